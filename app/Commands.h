@@ -1,0 +1,11 @@
+#pragma once
+/// @file The subcommands of the bagsim program. Each takes the arguments after its name and
+/// returns the process exit code (0 ok, 1 run failed, 2 bad input or usage).
+
+namespace bagsim::app {
+
+int runRunCommand(int argc, char** argv);          ///< bagsim run SCENARIO.yaml [--out DIR]
+int runBodyCommand(int argc, char** argv);         ///< bagsim body --sex ... --height ... --mass ...
+int runFitMaterialCommand(int argc, char** argv);  ///< bagsim fit-material TENSILE.csv --model ...
+
+}  // namespace bagsim::app

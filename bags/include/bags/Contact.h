@@ -1,0 +1,97 @@
+#pragma once
+/// @file Contact of membrane nodes with rigid analytic shapes (penalty, Coulomb friction) and
+/// of the membrane with itself.
+///
+/// Order of calls in a load step: set the shapes' poses, then, inside the Newton loop,
+/// addEnergy() for every trial x; once the step has converged, commitStep(x) (friction
+/// anchors move with the slip). Results (forces on the rigid shape, nodal pressures) are read
+/// with calc...() at the converged x.
+
+#include <bags/Mesh.h>
+#include <bags/Types.h>
+
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bags {
+
+/// A rigid solid with an analytic surface, posed in Ground by X_GS (shape frame S).
+class RigidShape {
+public:
+    virtual ~RigidShape() = default;
+    /// Signed distance [m] of Ground point p to the surface, negative inside the solid.
+    /// Also the closest surface point and the outward unit normal there (Ground), if asked.
+    virtual double calcSignedDistance(const Vec3& p_G, Vec3* closest_G, Vec3* normal_G) const = 0;
+    /// Gradient-of-normal d n / d p (3x3, Ground) at p: the surface curvature seen from p;
+    /// zero for flat faces. Used in the contact tangent.
+    virtual Mat3 calcNormalDerivative(const Vec3& p_G) const = 0;
+    virtual std::string getName() const = 0;
+    void setPose(const Eigen::Isometry3d& X_GS) { m_X_GS = X_GS; }
+    const Eigen::Isometry3d& getPose() const { return m_X_GS; }
+protected:
+    Eigen::Isometry3d m_X_GS = Eigen::Isometry3d::Identity();
+};
+
+/// Half-space below the plane through the frame origin with normal +z of the frame.
+std::unique_ptr<RigidShape> makePlane();
+/// Box with half-extents h [m], edges rounded by radius r [m] (r < min(h)).
+std::unique_ptr<RigidShape> makeBox(const Vec3& halfExtents, double edgeRadius = 0.0);
+/// Ellipsoid with semi-axes a [m] along the frame axes.
+std::unique_ptr<RigidShape> makeEllipsoid(const Vec3& semiAxes);
+/// Capsule: segment from -halfLength to +halfLength along frame z, radius r [m].
+std::unique_ptr<RigidShape> makeCapsule(double radius, double halfLength);
+
+/// Penalty contact of a set of membrane nodes with one rigid shape, with regularised Coulomb
+/// friction. Penalty stiffness per node = pressurePenalty * nodal reference area, so the
+/// contact pressure at a node is pressurePenalty * penetration [Pa].
+class RigidContact {
+public:
+    struct Options {
+        double pressurePenalty = 1e7;  ///< [Pa/m]: 1 mm penetration carries 10 kPa
+        double friction = 0.0;         ///< Coulomb coefficient (0 = frictionless)
+        double stickStiffnessRatio = 1.0;  ///< tangential / normal penalty
+        double onsetGap = 0.0;          ///< [m] smoothing width of the contact onset (0: C1 quadratic)
+        void validate() const;          ///< throws std::invalid_argument naming the option
+    };
+    RigidContact(const Mesh& mesh, std::vector<int> nodes, const RigidShape& shape,
+                 const Options& options);
+    /// Adds penalty energy, gradient and (symmetrised) Hessian at x.
+    void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+    /// True when friction is on: the term is then not a potential (solver uses residual norms).
+    bool isConservative() const;
+    /// Accepts x as converged: friction anchors follow the slip.
+    void commitStep(const Eigen::Matrix3Xd& x);
+    /// Total force [N] the membrane exerts on the shape, and torque [N m] about the shape's
+    /// frame origin, both in Ground.
+    void calcWrenchOnShape(const Eigen::Matrix3Xd& x, Vec3* force, Vec3* torque) const;
+    /// Contact pressure [Pa] per mesh node (0 for nodes not in contact / not in the set).
+    Eigen::VectorXd calcNodalPressure(const Eigen::Matrix3Xd& x) const;
+    int getNumActive(const Eigen::Matrix3Xd& x) const;
+private:
+    struct Impl;
+    std::shared_ptr<Impl> m_impl;
+};
+
+/// Membrane-membrane contact of a mesh with itself (top wall meeting bottom wall, folds):
+/// node-to-triangle penalty with a thickness offset, broad phase by spatial hashing.
+class SelfContact {
+public:
+    struct Options {
+        double pressurePenalty = 1e7;  ///< [Pa/m]
+        double thickness = 1e-3;       ///< [m] contact offset between two sheets
+        void validate() const;
+    };
+    SelfContact(const Mesh& mesh, const Options& options);
+    /// Rebuilds the candidate pairs at x (call once per load step or when x moved far).
+    void updateCandidates(const Eigen::Matrix3Xd& x);
+    void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+    int getNumActive(const Eigen::Matrix3Xd& x) const;
+private:
+    struct Impl;
+    std::shared_ptr<Impl> m_impl;
+};
+
+}  // namespace bags

@@ -1,0 +1,45 @@
+#pragma once
+/// @file Parametric airbag geometries and meshes for the bags solver and its verification
+/// cases. All dimensions [m]; the mesh size is the target triangle edge length [m].
+
+#include <bags/Mesh.h>
+
+namespace bags {
+
+/// The seed study's double-wedge airbag (see docs/geometry.md for the shape and why).
+/// Side profile in the x-z plane: a triangle with the long side on the bed board (z = 0),
+/// apex at height `height`, one sloped side of length `shortSide`; extruded along y by
+/// `width`. An internal vertical diaphragm under the apex splits it into two wedge chambers
+/// ("wedge-steep", "wedge-gentle") joined by the intermediate connection.
+struct DoubleWedgeParams {
+    double longSide = 0.350;   ///< base length [m]
+    double shortSide = 0.200;  ///< steep sloped side [m]
+    double width = 0.100;      ///< extrusion width [m]
+    double height = 0.150;     ///< apex height of the panel layout [m]
+    double meshSize = 0.010;   ///< target element edge [m]
+    bool diaphragm = true;     ///< build the internal wall (two chambers); false: one chamber
+    bool bondBase = true;      ///< base panel nodes are support nodes
+    /// Throws std::invalid_argument naming the parameter if the geometry is impossible.
+    void validate() const;
+};
+Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p);
+
+/// Rectangular box bag lx x ly x lz with the base on z = 0 (one chamber).
+Mesh makeBoxBag(double lx, double ly, double lz, double meshSize, bool bondBase = true);
+
+/// Sphere of radius r centred at the origin (icosphere, `refinements` subdivisions), one
+/// chamber, no supports (caller fixes rigid modes, e.g. through Mesh::fixedDofs).
+Mesh makeSphere(double r, int refinements);
+
+/// Square cushion of two flat square sheets of edge `edge` welded at their rim, reference
+/// configuration flat (top at z = +gap/2, bottom at z = -gap/2), `n` divisions per edge.
+/// Rim nodes shared. One chamber. For the inflated-square-airbag benchmark.
+Mesh makeSquareCushion(double edge, int n, double gap = 0.0);
+
+/// Flat circular disk of radius r in the x-y plane, normals +z, rim nodes in supportNodes.
+/// It has one open chamber made of all its triangles: with the rim fixed, the volume formula
+/// measures the volume swept from the flat state, so a pressure on it is a follower load
+/// (Hencky's clamped membrane). `rings` radial divisions.
+Mesh makeDisk(double r, int rings);
+
+}  // namespace bags

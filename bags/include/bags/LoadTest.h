@@ -1,0 +1,87 @@
+#pragma once
+/// @file The seed study's test rig: one airbag on a rigid bed board, inflated to a gas mass,
+/// then pressed by a rigid square block at a constant rate up to a peak force and released;
+/// the gas is let out to the next mass and the test repeated.
+///
+/// Order: LoadTestOptions::validate(), then runLoadTest(options, observer). The observer is
+/// called after every converged step (so a writer can stream frames and survive an interrupt);
+/// the result holds the curves, the stiffness per gas mass and the k(m) fit.
+
+#include <bags/Contact.h>
+#include <bags/Gas.h>
+#include <bags/Geometry.h>
+#include <bags/Material.h>
+#include <bags/Solver.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bags {
+
+struct LoadTestOptions {
+    DoubleWedgeParams geometry;
+    std::shared_ptr<const MembraneMaterial> material;  ///< base material (wrinkling added)
+    double thickness = 0.2e-3;          ///< membrane thickness [m]
+    double density = 1150.0;            ///< membrane density [kg/m^3] (gravity on the sheet)
+    double wrinklingResidual = 1e-3;    ///< residual stiffness fraction of slack states
+    bool gravity = true;                ///< self-weight of the sheet
+    GasOptions gas;
+    std::vector<double> gasMasses;      ///< [kg], run in this order (seed: 3.5 g down to 1.0 g)
+    double blockSize = 0.050;           ///< square block edge [m]
+    double loadingRate = 10.0e-3 / 60.0;///< [m/s] (10 mm/min)
+    double peakForce = 50.0;            ///< [N]
+    bool unload = true;                 ///< record the unloading branch too
+    double displacementStep = 1.0e-3;   ///< target block increment [m] (adapted)
+    double stiffnessFrom = 10.0;        ///< [N] force range of the stiffness fit
+    double stiffnessTo = 35.0;          ///< [N]
+    int polynomialOrder = 5;            ///< k(m) fit order (seed: 5)
+    RigidContact::Options blockContact;
+    RigidContact::Options floorContact;
+    bool selfContact = true;
+    SolverOptions solver;
+    /// Throws std::invalid_argument naming the option and what would be valid.
+    void validate() const;
+};
+
+/// One converged state of the test.
+struct LoadStep {
+    int curve = 0;             ///< index into LoadTestOptions::gasMasses
+    int step = 0;              ///< step within the curve
+    bool loading = true;       ///< false on the unloading branch
+    double time = 0.0;         ///< test time of this curve [s]
+    double displacement = 0.0; ///< block travel from first touch [m]
+    double force = 0.0;        ///< block force [N]
+    std::vector<double> gaugePressure;  ///< per chamber [Pa]
+    std::vector<double> volume;         ///< per chamber [m^3]
+    int newtonIterations = 0;
+};
+
+struct LoadCurve {
+    double gasMass = 0.0;            ///< [kg]
+    double unloadedHeight = 0.0;     ///< top of the inflated bag before loading [m]
+    double inflatedVolume = 0.0;     ///< [m^3] total
+    double inflatedGaugePressure = 0.0; ///< [Pa]
+    std::vector<LoadStep> steps;
+    double stiffness = 0.0;          ///< slope over the stiffness range [N/m]
+    double r2 = 0.0;                 ///< linearity of that range
+    int stage = 0;                   ///< 1, 2 or 3 (rule in docs/seed-load-test.md)
+    bool reachedPeak = false;
+};
+
+struct LoadTestResult {
+    std::vector<LoadCurve> curves;
+    std::vector<double> kFit;        ///< polynomial coefficients, highest power first, k in N/mm of m in g
+    double seconds = 0.0;            ///< wall time of the solve
+};
+
+/// Called after each converged step with the step and the nodal positions (3 x N).
+using LoadTestObserver = std::function<void(const LoadStep&, const Mesh&, const Eigen::Matrix3Xd&)>;
+
+LoadTestResult runLoadTest(const LoadTestOptions& options, const LoadTestObserver& observer = {});
+
+/// Seed's published fit k(m) [N/mm], m in g: highest power first.
+std::vector<double> getSeedStiffnessPolynomial();
+
+}  // namespace bags

@@ -1,0 +1,79 @@
+#pragma once
+/// @file Plane-stress incompressible hyperelastic membrane materials and the tension-field
+/// (wrinkling) relaxation.
+///
+/// A membrane material maps the in-plane right Cauchy-Green tensor C (2x2, symmetric,
+/// det C > 0) of a thin sheet to its strain energy per unit *reference volume*. Incompressibility
+/// with plane stress fixes the thickness stretch: lambda3^2 = C33 = 1 / det C, so
+/// I1 = tr C + 1/det C and I2 = det C + tr C / det C.
+///
+/// Voigt convention used everywhere in bags:
+///   S_v = [S11, S22, S12]            second Piola-Kirchhoff stress [Pa]
+///   E_v = [E11, E22, 2 E12]          Green-Lagrange strain, E = (C - I)/2
+///   D   = dS_v / dE_v                material tangent [Pa], symmetric 3x3
+/// so that dW = S_v . dE_v and S = 2 dW/dC.
+
+#include <bags/Types.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bags {
+
+class MembraneMaterial {
+public:
+    virtual ~MembraneMaterial() = default;
+
+    /// Strain energy per unit reference volume [J/m^3] at in-plane C; if S (resp. D) is not
+    /// null, also the stress S_v [Pa] (resp. tangent D [Pa]) in the Voigt convention above.
+    /// @pre C symmetric with det C > 0.
+    virtual double calcEnergy(const Mat2& C, Eigen::Vector3d* S, Eigen::Matrix3d* D) const = 0;
+
+    /// Small-strain shear modulus mu [Pa] (Young's modulus of the sheet is 3 mu).
+    virtual double getInitialShearModulus() const = 0;
+
+    /// Short model name, e.g. "yeoh".
+    virtual std::string getName() const = 0;
+
+    /// Uniaxial nominal (engineering) stress [Pa] at stretch lambda of an incompressible strip,
+    /// P = dW/dlambda with W(lambda, lambda^-1/2).
+    virtual double calcUniaxialNominalStress(double lambda) const;
+
+    virtual std::unique_ptr<MembraneMaterial> clone() const = 0;
+};
+
+/// W = C10 (I1 - 3).  @pre C10 > 0.
+std::unique_ptr<MembraneMaterial> makeNeoHookean(double C10);
+/// W = C10 (I1 - 3) + C01 (I2 - 3).
+std::unique_ptr<MembraneMaterial> makeMooneyRivlin(double C10, double C01);
+/// W = C10 (I1 - 3) + C20 (I1 - 3)^2 + C30 (I1 - 3)^3.
+std::unique_ptr<MembraneMaterial> makeYeoh(double C10, double C20, double C30);
+/// W = sum_i 2 mu_i / alpha_i^2 (l1^a_i + l2^a_i + l3^a_i - 3) (Abaqus convention).
+std::unique_ptr<MembraneMaterial> makeOgden(const std::vector<double>& mu,
+                                            const std::vector<double>& alpha);
+
+/// Tension-field relaxation of a base material (Pipkin's relaxed energy) plus a small fraction
+/// of the base energy as residual stiffness so slack and wrinkled states stay solvable:
+///   taut      (lambda2 >= lambda1^-1/2): W = W_base(C)
+///   wrinkled  (lambda1 > 1, lambda2 < lambda1^-1/2): W = W_uni(lambda1)
+///   slack     (lambda1 <= 1): W = 0
+/// where lambda1 >= lambda2 are the in-plane principal stretches and W_uni is the uniaxial
+/// energy. The total is W_relaxed + residual * W_base. Energy, S and D are consistent.
+class WrinklingMaterial : public MembraneMaterial {
+public:
+    WrinklingMaterial(std::unique_ptr<MembraneMaterial> base, double residual = 1e-3);
+    double calcEnergy(const Mat2& C, Eigen::Vector3d* S, Eigen::Matrix3d* D) const override;
+    double getInitialShearModulus() const override;
+    std::string getName() const override;
+    std::unique_ptr<MembraneMaterial> clone() const override;
+    /// 0 taut, 1 wrinkled, 2 slack at C.
+    int calcState(const Mat2& C) const;
+    const MembraneMaterial& getBase() const { return *m_base; }
+    double getResidual() const { return m_residual; }
+private:
+    std::unique_ptr<MembraneMaterial> m_base;
+    double m_residual;
+};
+
+}  // namespace bags

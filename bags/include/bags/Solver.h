@@ -1,0 +1,118 @@
+#pragma once
+/// @file The airbag's total potential energy and its quasi-static Newton solver.
+///
+/// MembraneModel sums membrane strain energy, gas work, follower pressures, gravity and contact
+/// into one energy of the nodal positions. solveEquilibrium() minimises it over the free dofs
+/// with Newton's method: a sparse factorisation of the membrane + contact + pressure tangent,
+/// the dense rank-one gas terms added through Sherman-Morrison-Woodbury (so the solve stays
+/// sparse), a backtracking line search, and a pseudo-transient shift when the tangent is not
+/// positive definite or Newton stalls.
+
+#include <bags/Contact.h>
+#include <bags/Gas.h>
+#include <bags/Material.h>
+#include <bags/Mesh.h>
+#include <bags/Types.h>
+
+#include <memory>
+#include <vector>
+
+namespace bags {
+
+struct SolverOptions {
+    double relativeTolerance = 1e-8;   ///< |r| / |f_ref| to converge
+    double absoluteTolerance = 1e-7;   ///< [N] |r| to converge regardless
+    int maxIterations = 60;            ///< Newton iterations per solve
+    double pseudoTransientShift = 1e-3;///< initial shift, as a fraction of mean tangent diagonal
+    int numThreads = 0;                ///< OpenMP threads for assembly (0: default)
+    void validate() const;             ///< throws std::invalid_argument naming the option
+};
+
+struct SolveSummary {
+    bool converged = false;
+    int iterations = 0;
+    int factorizations = 0;
+    double residualNorm = 0.0;         ///< [N] free-dof residual at exit
+    double energy = 0.0;               ///< [J] at exit
+    int shiftedIterations = 0;         ///< iterations that needed the pseudo-transient shift
+};
+
+/// The membrane, its gas, pressures and contacts as one energy.
+class MembraneModel {
+public:
+    MembraneModel(Mesh mesh, std::shared_ptr<const MembraneMaterial> material, double thickness);
+
+    const Mesh& getMesh() const { return m_mesh; }
+    double getThickness() const { return m_thickness; }
+    const MembraneMaterial& getMaterial() const { return *m_material; }
+
+    /// Self-weight of the sheet: density [kg/m^3], gravity g [m/s^2] in Ground.
+    void setGravity(double density, const Vec3& g);
+
+    /// A gas body filling the listed chambers (chambers joined by an open connection share one
+    /// pressure). Returns its index. Replaces any prescribed pressure on those chambers.
+    int addGas(const GasChamber& gas, const std::vector<int>& chambers);
+    GasChamber& updGas(int i) { return m_gases[i].gas; }
+    const GasChamber& getGas(int i) const { return m_gases[i].gas; }
+    int getNumGases() const { return static_cast<int>(m_gases.size()); }
+    const std::vector<int>& getGasChambers(int i) const { return m_gases[i].chambers; }
+    /// Prescribed gauge pressure [Pa] on a chamber not filled by a gas (follower load).
+    void setChamberPressure(int chamber, double gaugePressure);
+    double getChamberPressure(int chamber) const { return m_chamberPressure[chamber]; }
+
+    /// Adds a contact term; the model shares ownership.
+    void addRigidContact(std::shared_ptr<RigidContact> contact);
+    void setSelfContact(std::shared_ptr<SelfContact> contact) { m_selfContact = std::move(contact); }
+    std::shared_ptr<SelfContact> getSelfContact() const { return m_selfContact; }
+    bool isConservative() const;
+
+    /// Total potential energy and its derivatives at x, added into acc.
+    void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+    /// Only the membrane elements (strain energy, internal forces, material+geometric tangent).
+    void addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+    /// The gas bodies' volumes (sum of their chambers) [m^3] and gradients, for the solver.
+    double calcGasVolume(int gas, const Eigen::Matrix3Xd& x, Eigen::VectorXd* grad) const;
+    /// Gauge pressure [Pa] of chamber c at x (gas law or prescribed).
+    double calcChamberGaugePressure(int c, const Eigen::Matrix3Xd& x) const;
+
+    /// Dofs that are fixed (support nodes, Mesh::fixedDofs), sorted.
+    const std::vector<int>& getFixedDofs() const { return m_fixedDofs; }
+    /// Commits contact history at a converged x.
+    void commitStep(const Eigen::Matrix3Xd& x);
+
+    /// Membrane state per triangle: 0 taut, 1 wrinkled, 2 slack (needs a WrinklingMaterial).
+    std::vector<int> calcWrinkleStates(const Eigen::Matrix3Xd& x) const;
+    /// Largest in-plane principal Cauchy stress per triangle [Pa].
+    Eigen::VectorXd calcPrincipalStress(const Eigen::Matrix3Xd& x) const;
+
+private:
+    friend class EquilibriumSolver;
+    struct GasBody {
+        GasChamber gas;
+        std::vector<int> chambers;
+    };
+    void precompute();
+
+    Mesh m_mesh;
+    std::shared_ptr<const MembraneMaterial> m_material;
+    double m_thickness;
+    double m_density = 0.0;
+    Vec3 m_gravity = Vec3::Zero();
+    std::vector<GasBody> m_gases;
+    std::vector<int> m_chamberGas;        ///< gas index per chamber or -1
+    std::vector<double> m_chamberPressure;///< prescribed gauge pressure per chamber [Pa]
+    std::vector<std::shared_ptr<RigidContact>> m_contacts;
+    std::shared_ptr<SelfContact> m_selfContact;
+    std::vector<int> m_fixedDofs;
+    // Per triangle: inverse of the reference edge matrix in a local 2D frame, reference area.
+    std::vector<Eigen::Matrix2d> m_DmInv;
+    std::vector<double> m_area0;
+    Eigen::VectorXd m_nodalMass;          ///< [kg]
+};
+
+/// Minimises the model's energy over the free dofs, starting from x (updated in place).
+/// @throws NumericalError if x becomes non-finite or an element inverts beyond recovery.
+SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
+                              const SolverOptions& options);
+
+}  // namespace bags
