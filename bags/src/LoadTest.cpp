@@ -1,1 +1,344 @@
-// (under construction)
+#include <bags/LoadTest.h>
+#include <bags/Polynomial.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace bags {
+
+namespace {
+
+void require(bool ok, const std::string& option, double value, const std::string& valid) {
+    if (ok) return;
+    std::ostringstream s;
+    s << "load test option '" << option << "' = " << value << " is invalid; " << valid;
+    throw std::invalid_argument(s.str());
+}
+
+constexpr double kBlockHalfHeight = 0.010;  // [m] thickness of the rigid block is irrelevant
+
+// Everything one curve of the test needs, kept across curves (the bag is deflated in place).
+struct Rig {
+    std::shared_ptr<MembraneModel> model;
+    std::shared_ptr<RigidShape> block;
+    std::shared_ptr<RigidShape> floor;
+    std::shared_ptr<RigidContact> blockContact;
+    Eigen::Matrix3Xd x;
+    Vec3 blockCentreXY = Vec3::Zero();
+};
+
+double calcTop(const Eigen::Matrix3Xd& x) { return x.row(2).maxCoeff(); }
+
+void placeBlock(Rig& rig, double zBottom) {
+    Eigen::Isometry3d X_GS = Eigen::Isometry3d::Identity();
+    X_GS.translation() = Vec3(rig.blockCentreXY.x(), rig.blockCentreXY.y(),
+                              zBottom + kBlockHalfHeight);
+    rig.block->setPose(X_GS);
+}
+
+double calcTotalVolume(const MembraneModel& m, const Eigen::Matrix3Xd& x) {
+    double V = 0.0;
+    for (int g = 0; g < m.getNumGases(); ++g) V += m.calcGasVolume(g, x, nullptr);
+    return V;
+}
+
+// Solves with step cutting on a scalar control parameter: apply(s) sets the loads for s in
+// [s0, s1]; on failure the increment is halved. Returns the number of Newton iterations.
+template <class Apply>
+int solveRamp(Rig& rig, const SolverOptions& so, double s0, double s1, int maxCuts,
+              const Apply& apply, const char* what) {
+    double s = s0, ds = s1 - s0;
+    int iterations = 0, cuts = 0;
+    while ((s1 - s) * (ds > 0 ? 1 : -1) > 1e-15) {
+        const double next = (std::abs(s1 - s) < std::abs(ds) * 1.0000001) ? s1 : s + ds;
+        apply(next);
+        Eigen::Matrix3Xd x = rig.x;
+        SolveSummary sum;
+        bool ok = true;
+        try {
+            sum = solveEquilibrium(*rig.model, x, so);
+            ok = sum.converged;
+        } catch (const NumericalError&) {
+            ok = false;
+        }
+        iterations += sum.iterations;
+        if (ok) {
+            rig.x = x;
+            rig.model->commitStep(x);
+            s = next;
+            if (sum.iterations < 8) ds *= 2.0;
+        } else {
+            apply(s);
+            ds *= 0.5;
+            if (++cuts > maxCuts)
+                throw NumericalError(std::string("no convergence while ") + what);
+        }
+    }
+    return iterations;
+}
+
+}  // namespace
+
+void LoadTestOptions::validate() const {
+    geometry.validate();
+    if (!material) throw std::invalid_argument("load test option 'material' is not set");
+    require(thickness > 0.0 && thickness < 0.01, "thickness", thickness, "use 0 < t < 10 mm");
+    require(density >= 0.0, "density", density, "use a density >= 0 kg/m^3");
+    require(wrinklingResidual > 0.0 && wrinklingResidual < 0.1, "wrinklingResidual",
+            wrinklingResidual, "use 0 < residual < 0.1 (e.g. 1e-3)");
+    gas.validate();
+    if (gasMasses.empty()) throw std::invalid_argument("load test option 'gasMasses' is empty");
+    for (double m : gasMasses)
+        require(m > 0.0 && m < 1.0, "gasMasses", m, "use masses > 0 (in kg inside; e.g. 3.5 g)");
+    require(blockSize > 0.0 && blockSize <= geometry.longSide, "blockSize", blockSize,
+            "use 0 < block <= the airbag's long side");
+    require(loadingRate > 0.0, "loadingRate", loadingRate, "use a positive rate (e.g. 10 mm/min)");
+    require(peakForce > 0.0, "peakForce", peakForce, "use a positive force (e.g. 50 N)");
+    require(displacementStep > 0.0 && displacementStep <= 0.02, "displacementStep",
+            displacementStep, "use 0 < step <= 20 mm");
+    require(stiffnessFrom >= 0.0 && stiffnessTo > stiffnessFrom && stiffnessTo <= peakForce,
+            "stiffnessTo", stiffnessTo, "use 0 <= from < to <= peak force");
+    require(polynomialOrder >= 1 && polynomialOrder <= 8, "polynomialOrder", polynomialOrder,
+            "use an order from 1 to 8");
+    blockContact.validate();
+    floorContact.validate();
+    solver.validate();
+}
+
+std::vector<double> getSeedStiffnessPolynomial() {
+    return {-0.945, 8.394, -25.707, 32.714, -17.181, 6.196};
+}
+
+LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& observer) {
+    o.validate();
+    const auto wallStart = std::chrono::steady_clock::now();
+    const Mesh mesh = makeDoubleWedgeBag(o.geometry);
+
+    Rig rig;
+    auto material = std::make_shared<WrinklingMaterial>(o.material->clone(), o.wrinklingResidual);
+    rig.model = std::make_shared<MembraneModel>(mesh, material, o.thickness);
+    if (o.gravity && o.density > 0.0) rig.model->setGravity(o.density, Vec3(0, 0, -9.81));
+
+    // Contact candidates: every node not bonded to the bed board.
+    std::vector<char> isSupport(mesh.getNumNodes(), 0);
+    for (int n : mesh.supportNodes) isSupport[n] = 1;
+    std::vector<int> freeNodes;
+    for (int n = 0; n < mesh.getNumNodes(); ++n)
+        if (!isSupport[n]) freeNodes.push_back(n);
+
+    rig.floor = makePlane();
+    rig.model->addRigidContact(
+        std::make_shared<RigidContact>(mesh, freeNodes, *rig.floor, o.floorContact));
+    rig.block = makeBox(Vec3(0.5 * o.blockSize, 0.5 * o.blockSize, kBlockHalfHeight),
+                        std::min(1e-3, 0.1 * o.blockSize));
+    rig.blockContact = std::make_shared<RigidContact>(mesh, freeNodes, *rig.block, o.blockContact);
+    rig.model->addRigidContact(rig.blockContact);
+    std::shared_ptr<SelfContact> self;
+    if (o.selfContact) {
+        SelfContact::Options so;
+        so.pressurePenalty = o.blockContact.pressurePenalty;
+        so.thickness = std::max(2.0 * o.thickness, 0.5e-3);
+        self = std::make_shared<SelfContact>(mesh, so);
+        rig.model->setSelfContact(self);
+    }
+    rig.x = mesh.X;
+    // Block above the apex ridge, parked well clear while inflating.
+    {
+        int top = 0;
+        mesh.X.row(2).maxCoeff(&top);
+        rig.blockCentreXY = Vec3(mesh.X(0, top), 0.0, 0.0);
+    }
+    placeBlock(rig, calcTop(rig.x) + 0.2);
+
+    // Inflate: a prescribed pressure ramp shapes the flat panels, then the gas takes over.
+    const int nc = static_cast<int>(mesh.chambers.size());
+    std::vector<int> allChambers(nc);
+    for (int c = 0; c < nc; ++c) allChambers[c] = c;
+    {
+        double Vflat = 0.0;
+        for (int c = 0; c < nc; ++c) Vflat += calcChamberVolume(mesh, c, rig.x);
+        GasChamber probe(o.gas, o.gasMasses.front());
+        probe.seal(Vflat);
+        const double pTarget = std::clamp(probe.calcGaugePressure(Vflat), 200.0, 5000.0);
+        solveRamp(rig, o.solver, 0.0, pTarget, 30,
+                  [&](double p) {
+                      for (int c = 0; c < nc; ++c) rig.model->setChamberPressure(c, p);
+                  },
+                  "inflating the airbag");
+        for (int c = 0; c < nc; ++c) rig.model->setChamberPressure(c, 0.0);
+    }
+    GasChamber gas(o.gas, o.gasMasses.front());
+    {
+        double V = 0.0;
+        for (int c = 0; c < nc; ++c) V += calcChamberVolume(mesh, c, rig.x);
+        gas.seal(V);
+    }
+    rig.model->addGas(gas, allChambers);
+
+    LoadTestResult result;
+    for (size_t k = 0; k < o.gasMasses.size(); ++k) {
+        LoadCurve curve;
+        curve.gasMass = o.gasMasses[k];
+        // Let the gas out (or in) to this curve's mass in small mass steps, block clear.
+        placeBlock(rig, calcTop(rig.x) + 0.05);
+        const double m0 = rig.model->getGas(0).getMass();
+        solveRamp(rig, o.solver, m0, curve.gasMass, 30,
+                  [&](double m) {
+                      const double V = rig.model->calcGasVolume(0, rig.x, nullptr);
+                      rig.model->updGas(0).setMass(m, V);
+                  },
+                  "changing the gas mass");
+        // setMass reseals at the current volume: isothermal p V = m R T holds whatever the
+        // sealing volume, so the state is exact; for adiabatic gases the reference is the
+        // state at this mass, as in a slow let-down at room temperature.
+        const double top = calcTop(rig.x);
+        curve.unloadedHeight = top;
+        curve.inflatedVolume = rig.model->calcGasVolume(0, rig.x, nullptr);
+        curve.inflatedGaugePressure = rig.model->getGas(0).calcGaugePressure(curve.inflatedVolume);
+        if (self) self->updateCandidates(rig.x);
+
+        auto record = [&](double disp, bool loading, int iters) {
+            LoadStep st;
+            st.curve = static_cast<int>(k);
+            st.step = static_cast<int>(curve.steps.size());
+            st.loading = loading;
+            st.displacement = disp;
+            const double prevDisp = curve.steps.empty() ? 0.0 : curve.steps.back().displacement;
+            const double prevTime = curve.steps.empty() ? 0.0 : curve.steps.back().time;
+            st.time = prevTime + std::abs(disp - prevDisp) / o.loadingRate;
+            Vec3 f, tq;
+            rig.blockContact->calcWrenchOnShape(rig.x, &f, &tq);
+            st.force = f.z();
+            for (int c = 0; c < nc; ++c) {
+                st.gaugePressure.push_back(rig.model->calcChamberGaugePressure(c, rig.x));
+                st.volume.push_back(calcChamberVolume(mesh, c, rig.x));
+            }
+            st.newtonIterations = iters;
+            curve.steps.push_back(st);
+            if (observer) observer(st, mesh, rig.x);
+            return st.force;
+        };
+
+        record(0.0, true, 0);
+        // Loading: displacement control, adaptive, aiming the last step at the peak force.
+        double disp = 0.0, ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;
+        const double minStep = 1e-6;
+        const double maxDisp = top - 0.002;  // the block cannot pass the bed board
+        while (force < o.peakForce * (1.0 - 1e-3)) {
+            double step = std::min(ds, o.displacementStep);
+            if (stiffnessEstimate > 0.0)
+                step = std::min(step, 1.05 * (o.peakForce - force) / stiffnessEstimate);
+            step = std::max(step, minStep);
+            if (disp + step > maxDisp) break;
+            Eigen::Matrix3Xd x = rig.x;
+            placeBlock(rig, top - disp - step);
+            if (self) self->updateCandidates(x);
+            bool ok = true;
+            SolveSummary sum;
+            try {
+                sum = solveEquilibrium(*rig.model, x, o.solver);
+                ok = sum.converged;
+            } catch (const NumericalError&) {
+                ok = false;
+            }
+            if (!ok) {
+                ds = 0.5 * step;
+                if (ds < minStep) {
+                    std::ostringstream s;
+                    s << "no convergence loading at gas mass " << curve.gasMass * 1e3
+                      << " g, block travel " << disp * 1e3 << " mm";
+                    throw NumericalError(s.str(), curve.steps.back().time,
+                                         static_cast<int>(curve.steps.size()));
+                }
+                continue;
+            }
+            rig.x = x;
+            rig.model->commitStep(x);
+            const double prevForce = force;
+            disp += step;
+            force = record(disp, true, sum.iterations);
+            const double k = (force - prevForce) / step;
+            if (k > 0.0) stiffnessEstimate = k;
+            if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
+        }
+        curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
+        // Unloading: back up the same way until the block leaves the bag.
+        if (o.unload) {
+            ds = o.displacementStep;
+            while (disp > 0.0) {
+                const double step = std::min(ds, disp);
+                Eigen::Matrix3Xd x = rig.x;
+                placeBlock(rig, top - (disp - step));
+                if (self) self->updateCandidates(x);
+                bool ok = true;
+                SolveSummary sum;
+                try {
+                    sum = solveEquilibrium(*rig.model, x, o.solver);
+                    ok = sum.converged;
+                } catch (const NumericalError&) {
+                    ok = false;
+                }
+                if (!ok) {
+                    ds = 0.5 * step;
+                    if (ds < minStep)
+                        throw NumericalError("no convergence unloading", curve.steps.back().time,
+                                             static_cast<int>(curve.steps.size()));
+                    continue;
+                }
+                rig.x = x;
+                rig.model->commitStep(x);
+                disp -= step;
+                if (disp < 1e-12) disp = 0.0;
+                const double f = record(disp, false, sum.iterations);
+                if (f <= 0.0 && disp > 0.0) break;  // block has left the bag
+                if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
+            }
+        }
+        // Stiffness over the force range, loading branch.
+        std::vector<double> d, f;
+        for (const LoadStep& st : curve.steps)
+            if (st.loading && st.force >= o.stiffnessFrom && st.force <= o.stiffnessTo)
+                d.push_back(st.displacement), f.push_back(st.force);
+        if (d.size() >= 2) {
+            const LinearFit lf = fitLine(d, f);
+            curve.stiffness = lf.slope;
+            curve.r2 = lf.r2;
+        } else {
+            curve.stiffness = std::numeric_limits<double>::quiet_NaN();
+            curve.r2 = std::numeric_limits<double>::quiet_NaN();
+        }
+        result.curves.push_back(std::move(curve));
+    }
+    classifyStages(result.curves);
+    // k(m) fit in the seed's units: k [N/mm] of m [g].
+    std::vector<double> mg, kk;
+    for (const LoadCurve& c : result.curves)
+        if (std::isfinite(c.stiffness)) mg.push_back(c.gasMass * 1e3), kk.push_back(c.stiffness * 1e-3);
+    if (static_cast<int>(mg.size()) > o.polynomialOrder)
+        result.kFit = fitPolynomial(mg, kk, o.polynomialOrder);
+    result.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+    return result;
+}
+
+void classifyStages(std::vector<LoadCurve>& curves, double linearR2) {
+    // Stage 3: masses below the one with the least stiffness (stiffness rises again as gas is
+    // let out). Above it: stage 1 if the 10-35 N range is linear (r2 >= linearR2), else 2.
+    double kMin = std::numeric_limits<double>::infinity(), mAtMin = 0.0;
+    for (const LoadCurve& c : curves)
+        if (std::isfinite(c.stiffness) && c.stiffness < kMin) kMin = c.stiffness, mAtMin = c.gasMass;
+    for (LoadCurve& c : curves) {
+        if (!std::isfinite(c.stiffness)) {
+            c.stage = 0;
+        } else if (c.gasMass < mAtMin - 1e-12) {
+            c.stage = 3;
+        } else {
+            c.stage = c.r2 >= linearR2 ? 1 : 2;
+        }
+    }
+}
+
+}  // namespace bags

@@ -1,1 +1,307 @@
-// (under construction)
+#include <bags/Solver.h>
+
+#include "SparseSolve.h"
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace bags {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Gradient of the linear shape functions of a triangle in its local 2D reference frame.
+struct ShapeGradients {
+    Vec2 dN[3];
+};
+
+ShapeGradients calcShapeGradients(const Mat2& DmInv) {
+    ShapeGradients s;
+    s.dN[1] = DmInv.row(0).transpose();
+    s.dN[2] = DmInv.row(1).transpose();
+    s.dN[0] = -(s.dN[1] + s.dN[2]);
+    return s;
+}
+
+}  // namespace
+
+void SolverOptions::validate() const {
+    auto fail = [](const char* name, double v, const char* valid) {
+        std::ostringstream s;
+        s << "solver option '" << name << "' = " << v << " is invalid; " << valid;
+        throw std::invalid_argument(s.str());
+    };
+    if (!(relativeTolerance > 0.0 && relativeTolerance < 1.0))
+        fail("relativeTolerance", relativeTolerance, "use 0 < tol < 1 (e.g. 1e-8)");
+    if (!(absoluteTolerance > 0.0)) fail("absoluteTolerance", absoluteTolerance, "use > 0 N");
+    if (maxIterations < 1) fail("maxIterations", maxIterations, "use at least 1");
+    if (!(pseudoTransientShift > 0.0)) fail("pseudoTransientShift", pseudoTransientShift, "use > 0");
+    if (numThreads < 0) fail("numThreads", numThreads, "use 0 (default) or a positive count");
+}
+
+// ---------------------------------------------------------------------------------------------
+// MembraneModel
+
+MembraneModel::MembraneModel(Mesh mesh, std::shared_ptr<const MembraneMaterial> material,
+                             double thickness)
+    : m_mesh(std::move(mesh)), m_material(std::move(material)), m_thickness(thickness) {
+    if (!m_material) throw std::invalid_argument("MembraneModel needs a material");
+    if (!(thickness > 0.0)) throw std::invalid_argument("membrane thickness must be positive");
+    m_mesh.validate();
+    precompute();
+}
+
+void MembraneModel::precompute() {
+    const int nt = m_mesh.getNumTris();
+    m_DmInv.resize(nt);
+    m_area0.resize(nt);
+    for (int e = 0; e < nt; ++e) {
+        const Vec3 X0 = m_mesh.X.col(m_mesh.tris(0, e));
+        const Vec3 X1 = m_mesh.X.col(m_mesh.tris(1, e));
+        const Vec3 X2 = m_mesh.X.col(m_mesh.tris(2, e));
+        const Vec3 a = X1 - X0, b = X2 - X0;
+        const Vec3 n = a.cross(b);
+        const double twiceArea = n.norm();
+        if (!(twiceArea > 0.0)) {
+            throw NumericalError("degenerate reference triangle " + std::to_string(e), -1, -1, e);
+        }
+        const Vec3 e1 = a.normalized();
+        const Vec3 e2 = (n / twiceArea).cross(e1);
+        Mat2 Dm;
+        Dm << a.dot(e1), b.dot(e1), a.dot(e2), b.dot(e2);
+        m_DmInv[e] = Dm.inverse();
+        m_area0[e] = 0.5 * twiceArea;
+    }
+    m_chamberGas.assign(m_mesh.chambers.size(), -1);
+    m_chamberPressure.assign(m_mesh.chambers.size(), 0.0);
+
+    std::vector<char> fixed(3 * m_mesh.getNumNodes(), 0);
+    for (int n : m_mesh.supportNodes)
+        for (int d = 0; d < 3; ++d) fixed[3 * n + d] = 1;
+    for (int dof : m_mesh.fixedDofs) fixed[dof] = 1;
+    m_fixedDofs.clear();
+    for (int i = 0; i < static_cast<int>(fixed.size()); ++i)
+        if (fixed[i]) m_fixedDofs.push_back(i);
+    m_nodalMass = Eigen::VectorXd::Zero(m_mesh.getNumNodes());
+}
+
+void MembraneModel::setGravity(double density, const Vec3& g) {
+    m_density = density;
+    m_gravity = g;
+    m_nodalMass = m_mesh.calcNodalAreas() * (density * m_thickness);
+}
+
+int MembraneModel::addGas(const GasChamber& gas, const std::vector<int>& chambers) {
+    if (chambers.empty()) throw std::invalid_argument("a gas must fill at least one chamber");
+    for (int c : chambers) {
+        if (c < 0 || c >= static_cast<int>(m_mesh.chambers.size()))
+            throw std::invalid_argument("gas chamber index out of range");
+        if (m_chamberGas[c] >= 0) throw std::invalid_argument("chamber already filled by a gas");
+    }
+    const int i = static_cast<int>(m_gases.size());
+    m_gases.push_back({gas, chambers});
+    for (int c : chambers) m_chamberGas[c] = i, m_chamberPressure[c] = 0.0;
+    return i;
+}
+
+void MembraneModel::setChamberPressure(int chamber, double gaugePressure) {
+    if (m_chamberGas.at(chamber) >= 0)
+        throw std::invalid_argument("chamber pressure is set by its gas; cannot prescribe it");
+    m_chamberPressure[chamber] = gaugePressure;
+}
+
+void MembraneModel::addRigidContact(std::shared_ptr<RigidContact> contact) {
+    m_contacts.push_back(std::move(contact));
+}
+
+bool MembraneModel::isConservative() const {
+    for (const auto& c : m_contacts)
+        if (!c->isConservative()) return false;
+    return true;
+}
+
+void MembraneModel::commitStep(const Eigen::Matrix3Xd& x) {
+    for (auto& c : m_contacts) c->commitStep(x);
+}
+
+double MembraneModel::calcGasVolume(int gas, const Eigen::Matrix3Xd& x,
+                                    Eigen::VectorXd* grad) const {
+    double V = 0.0;
+    if (grad) grad->setZero(3 * m_mesh.getNumNodes());
+    for (int c : m_gases[gas].chambers) {
+        V += calcChamberVolume(m_mesh, c, x);
+        if (grad) *grad += calcChamberVolumeGradient(m_mesh, c, x);
+    }
+    return V;
+}
+
+double MembraneModel::calcChamberGaugePressure(int c, const Eigen::Matrix3Xd& x) const {
+    const int g = m_chamberGas.at(c);
+    if (g < 0) return m_chamberPressure[c];
+    return m_gases[g].gas.calcGaugePressure(calcGasVolume(g, x, nullptr));
+}
+
+void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
+    const int nt = m_mesh.getNumTris();
+    const MembraneMaterial& mat = *m_material;
+    const bool wantG = acc.wantGradient, wantH = acc.wantHessian;
+    double energy = 0.0;
+    bool invalid = false;
+    int badElement = -1;
+
+#pragma omp parallel reduction(+ : energy)
+    {
+        std::vector<Triplet> localH;
+        Eigen::VectorXd localG;
+        if (wantG) localG.setZero(acc.grad.size());
+        if (wantH) localH.reserve(static_cast<size_t>(81) * nt / 2 + 81);
+#pragma omp for schedule(static)
+        for (int e = 0; e < nt; ++e) {
+            const int n[3] = {m_mesh.tris(0, e), m_mesh.tris(1, e), m_mesh.tris(2, e)};
+            const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
+            Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
+            for (int a = 0; a < 3; ++a) F += x.col(n[a]) * sg.dN[a].transpose();
+            const Mat2 C = F.transpose() * F;
+            if (!(C.determinant() > 1e-12)) {
+#pragma omp critical
+                {
+                    invalid = true;
+                    badElement = e;
+                }
+                continue;
+            }
+            Eigen::Vector3d S;
+            Eigen::Matrix3d D;
+            const double vol = m_area0[e] * m_thickness;
+            energy += vol * mat.calcEnergy(C, wantG || wantH ? &S : nullptr, wantH ? &D : nullptr);
+            if (!wantG && !wantH) continue;
+            Mat2 Sm;
+            Sm << S(0), S(2), S(2), S(1);
+            const Vec3 f1 = F.col(0), f2 = F.col(1);
+            if (wantG) {
+                const Eigen::Matrix<double, 3, 2> P = F * Sm;
+                for (int a = 0; a < 3; ++a) localG.segment<3>(3 * n[a]) += vol * (P * sg.dN[a]);
+            }
+            if (wantH) {
+                Eigen::Matrix3d B[3];  // dE_v / dx_a
+                for (int a = 0; a < 3; ++a) {
+                    const Vec2& g = sg.dN[a];
+                    B[a].row(0) = g(0) * f1.transpose();
+                    B[a].row(1) = g(1) * f2.transpose();
+                    B[a].row(2) = g(1) * f1.transpose() + g(0) * f2.transpose();
+                }
+                for (int a = 0; a < 3; ++a) {
+                    const Eigen::Matrix3d DB = D * B[a];
+                    for (int b = 0; b < 3; ++b) {
+                        Mat3 K = B[b].transpose() * DB;  // (b,a) block
+                        K.diagonal().array() += sg.dN[b].dot(Sm * sg.dN[a]);
+                        K *= vol;
+                        for (int i = 0; i < 3; ++i)
+                            for (int j = 0; j < 3; ++j)
+                                localH.emplace_back(3 * n[b] + i, 3 * n[a] + j, K(i, j));
+                    }
+                }
+            }
+        }
+#pragma omp critical
+        {
+            if (wantG) acc.grad += localG;
+            if (wantH) acc.hess.insert(acc.hess.end(), localH.begin(), localH.end());
+        }
+    }
+    if (invalid) {
+        acc.energy = kInf;
+        if (wantG || wantH)
+            throw NumericalError("membrane element " + std::to_string(badElement) +
+                                     " collapsed (det C <= 0)",
+                                 -1, -1, badElement);
+        return;
+    }
+    acc.energy += energy;
+}
+
+void MembraneModel::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
+    addMembraneEnergy(x, acc);
+    if (!std::isfinite(acc.energy)) return;
+    addLoadEnergy(x, acc);
+}
+
+void MembraneModel::addLoadEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
+    // Prescribed follower pressures: -p V_c.
+    for (size_t c = 0; c < m_mesh.chambers.size(); ++c)
+        if (m_chamberGas[c] < 0 && m_chamberPressure[c] != 0.0)
+            calcChamberVolume(m_mesh, static_cast<int>(c), x, &acc, -m_chamberPressure[c]);
+    // Gases: -G(V); gradient -(p - pa) dV; sparse Hessian -(p - pa) d2V. The dense rank-one
+    // part -(dp/dV) g g^T is left to the solver (calcGasRankOne).
+    for (const GasBody& gb : m_gases) {
+        double V = 0.0;
+        for (int c : gb.chambers) V += calcChamberVolume(m_mesh, c, x);
+        if (!(V > 0.0)) {
+            acc.energy = kInf;
+            if (acc.wantGradient) throw NumericalError("gas volume became non-positive");
+            return;
+        }
+        const double pg = gb.gas.calcGaugePressure(V);
+        acc.energy -= gb.gas.calcWorkPotential(V);
+        if (acc.wantGradient || acc.wantHessian) {
+            // Add -pg * (dV, d2V); the energy part -pg*V is taken back out.
+            const double e0 = acc.energy;
+            for (int c : gb.chambers) calcChamberVolume(m_mesh, c, x, &acc, -pg);
+            acc.energy = e0;
+        }
+    }
+    // Gravity: -m g . x
+    if (m_density > 0.0 && m_gravity.squaredNorm() > 0.0) {
+        for (int i = 0; i < m_mesh.getNumNodes(); ++i) {
+            acc.energy -= m_nodalMass(i) * m_gravity.dot(x.col(i));
+            if (acc.wantGradient) acc.grad.segment<3>(3 * i) -= m_nodalMass(i) * m_gravity;
+        }
+    }
+    for (const auto& c : m_contacts) c->addEnergy(x, acc);
+    if (m_selfContact) m_selfContact->addEnergy(x, acc);
+}
+
+std::vector<int> MembraneModel::calcWrinkleStates(const Eigen::Matrix3Xd& x) const {
+    std::vector<int> states(m_mesh.getNumTris(), 0);
+    const auto* w = dynamic_cast<const WrinklingMaterial*>(m_material.get());
+    if (!w) return states;
+    for (int e = 0; e < m_mesh.getNumTris(); ++e) {
+        const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
+        Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
+        for (int a = 0; a < 3; ++a) F += x.col(m_mesh.tris(a, e)) * sg.dN[a].transpose();
+        states[e] = w->calcState(F.transpose() * F);
+    }
+    return states;
+}
+
+Eigen::VectorXd MembraneModel::calcPrincipalStress(const Eigen::Matrix3Xd& x) const {
+    Eigen::VectorXd s(m_mesh.getNumTris());
+    for (int e = 0; e < m_mesh.getNumTris(); ++e) {
+        const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
+        Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
+        for (int a = 0; a < 3; ++a) F += x.col(m_mesh.tris(a, e)) * sg.dN[a].transpose();
+        const Mat2 C = F.transpose() * F;
+        Eigen::Vector3d S;
+        m_material->calcEnergy(C, &S, nullptr);
+        Mat2 Sm;
+        Sm << S(0), S(2), S(2), S(1);
+        // Cauchy stress in the deformed plane: sigma = J^-1 F S F^T with J = 1 (incompressible):
+        // in-plane sigma has the eigenvalues of S C (similar matrix).
+        const Mat2 SC = Sm * C;
+        Eigen::EigenSolver<Mat2> es(SC);
+        s(e) = es.eigenvalues().real().maxCoeff();
+    }
+    return s;
+}
+
+}  // namespace bags

@@ -1,1 +1,136 @@
-// (under construction)
+// The model's total tangent (membrane + follower pressure + gas, including the dense rank-one
+// gas term the solver adds by Sherman-Morrison-Woodbury) against finite differences, and the
+// Newton solver's behaviour.
+#include "TestMeshes.h"
+
+#include <bags/Gas.h>
+#include <bags/Geometry.h>
+#include <bags/Material.h>
+#include <bags/Solver.h>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/SparseCore>
+
+#include <random>
+
+using namespace bags;
+
+namespace {
+
+Eigen::VectorXd totalGradient(const MembraneModel& m, const Eigen::Matrix3Xd& x) {
+    EnergyAccumulator acc(m.getMesh().getNumNodes());
+    acc.wantHessian = false;
+    m.addEnergy(x, acc);
+    return acc.grad;
+}
+
+double totalEnergy(const MembraneModel& m, const Eigen::Matrix3Xd& x) {
+    EnergyAccumulator acc(m.getMesh().getNumNodes());
+    acc.wantHessian = false;
+    m.addEnergy(x, acc);
+    return acc.energy;
+}
+
+// Sparse tangent plus the rank-one gas terms -(dp/dV) g g^T, as the solver forms them.
+Eigen::MatrixXd totalHessian(const MembraneModel& m, const Eigen::Matrix3Xd& x) {
+    const int n = 3 * m.getMesh().getNumNodes();
+    EnergyAccumulator acc(m.getMesh().getNumNodes());
+    m.addEnergy(x, acc);
+    Eigen::SparseMatrix<double> H(n, n);
+    H.setFromTriplets(acc.hess.begin(), acc.hess.end());
+    Eigen::MatrixXd Hd(H);
+    for (int g = 0; g < m.getNumGases(); ++g) {
+        Eigen::VectorXd dV;
+        const double V = m.calcGasVolume(g, x, &dV);
+        Hd -= m.getGas(g).calcPressureDerivative(V) * dV * dV.transpose();
+    }
+    return Hd;
+}
+
+Eigen::Matrix3Xd perturbed(const Eigen::Matrix3Xd& x, double amplitude, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::Matrix3Xd y = x;
+    for (int i = 0; i < y.size(); ++i) y.data()[i] += amplitude * u(rng);
+    return y;
+}
+
+MembraneModel makeGasSphere(double* V0) {
+    Mesh mesh = makeSphere(0.05, 1);
+    EXPECT_TRUE(test::fixSphereRigidModes(mesh));
+    auto mat = std::make_shared<WrinklingMaterial>(makeYeoh(1e6, -1e4, 1e3), 1e-3);
+    MembraneModel model(mesh, mat, 0.2e-3);
+    *V0 = calcChamberVolume(mesh, 0, mesh.X);
+    GasChamber gas(GasOptions(), 1.2 * GasOptions().getAmbientDensity() * *V0);
+    gas.seal(*V0);
+    model.addGas(gas, {0});
+    return model;
+}
+
+}  // namespace
+
+TEST(ModelTangent, GasAndFollowerPressureMatchFiniteDifferences) {
+    double V0 = 0.0;
+    const MembraneModel model = makeGasSphere(&V0);
+    // 5 % stretched and 1 mm noise: taut, with some wrinkled elements.
+    const Eigen::Matrix3Xd x = perturbed(1.05 * model.getMesh().X, 1e-3, 7);
+    const Eigen::VectorXd g = totalGradient(model, x);
+    const Eigen::MatrixXd H = totalHessian(model, x);
+    const double h = 1e-7;
+    Eigen::MatrixXd Hfd(H.rows(), H.cols());
+    Eigen::VectorXd gfd(g.size());
+    for (int k = 0; k < g.size(); ++k) {
+        Eigen::Matrix3Xd xp = x, xm = x;
+        xp.data()[k] += h;
+        xm.data()[k] -= h;
+        Hfd.col(k) = (totalGradient(model, xp) - totalGradient(model, xm)) / (2 * h);
+        gfd(k) = (totalEnergy(model, xp) - totalEnergy(model, xm)) / (2 * h);
+    }
+    // Tolerances: central differences, 1e-5 relative (gas energy ~ p V is large, so the
+    // energy difference loses more digits: 1e-4 there).
+    EXPECT_LT((g - gfd).norm(), 1e-4 * g.norm());
+    EXPECT_LT((H - Hfd).norm(), 1e-5 * H.norm());
+}
+
+TEST(Solver, NewtonConvergesQuadraticallyNearEquilibrium) {
+    double V0 = 0.0;
+    const MembraneModel model = makeGasSphere(&V0);
+    // Solve once (from the reference shape, with the pseudo-transient start), then perturb
+    // by 0.1 mm and re-solve: a full Newton with the exact tangent needs only a few steps.
+    Eigen::Matrix3Xd x = model.getMesh().X;
+    Mesh m = model.getMesh();
+    SolverOptions so;
+    SolveSummary s1 = solveEquilibrium(model, x, so);
+    ASSERT_TRUE(s1.converged) << s1.residualNorm;
+    Eigen::Matrix3Xd y = perturbed(x, 1e-4, 3);
+    SolveSummary s2 = solveEquilibrium(model, y, so);
+    ASSERT_TRUE(s2.converged);
+    EXPECT_LE(s2.iterations, 8);
+    // The perturbed start returns to the same volume (unique equilibrium of the gas sphere).
+    EXPECT_NEAR(calcChamberVolume(m, 0, y), calcChamberVolume(m, 0, x), 1e-9 * V0);
+}
+
+TEST(Solver, FixedDofsDoNotMove) {
+    Mesh mesh = makeBoxBag(0.1, 0.1, 0.05, 0.02, true);
+    ASSERT_FALSE(mesh.supportNodes.empty());
+    auto mat = std::make_shared<WrinklingMaterial>(makeNeoHookean(1e6), 1e-3);
+    MembraneModel model(mesh, mat, 0.2e-3);
+    model.setChamberPressure(0, 200.0);
+    Eigen::Matrix3Xd x = mesh.X;
+    const SolveSummary s = solveEquilibrium(model, x, SolverOptions());
+    EXPECT_TRUE(s.converged);
+    for (int n : mesh.supportNodes) EXPECT_EQ((x.col(n) - mesh.X.col(n)).norm(), 0.0);
+    EXPECT_GT(calcChamberVolume(mesh, 0, x), calcChamberVolume(mesh, 0, mesh.X));
+}
+
+TEST(Solver, RejectsBadOptionsAndNonFiniteStart) {
+    SolverOptions so;
+    so.maxIterations = 0;
+    EXPECT_THROW(so.validate(), std::invalid_argument);
+    Mesh mesh = makeBoxBag(0.1, 0.1, 0.05, 0.05, true);
+    MembraneModel model(mesh, std::shared_ptr<MembraneMaterial>(makeNeoHookean(1e6)), 0.2e-3);
+    Eigen::Matrix3Xd x = mesh.X;
+    x(0, 0) = std::nan("");
+    EXPECT_THROW(solveEquilibrium(model, x, SolverOptions()), NumericalError);
+}

@@ -21,10 +21,15 @@ struct DoubleWedgeParams {
     bool bondBase = true;      ///< base panel nodes are support nodes
     /// Throws std::invalid_argument naming the parameter if the geometry is impossible.
     void validate() const;
+    /// x of the apex (and of the diaphragm), sqrt(shortSide^2 - height^2) [m].
+    double calcApexX() const;
+    /// Volume of the flat-panel (unstretched) shape, longSide * height * width / 2 [m^3].
+    double calcFlatVolume() const;
 };
 Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p);
 
-/// Rectangular box bag lx x ly x lz with the base on z = 0 (one chamber).
+/// Rectangular box bag lx x ly x lz with the base on z = 0, centred on x = y = 0 (one chamber
+/// "box"; panels "bottom", "top", "side-x-minus", "side-x-plus", "side-y-minus", "side-y-plus").
 Mesh makeBoxBag(double lx, double ly, double lz, double meshSize, bool bondBase = true);
 
 /// Sphere of radius r centred at the origin (icosphere, `refinements` subdivisions), one
@@ -33,7 +38,8 @@ Mesh makeSphere(double r, int refinements);
 
 /// Square cushion of two flat square sheets of edge `edge` welded at their rim, reference
 /// configuration flat (top at z = +gap/2, bottom at z = -gap/2), `n` divisions per edge.
-/// Rim nodes shared. One chamber. For the inflated-square-airbag benchmark.
+/// Rim nodes shared (they lie at z = 0, so with gap > 0 the outermost ring of triangles is
+/// slightly tilted). One chamber. For the inflated-square-airbag benchmark.
 Mesh makeSquareCushion(double edge, int n, double gap = 0.0);
 
 /// Flat circular disk of radius r in the x-y plane, normals +z, rim nodes in supportNodes.

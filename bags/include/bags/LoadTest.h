@@ -81,6 +81,12 @@ using LoadTestObserver = std::function<void(const LoadStep&, const Mesh&, const 
 
 LoadTestResult runLoadTest(const LoadTestOptions& options, const LoadTestObserver& observer = {});
 
+/// Sets LoadCurve::stage: stage 3 for masses below the one of least stiffness (stiffness rises
+/// again as gas is let out); above it, stage 1 where the stiffness range is linear
+/// (r2 >= linearR2) and stage 2 where it is not (kinked curves). Curves without a stiffness
+/// get stage 0.
+void classifyStages(std::vector<LoadCurve>& curves, double linearR2 = 0.995);
+
 /// Seed's published fit k(m) [N/mm], m in g: highest power first.
 std::vector<double> getSeedStiffnessPolynomial();
 

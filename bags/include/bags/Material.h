@@ -63,6 +63,13 @@ std::unique_ptr<MembraneMaterial> makeOgden(const std::vector<double>& mu,
 class WrinklingMaterial : public MembraneMaterial {
 public:
     WrinklingMaterial(std::unique_ptr<MembraneMaterial> base, double residual = 1e-3);
+    /// As above, but the residual term is residual * W_residual with its own material (e.g. a
+    /// neo-Hookean of the base's initial shear modulus, which stays convex where a Yeoh with
+    /// C30 < 0 does not: in strong biaxial compression, I1 = tr C + 1/det C grows without bound).
+    /// @throws std::invalid_argument if residual < 0 or a material is null.
+    WrinklingMaterial(std::unique_ptr<MembraneMaterial> base, double residual,
+                      std::unique_ptr<MembraneMaterial> residualMaterial);
+    WrinklingMaterial(const WrinklingMaterial& other);
     double calcEnergy(const Mat2& C, Eigen::Vector3d* S, Eigen::Matrix3d* D) const override;
     double getInitialShearModulus() const override;
     std::string getName() const override;
@@ -71,9 +78,16 @@ public:
     int calcState(const Mat2& C) const;
     const MembraneMaterial& getBase() const { return *m_base; }
     double getResidual() const { return m_residual; }
+    /// The material of the residual term (the base unless one was given).
+    const MembraneMaterial& getResidualMaterial() const {
+        return m_residualMaterial ? *m_residualMaterial : *m_base;
+    }
+    /// Principal stretches (lambda1 >= lambda2) of the in-plane C [-].
+    static void calcPrincipalStretches(const Mat2& C, double* lambda1, double* lambda2);
 private:
     std::unique_ptr<MembraneMaterial> m_base;
     double m_residual;
+    std::unique_ptr<MembraneMaterial> m_residualMaterial;  ///< null: the base
 };
 
 }  // namespace bags

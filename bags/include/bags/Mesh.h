@@ -43,7 +43,28 @@ struct Mesh {
     /// support nodes (then its volume is measured from the fixed rim); throws
     /// std::invalid_argument with the reason.
     void validate() const;
+
+    /// Index of the panel called `name`, -1 if there is none.
+    int findPanel(const std::string& name) const;
+    /// Index of the chamber called `name`, -1 if there is none.
+    int findChamber(const std::string& name) const;
 };
+
+/// Shape statistics of a mesh's reference triangles (for choosing and reporting mesh sizes).
+struct MeshQuality {
+    int numNodes = 0;        ///< number of nodes
+    int numTris = 0;         ///< number of triangles
+    double minAngle = 0.0;   ///< smallest interior angle of any triangle [rad]
+    double maxAngle = 0.0;   ///< largest interior angle of any triangle [rad]
+    double meanAspect = 0.0; ///< mean of R/(2 r) (circumradius over twice the inradius; 1 = equilateral)
+    double maxAspect = 0.0;  ///< largest R/(2 r)
+    double minEdge = 0.0;    ///< shortest edge [m]
+    double meanEdge = 0.0;   ///< mean edge length over triangles' edges [m]
+    double maxEdge = 0.0;    ///< longest edge [m]
+};
+
+/// Triangle shape statistics of the reference configuration mesh.X.
+MeshQuality calcMeshQuality(const Mesh& mesh);
 
 /// Enclosed volume [m^3] of chamber `c` at deformed positions x (3 x N) by the divergence
 /// theorem, V = 1/6 sum sign * x0 . (x1 x x2). If acc is given, adds scale*V to acc.energy,
@@ -53,5 +74,9 @@ double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x,
 
 /// dV/dx of chamber c as a dense 3N vector [m^2].
 Eigen::VectorXd calcChamberVolumeGradient(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x);
+
+/// Adds scale*dV/dx of chamber c into `grad` (size 3N) without allocating; returns V [m^3].
+double addChamberVolumeGradient(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x,
+                                Eigen::VectorXd& grad, double scale = 1.0);
 
 }  // namespace bags

@@ -70,6 +70,8 @@ public:
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     /// Only the membrane elements (strain energy, internal forces, material+geometric tangent).
     void addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+    /// Everything but the membrane: pressures, gases (sparse part), gravity, contact.
+    void addLoadEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     /// The gas bodies' volumes (sum of their chambers) [m^3] and gradients, for the solver.
     double calcGasVolume(int gas, const Eigen::Matrix3Xd& x, Eigen::VectorXd* grad) const;
     /// Gauge pressure [Pa] of chamber c at x (gas law or prescribed).

@@ -1,0 +1,199 @@
+// Newton solver for the quasi-static equilibrium of a MembraneModel.
+#include <bags/Solver.h>
+
+#include "SparseSolve.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace bags {
+
+namespace {
+
+using SpMat = detail::SparseSpdSolver::Matrix;
+
+// Free-dof numbering: -1 for fixed dofs.
+std::vector<int> makeFreeMap(int ndof, const std::vector<int>& fixed, int* nfree) {
+    std::vector<int> map(ndof, 0);
+    for (int d : fixed) map[d] = -1;
+    int k = 0;
+    for (int i = 0; i < ndof; ++i)
+        if (map[i] >= 0) map[i] = k++;
+    *nfree = k;
+    return map;
+}
+
+Eigen::VectorXd reduce(const Eigen::VectorXd& full, const std::vector<int>& map, int nfree) {
+    Eigen::VectorXd r(nfree);
+    for (int i = 0; i < static_cast<int>(map.size()); ++i)
+        if (map[i] >= 0) r(map[i]) = full(i);
+    return r;
+}
+
+void expandAdd(const Eigen::VectorXd& red, const std::vector<int>& map, double alpha,
+               Eigen::Matrix3Xd& x) {
+    double* xp = x.data();
+    for (int i = 0; i < static_cast<int>(map.size()); ++i)
+        if (map[i] >= 0) xp[i] += alpha * red(map[i]);
+}
+
+// Lower triangle of the reduced Hessian.
+SpMat assembleLower(const std::vector<Triplet>& trips, const std::vector<int>& map, int nfree) {
+    std::vector<Triplet> red;
+    red.reserve(trips.size() / 2 + nfree);
+    for (const Triplet& t : trips) {
+        const int i = map[t.row()], j = map[t.col()];
+        if (i < 0 || j < 0 || i < j) continue;
+        red.emplace_back(i, j, t.value());
+    }
+    for (int i = 0; i < nfree; ++i) red.emplace_back(i, i, 0.0);  // keep the diagonal in the pattern
+    SpMat K(nfree, nfree);
+    K.setFromTriplets(red.begin(), red.end());
+    return K;
+}
+
+double energyAt(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
+    EnergyAccumulator acc(0);
+    acc.grad.resize(0);
+    acc.wantGradient = false;
+    acc.wantHessian = false;
+    try {
+        model.addEnergy(x, acc);
+    } catch (const NumericalError&) {
+        return std::numeric_limits<double>::infinity();
+    }
+    if (!x.allFinite()) return std::numeric_limits<double>::infinity();
+    return acc.energy;
+}
+
+}  // namespace
+
+SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
+                              const SolverOptions& options) {
+    options.validate();
+    const int nn = model.getMesh().getNumNodes();
+    const int ndof = 3 * nn;
+    int nfree = 0;
+    const std::vector<int> map = makeFreeMap(ndof, model.getFixedDofs(), &nfree);
+    const bool conservative = model.isConservative();
+
+    SolveSummary sum;
+    detail::SparseSpdSolver llt;
+    double shift = 0.0;  // pseudo-transient diagonal shift [N/m]
+    double prevResidual = -1.0;
+
+    for (int it = 0; it <= options.maxIterations; ++it) {
+        if (!x.allFinite()) throw NumericalError("non-finite nodal positions", -1, it);
+        EnergyAccumulator acc(nn);
+        model.addMembraneEnergy(x, acc);
+        const double membraneForce = reduce(acc.grad, map, nfree).norm();
+        model.addLoadEnergy(x, acc);
+        const Eigen::VectorXd r = reduce(acc.grad, map, nfree);
+        const double rnorm = r.norm();
+        sum.residualNorm = rnorm;
+        sum.energy = acc.energy;
+        sum.iterations = it;
+        if (!std::isfinite(rnorm)) throw NumericalError("non-finite residual", -1, it);
+        const double tol = std::max(options.absoluteTolerance,
+                                    options.relativeTolerance * std::max(membraneForce, 1e-300));
+        if (rnorm <= tol) {
+            sum.converged = true;
+            return sum;
+        }
+        if (it == options.maxIterations) break;
+
+        SpMat K = assembleLower(acc.hess, map, nfree);
+        double diagMean = 0.0;
+        for (int i = 0; i < nfree; ++i) diagMean += std::abs(K.coeff(i, i));
+        diagMean = std::max(diagMean / std::max(nfree, 1), 1e-12);
+
+        // Dense rank-one gas terms: c g g^T, c = -dp/dV > 0.
+        const int ng = model.getNumGases();
+        Eigen::MatrixXd U(nfree, ng);
+        Eigen::VectorXd cgas(ng);
+        for (int g = 0; g < ng; ++g) {
+            Eigen::VectorXd grad;
+            const double V = model.calcGasVolume(g, x, &grad);
+            U.col(g) = reduce(grad, map, nfree);
+            cgas(g) = -model.getGas(g).calcPressureDerivative(V);
+        }
+
+        // Factor K + shift I, raising the shift until positive definite.
+        bool factored = false;
+        for (int attempt = 0; attempt < 30; ++attempt) {
+            SpMat Ks = K;
+            if (shift > 0.0)
+                for (int i = 0; i < nfree; ++i) Ks.coeffRef(i, i) += shift;
+            ++sum.factorizations;
+            if (llt.factorize(Ks)) {
+                factored = true;
+                break;
+            }
+            shift = shift > 0.0 ? shift * 10.0 : options.pseudoTransientShift * diagMean;
+        }
+        if (!factored) throw NumericalError("tangent could not be factored", -1, it);
+        if (shift > 0.0) ++sum.shiftedIterations;
+
+        // Sherman-Morrison-Woodbury: (K + U C U^T)^-1 (-r).
+        Eigen::VectorXd d = llt.solve(Eigen::VectorXd(-r));
+        if (ng > 0) {
+            const Eigen::MatrixXd KU = llt.solve(U);
+            Eigen::MatrixXd cap = U.transpose() * KU;
+            cap.diagonal() += cgas.cwiseInverse();
+            d -= KU * cap.ldlt().solve(U.transpose() * d);
+        }
+
+        // Line search: Armijo on the energy (conservative), on the residual norm otherwise.
+        const double slope = r.dot(d);
+        double alpha = 1.0;
+        bool accepted = false;
+        const Eigen::Matrix3Xd x0 = x;
+        for (int ls = 0; ls < 25; ++ls) {
+            x = x0;
+            expandAdd(d, map, alpha, x);
+            if (conservative && slope < 0.0) {
+                const double E = energyAt(model, x);
+                const double roundoff = 1e-13 * (std::abs(acc.energy) + 1.0);
+                if (std::isfinite(E) && E <= acc.energy + 1e-4 * alpha * slope + roundoff) {
+                    accepted = true;
+                    break;
+                }
+            } else {
+                EnergyAccumulator trial(nn);
+                trial.wantHessian = false;
+                bool ok = true;
+                try {
+                    model.addEnergy(x, trial);
+                } catch (const NumericalError&) {
+                    ok = false;
+                }
+                if (ok && reduce(trial.grad, map, nfree).norm() < (1.0 - 1e-4 * alpha) * rnorm) {
+                    accepted = true;
+                    break;
+                }
+            }
+            alpha *= 0.5;
+        }
+        if (!accepted) {
+            // Not a usable direction: go back and damp harder (pseudo-transient).
+            x = x0;
+            shift = std::max(shift * 10.0, options.pseudoTransientShift * diagMean);
+            continue;
+        }
+        // Relax the shift as the step is accepted whole; stop shifting once small.
+        if (shift > 0.0) {
+            const double ratio = prevResidual > 0.0 ? rnorm / prevResidual : 1.0;
+            shift *= (alpha == 1.0) ? std::min(0.1, ratio) : (alpha < 0.1 ? 2.0 : 1.0);
+            if (shift < 1e-10 * diagMean) shift = 0.0;
+        }
+        prevResidual = rnorm;
+    }
+    sum.converged = false;
+    return sum;
+}
+
+}  // namespace bags
