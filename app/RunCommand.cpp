@@ -1,9 +1,423 @@
-// (under construction)
-#include "Commands.h"
+// bagsim run: reads a scenario, runs it, streams the results into the output folder and
+// prints progress and a summary. Exit status: 0 complete, 1 the run failed (numerical or I/O),
+// 2 bad input (scenario, options, output folder), 130 interrupted (Ctrl-C).
+#include <bags/LoadTest.h>
+#include <bags/Polynomial.h>
+#include <bagsim/Version.h>
+#include <io/InputError.h>
+#include <io/LoadTestScenario.h>
+#include <io/Results.h>
+#include <io/Scenario.h>
+#include <io/Units.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "Commands.h"
+
 namespace bagsim::app {
-int runRunCommand(int, char**) {
-    std::cerr << "bagsim: this command is not built yet\n";
-    return 1;
+
+namespace {
+
+const char* kHelp =
+    "usage: bagsim run SCENARIO.yaml [--out DIR] [--force] [--set KEY=VALUE]...\n"
+    "\n"
+    "Runs a scenario and writes its results into an output folder. The scenario kind\n"
+    "seed-load-test is the seed study's test rig: one airbag inflated to each gas mass, pressed\n"
+    "by a rigid block to a peak force and released; it prints the stiffness per gas mass and the\n"
+    "k(m) fit next to the seed's. Scenario keys: docs/scenario-reference.md.\n"
+    "\n"
+    "options:\n"
+    "  --out DIR          output folder (default: out/<scenario name>)\n"
+    "  --force            write into DIR even if it is not empty (its result files are replaced)\n"
+    "  --set KEY=VALUE    override a scenario value, e.g. --set airbag.mesh_size=\"5 mm\"\n"
+    "                     (repeatable; VALUE is YAML: --set test.gas_masses=\"[3 g, 2 g]\")\n"
+    "  --quiet            no progress, only the summary\n"
+    "  -h, --help         this text\n"
+    "\n"
+    "outputs (docs/output-layout.md): results.h5, results.xdmf (open in ParaView),\n"
+    "load_displacement.csv, stiffness.csv. While the run writes, the folder holds a file\n"
+    "INCOMPLETE; it is removed only when the run finishes. Ctrl-C stops the run after the\n"
+    "current step and keeps what was computed.\n"
+    "\n"
+    "exit status: 0 complete, 1 run failed, 2 bad input, 130 interrupted.\n";
+
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void onInterrupt(int sig) {
+    g_interrupted = sig;
+    // A second Ctrl-C ends the program at once.
+    std::signal(sig, SIG_DFL);
 }
+
+/// Thrown from the observer when the user interrupts; unwinds out of the solver.
+struct Interrupted : std::runtime_error {
+    Interrupted() : std::runtime_error("interrupted by the user") {}
+};
+
+/// Bad command-line usage: exit status 2.
+struct UsageError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+struct Args {
+    std::string scenario;
+    std::string out;
+    bool force = false;
+    bool quiet = false;
+    bool help = false;
+    std::vector<std::string> sets;
+    std::string commandLine;
+};
+
+Args parseArgs(int argc, char** argv) {
+    Args a;
+    a.commandLine = "bagsim run";
+    for (int i = 0; i < argc; ++i) a.commandLine += std::string(" ") + argv[i];
+    for (int i = 0; i < argc; ++i) {
+        const std::string arg = argv[i];
+        auto value = [&](const std::string& name) -> std::string {
+            const std::string prefix = name + "=";
+            if (arg.rfind(prefix, 0) == 0) return arg.substr(prefix.size());
+            if (i + 1 >= argc) throw UsageError(name + " needs a value");
+            return argv[++i];
+        };
+        if (arg == "-h" || arg == "--help") {
+            a.help = true;
+        } else if (arg == "--force") {
+            a.force = true;
+        } else if (arg == "--quiet" || arg == "-q") {
+            a.quiet = true;
+        } else if (arg == "--out" || arg.rfind("--out=", 0) == 0) {
+            a.out = value("--out");
+        } else if (arg == "--set" || arg.rfind("--set=", 0) == 0) {
+            a.sets.push_back(value("--set"));
+        } else if (arg.rfind("-", 0) == 0 && arg.size() > 1) {
+            throw UsageError("unknown option '" + arg +
+                             "'; valid: --out DIR, --force, --set KEY=VALUE, --quiet, --help");
+        } else if (a.scenario.empty()) {
+            a.scenario = arg;
+        } else {
+            throw UsageError("one scenario at a time ('" + a.scenario + "' and '" + arg + "')");
+        }
+    }
+    if (!a.help && a.scenario.empty())
+        throw UsageError(
+            "which scenario? e.g. bagsim run "
+            "scenarios/seed-load-test.yaml");
+    return a;
+}
+
+std::string fmt(const char* f, double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+std::string formatPolynomial(const std::vector<double>& c) {
+    std::string s;
+    const int n = static_cast<int>(c.size()) - 1;
+    for (int i = 0; i <= n; ++i) {
+        const int power = n - i;
+        std::string term = fmt("%.4g", std::fabs(c[i]));
+        if (power >= 1) term += " m";
+        if (power >= 2) term += "^" + std::to_string(power);
+        s += (i == 0 ? (c[i] < 0 ? "-" : "") : (c[i] < 0 ? " - " : " + ")) + term;
+    }
+    return s;
+}
+
+// Progress of the run as the observer sees it, one line per finished curve.
+class Progress {
+  public:
+    Progress(const bags::LoadTestOptions& o, bool quiet)
+        : m_options(o), m_quiet(quiet), m_tty(isatty(STDERR_FILENO) != 0) {}
+
+    void onStep(const bags::LoadStep& s, const Eigen::Matrix3Xd& x) {
+        if (s.curve != m_curve) {
+            if (m_curve >= 0) printCurve();
+            m_curve = s.curve;
+            m_steps = 0;
+            m_peakForce = 0.0;
+            m_peakDisplacement = 0.0;
+            m_pressure0 = calcPressure(s);
+            m_height0 = x.row(2).maxCoeff();
+            m_curveStart = std::chrono::steady_clock::now();
+            m_rangeDisplacement.clear();
+            m_rangeForce.clear();
+        }
+        ++m_steps;
+        if (s.loading && s.force >= m_options.stiffnessFrom && s.force <= m_options.stiffnessTo) {
+            m_rangeDisplacement.push_back(s.displacement);
+            m_rangeForce.push_back(s.force);
+        }
+        if (s.force > m_peakForce) {
+            m_peakForce = s.force;
+            m_peakDisplacement = s.displacement;
+        }
+        if (m_tty && !m_quiet) {
+            const auto now = std::chrono::steady_clock::now();
+            if (std::chrono::duration<double>(now - m_lastLive).count() > 0.2) {
+                m_lastLive = now;
+                std::fprintf(stderr, "\r\033[K  %s  step %d %s: F = %.1f N, d = %.1f mm",
+                             io::formatQuantity(m_options.gasMasses[s.curve], "g", 2).c_str(),
+                             s.step, s.loading ? "loading" : "unloading", s.force,
+                             s.displacement * 1e3);
+                std::fflush(stderr);
+            }
+        }
+    }
+
+    void finish() {
+        if (m_curve >= 0) printCurve();
+        m_curve = -1;
+    }
+
+  private:
+    static double calcPressure(const bags::LoadStep& s) {
+        double sum = 0.0;
+        for (double p : s.gaugePressure) sum += p;
+        return s.gaugePressure.empty() ? 0.0 : sum / double(s.gaugePressure.size());
+    }
+
+    void printCurve() {
+        if (m_quiet) return;
+        const double secs =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - m_curveStart).count();
+        // Stiffness preview: the library's rule (straight line through the loading steps in the
+        // force range); the table printed at the end is the library's own result.
+        std::string k = "k n/a";
+        if (m_rangeForce.size() >= 2) {
+            try {
+                k = fmt("k = %.3f N/mm",
+                        1e-3 * bags::fitLine(m_rangeDisplacement, m_rangeForce).slope);
+            } catch (const std::invalid_argument&) {
+            }
+        }
+        if (m_tty) std::fprintf(stderr, "\r\033[K");
+        std::fprintf(stderr,
+                     "  curve %d/%zu  %s: p = %.2f kPa, top %.1f mm before loading; %d steps, "
+                     "peak %.1f N at %.1f mm, %s; %.1f s\n",
+                     m_curve + 1, m_options.gasMasses.size(),
+                     io::formatQuantity(m_options.gasMasses[m_curve], "g", 2).c_str(),
+                     m_pressure0 * 1e-3, m_height0 * 1e3, m_steps, m_peakForce,
+                     m_peakDisplacement * 1e3, k.c_str(), secs);
+    }
+
+    const bags::LoadTestOptions& m_options;
+    bool m_quiet;
+    bool m_tty;
+    int m_curve = -1;
+    int m_steps = 0;
+    double m_peakForce = 0.0, m_peakDisplacement = 0.0;
+    double m_pressure0 = 0.0, m_height0 = 0.0;
+    std::vector<double> m_rangeDisplacement, m_rangeForce;  ///< loading steps in the k range
+    std::chrono::steady_clock::time_point m_curveStart, m_lastLive;
+};
+
+void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o) {
+    std::ostream& out = std::cout;
+    out << "\nstiffness over " << fmt("%g", o.stiffnessFrom) << "-" << fmt("%g", o.stiffnessTo)
+        << " N (slope of force vs displacement on loading):\n";
+    out << "  gas [g]  height [mm]  p0 [kPa]  V0 [mL]  steps  peak  k [N/mm]      r2  stage\n";
+    for (const bags::LoadCurve& c : r.curves) {
+        char line[160];
+        std::snprintf(line, sizeof line,
+                      "  %7.3f  %11.1f  %8.2f  %7.0f  %5zu  %4s  %8.3f  %6.4f  %5d\n",
+                      c.gasMass * 1e3, c.unloadedHeight * 1e3, c.inflatedGaugePressure * 1e-3,
+                      c.inflatedVolume * 1e6, c.steps.size(), c.reachedPeak ? "yes" : "no",
+                      c.stiffness * 1e-3, c.r2, c.stage);
+        out << line;
+    }
+
+    const std::vector<double> seed = bags::getSeedStiffnessPolynomial();
+    out << "\nk(m) [N/mm], m [g]:\n";
+    out << "  seed:  k = " << formatPolynomial(seed) << "\n";
+    if (r.kFit.empty()) {
+        out << "  bagsim: no fit (it needs more gas masses than the polynomial order "
+            << o.polynomialOrder << ")\n";
+        return;
+    }
+    out << "  bagsim: k = " << formatPolynomial(r.kFit) << "\n";
+    // Both fits on a fine grid over the seed's range, 1.0-3.5 g.
+    const int n = 251;
+    double maxDiff = 0.0, sumSq = 0.0, maxAt = 1.0;
+    for (int i = 0; i < n; ++i) {
+        const double m = 1.0 + 2.5 * i / (n - 1);
+        const double d = bags::evalPolynomial(r.kFit, m) - bags::evalPolynomial(seed, m);
+        sumSq += d * d;
+        if (std::fabs(d) > std::fabs(maxDiff)) {
+            maxDiff = d;
+            maxAt = m;
+        }
+    }
+    out << "  m [g]   bagsim   seed   difference\n";
+    for (double m = 1.0; m <= 3.5 + 1e-9; m += 0.5) {
+        const double kb = bags::evalPolynomial(r.kFit, m), ks = bags::evalPolynomial(seed, m);
+        char line[96];
+        std::snprintf(line, sizeof line, "  %5.2f  %7.3f  %5.3f  %+8.3f\n", m, kb, ks, kb - ks);
+        out << line;
+    }
+    out << "  difference bagsim - seed over 1.0-3.5 g: max " << fmt("%+.3f", maxDiff)
+        << " N/mm (at " << fmt("%.2f", maxAt) << " g), RMS " << fmt("%.3f", std::sqrt(sumSq / n))
+        << " N/mm\n";
+}
+
+}  // namespace
+
+int runRunCommand(int argc, char** argv) {
+    Args args;
+    try {
+        args = parseArgs(argc, argv);
+    } catch (const UsageError& e) {
+        std::cerr << "bagsim run: " << e.what() << " (see bagsim run --help)\n";
+        return 2;
+    }
+    if (args.help) {
+        std::cout << kHelp;
+        return 0;
+    }
+
+    // Input: everything that can be wrong with the scenario is found before any output exists.
+    io::ScenarioFile file;
+    io::LoadTestScenario sc;
+    std::filesystem::path outPath;
+    std::unique_ptr<io::OutputDir> outDir;
+    try {
+        file = io::ScenarioFile::load(args.scenario);
+        for (const std::string& s : args.sets) file.applyOverride(s);
+        io::readScenarioKind(file);
+        sc = io::readLoadTestScenario(file);
+        outPath = args.out.empty() ? std::filesystem::path("out") / sc.name
+                                   : std::filesystem::path(args.out);
+        outDir = std::make_unique<io::OutputDir>(outPath, args.force);
+    } catch (const io::InputError& e) {
+        std::cerr << "bagsim: error: " << e.what() << "\n";
+        return 2;
+    }
+
+    bags::LoadTestOptions& o = sc.options;
+    // Ctrl-C is noticed within one Newton iteration, not only between load steps (inflating
+    // and letting gas out take many iterations before the first step of a curve).
+    o.solver.monitor = [](int, double, double, double) {
+        if (g_interrupted) throw Interrupted();
+    };
+    if (!args.quiet) {
+        std::cerr << "bagsim " << bagsim::kVersion << ": " << args.scenario << " (" << sc.name
+                  << ")\n"
+                  << "  airbag " << io::formatSignificant(o.geometry.longSide, "mm") << " x "
+                  << io::formatSignificant(o.geometry.width, "mm") << ", height "
+                  << io::formatSignificant(o.geometry.height, "mm") << ", mesh "
+                  << io::formatSignificant(o.geometry.meshSize, "mm") << "; "
+                  << o.material->getName() << " membrane "
+                  << io::formatSignificant(o.thickness, "mm") << "\n"
+                  << "  " << o.gasMasses.size() << " gas masses from "
+                  << io::formatQuantity(o.gasMasses.front(), "g", 2) << " to "
+                  << io::formatQuantity(o.gasMasses.back(), "g", 2) << "; block "
+                  << io::formatSignificant(o.blockSize, "mm") << " at "
+                  << io::formatSignificant(o.loadingRate, "mm/min") << " to "
+                  << io::formatSignificant(o.peakForce, "N") << "\n"
+                  << "  writing to " << outPath.string() << "/ (Ctrl-C stops and keeps what "
+                  << "was computed)\n";
+    }
+
+    io::RunInfo info{args.scenario, file.getText(), file.getOverrides(), args.commandLine};
+    io::LoadTestWriter::Options wo;
+    wo.frameEvery = sc.output.frameEvery;
+    std::unique_ptr<io::LoadTestWriter> writer;
+    try {
+        writer = std::make_unique<io::LoadTestWriter>(*outDir, info, o, wo);
+    } catch (const std::exception& e) {
+        std::cerr << "bagsim: error: cannot write the results: " << e.what() << "\n";
+        outDir->setStatus("failed", e.what());
+        return 1;
+    }
+
+    g_interrupted = 0;
+    auto previousInt = std::signal(SIGINT, onInterrupt);
+    auto previousTerm = std::signal(SIGTERM, onInterrupt);
+    struct RestoreSignals {
+        void (*i)(int);
+        void (*t)(int);
+        ~RestoreSignals() {
+            std::signal(SIGINT, i);
+            std::signal(SIGTERM, t);
+        }
+    } restore{previousInt, previousTerm};
+
+    Progress progress(o, args.quiet);
+    int lastCurve = 0, lastStep = -1;
+    auto observer = [&](const bags::LoadStep& s, const bags::Mesh& mesh,
+                        const Eigen::Matrix3Xd& x) {
+        writer->addStep(s, mesh, x);
+        progress.onStep(s, x);
+        lastCurve = s.curve;
+        lastStep = s.step;
+        if (g_interrupted) throw Interrupted();
+    };
+
+    bags::LoadTestResult result;
+    auto where = [&] {
+        return lastStep < 0 ? std::string("before the first step")
+                            : "after step " + std::to_string(lastStep) + " of curve " +
+                                  std::to_string(lastCurve + 1) + " (" +
+                                  io::formatQuantity(o.gasMasses[lastCurve], "g", 2) + ")";
+    };
+    try {
+        result = bags::runLoadTest(o, observer);
+        progress.finish();
+        writer->finish(result);
+    } catch (const Interrupted&) {
+        progress.finish();
+        const std::string msg = std::string("interrupted by ") +
+                                (g_interrupted == SIGTERM ? "SIGTERM" : "the user (SIGINT)") + " " +
+                                where();
+        writer->fail("interrupted", msg);
+        std::cerr << "bagsim: " << msg << "; partial results kept in " << outPath.string()
+                  << "/ (marked INCOMPLETE)\n";
+        return 130;
+    } catch (const bags::NumericalError& e) {
+        progress.finish();
+        std::string msg = std::string("numerical failure: ") + e.what();
+        if (e.getTime() >= 0) msg += fmt("; time %.4g s", e.getTime());
+        if (e.getStep() >= 0) msg += "; step " + std::to_string(e.getStep());
+        if (e.getElement() >= 0) msg += "; element " + std::to_string(e.getElement());
+        msg += " (" + where() + ")";
+        writer->fail("failed", msg);
+        std::cerr << "bagsim: run failed: " << msg << "\n  partial results kept in "
+                  << outPath.string() << "/ (marked INCOMPLETE)\n";
+        return 1;
+    } catch (const std::exception& e) {
+        progress.finish();
+        const std::string msg = std::string(e.what()) + " (" + where() + ")";
+        writer->fail("failed", msg);
+        std::cerr << "bagsim: run failed: " << msg << "\n  partial results kept in "
+                  << outPath.string() << "/ (marked INCOMPLETE)\n";
+        return 1;
+    }
+
+    printSummary(result, o);
+    const std::string dir = outPath.string();
+    std::cout << "\nsolved in " << fmt("%.1f", result.seconds) << " s; " << writer->getNumSteps()
+              << " steps, " << writer->getNumFrames() << " frames saved\n"
+              << "results in " << dir << "/:\n"
+              << "  " << io::kResultsH5 << "             all curves, mesh and frames "
+              << "(docs/output-layout.md)\n"
+              << "  " << io::kResultsXdmf << "           open in ParaView: the deforming membrane\n"
+              << "  " << io::kLoadDisplacementCsv << "  gas_mass_g,displacement_mm,force_N,"
+              << "pressure_kPa,branch\n"
+              << "  " << io::kStiffnessCsv << "          gas_mass_g,stiffness_N_per_mm,r2,stage\n";
+    return 0;
+}
+
 }  // namespace bagsim::app

@@ -1,1 +1,265 @@
-// (under construction)
+// Penalty contact of membrane nodes with a rigid shape, with regularised Coulomb friction.
+//
+// Normal law per node (g = signed distance, k = pressurePenalty * nodal reference area):
+//   onsetGap = 0:  phi(g) = k g^2 / 2 for g < 0                (C1 energy)
+//   onsetGap = w:  phi'' ramps linearly from 0 at g = w/2 to k at g = -w/2 (C2 energy, cubic
+//                  in the ramp); below -w/2 the force is exactly k g, as without smoothing.
+// Friction: an elastic stick spring k_t = stickStiffnessRatio * k to an anchor on the surface
+// (stored in the shape frame, so it rides with the shape), capped at mu * f_n (slip).
+
+#include <bags/Contact.h>
+
+#include <omp.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace bags {
+
+namespace {
+
+/// Normal penalty potential phi(g) with its first and second derivatives.
+struct NormalLaw {
+    double k;
+    double width;  // onsetGap [m]
+    /// Returns false when the node is not in contact (phi = phi' = phi'' = 0).
+    bool eval(double g, double& phi, double& dphi, double& ddphi) const {
+        if (width <= 0.0) {
+            if (g >= 0.0) return false;
+            phi = 0.5 * k * g * g;
+            dphi = k * g;
+            ddphi = k;
+            return true;
+        }
+        const double half = 0.5 * width;
+        if (g >= half) return false;
+        const double u = half - g;
+        if (u <= width) {
+            phi = k * u * u * u / (6.0 * width);
+            dphi = -k * u * u / (2.0 * width);
+            ddphi = k * u / width;
+        } else {
+            phi = 0.5 * k * g * g + k * width * width / 24.0;
+            dphi = k * g;
+            ddphi = k;
+        }
+        return true;
+    }
+    double activationDistance() const { return width > 0.0 ? 0.5 * width : 0.0; }
+};
+
+/// One node's contribution.
+struct NodeTerm {
+    bool active = false;
+    double energy = 0.0;
+    Vec3 grad = Vec3::Zero();  // dE/dp = - force on the node
+    Mat3 hess = Mat3::Zero();
+    Vec3 closest = Vec3::Zero();
+    double normalForce = 0.0;  // f_n >= 0 [N]
+};
+
+}  // namespace
+
+void RigidContact::Options::validate() const {
+    if (!(pressurePenalty > 0.0) || !std::isfinite(pressurePenalty))
+        throw std::invalid_argument("RigidContact option pressurePenalty must be > 0 [Pa/m], got " +
+                                    std::to_string(pressurePenalty));
+    if (!(friction >= 0.0) || !std::isfinite(friction))
+        throw std::invalid_argument("RigidContact option friction must be >= 0, got " +
+                                    std::to_string(friction));
+    if (!(stickStiffnessRatio > 0.0) || !std::isfinite(stickStiffnessRatio))
+        throw std::invalid_argument("RigidContact option stickStiffnessRatio must be > 0, got " +
+                                    std::to_string(stickStiffnessRatio));
+    if (!(onsetGap >= 0.0) || !std::isfinite(onsetGap))
+        throw std::invalid_argument("RigidContact option onsetGap must be >= 0 [m], got " +
+                                    std::to_string(onsetGap));
+    if (minNodesForThreads < 1)
+        throw std::invalid_argument("RigidContact option minNodesForThreads must be >= 1, got " +
+                                    std::to_string(minNodesForThreads));
+}
+
+struct RigidContact::Impl {
+    Options opt;
+    const RigidShape* shape = nullptr;
+    int numNodes = 0;              // nodes of the mesh
+    std::vector<int> nodes;        // contact set
+    std::vector<double> area;      // nodal reference area [m^2] per contact node
+    std::vector<Vec3> anchor_S;    // friction anchor on the surface, shape frame
+    std::vector<char> hasAnchor;
+
+    NormalLaw law(int j) const { return NormalLaw{opt.pressurePenalty * area[j], opt.onsetGap}; }
+
+    /// Fast rejection of nodes certainly out of reach of the shape.
+    bool isFar(const Vec3& p) const {
+        return shape->calcDistanceLowerBound(p) >= 0.5 * opt.onsetGap;
+    }
+
+    void evalNode(int j, const Vec3& p, bool wantHess, NodeTerm& out) const {
+        out.active = false;
+        if (area[j] <= 0.0 || isFar(p)) return;
+        const NormalLaw nl = law(j);
+        double g;
+        Vec3 c, n;
+        Mat3 dn;
+        shape->calcContactGeometry(p, &g, &c, &n, wantHess ? &dn : nullptr);
+        double phi, dphi, ddphi;
+        if (!nl.eval(g, phi, dphi, ddphi)) return;
+        out.active = true;
+        out.closest = c;
+        out.normalForce = -dphi;
+        out.energy = phi;
+        out.grad = dphi * n;
+        if (wantHess) out.hess = ddphi * n * n.transpose() + dphi * dn;
+        if (opt.friction > 0.0 && hasAnchor[j]) {
+            const Vec3 a_G = shape->getPose() * anchor_S[j];
+            const Mat3 P = Mat3::Identity() - n * n.transpose();
+            const Vec3 dt = P * (p - a_G);
+            const double r = dt.norm();
+            const double kt = opt.stickStiffnessRatio * nl.k;
+            const double cap = opt.friction * out.normalForce;
+            if (kt * r <= cap) {  // stick: an elastic spring to the anchor
+                out.energy += 0.5 * kt * r * r;
+                out.grad += kt * dt;
+                if (wantHess) out.hess += kt * P;
+            } else {  // slip: force mu f_n against the offset; its dependence on f_n is dropped
+                const Vec3 t = dt / r;
+                out.energy += cap * (r - 0.5 * cap / kt);
+                out.grad += cap * t;
+                if (wantHess) out.hess += (cap / r) * (P - t * t.transpose());
+            }
+        }
+    }
+};
+
+RigidContact::RigidContact(const Mesh& mesh, std::vector<int> nodes, const RigidShape& shape,
+                           const Options& options)
+    : m_impl(std::make_shared<Impl>()) {
+    options.validate();
+    Impl& m = *m_impl;
+    m.opt = options;
+    m.shape = &shape;
+    m.numNodes = mesh.getNumNodes();
+    const Eigen::VectorXd A = mesh.calcNodalAreas();
+    for (int v : nodes)
+        if (v < 0 || v >= m.numNodes)
+            throw std::invalid_argument("RigidContact: node " + std::to_string(v) +
+                                        " is not in the mesh (0.." +
+                                        std::to_string(m.numNodes - 1) + ")");
+    m.nodes = std::move(nodes);
+    m.area.resize(m.nodes.size());
+    for (size_t j = 0; j < m.nodes.size(); ++j) m.area[j] = A[m.nodes[j]];
+    m.anchor_S.assign(m.nodes.size(), Vec3::Zero());
+    m.hasAnchor.assign(m.nodes.size(), 0);
+}
+
+void RigidContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
+    const Impl& m = *m_impl;
+    if (x.cols() != m.numNodes)
+        throw std::invalid_argument("RigidContact::addEnergy: x has " + std::to_string(x.cols()) +
+                                    " nodes, the mesh " + std::to_string(m.numNodes));
+    const int n = static_cast<int>(m.nodes.size());
+    const bool wantGrad = acc.wantGradient;
+    const bool wantHess = acc.wantHessian;
+    auto scatter = [&](int j, const NodeTerm& t) {
+        if (!t.active) return;
+        const int v = m.nodes[j];
+        acc.energy += t.energy;
+        if (wantGrad) acc.addGrad(v, t.grad);
+        if (wantHess) acc.addHessBlock(v, v, t.hess);
+    };
+    if (n >= m.opt.minNodesForThreads && omp_get_max_threads() > 1) {
+        // Evaluate in parallel into one buffer, then add serially (acc is not thread-safe).
+        std::vector<NodeTerm> terms(n);
+#pragma omp parallel for schedule(static)
+        for (int j = 0; j < n; ++j) m.evalNode(j, x.col(m.nodes[j]), wantHess, terms[j]);
+        for (int j = 0; j < n; ++j) scatter(j, terms[j]);
+    } else {
+        NodeTerm t;
+        for (int j = 0; j < n; ++j) {
+            m.evalNode(j, x.col(m.nodes[j]), wantHess, t);
+            scatter(j, t);
+        }
+    }
+}
+
+bool RigidContact::isConservative() const { return m_impl->opt.friction == 0.0; }
+
+void RigidContact::commitStep(const Eigen::Matrix3Xd& x) {
+    Impl& m = *m_impl;
+    if (m.opt.friction == 0.0) return;
+    const Eigen::Isometry3d X_SG = m.shape->getPose().inverse();
+    for (size_t j = 0; j < m.nodes.size(); ++j) {
+        const Vec3 p = x.col(m.nodes[j]);
+        double g;
+        Vec3 c, n;
+        m.shape->calcContactGeometry(p, &g, &c, &n, nullptr);
+        double phi, dphi, ddphi;
+        if (m.area[j] <= 0.0 || !m.law(static_cast<int>(j)).eval(g, phi, dphi, ddphi)) {
+            m.hasAnchor[j] = 0;  // released: the next touch starts a fresh anchor
+            continue;
+        }
+        if (!m.hasAnchor[j]) {
+            m.anchor_S[j] = X_SG * c;
+            m.hasAnchor[j] = 1;
+            continue;
+        }
+        const Vec3 a_G = m.shape->getPose() * m.anchor_S[j];
+        const Vec3 dt = (Mat3::Identity() - n * n.transpose()) * (p - a_G);
+        const double r = dt.norm();
+        const double kt = m.opt.stickStiffnessRatio * m.opt.pressurePenalty * m.area[j];
+        const double cap = -m.opt.friction * dphi;
+        if (kt * r > cap) {
+            // Slipped: move the anchor so that the stored elastic offset carries the capped force.
+            Vec3 aNew = c - (cap / kt) * (dt / r);
+            Vec3 aOnSurface;
+            m.shape->calcSignedDistance(aNew, &aOnSurface, nullptr);
+            m.anchor_S[j] = X_SG * aOnSurface;
+        }
+    }
+}
+
+void RigidContact::calcWrenchOnShape(const Eigen::Matrix3Xd& x, Vec3* force, Vec3* torque) const {
+    const Impl& m = *m_impl;
+    Vec3 F = Vec3::Zero(), T = Vec3::Zero();
+    const Vec3 o = m.shape->getPose().translation();
+    NodeTerm t;
+    for (size_t j = 0; j < m.nodes.size(); ++j) {
+        m.evalNode(static_cast<int>(j), x.col(m.nodes[j]), false, t);
+        if (!t.active) continue;
+        // The node pushes the shape with -(force on node) = dE/dp, applied at the contact point.
+        F += t.grad;
+        T += (t.closest - o).cross(t.grad);
+    }
+    if (force) *force = F;
+    if (torque) *torque = T;
+}
+
+Eigen::VectorXd RigidContact::calcNodalPressure(const Eigen::Matrix3Xd& x) const {
+    const Impl& m = *m_impl;
+    Eigen::VectorXd p = Eigen::VectorXd::Zero(m.numNodes);
+    NodeTerm t;
+    for (size_t j = 0; j < m.nodes.size(); ++j) {
+        m.evalNode(static_cast<int>(j), x.col(m.nodes[j]), false, t);
+        if (t.active) p[m.nodes[j]] += t.normalForce / m.area[j];
+    }
+    return p;
+}
+
+int RigidContact::getNumActive(const Eigen::Matrix3Xd& x) const {
+    const Impl& m = *m_impl;
+    int count = 0;
+    NodeTerm t;
+    for (size_t j = 0; j < m.nodes.size(); ++j) {
+        m.evalNode(static_cast<int>(j), x.col(m.nodes[j]), false, t);
+        if (t.active) ++count;
+    }
+    return count;
+}
+
+const std::vector<int>& RigidContact::getNodes() const { return m_impl->nodes; }
+
+const RigidShape& RigidContact::getShape() const { return *m_impl->shape; }
+
+}  // namespace bags

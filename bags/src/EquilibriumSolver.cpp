@@ -147,6 +147,12 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
             d -= KU * cap.ldlt().solve(U.transpose() * d);
         }
 
+        // Trust limit on the largest nodal move (slack membranes can propose huge steps).
+        if (options.maxStep > 0.0) {
+            const double dmax = d.size() ? d.cwiseAbs().maxCoeff() : 0.0;  // per component
+            if (dmax > options.maxStep) d *= options.maxStep / dmax;
+        }
+
         // Line search: Armijo on the energy (conservative), on the residual norm otherwise.
         const double slope = r.dot(d);
         double alpha = 1.0;
@@ -178,6 +184,7 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
             }
             alpha *= 0.5;
         }
+        if (options.monitor) options.monitor(it, rnorm, accepted ? alpha : 0.0, shift);
         if (!accepted) {
             // Not a usable direction: go back and damp harder (pseudo-transient).
             x = x0;

@@ -14,10 +14,11 @@ namespace bags {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr int kSmoothSweeps = 20;  ///< Laplacian sweeps over the side panels' inner nodes
 
 /// Collects nodes, triangles and panels; orients each triangle to a wanted normal.
 class MeshBuilder {
-public:
+  public:
     int addNode(const Vec3& p) {
         m_nodes.push_back(p);
         return static_cast<int>(m_nodes.size()) - 1;
@@ -69,8 +70,8 @@ public:
             else if (i + 1 >= lo.size())
                 advanceLo = false;
             else
-                advanceLo = calcMinAngle(lo[i], lo[i + 1], up[j]) >=
-                            calcMinAngle(lo[i], up[j + 1], up[j]);
+                advanceLo =
+                    calcMinAngle(lo[i], lo[i + 1], up[j]) >= calcMinAngle(lo[i], up[j + 1], up[j]);
             if (advanceLo) {
                 addTri(lo[i], lo[i + 1], up[j], panel, outward);
                 ++i;
@@ -80,6 +81,57 @@ public:
             }
         }
     }
+    /// Laplacian smoothing of the `free` nodes over the triangles from index firstTri on
+    /// (Gauss-Seidel sweeps; each free node moves to the mean of its neighbours). For a flat,
+    /// convex panel this evens out the zipped rows while the panel's boundary stays put. The
+    /// result is kept only if no triangle turned over (normal against `outward`) and the
+    /// smallest angle lost less than 10 % (smoothing trades a little of the worst angle for
+    /// much more even triangles); otherwise the nodes go back where they were.
+    void smooth(const std::vector<int>& free, int firstTri, int sweeps, const Vec3& outward) {
+        std::vector<Vec3> saved;
+        for (int n : free) saved.push_back(m_nodes[n]);
+        const double before = calcMinAngle(firstTri, outward);
+        relax(free, firstTri, sweeps);
+        if (!(calcMinAngle(firstTri, outward) >= 0.9 * before))
+            for (size_t i = 0; i < free.size(); ++i) m_nodes[free[i]] = saved[i];
+    }
+    /// Smallest angle of the triangles from firstTri on [rad]; -1 if one faces against
+    /// `outward`.
+    double calcMinAngle(int firstTri, const Vec3& outward) const {
+        double m = kPi;
+        for (size_t t = firstTri; t < m_tris.size(); ++t) {
+            const Eigen::Vector3i& v = m_tris[t];
+            const Vec3 n = (m_nodes[v[1]] - m_nodes[v[0]]).cross(m_nodes[v[2]] - m_nodes[v[0]]);
+            if (!(n.dot(outward) > 0.0)) return -1.0;
+            m = std::min(m, calcMinAngle(v[0], v[1], v[2]));
+        }
+        return m;
+    }
+
+  private:
+    void relax(const std::vector<int>& free, int firstTri, int sweeps) {
+        std::vector<std::vector<int>> nbr(free.size());
+        std::vector<int> slot(m_nodes.size(), -1);
+        for (size_t i = 0; i < free.size(); ++i) slot[free[i]] = static_cast<int>(i);
+        for (size_t t = firstTri; t < m_tris.size(); ++t)
+            for (int k = 0; k < 3; ++k) {
+                const int a = m_tris[t][k], c = m_tris[t][(k + 1) % 3];
+                if (slot[a] >= 0) nbr[slot[a]].push_back(c);
+                if (slot[c] >= 0) nbr[slot[c]].push_back(a);
+            }
+        for (auto& v : nbr) {
+            std::sort(v.begin(), v.end());
+            v.erase(std::unique(v.begin(), v.end()), v.end());
+        }
+        for (int s = 0; s < sweeps; ++s)
+            for (size_t i = 0; i < free.size(); ++i) {
+                Vec3 mean = Vec3::Zero();
+                for (int c : nbr[i]) mean += m_nodes[c];
+                m_nodes[free[i]] = mean / static_cast<double>(nbr[i].size());
+            }
+    }
+
+  public:
     int getNumTris() const { return static_cast<int>(m_tris.size()); }
     Vec3 calcCentroid(int t) const {
         const Eigen::Vector3i& v = m_tris[t];
@@ -97,7 +149,7 @@ public:
         return m;
     }
 
-private:
+  private:
     std::vector<Vec3> m_nodes;
     std::vector<Eigen::Vector3i> m_tris;
     std::vector<int> m_triPanel;
@@ -157,15 +209,18 @@ void DoubleWedgeParams::validate() const {
     requirePositive(p + "width [m]", width);
     requirePositive(p + "height [m]", height);
     requirePositive(p + "meshSize [m]", meshSize);
-    if (!(shortSide > height))
-        throw std::invalid_argument(p + "shortSide = " + fmt(shortSide) +
-                                    " m is invalid: the steep side must be longer than the "
-                                    "height (" + fmt(height) + " m)");
+    if (diaphragm ? !(shortSide > height) : !(shortSide >= height))
+        throw std::invalid_argument(
+            p + "shortSide = " + fmt(shortSide) + " m is invalid: the steep side must be " +
+            (diaphragm ? "longer than the height (" + fmt(height) + " m)"
+                       : "at least the height (" + fmt(height) +
+                             " m; equal gives a single right-angled wedge)"));
     const double ax = calcApexX();
     if (!(longSide > ax))
-        throw std::invalid_argument(
-            p + "longSide = " + fmt(longSide) + " m is invalid: it must exceed the apex's x, "
-            "sqrt(shortSide^2 - height^2) = " + fmt(ax) + " m, so the apex lies above the base");
+        throw std::invalid_argument(p + "longSide = " + fmt(longSide) +
+                                    " m is invalid: it must exceed the apex's x, "
+                                    "sqrt(shortSide^2 - height^2) = " +
+                                    fmt(ax) + " m, so the apex lies above the base");
     const double minDim = std::min({longSide, shortSide, width, height});
     const double hi = std::min(0.05, 0.5 * minDim);
     if (meshSize < 0.001 || meshSize > hi)
@@ -181,7 +236,12 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
     const double sLen = p.shortSide, gLen = std::hypot(L - ax, H);
 
     // Rows of the side panels at heights z_k = H k / n; both sloped sides get n segments.
-    const int n = numSegments(0.5 * (sLen + gLen), ms, 2);
+    // Rows sqrt(3)/2 h apart give the side panels near-equilateral triangles of edge h; more
+    // rows if a sloped side's segments would exceed 1.5 h (shallow slopes).
+    const int n = std::max(numSegments(H, std::sqrt(3.0) / 2.0 * ms, 2),
+                           numSegments(std::max(sLen, gLen), 1.5 * ms, 2));
+    // In-row node spacing: h, or less when rows are closer than sqrt(3)/2 h (equilateral).
+    const double rowSpacing = std::min(ms, 2.0 / std::sqrt(3.0) * H / n);
     const int ny = numSegments(W, ms, 1);
 
     // Base x stations (with a station at the apex's x when there is a diaphragm).
@@ -206,7 +266,7 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
     perim.back() = Vec2(ax, H);
     for (int k = n - 1; k >= 1; --k) perim.emplace_back(ax * k / n, H * k / n);
     const int np = static_cast<int>(perim.size());
-    auto gentleIdx = [&](int k) { return nb + k; };                  // k = 0 (B) .. n (C)
+    auto gentleIdx = [&](int k) { return nb + k; };                      // k = 0 (B) .. n (C)
     auto steepIdx = [&](int k) { return k == 0 ? 0 : nb + 2 * n - k; };  // k = 0 (A) .. n (C)
 
     MeshBuilder b;
@@ -225,7 +285,8 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
     std::vector<int> grid(static_cast<size_t>(np) * (ny + 1));
     auto gid = [&](int pi, int j) -> int& { return grid[static_cast<size_t>(pi) * (ny + 1) + j]; };
     for (int pi = 0; pi < np; ++pi)
-        for (int j = 0; j <= ny; ++j) gid(pi, j) = b.addNode(Vec3(perim[pi][0], ys[j], perim[pi][1]));
+        for (int j = 0; j <= ny; ++j)
+            gid(pi, j) = b.addNode(Vec3(perim[pi][0], ys[j], perim[pi][1]));
 
     const Vec3 nBase(0, 0, -1);
     const Vec3 nSteep = Vec3(-H, 0, ax).normalized();
@@ -258,9 +319,14 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
         const Vec3 nrm(0, side == 0 ? -1.0 : 1.0, 0);
         std::vector<std::vector<int>> left(n + 1), right(n + 1);  // right unused w/o diaphragm
         column[side].assign(n + 1, -1);
+        std::vector<int> interior;  // nodes inside the side panel, free to be smoothed
+        const int firstTri = b.getNumTris();
         auto addRowNodes = [&](std::vector<int>& row, double x0, double x1, double z) {
-            const int m = numSegments(x1 - x0, ms);
-            for (int i = 1; i < m; ++i) row.push_back(b.addNode(Vec3(x0 + (x1 - x0) * i / m, ys[j], z)));
+            const int m = numSegments(x1 - x0, rowSpacing);
+            for (int i = 1; i < m; ++i) {
+                row.push_back(b.addNode(Vec3(x0 + (x1 - x0) * i / m, ys[j], z)));
+                interior.push_back(row.back());
+            }
         };
         for (int k = 0; k <= n; ++k) {
             if (k == 0) {
@@ -299,6 +365,7 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
             b.zipRows(left[k], left[k + 1], panel, nrm);
             if (p.diaphragm) b.zipRows(right[k], right[k + 1], panel, nrm);
         }
+        b.smooth(interior, firstTri, kSmoothSweeps, nrm);
     }
 
     // Diaphragm: plane x = ax, rows k (z) x columns j (y), normal +x (out of wedge-steep).
@@ -377,14 +444,14 @@ Mesh makeBoxBag(double lx, double ly, double lz, double meshSize, bool bondBase)
         if (id < 0) {
             const int ijk[3] = {i, j, k};
             Vec3 pos;
-            for (int d = 0; d < 3; ++d) pos[d] = ijk[d] == n[d] ? lo[d] + len[d] : lo[d] + len[d] * ijk[d] / n[d];
+            for (int d = 0; d < 3; ++d)
+                pos[d] = ijk[d] == n[d] ? lo[d] + len[d] : lo[d] + len[d] * ijk[d] / n[d];
             id = b.addNode(pos);
         }
         return id;
     };
-    const char* names[3][2] = {{"side-x-minus", "side-x-plus"},
-                               {"side-y-minus", "side-y-plus"},
-                               {"bottom", "top"}};
+    const char* names[3][2] = {
+        {"side-x-minus", "side-x-plus"}, {"side-y-minus", "side-y-plus"}, {"bottom", "top"}};
     std::vector<int> bottom;
     for (int d = 0; d < 3; ++d) {
         const int u = (d + 1) % 3, v = (d + 2) % 3;  // in-face directions
@@ -426,14 +493,14 @@ Mesh makeSphere(double r, int refinements) {
         throw std::invalid_argument("makeSphere: refinements = " + std::to_string(refinements) +
                                     " is invalid: valid is 0..8");
     const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-    std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0},
-                           {0, -1, t}, {0, 1, t},  {0, -1, -t}, {0, 1, -t},
-                           {t, 0, -1}, {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                           {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                           {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
     for (Vec3& p : v) p = r * p.normalized();
-    std::vector<Eigen::Vector3i> f = {
-        {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-        {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-        {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+    std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                      {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                      {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                      {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
     for (int level = 0; level < refinements; ++level) {
         std::map<std::pair<int, int>, int> mid;
         auto midpoint = [&](int a, int c) {

@@ -47,37 +47,68 @@ double calcTotalVolume(const MembraneModel& m, const Eigen::Matrix3Xd& x) {
 
 // Solves with step cutting on a scalar control parameter: apply(s) sets the loads for s in
 // [s0, s1]; on failure the increment is halved. Returns the number of Newton iterations.
-template <class Apply>
-int solveRamp(Rig& rig, const SolverOptions& so, double s0, double s1, int maxCuts,
-              const Apply& apply, const char* what) {
-    double s = s0, ds = s1 - s0;
-    int iterations = 0, cuts = 0;
-    while ((s1 - s) * (ds > 0 ? 1 : -1) > 1e-15) {
-        const double next = (std::abs(s1 - s) < std::abs(ds) * 1.0000001) ? s1 : s + ds;
-        apply(next);
+// Solves the current loads starting from rig.x. If Newton fails, retries once with the
+// stabilisation anchored at rig.x (slack, wrinkling states). On success rig.x is updated and
+// contact history committed. Returns false if both fail.
+bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* stabEnergy) {
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1) {
+            if (o.stabilization <= 0.0) return false;
+            rig.model->setStabilization(o.stabilization, rig.x);
+        }
         Eigen::Matrix3Xd x = rig.x;
-        SolveSummary sum;
-        bool ok = true;
+        bool ok = false;
+        SolverOptions so = o.solver;
+        if (so.maxStep == 0.0) so.maxStep = o.geometry.meshSize;  // trust limit: one element
         try {
-            sum = solveEquilibrium(*rig.model, x, so);
-            ok = sum.converged;
+            *sum = solveEquilibrium(*rig.model, x, so);
+            ok = sum->converged;
         } catch (const NumericalError&) {
             ok = false;
         }
-        iterations += sum.iterations;
+        *stabEnergy = ok ? rig.model->calcStabilizationEnergy(x) : 0.0;
+        if (pass == 1) rig.model->setStabilization(0.0, rig.x);
         if (ok) {
             rig.x = x;
             rig.model->commitStep(x);
+            return true;
+        }
+    }
+    return false;
+}
+
+// Ramps a scalar load parameter from s0 to s1 (apply(s) sets the loads), halving the increment
+// on failure. Always solves at least once.
+template <class Apply>
+void solveRamp(Rig& rig, const LoadTestOptions& o, double s0, double s1, const Apply& apply,
+               const char* what) {
+    double s = s0, ds = s1 - s0;
+    int cuts = 0;
+    bool solved = false;
+    while (!solved || s != s1) {
+        const double next = std::abs(s1 - s) <= std::abs(ds) * (1.0 + 1e-9) ? s1 : s + ds;
+        apply(next);
+        SolveSummary sum;
+        double stab = 0.0;
+        if (trySolve(rig, o, &sum, &stab)) {
             s = next;
+            solved = true;
             if (sum.iterations < 8) ds *= 2.0;
         } else {
             apply(s);
             ds *= 0.5;
-            if (++cuts > maxCuts)
-                throw NumericalError(std::string("no convergence while ") + what);
+            if (++cuts > 30) throw NumericalError(std::string("no convergence while ") + what);
         }
     }
-    return iterations;
+}
+
+// Top of the bag under the block's footprint [m] (where the block first touches).
+double calcTopUnderBlock(const Eigen::Matrix3Xd& x, const Vec3& centre, double half) {
+    double top = -std::numeric_limits<double>::infinity();
+    for (int i = 0; i < x.cols(); ++i)
+        if (std::abs(x(0, i) - centre.x()) <= half && std::abs(x(1, i) - centre.y()) <= half)
+            top = std::max(top, x(2, i));
+    return std::isfinite(top) ? top : calcTop(x);
 }
 
 }  // namespace
@@ -103,6 +134,8 @@ void LoadTestOptions::validate() const {
             "stiffnessTo", stiffnessTo, "use 0 <= from < to <= peak force");
     require(polynomialOrder >= 1 && polynomialOrder <= 8, "polynomialOrder", polynomialOrder,
             "use an order from 1 to 8");
+    require(stabilization >= 0.0, "stabilization", stabilization,
+            "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
     blockContact.validate();
     floorContact.validate();
     solver.validate();
@@ -163,7 +196,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         GasChamber probe(o.gas, o.gasMasses.front());
         probe.seal(Vflat);
         const double pTarget = std::clamp(probe.calcGaugePressure(Vflat), 200.0, 5000.0);
-        solveRamp(rig, o.solver, 0.0, pTarget, 30,
+        solveRamp(rig, o, 0.0, pTarget,
                   [&](double p) {
                       for (int c = 0; c < nc; ++c) rig.model->setChamberPressure(c, p);
                   },
@@ -185,7 +218,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         // Let the gas out (or in) to this curve's mass in small mass steps, block clear.
         placeBlock(rig, calcTop(rig.x) + 0.05);
         const double m0 = rig.model->getGas(0).getMass();
-        solveRamp(rig, o.solver, m0, curve.gasMass, 30,
+        solveRamp(rig, o, m0, curve.gasMass,
                   [&](double m) {
                       const double V = rig.model->calcGasVolume(0, rig.x, nullptr);
                       rig.model->updGas(0).setMass(m, V);
@@ -194,13 +227,13 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         // setMass reseals at the current volume: isothermal p V = m R T holds whatever the
         // sealing volume, so the state is exact; for adiabatic gases the reference is the
         // state at this mass, as in a slow let-down at room temperature.
-        const double top = calcTop(rig.x);
+        const double top = calcTopUnderBlock(rig.x, rig.blockCentreXY, 0.5 * o.blockSize);
         curve.unloadedHeight = top;
         curve.inflatedVolume = rig.model->calcGasVolume(0, rig.x, nullptr);
         curve.inflatedGaugePressure = rig.model->getGas(0).calcGaugePressure(curve.inflatedVolume);
         if (self) self->updateCandidates(rig.x);
 
-        auto record = [&](double disp, bool loading, int iters) {
+        auto record = [&](double disp, bool loading, int iters, double stabEnergy) {
             LoadStep st;
             st.curve = static_cast<int>(k);
             st.step = static_cast<int>(curve.steps.size());
@@ -217,12 +250,27 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                 st.volume.push_back(calcChamberVolume(mesh, c, rig.x));
             }
             st.newtonIterations = iters;
+            st.stabilizationEnergy = stabEnergy;
             curve.steps.push_back(st);
             if (observer) observer(st, mesh, rig.x);
             return st.force;
         };
 
-        record(0.0, true, 0);
+        record(0.0, true, 0, 0.0);
+        // Moves the block to travel `to` (from the last converged state); on failure the
+        // caller shortens the step.
+        auto advance = [&](double to, SolveSummary* sum, double* stab) {
+            placeBlock(rig, top - to);
+            if (self) self->updateCandidates(rig.x);
+            return trySolve(rig, o, sum, stab);
+        };
+        auto fail = [&](const char* branch, double disp) {
+            std::ostringstream s;
+            s << "no convergence " << branch << " at gas mass " << curve.gasMass * 1e3
+              << " g, block travel " << disp * 1e3 << " mm";
+            throw NumericalError(s.str(), curve.steps.back().time,
+                                 static_cast<int>(curve.steps.size()));
+        };
         // Loading: displacement control, adaptive, aiming the last step at the peak force.
         double disp = 0.0, ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;
         const double minStep = 1e-6;
@@ -233,69 +281,37 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                 step = std::min(step, 1.05 * (o.peakForce - force) / stiffnessEstimate);
             step = std::max(step, minStep);
             if (disp + step > maxDisp) break;
-            Eigen::Matrix3Xd x = rig.x;
-            placeBlock(rig, top - disp - step);
-            if (self) self->updateCandidates(x);
-            bool ok = true;
             SolveSummary sum;
-            try {
-                sum = solveEquilibrium(*rig.model, x, o.solver);
-                ok = sum.converged;
-            } catch (const NumericalError&) {
-                ok = false;
-            }
-            if (!ok) {
+            double stab = 0.0;
+            if (!advance(disp + step, &sum, &stab)) {
+                placeBlock(rig, top - disp);
                 ds = 0.5 * step;
-                if (ds < minStep) {
-                    std::ostringstream s;
-                    s << "no convergence loading at gas mass " << curve.gasMass * 1e3
-                      << " g, block travel " << disp * 1e3 << " mm";
-                    throw NumericalError(s.str(), curve.steps.back().time,
-                                         static_cast<int>(curve.steps.size()));
-                }
+                if (ds < minStep) fail("loading", disp);
                 continue;
             }
-            rig.x = x;
-            rig.model->commitStep(x);
             const double prevForce = force;
             disp += step;
-            force = record(disp, true, sum.iterations);
+            force = record(disp, true, sum.iterations, stab);
             const double k = (force - prevForce) / step;
             if (k > 0.0) stiffnessEstimate = k;
             if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
         }
         curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
         // Unloading: back up the same way until the block leaves the bag.
-        if (o.unload) {
-            ds = o.displacementStep;
-            while (disp > 0.0) {
-                const double step = std::min(ds, disp);
-                Eigen::Matrix3Xd x = rig.x;
-                placeBlock(rig, top - (disp - step));
-                if (self) self->updateCandidates(x);
-                bool ok = true;
-                SolveSummary sum;
-                try {
-                    sum = solveEquilibrium(*rig.model, x, o.solver);
-                    ok = sum.converged;
-                } catch (const NumericalError&) {
-                    ok = false;
-                }
-                if (!ok) {
-                    ds = 0.5 * step;
-                    if (ds < minStep)
-                        throw NumericalError("no convergence unloading", curve.steps.back().time,
-                                             static_cast<int>(curve.steps.size()));
-                    continue;
-                }
-                rig.x = x;
-                rig.model->commitStep(x);
-                disp -= step;
-                if (disp < 1e-12) disp = 0.0;
-                const double f = record(disp, false, sum.iterations);
-                if (f <= 0.0 && disp > 0.0) break;  // block has left the bag
-                if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
+        ds = o.displacementStep;
+        while (o.unload && disp > 0.0) {
+            const double step = std::min(ds, disp);
+            SolveSummary sum;
+            double stab = 0.0;
+            if (!advance(disp - step, &sum, &stab)) {
+                placeBlock(rig, top - disp);
+                ds = 0.5 * step;
+                if (ds < minStep) fail("unloading", disp);
+                continue;
             }
+            disp = std::max(disp - step, 0.0);
+            if (record(disp, false, sum.iterations, stab) <= 0.0) break;  // block has left
+            if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
         }
         // Stiffness over the force range, loading branch.
         std::vector<double> d, f;

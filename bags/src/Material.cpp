@@ -4,13 +4,13 @@
 // which C12 stands for both off-diagonal entries. With E_v = [(c1-1)/2, (c2-1)/2, c3] the
 // chain rule is diagonal: dW/dE_v = T dW/dc and d2W/dE_v2 = T (d2W/dc2) T, T = diag(2, 2, 1).
 // Working in c keeps the factor 2 of the shear terms in one place (kT).
-#include "MaterialDetail.h"
-
 #include <bags/Material.h>
 
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+
+#include "MaterialDetail.h"
 
 namespace bags {
 namespace detail {
@@ -59,7 +59,7 @@ void cToVoigt(const Eigen::Vector3d& g, const Eigen::Matrix3d& H, Eigen::Vector3
 
 /// Base of the models written as W(I1, I2) with the plane-stress incompressible invariants.
 class InvariantMaterial : public MembraneMaterial {
-public:
+  public:
     double calcEnergy(const Mat2& C, Eigen::Vector3d* S, Eigen::Matrix3d* D) const override {
         detail::checkC(C, "membrane material");
         const CScalars s = detail::calcCScalars(C);
@@ -77,9 +77,9 @@ public:
         if (D) {
             const Eigen::Matrix3d dJdJ = s.dJ * s.dJ.transpose();
             const Eigen::Matrix3d hI1 = -iJ2 * s.hJ + 2.0 * iJ3 * dJdJ;
-            const Eigen::Matrix3d hI2 = s.hJ -
-                                        iJ2 * (s.dtr * s.dJ.transpose() + s.dJ * s.dtr.transpose()) -
-                                        s.tr * iJ2 * s.hJ + 2.0 * s.tr * iJ3 * dJdJ;
+            const Eigen::Matrix3d hI2 =
+                s.hJ - iJ2 * (s.dtr * s.dJ.transpose() + s.dJ * s.dtr.transpose()) -
+                s.tr * iJ2 * s.hJ + 2.0 * s.tr * iJ3 * dJdJ;
             H = W11 * dI1 * dI1.transpose() +
                 W12 * (dI1 * dI2.transpose() + dI2 * dI1.transpose()) +
                 W22 * dI2 * dI2.transpose() + W1 * hI1 + W2 * hI2;
@@ -96,14 +96,14 @@ public:
         return 2.0 * (l - 1.0 / (l * l)) * (W1 + W2 / l);
     }
 
-protected:
+  protected:
     /// W and its first and second partial derivatives in (I1, I2).
     virtual double calcW(double I1, double I2, double* W1, double* W2, double* W11, double* W12,
                          double* W22) const = 0;
 };
 
 class NeoHookean : public InvariantMaterial {
-public:
+  public:
     explicit NeoHookean(double C10) : m_C10(C10) {
         if (!(C10 > 0.0) || !std::isfinite(C10))
             throw std::invalid_argument("neo-Hookean: C10 = " + std::to_string(C10) +
@@ -115,7 +115,7 @@ public:
         return std::make_unique<NeoHookean>(*this);
     }
 
-protected:
+  protected:
     double calcW(double I1, double, double* W1, double* W2, double* W11, double* W12,
                  double* W22) const override {
         *W1 = m_C10;
@@ -123,12 +123,12 @@ protected:
         return m_C10 * (I1 - 3.0);
     }
 
-private:
+  private:
     double m_C10;
 };
 
 class MooneyRivlin : public InvariantMaterial {
-public:
+  public:
     MooneyRivlin(double C10, double C01) : m_C10(C10), m_C01(C01) {
         if (!(C10 + C01 > 0.0) || !std::isfinite(C10) || !std::isfinite(C01))
             throw std::invalid_argument("Mooney-Rivlin: C10 + C01 = " + std::to_string(C10 + C01) +
@@ -140,7 +140,7 @@ public:
         return std::make_unique<MooneyRivlin>(*this);
     }
 
-protected:
+  protected:
     double calcW(double I1, double I2, double* W1, double* W2, double* W11, double* W12,
                  double* W22) const override {
         *W1 = m_C10;
@@ -149,12 +149,12 @@ protected:
         return m_C10 * (I1 - 3.0) + m_C01 * (I2 - 3.0);
     }
 
-private:
+  private:
     double m_C10, m_C01;
 };
 
 class Yeoh : public InvariantMaterial {
-public:
+  public:
     Yeoh(double C10, double C20, double C30) : m_C10(C10), m_C20(C20), m_C30(C30) {
         if (!(C10 > 0.0) || !std::isfinite(C10) || !std::isfinite(C20) || !std::isfinite(C30))
             throw std::invalid_argument("Yeoh: C10 = " + std::to_string(C10) +
@@ -166,7 +166,7 @@ public:
         return std::make_unique<Yeoh>(*this);
     }
 
-protected:
+  protected:
     double calcW(double I1, double, double* W1, double* W2, double* W11, double* W12,
                  double* W22) const override {
         const double x = I1 - 3.0;
@@ -176,7 +176,7 @@ protected:
         return x * (m_C10 + x * (m_C20 + x * m_C30));
     }
 
-private:
+  private:
     double m_C10, m_C20, m_C30;
 };
 
@@ -184,7 +184,7 @@ private:
 /// G_i = e1^p_i + e2^p_i is a symmetric function of the eigenvalues e of C (= l1^a + l2^a) and
 /// J^-p_i = l3^a with l3 = 1 / (l1 l2).
 class Ogden : public MembraneMaterial {
-public:
+  public:
     Ogden(std::vector<double> mu, std::vector<double> alpha)
         : m_mu(std::move(mu)), m_alpha(std::move(alpha)) {
         if (m_mu.empty() || m_mu.size() != m_alpha.size())
@@ -194,9 +194,9 @@ public:
         double mu0 = 0.0;
         for (std::size_t i = 0; i < m_mu.size(); ++i) {
             if (!std::isfinite(m_mu[i]) || !std::isfinite(m_alpha[i]) || m_alpha[i] == 0.0)
-                throw std::invalid_argument("Ogden: term " + std::to_string(i + 1) + " has mu = " +
-                                            std::to_string(m_mu[i]) + " Pa, alpha = " +
-                                            std::to_string(m_alpha[i]) +
+                throw std::invalid_argument("Ogden: term " + std::to_string(i + 1) +
+                                            " has mu = " + std::to_string(m_mu[i]) +
+                                            " Pa, alpha = " + std::to_string(m_alpha[i]) +
                                             "; valid: finite values, alpha != 0");
             mu0 += m_mu[i];
         }
@@ -227,8 +227,8 @@ public:
                 g += k * (G.Gm * s.dm + G.Gq * s.dq + h1 * s.dJ);
                 if (D) {
                     const double h2 = p * (p + 1.0) * h / (s.J * s.J);
-                    H += k * (G.Gmm * dmdm + G.Gmq * dmdq + G.Gqq * dqdq + G.Gq * s.hq +
-                              h2 * dJdJ + h1 * s.hJ);
+                    H += k * (G.Gmm * dmdm + G.Gmq * dmdq + G.Gqq * dqdq + G.Gq * s.hq + h2 * dJdJ +
+                              h1 * s.hJ);
                 }
             }
         }
@@ -255,7 +255,7 @@ public:
         return std::make_unique<Ogden>(*this);
     }
 
-private:
+  private:
     std::vector<double> m_mu;     // [Pa]
     std::vector<double> m_alpha;  // [-]
 };
@@ -267,6 +267,13 @@ double detail::powDerivative(double x, double p, int n) {
     double c = 1.0;
     for (int j = 0; j < n; ++j) c *= (p - j);
     return c == 0.0 ? 0.0 : c * std::pow(x, p - n);
+}
+
+double MembraneMaterial::calcNaturalWidth(double e1, double* d1, double* d2) const {
+    const double n = 1.0 / std::sqrt(e1);
+    if (d1) *d1 = -0.5 * n / e1;
+    if (d2) *d2 = 0.75 * n / (e1 * e1);
+    return n;
 }
 
 double MembraneMaterial::calcUniaxialNominalStress(double lambda) const {

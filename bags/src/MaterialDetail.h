@@ -5,7 +5,6 @@
 #include <bags/Types.h>
 
 #include <Eigen/Core>
-
 #include <algorithm>
 #include <cmath>
 

@@ -87,17 +87,18 @@ void Mesh::validate() const {
                 fail("triangle " + std::to_string(t) + " refers to node " +
                      std::to_string(tris(k, t)) + ", valid are 0.." + std::to_string(nn - 1));
         const int a = tris(0, t), b = tris(1, t), c = tris(2, t);
-        if (a == b || b == c || a == c)
-            fail("triangle " + std::to_string(t) + " repeats a node");
-        const double len2 = std::max({(X.col(b) - X.col(a)).squaredNorm(),
-                                      (X.col(c) - X.col(b)).squaredNorm(),
-                                      (X.col(a) - X.col(c)).squaredNorm()});
+        if (a == b || b == c || a == c) fail("triangle " + std::to_string(t) + " repeats a node");
+        const double len2 =
+            std::max({(X.col(b) - X.col(a)).squaredNorm(), (X.col(c) - X.col(b)).squaredNorm(),
+                      (X.col(a) - X.col(c)).squaredNorm()});
         if (!(triArea(X, a, b, c) > 1e-10 * len2))
             fail("triangle " + std::to_string(t) + " is degenerate (zero reference area)");
     }
     if (static_cast<int>(triPanel.size()) != nt)
-        fail("triPanel has " + std::to_string(triPanel.size()) + " entries, expected one per "
-             "triangle (" + std::to_string(nt) + ")");
+        fail("triPanel has " + std::to_string(triPanel.size()) +
+             " entries, expected one per "
+             "triangle (" +
+             std::to_string(nt) + ")");
     for (int t = 0; t < nt; ++t)
         if (triPanel[t] < 0 || triPanel[t] >= static_cast<int>(panelNames.size()))
             fail("triangle " + std::to_string(t) + " has panel index " +
@@ -195,8 +196,8 @@ MeshQuality calcMeshQuality(const Mesh& mesh) {
     return q;
 }
 
-double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x,
-                         EnergyAccumulator* acc, double scale) {
+double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x, EnergyAccumulator* acc,
+                         double scale) {
     checkChamberIndex(mesh, c);
     const ChamberBoundary& ch = mesh.chambers[c];
     const int nt = static_cast<int>(ch.tris.size());
@@ -206,7 +207,13 @@ double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x,
         throw std::invalid_argument("calcChamberVolume: accumulator gradient has size " +
                                     std::to_string(acc->grad.size()) + ", expected " +
                                     std::to_string(3 * x.cols()));
-    if (wantH) acc->hess.reserve(acc->hess.size() + 36 * static_cast<size_t>(nt));
+    if (wantH) {
+        // Grow geometrically: an exact reserve per call would copy the caller's (large)
+        // triplet list on every chamber evaluation.
+        const size_t need = acc->hess.size() + 36 * static_cast<size_t>(nt);
+        if (acc->hess.capacity() < need)
+            acc->hess.reserve(std::max(need, 2 * acc->hess.capacity()));
+    }
     const double sixth = 1.0 / 6.0;
     double v6 = 0.0;  // 6 V
     for (int i = 0; i < nt; ++i) {

@@ -1,7 +1,6 @@
 #include <bags/Polynomial.h>
 
 #include <Eigen/Dense>
-
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -18,9 +17,9 @@ std::vector<double> fitPolynomial(const std::vector<double>& x, const std::vecto
                                     " must be >= 0");
     const int n = static_cast<int>(x.size());
     if (n < order + 1)
-        throw std::invalid_argument("fitPolynomial: order " + std::to_string(order) + " needs at least " +
-                                    std::to_string(order + 1) + " points, got " +
-                                    std::to_string(n));
+        throw std::invalid_argument("fitPolynomial: order " + std::to_string(order) +
+                                    " needs at least " + std::to_string(order + 1) +
+                                    " points, got " + std::to_string(n));
     // Fit in t = (x - shift) / scale, then expand back: the raw Vandermonde matrix of, e.g.,
     // masses in grams to the 5th power is poorly conditioned.
     double lo = x[0], hi = x[0];

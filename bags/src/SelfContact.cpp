@@ -1,1 +1,443 @@
-// (under construction)
+// Self contact of a membrane: node-to-triangle penalty with a thickness offset.
+//
+// Pairs: a node v and a triangle T that contains neither v nor a neighbour of v. Distance d:
+//   - projection of v inside T ("interior"): d = s * (v - x0) . n_T, the plane distance signed
+//     by the side s the node was on when the pair was found (so a node pushed through the sheet
+//     within a step is pushed back, not further through);
+//   - otherwise the unsigned distance to the closest edge or vertex of T.
+// Energy 0.5 k (h - d)^2 for d < h with k = pressurePenalty * A_v / 2: every pair of sheets is
+// seen twice (nodes of A against triangles of B and the reverse), so two parallel sheets at gap
+// g < h press on each other with pressurePenalty * (h - g), the same law as rigid contact.
+// Per node and per side of the node's own surface only the nearest candidate triangle acts,
+// so a node above a shared edge or vertex is not counted twice.
+
+#include <bags/Contact.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace bags {
+
+namespace {
+
+using Vec12 = Eigen::Matrix<double, 12, 1>;
+using Mat12 = Eigen::Matrix<double, 12, 12>;
+
+inline Mat3 skew(const Vec3& a) {
+    Mat3 S;
+    S << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
+    return S;
+}
+
+/// Where the closest point of a triangle to p lies.
+enum class Region { Interior, Vertex0, Vertex1, Vertex2, Edge01, Edge12, Edge20 };
+
+/// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Region closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                              Vec3& q) {
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+    if (d1 <= 0.0 && d2 <= 0.0) { q = a; return Region::Vertex0; }
+    const Vec3 bp = p - b;
+    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+    if (d3 >= 0.0 && d4 <= d3) { q = b; return Region::Vertex1; }
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        q = a + d1 / (d1 - d3) * ab;
+        return Region::Edge01;
+    }
+    const Vec3 cp = p - c;
+    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+    if (d6 >= 0.0 && d5 <= d6) { q = c; return Region::Vertex2; }
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        q = a + d2 / (d2 - d6) * ac;
+        return Region::Edge20;
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+        q = b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+        return Region::Edge12;
+    }
+    const double denom = 1.0 / (va + vb + vc);
+    q = a + ab * (vb * denom) + ac * (vc * denom);
+    return Region::Interior;
+}
+
+/// Contact distance of node p to triangle x (columns x0, x1, x2) for a pair on side `side`.
+double pairDistance(const Vec3& p, const Vec3& x0, const Vec3& x1, const Vec3& x2, int side,
+                    Region* regionOut = nullptr) {
+    Vec3 q;
+    const Region region = closestPointOnTriangle(p, x0, x1, x2, q);
+    if (regionOut) *regionOut = region;
+    if (region == Region::Interior) {
+        const Vec3 n = (x1 - x0).cross(x2 - x0);
+        return side * (p - x0).dot(n) / n.norm();
+    }
+    return (p - q).norm();
+}
+
+/// Plane distance D = (p - x0) . n / |n|, n = (x1 - x0) x (x2 - x0), with its exact gradient and
+/// Hessian w.r.t. (p, x0, x1, x2). Derived in (r, e1, e2) = (p - x0, x1 - x0, x2 - x0).
+void planeDistanceDerivatives(const Vec3& p, const Vec3& x0, const Vec3& x1, const Vec3& x2,
+                              Vec12& g, Mat12& H) {
+    const Vec3 r = p - x0, e1 = x1 - x0, e2 = x2 - x0;
+    const Vec3 nv = e1.cross(e2);
+    const double l = nv.norm();
+    const Vec3 n = nv / l;
+    const double D = r.dot(n);
+    const Mat3 P = Mat3::Identity() - n * n.transpose();
+    const Vec3 rt = P * r;
+    // Hessian of f(n) = r.n/|n| w.r.t. the unnormalised normal.
+    const Mat3 F = (-(n * rt.transpose() + rt * n.transpose()) - D * P) / (l * l);
+    const Mat3 S1 = skew(e1), S2 = skew(e2);
+    Eigen::Matrix<double, 9, 1> g9;
+    g9 << n, e2.cross(rt) / l, rt.cross(e1) / l;
+    Eigen::Matrix<double, 9, 9> H9 = Eigen::Matrix<double, 9, 9>::Zero();
+    const Mat3 Hr1 = -P * S2 / l, Hr2 = P * S1 / l;
+    const Mat3 H11 = S2.transpose() * F * S2;
+    const Mat3 H22 = S1.transpose() * F * S1;
+    const Mat3 H12 = S2 * F * S1 - skew(rt / l);
+    H9.block<3, 3>(0, 3) = Hr1;
+    H9.block<3, 3>(3, 0) = Hr1.transpose();
+    H9.block<3, 3>(0, 6) = Hr2;
+    H9.block<3, 3>(6, 0) = Hr2.transpose();
+    H9.block<3, 3>(3, 3) = H11;
+    H9.block<3, 3>(6, 6) = H22;
+    H9.block<3, 3>(3, 6) = H12;
+    H9.block<3, 3>(6, 3) = H12.transpose();
+    // (r, e1, e2) = J (p, x0, x1, x2)
+    Eigen::Matrix<double, 9, 12> J = Eigen::Matrix<double, 9, 12>::Zero();
+    const Mat3 I = Mat3::Identity();
+    J.block<3, 3>(0, 0) = I;
+    J.block<3, 3>(0, 3) = -I;
+    J.block<3, 3>(3, 3) = -I;
+    J.block<3, 3>(3, 6) = I;
+    J.block<3, 3>(6, 3) = -I;
+    J.block<3, 3>(6, 9) = I;
+    g = J.transpose() * g9;
+    H = J.transpose() * H9 * J;
+}
+
+/// Distance |p - (a + t (b - a))| to a segment at its interior closest point, with gradient and
+/// Hessian w.r.t. (p, a, b) (t eliminated: H = B^T B - m m^T / |e|^2 for Phi = |w|^2 / 2).
+void segmentDistanceDerivatives(const Vec3& p, const Vec3& a, const Vec3& b,
+                                Eigen::Matrix<double, 9, 1>& g, Eigen::Matrix<double, 9, 9>& H,
+                                double& d) {
+    const Vec3 e = b - a;
+    const double ee = e.squaredNorm();
+    const double t = (p - a).dot(e) / ee;
+    const Vec3 w = p - a - t * e;
+    d = w.norm();
+    const Eigen::Vector3d coef(1.0, -(1.0 - t), -t);
+    Eigen::Matrix<double, 9, 1> gPhi, m;
+    gPhi << w, -(1.0 - t) * w, -t * w;
+    m << -e, w + (1.0 - t) * e, -w + t * e;
+    Eigen::Matrix<double, 9, 9> HPhi;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            HPhi.block<3, 3>(3 * i, 3 * j) = coef[i] * coef[j] * Mat3::Identity();
+    HPhi -= m * m.transpose() / ee;
+    g = gPhi / d;
+    H = HPhi / d - gPhi * gPhi.transpose() / (d * d * d);
+}
+
+struct Candidate {
+    int node;
+    int tri;
+    signed char side;   // side of the triangle plane the node was on when found
+    signed char group;  // which side of the node's own surface the triangle lies on
+};
+
+inline std::uint64_t cellHash(std::int64_t i, std::int64_t j, std::int64_t k) {
+    return static_cast<std::uint64_t>(i) * 73856093ULL ^ static_cast<std::uint64_t>(j) * 19349663ULL ^
+           static_cast<std::uint64_t>(k) * 83492791ULL;
+}
+
+}  // namespace
+
+void SelfContact::Options::validate() const {
+    if (!(pressurePenalty > 0.0) || !std::isfinite(pressurePenalty))
+        throw std::invalid_argument("SelfContact option pressurePenalty must be > 0 [Pa/m], got " +
+                                    std::to_string(pressurePenalty));
+    if (!(thickness > 0.0) || !std::isfinite(thickness))
+        throw std::invalid_argument("SelfContact option thickness must be > 0 [m], got " +
+                                    std::to_string(thickness));
+    if (!(candidateMargin >= 0.0) || !std::isfinite(candidateMargin))
+        throw std::invalid_argument("SelfContact option candidateMargin must be >= 0 [m], got " +
+                                    std::to_string(candidateMargin));
+}
+
+struct SelfContact::Impl {
+    Options opt;
+    int numNodes = 0;
+    Eigen::Matrix3Xi tris;
+    std::vector<double> k;          // penalty stiffness per node [N/m]
+    std::vector<int> nbrStart, nbr;  // node neighbours (CSR)
+    std::vector<Candidate> cands;    // sorted by (node, group, tri)
+    Eigen::Matrix3Xd xUpdate;        // positions at the last updateCandidates()
+    bool updated = false;
+
+    /// Nearest candidate of each (node, group) run; calls f(candidate, distance, region).
+    template <class F>
+    void forEachActive(const Eigen::Matrix3Xd& x, F&& f) const {
+        const double h = opt.thickness;
+        size_t i = 0;
+        while (i < cands.size()) {
+            size_t j = i;
+            double dBest = std::numeric_limits<double>::infinity();
+            size_t best = i;
+            Region rBest = Region::Interior;
+            const Vec3 p = x.col(cands[i].node);
+            while (j < cands.size() && cands[j].node == cands[i].node &&
+                   cands[j].group == cands[i].group) {
+                const Candidate& c = cands[j];
+                Region reg;
+                const double d = pairDistance(p, x.col(tris(0, c.tri)), x.col(tris(1, c.tri)),
+                                              x.col(tris(2, c.tri)), c.side, &reg);
+                if (d < dBest) {
+                    dBest = d;
+                    best = j;
+                    rBest = reg;
+                }
+                ++j;
+            }
+            if (dBest < h) f(cands[best], dBest, rBest);
+            i = j;
+        }
+    }
+};
+
+SelfContact::SelfContact(const Mesh& mesh, const Options& options)
+    : m_impl(std::make_shared<Impl>()) {
+    options.validate();
+    Impl& m = *m_impl;
+    m.opt = options;
+    m.numNodes = mesh.getNumNodes();
+    m.tris = mesh.tris;
+    const int nt = mesh.getNumTris();
+    for (int t = 0; t < nt; ++t)
+        for (int a = 0; a < 3; ++a)
+            if (m.tris(a, t) < 0 || m.tris(a, t) >= m.numNodes)
+                throw std::invalid_argument("SelfContact: triangle " + std::to_string(t) +
+                                            " has node " + std::to_string(m.tris(a, t)) +
+                                            " outside the mesh");
+    const Eigen::VectorXd area = mesh.calcNodalAreas();
+    m.k.resize(m.numNodes);
+    for (int v = 0; v < m.numNodes; ++v) m.k[v] = 0.5 * options.pressurePenalty * area[v];
+    std::vector<std::vector<int>> nb(m.numNodes);
+    for (int t = 0; t < nt; ++t) {
+        const int v[3] = {m.tris(0, t), m.tris(1, t), m.tris(2, t)};
+        for (int a = 0; a < 3; ++a) {
+            nb[v[a]].push_back(v[(a + 1) % 3]);
+            nb[v[a]].push_back(v[(a + 2) % 3]);
+        }
+    }
+    m.nbrStart.assign(1, 0);
+    for (int v = 0; v < m.numNodes; ++v) {
+        std::sort(nb[v].begin(), nb[v].end());
+        nb[v].erase(std::unique(nb[v].begin(), nb[v].end()), nb[v].end());
+        m.nbr.insert(m.nbr.end(), nb[v].begin(), nb[v].end());
+        m.nbrStart.push_back(static_cast<int>(m.nbr.size()));
+    }
+}
+
+void SelfContact::updateCandidates(const Eigen::Matrix3Xd& x) {
+    Impl& m = *m_impl;
+    if (x.cols() != m.numNodes)
+        throw std::invalid_argument("SelfContact::updateCandidates: x has " +
+                                    std::to_string(x.cols()) + " nodes, the mesh " +
+                                    std::to_string(m.numNodes));
+    const int nt = static_cast<int>(m.tris.cols());
+    const double reach = m.opt.thickness + m.opt.candidateMargin;
+    // Keep the side of pairs that persist, so a node that went through a sheet in the last step
+    // is still pushed back to where it came from.
+    std::vector<Candidate> old = std::move(m.cands);
+    std::sort(old.begin(), old.end(), [](const Candidate& a, const Candidate& b) {
+        return a.node != b.node ? a.node < b.node : a.tri < b.tri;
+    });
+    m.cands.clear();
+
+    // Expanded triangle AABBs and the cell size.
+    std::vector<Eigen::Array3d> lo(nt), hi(nt);
+    double meanExtent = 0.0;
+    for (int t = 0; t < nt; ++t) {
+        const Vec3 a = x.col(m.tris(0, t)), b = x.col(m.tris(1, t)), c = x.col(m.tris(2, t));
+        lo[t] = a.array().min(b.array()).min(c.array()) - reach;
+        hi[t] = a.array().max(b.array()).max(c.array()) + reach;
+        meanExtent += (hi[t] - lo[t]).maxCoeff();
+    }
+    if (nt == 0) {
+        m.xUpdate = x;
+        m.updated = true;
+        return;
+    }
+    meanExtent /= nt;
+    const double cell = std::max(meanExtent, 1e-9);
+    auto cellOf = [&](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
+
+    // Spatial hash (Teschner et al. 2003): bucket -> triangles whose box overlaps a cell there.
+    size_t tableSize = 1024;
+    while (tableSize < 2 * static_cast<size_t>(nt)) tableSize *= 2;
+    std::vector<int> count(tableSize + 1, 0);
+    auto forCells = [&](int t, auto&& f) {
+        for (std::int64_t i = cellOf(lo[t][0]); i <= cellOf(hi[t][0]); ++i)
+            for (std::int64_t j = cellOf(lo[t][1]); j <= cellOf(hi[t][1]); ++j)
+                for (std::int64_t kk = cellOf(lo[t][2]); kk <= cellOf(hi[t][2]); ++kk)
+                    f(cellHash(i, j, kk) & (tableSize - 1));
+    };
+    for (int t = 0; t < nt; ++t) forCells(t, [&](std::uint64_t b) { ++count[b + 1]; });
+    for (size_t b = 0; b < tableSize; ++b) count[b + 1] += count[b];
+    std::vector<int> entries(count[tableSize]);
+    std::vector<int> fill(count.begin(), count.end() - 1);
+    for (int t = 0; t < nt; ++t) forCells(t, [&](std::uint64_t b) { entries[fill[b]++] = t; });
+
+    // Vertex normals (area weighted) decide on which side of its own sheet a triangle lies.
+    Eigen::Matrix3Xd vn = Eigen::Matrix3Xd::Zero(3, m.numNodes);
+    for (int t = 0; t < nt; ++t) {
+        const Vec3 n = (x.col(m.tris(1, t)) - x.col(m.tris(0, t)))
+                           .cross(x.col(m.tris(2, t)) - x.col(m.tris(0, t)));
+        for (int a = 0; a < 3; ++a) vn.col(m.tris(a, t)) += n;
+    }
+
+    std::vector<int> seen(nt, -1), nbrMark(m.numNodes, -1);
+    for (int v = 0; v < m.numNodes; ++v) {
+        if (m.k[v] <= 0.0) continue;
+        const Vec3 p = x.col(v);
+        for (int q = m.nbrStart[v]; q < m.nbrStart[v + 1]; ++q) nbrMark[m.nbr[q]] = v;
+        nbrMark[v] = v;
+        const std::uint64_t b = cellHash(cellOf(p.x()), cellOf(p.y()), cellOf(p.z())) &
+                                (tableSize - 1);
+        const size_t first = m.cands.size();
+        for (int e = count[b]; e < count[b + 1]; ++e) {
+            const int t = entries[e];
+            if (seen[t] == v) continue;
+            seen[t] = v;
+            if ((p.array() < lo[t]).any() || (p.array() > hi[t]).any()) continue;
+            const int i0 = m.tris(0, t), i1 = m.tris(1, t), i2 = m.tris(2, t);
+            if (nbrMark[i0] == v || nbrMark[i1] == v || nbrMark[i2] == v) continue;
+            Vec3 q;
+            const Vec3 x0 = x.col(i0), x1 = x.col(i1), x2 = x.col(i2);
+            closestPointOnTriangle(p, x0, x1, x2, q);
+            if ((p - q).norm() >= reach) continue;
+            Candidate c;
+            c.node = v;
+            c.tri = t;
+            const auto it = std::lower_bound(
+                old.begin(), old.end(), std::make_pair(v, t),
+                [](const Candidate& a, const std::pair<int, int>& key) {
+                    return a.node != key.first ? a.node < key.first : a.tri < key.second;
+                });
+            if (it != old.end() && it->node == v && it->tri == t)
+                c.side = it->side;
+            else
+                c.side = (p - x0).dot((x1 - x0).cross(x2 - x0)) < 0.0 ? -1 : 1;
+            c.group = (q - p).dot(vn.col(v)) < 0.0 ? 0 : 1;
+            m.cands.push_back(c);
+        }
+        std::sort(m.cands.begin() + first, m.cands.end(),
+                  [](const Candidate& a, const Candidate& b) {
+                      return a.group != b.group ? a.group < b.group : a.tri < b.tri;
+                  });
+    }
+    m.xUpdate = x;
+    m.updated = true;
+}
+
+void SelfContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
+    const Impl& m = *m_impl;
+    if (x.cols() != m.numNodes)
+        throw std::invalid_argument("SelfContact::addEnergy: x has " + std::to_string(x.cols()) +
+                                    " nodes, the mesh " + std::to_string(m.numNodes));
+    const double h = m.opt.thickness;
+    m.forEachActive(x, [&](const Candidate& c, double d, Region region) {
+        const double k = m.k[c.node];
+        const double gap = h - d;
+        acc.energy += 0.5 * k * gap * gap;
+        if (!acc.wantGradient && !acc.wantHessian) return;
+        const int ids[4] = {c.node, m.tris(0, c.tri), m.tris(1, c.tri), m.tris(2, c.tri)};
+        Vec12 gd = Vec12::Zero();
+        Mat12 Hd = Mat12::Zero();
+        const Vec3 p = x.col(ids[0]);
+        if (region == Region::Interior) {
+            planeDistanceDerivatives(p, x.col(ids[1]), x.col(ids[2]), x.col(ids[3]), gd, Hd);
+            gd *= c.side;
+            Hd *= c.side;
+        } else {
+            if (!(d > 1e-14 * h)) return;  // node on the edge itself: the gradient is undefined
+            int a = -1, b = -1;
+            switch (region) {
+                case Region::Vertex0: a = 0; break;
+                case Region::Vertex1: a = 1; break;
+                case Region::Vertex2: a = 2; break;
+                case Region::Edge01: a = 0; b = 1; break;
+                case Region::Edge12: a = 1; b = 2; break;
+                case Region::Edge20: a = 2; b = 0; break;
+                default: break;
+            }
+            if (b < 0) {
+                const Vec3 u = (p - x.col(ids[1 + a])) / d;
+                const Mat3 Hu = (Mat3::Identity() - u * u.transpose()) / d;
+                gd.segment<3>(0) = u;
+                gd.segment<3>(3 * (1 + a)) = -u;
+                Hd.block<3, 3>(0, 0) = Hu;
+                Hd.block<3, 3>(3 * (1 + a), 3 * (1 + a)) = Hu;
+                Hd.block<3, 3>(0, 3 * (1 + a)) = -Hu;
+                Hd.block<3, 3>(3 * (1 + a), 0) = -Hu;
+            } else {
+                Eigen::Matrix<double, 9, 1> g9;
+                Eigen::Matrix<double, 9, 9> H9;
+                double dd;
+                segmentDistanceDerivatives(p, x.col(ids[1 + a]), x.col(ids[1 + b]), g9, H9, dd);
+                const int slot[3] = {0, 1 + a, 1 + b};
+                for (int i = 0; i < 3; ++i) {
+                    gd.segment<3>(3 * slot[i]) = g9.segment<3>(3 * i);
+                    for (int j = 0; j < 3; ++j)
+                        Hd.block<3, 3>(3 * slot[i], 3 * slot[j]) = H9.block<3, 3>(3 * i, 3 * j);
+                }
+            }
+        }
+        // E = k (h - d)^2 / 2: dE = -k (h - d) dd; d2E = k dd dd^T - k (h - d) d2d.
+        if (acc.wantGradient)
+            for (int i = 0; i < 4; ++i) acc.addGrad(ids[i], -k * gap * gd.segment<3>(3 * i));
+        if (acc.wantHessian) {
+            const Mat12 H = k * gd * gd.transpose() - k * gap * Hd;
+            for (int i = 0; i < 4; ++i)
+                for (int j = 0; j < 4; ++j)
+                    acc.addHessBlock(ids[i], ids[j], H.block<3, 3>(3 * i, 3 * j));
+        }
+    });
+}
+
+int SelfContact::getNumActive(const Eigen::Matrix3Xd& x) const {
+    const Impl& m = *m_impl;
+    int count = 0;
+    int lastNode = -1;
+    m.forEachActive(x, [&](const Candidate& c, double, Region) {
+        if (c.node != lastNode) ++count;
+        lastNode = c.node;
+    });
+    return count;
+}
+
+bool SelfContact::isCandidateListValid(const Eigen::Matrix3Xd& x) const {
+    const Impl& m = *m_impl;
+    if (!m.updated || x.cols() != m.xUpdate.cols()) return false;
+    if (x.cols() == 0) return true;
+    const double lim = 0.5 * m.opt.candidateMargin;
+    return (x - m.xUpdate).colwise().squaredNorm().maxCoeff() <= lim * lim;
+}
+
+std::vector<std::pair<int, int>> SelfContact::getCandidatePairs() const {
+    std::vector<std::pair<int, int>> out;
+    out.reserve(m_impl->cands.size());
+    for (const Candidate& c : m_impl->cands) out.emplace_back(c.node, c.tri);
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace bags

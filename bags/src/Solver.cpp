@@ -46,7 +46,7 @@ void SolverOptions::validate() const {
     if (!(absoluteTolerance > 0.0)) fail("absoluteTolerance", absoluteTolerance, "use > 0 N");
     if (maxIterations < 1) fail("maxIterations", maxIterations, "use at least 1");
     if (!(pseudoTransientShift > 0.0)) fail("pseudoTransientShift", pseudoTransientShift, "use > 0");
-    if (numThreads < 0) fail("numThreads", numThreads, "use 0 (default) or a positive count");
+    if (!(maxStep >= 0.0)) fail("maxStep", maxStep, "use >= 0 m (0: no limit)");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -93,6 +93,21 @@ void MembraneModel::precompute() {
     for (int i = 0; i < static_cast<int>(fixed.size()); ++i)
         if (fixed[i]) m_fixedDofs.push_back(i);
     m_nodalMass = Eigen::VectorXd::Zero(m_mesh.getNumNodes());
+    m_nodalArea = m_mesh.calcNodalAreas();
+}
+
+void MembraneModel::setStabilization(double k, const Eigen::Matrix3Xd& anchor) {
+    if (!(k >= 0.0)) throw std::invalid_argument("stabilisation stiffness must be >= 0");
+    m_stabilization = k;
+    m_anchor = anchor;
+}
+
+double MembraneModel::calcStabilizationEnergy(const Eigen::Matrix3Xd& x) const {
+    if (m_stabilization == 0.0) return 0.0;
+    double e = 0.0;
+    for (int i = 0; i < m_mesh.getNumNodes(); ++i)
+        e += 0.5 * m_stabilization * m_nodalArea(i) * (x.col(i) - m_anchor.col(i)).squaredNorm();
+    return e;
 }
 
 void MembraneModel::setGravity(double density, const Vec3& g) {
@@ -159,7 +174,7 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
     bool invalid = false;
     int badElement = -1;
 
-#pragma omp parallel reduction(+ : energy)
+#pragma omp parallel reduction(+ : energy) if (nt > 4000)
     {
         std::vector<Triplet> localH;
         Eigen::VectorXd localG;
@@ -269,6 +284,16 @@ void MembraneModel::addLoadEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& 
     }
     for (const auto& c : m_contacts) c->addEnergy(x, acc);
     if (m_selfContact) m_selfContact->addEnergy(x, acc);
+    if (m_stabilization > 0.0) {
+        for (int i = 0; i < m_mesh.getNumNodes(); ++i) {
+            const double k = m_stabilization * m_nodalArea(i);
+            const Vec3 d = x.col(i) - m_anchor.col(i);
+            acc.energy += 0.5 * k * d.squaredNorm();
+            if (acc.wantGradient) acc.grad.segment<3>(3 * i) += k * d;
+            if (acc.wantHessian)
+                for (int j = 0; j < 3; ++j) acc.hess.emplace_back(3 * i + j, 3 * i + j, k);
+        }
+    }
 }
 
 std::vector<int> MembraneModel::calcWrinkleStates(const Eigen::Matrix3Xd& x) const {

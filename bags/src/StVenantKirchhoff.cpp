@@ -22,6 +22,12 @@ public:
         if (D) *D = m_D;
         return 0.5 * Ev.dot(Sv);
     }
+    // Free strip: S22 = 0 gives E22 = -nu E11, i.e. e2 = 1 - nu (e1 - 1).
+    double calcNaturalWidth(double e1, double* d1, double* d2) const override {
+        if (d1) *d1 = -m_nu;
+        if (d2) *d2 = 0.0;
+        return 1.0 - m_nu * (e1 - 1.0);
+    }
     double getInitialShearModulus() const override { return m_E / (2.0 * (1.0 + m_nu)); }
     std::string getName() const override { return "st-venant-kirchhoff"; }
     std::unique_ptr<MembraneMaterial> clone() const override {

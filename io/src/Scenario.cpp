@@ -7,14 +7,15 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <system_error>
 
 namespace io {
 
 struct ScenarioFile::Source {
     std::string fileName;
     std::string text;
-    std::vector<std::string> overrides;      ///< "key=value" as given
-    std::set<std::string> overriddenPaths;   ///< dotted paths replaced by --set
+    std::vector<std::string> overrides;     ///< "key=value" as given
+    std::set<std::string> overriddenPaths;  ///< dotted paths replaced by --set
 };
 
 namespace {
@@ -74,7 +75,8 @@ std::string findClosest(const std::string& word, const std::vector<std::string>&
     std::string best;
     int bestDistance = 1 << 30;
     for (const std::string& c : candidates) {
-        const int d = 2 * calcEditDistance(lower(word), lower(c)) + (lower(word) == lower(c) ? 1 : 0);
+        const int d =
+            2 * calcEditDistance(lower(word), lower(c)) + (lower(word) == lower(c) ? 1 : 0);
         if (d < bestDistance) {
             bestDistance = d;
             best = c;
@@ -89,6 +91,11 @@ std::string findClosest(const std::string& word, const std::vector<std::string>&
 // ScenarioFile
 
 ScenarioFile ScenarioFile::load(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        throw InputError(path, 0, "",
+                         "is a folder; give a scenario file (e.g. "
+                         "scenarios/seed-load-test.yaml)");
     std::ifstream in(path, std::ios::binary);
     if (!in) {
         const std::string reason = std::strerror(errno);
@@ -122,8 +129,8 @@ ScenarioFile ScenarioFile::parse(const std::string& text, const std::string& nam
 void ScenarioFile::applyOverride(const std::string& keyPath, const std::string& value) {
     const std::string where = "--set " + keyPath;
     const std::vector<std::string> parts = splitPath(keyPath);
-    if (keyPath.empty() || std::any_of(parts.begin(), parts.end(),
-                                       [](const std::string& p) { return p.empty(); }))
+    if (keyPath.empty() ||
+        std::any_of(parts.begin(), parts.end(), [](const std::string& p) { return p.empty(); }))
         throw InputError(where, 0, "",
                          "the key path must be section.key, e.g. airbag.mesh_size=\"5 mm\"");
     YAML::Node valueNode;
@@ -150,8 +157,8 @@ void ScenarioFile::applyOverride(const std::string& keyPath, const std::string& 
             cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
             child.reset(cur[parts[i]]);
         } else if (!child.IsMap()) {
-            throw InputError(where, 0, path, "is not a section, so it has no key '" +
-                                                 parts[i + 1] + "'");
+            throw InputError(where, 0, path,
+                             "is not a section, so it has no key '" + parts[i + 1] + "'");
         }
         cur.reset(child);
     }
@@ -194,7 +201,8 @@ std::string ScenarioNode::getChildPath(const std::string& key) const {
 std::string ScenarioNode::getWhere(const std::string& path) const {
     // An override of a key or of any section containing it moves the error to the command line.
     for (const std::string& o : m_source->overriddenPaths)
-        if (path == o || path.rfind(o + ".", 0) == 0) return "--set " + o;
+        if (path == o || path.rfind(o + ".", 0) == 0 || path.rfind(o + "[", 0) == 0)
+            return "--set " + o;
     return m_source->fileName;
 }
 
@@ -266,10 +274,11 @@ void ScenarioNode::checkKeys(const std::vector<std::string>& required,
             }
             for (const auto& [k, l] : seen)
                 if (k == key)
-                    throw InputError(getWhere(path), line, path,
-                                     "appears twice in " + sectionName(m_path) +
-                                         (l > 0 ? " (first at line " + std::to_string(l) + ")" : "") +
-                                         "; keep one");
+                    throw InputError(
+                        getWhere(path), line, path,
+                        "appears twice in " + sectionName(m_path) +
+                            (l > 0 ? " (first at line " + std::to_string(l) + ")" : "") +
+                            "; keep one");
             seen.emplace_back(key, line);
         }
     }
@@ -281,8 +290,7 @@ void ScenarioNode::checkKeys(const std::vector<std::string>& required,
                                                : "missing required keys " + joinQuoted(missing));
         msg += " in " + sectionName(m_path) + "; it requires " + joinQuoted(required);
         if (!optional.empty()) msg += " (optional: " + joinQuoted(optional) + ")";
-        if (m_path.empty())
-            throw InputError(m_source->fileName, 0, "", msg);
+        if (m_path.empty()) throw InputError(m_source->fileName, 0, "", msg);
         fail(msg);
     }
 }
@@ -342,8 +350,7 @@ double ScenarioNode::asNumber() const { return asQuantity(Dimension::Dimensionle
 
 int ScenarioNode::asInteger() const {
     const double v = asNumber();
-    if (v != std::floor(v) || std::fabs(v) > 1e9)
-        fail(getValueText() + " must be a whole number");
+    if (v != std::floor(v) || std::fabs(v) > 1e9) fail(getValueText() + " must be a whole number");
     return static_cast<int>(v);
 }
 

@@ -109,57 +109,96 @@ std::vector<UnitInfo> getUnits(Dimension d) {
 
 std::string getDimensionName(Dimension d) {
     switch (d) {
-        case Dimension::Dimensionless: return "a plain number";
-        case Dimension::Length: return "a length";
-        case Dimension::Mass: return "a mass";
-        case Dimension::Force: return "a force";
-        case Dimension::Pressure: return "a pressure";
-        case Dimension::Velocity: return "a velocity";
-        case Dimension::Temperature: return "a temperature";
-        case Dimension::Density: return "a density";
-        case Dimension::MolarMass: return "a molar mass";
-        case Dimension::Time: return "a time";
-        case Dimension::Angle: return "an angle";
-        case Dimension::Stiffness: return "a stiffness (force per length)";
-        case Dimension::StiffnessPerArea: return "a pressure per length";
+        case Dimension::Dimensionless:
+            return "a plain number";
+        case Dimension::Length:
+            return "a length";
+        case Dimension::Mass:
+            return "a mass";
+        case Dimension::Force:
+            return "a force";
+        case Dimension::Pressure:
+            return "a pressure";
+        case Dimension::Velocity:
+            return "a velocity";
+        case Dimension::Temperature:
+            return "a temperature";
+        case Dimension::Density:
+            return "a density";
+        case Dimension::MolarMass:
+            return "a molar mass";
+        case Dimension::Time:
+            return "a time";
+        case Dimension::Angle:
+            return "an angle";
+        case Dimension::Stiffness:
+            return "a stiffness (force per length)";
+        case Dimension::StiffnessPerArea:
+            return "a pressure per length";
     }
     return "a quantity";
 }
 
 std::string getSiUnit(Dimension d) {
     switch (d) {
-        case Dimension::Dimensionless: return "";
-        case Dimension::Length: return "m";
-        case Dimension::Mass: return "kg";
-        case Dimension::Force: return "N";
-        case Dimension::Pressure: return "Pa";
-        case Dimension::Velocity: return "m/s";
-        case Dimension::Temperature: return "K";
-        case Dimension::Density: return "kg/m^3";
-        case Dimension::MolarMass: return "kg/mol";
-        case Dimension::Time: return "s";
-        case Dimension::Angle: return "rad";
-        case Dimension::Stiffness: return "N/m";
-        case Dimension::StiffnessPerArea: return "Pa/m";
+        case Dimension::Dimensionless:
+            return "";
+        case Dimension::Length:
+            return "m";
+        case Dimension::Mass:
+            return "kg";
+        case Dimension::Force:
+            return "N";
+        case Dimension::Pressure:
+            return "Pa";
+        case Dimension::Velocity:
+            return "m/s";
+        case Dimension::Temperature:
+            return "K";
+        case Dimension::Density:
+            return "kg/m^3";
+        case Dimension::MolarMass:
+            return "kg/mol";
+        case Dimension::Time:
+            return "s";
+        case Dimension::Angle:
+            return "rad";
+        case Dimension::Stiffness:
+            return "N/m";
+        case Dimension::StiffnessPerArea:
+            return "Pa/m";
     }
     return "";
 }
 
 std::string getExample(Dimension d) {
     switch (d) {
-        case Dimension::Dimensionless: return "0.3";
-        case Dimension::Length: return "350 mm";
-        case Dimension::Mass: return "3.5 g";
-        case Dimension::Force: return "50 N";
-        case Dimension::Pressure: return "5 kPa";
-        case Dimension::Velocity: return "10 mm/min";
-        case Dimension::Temperature: return "23 degC";
-        case Dimension::Density: return "1150 kg/m^3";
-        case Dimension::MolarMass: return "29 g/mol";
-        case Dimension::Time: return "60 s";
-        case Dimension::Angle: return "30 deg";
-        case Dimension::Stiffness: return "5 N/mm";
-        case Dimension::StiffnessPerArea: return "1e7 Pa/m";
+        case Dimension::Dimensionless:
+            return "0.3";
+        case Dimension::Length:
+            return "350 mm";
+        case Dimension::Mass:
+            return "3.5 g";
+        case Dimension::Force:
+            return "50 N";
+        case Dimension::Pressure:
+            return "5 kPa";
+        case Dimension::Velocity:
+            return "10 mm/min";
+        case Dimension::Temperature:
+            return "23 degC";
+        case Dimension::Density:
+            return "1150 kg/m^3";
+        case Dimension::MolarMass:
+            return "29 g/mol";
+        case Dimension::Time:
+            return "60 s";
+        case Dimension::Angle:
+            return "30 deg";
+        case Dimension::Stiffness:
+            return "5 N/mm";
+        case Dimension::StiffnessPerArea:
+            return "1e7 Pa/m";
     }
     return "";
 }
@@ -217,8 +256,8 @@ double fromUnit(double value, const std::string& unit) {
 
 std::string formatQuantity(double valueSi, const std::string& unit, int decimals) {
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f %s", decimals < 0 ? 0 : decimals,
-                  toUnit(valueSi, unit), unit.c_str());
+    std::snprintf(buf, sizeof buf, "%.*f %s", decimals < 0 ? 0 : decimals, toUnit(valueSi, unit),
+                  unit.c_str());
     return buf;
 }
 

@@ -116,3 +116,29 @@ TEST(MembraneElement, UniformStretchPatchHasNoInteriorForceAndExactStress) {
     EXPECT_NEAR(right(0), traction(0) * L * t, 1e-10 * traction.norm() * L * t);
     EXPECT_NEAR(right(1), traction(1) * L * t, 1e-10 * traction.norm() * L * t);
 }
+
+TEST(MembraneElement, TangentMatchesFiniteDifferencesCompressibleWithWrinkling) {
+    // St. Venant-Kirchhoff (nu = 0.4) under the tension-field law with its own natural width
+    // e2 = 1 - nu (e1 - 1): taut, wrinkled and slack elements.
+    std::shared_ptr<MembraneMaterial> m(
+        new WrinklingMaterial(makeStVenantKirchhoff(588e6, 0.4), 1e-3));
+    MembraneModel model(test::makePatch(2, 0.1), m, 0.6e-3);
+    checkTangents(model, 1.03, 4);
+    checkTangents(model, 0.98, 5);
+}
+
+TEST(WrinklingCompressible, FreeStripOfStVenantKirchhoffCarriesNoLateralStress) {
+    // A strip stretched to l1 = 1.05 with its lateral stretch below the natural width
+    // sqrt(1 - 0.4 (l1^2 - 1)) is wrinkled: S22 = 0 and S11 is the base's plane-stress
+    // uniaxial stress E E11 (exact for SVK). Tolerance 1e-9 relative (residual 0).
+    const double E = 588e6, nu = 0.4, e1 = 1.05 * 1.05;
+    WrinklingMaterial w(makeStVenantKirchhoff(E, nu), 0.0);
+    Mat2 C = Mat2::Zero();
+    C(0, 0) = e1;
+    C(1, 1) = 0.9 * (1.0 - nu * (e1 - 1.0));
+    Eigen::Vector3d S;
+    w.calcEnergy(C, &S, nullptr);
+    EXPECT_EQ(w.calcState(C), 1);
+    EXPECT_NEAR(S(1), 0.0, 1e-9 * E);
+    EXPECT_NEAR(S(0), E * 0.5 * (e1 - 1.0), 1e-9 * E);
+}

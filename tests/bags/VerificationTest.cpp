@@ -71,6 +71,7 @@ TEST(Verification, SphereWithFixedGasMassPassesTheLimitPoint) {
     GasOptions air;
     const double lTarget = 1.6;
     const double pTarget = sphereNeoHookeanPressure(C10, H, R, lTarget);
+    const double pMax = sphereNeoHookeanPressure(C10, H, R, std::pow(7.0, 1.0 / 6.0));
     const double mTarget = (air.ambientPressure + pTarget) * V0 * std::pow(lTarget, 3) /
                            (air.getSpecificGasConstant() * air.temperature);
     // Pre-inflate with pressure to l ~ 1.2, then seal the gas and add mass in steps.
@@ -93,8 +94,10 @@ TEST(Verification, SphereWithFixedGasMassPassesTheLimitPoint) {
 TEST(Verification, InflatedSquareAirbagCentreDeflection) {
     // Reference: inflated square airbag, edge 0.8485 m (diagonal 1.2 m), t = 0.6 mm,
     // E = 588 MPa, nu = 0.4, p = 5 kPa: centre deflection 0.2167 m (Jarasjarungkiat, Wuchner &
-    // Bletzinger 2009). Tolerance 2 % (the issue's). St. Venant-Kirchhoff membrane, full bag
-    // (two sheets), symmetry planes used only to remove rigid modes.
+    // Bletzinger 2009, with wrinkling). Tolerance 2 % (the issue's). St. Venant-Kirchhoff
+    // membrane under the tension-field law (residual 1e-3), full bag (two sheets), symmetry
+    // planes used only to remove rigid modes. Measured: 0.2150 m at 24 divisions (-0.8 %).
+    // Without the wrinkling law the compressed corners stiffen the bag: 0.183 m (-15 %).
     const double edge = 0.8485, t = 0.6e-3;
     Mesh mesh = makeSquareCushion(edge, 24, 1e-3);
     const Vec3 c = mesh.X.rowwise().mean();
@@ -104,7 +107,8 @@ TEST(Verification, InflatedSquareAirbagCentreDeflection) {
         if (std::abs(p.y()) < 1e-9) mesh.fixedDofs.push_back(3 * i + 1);
         if (std::abs(p.z()) < 1e-9) mesh.fixedDofs.push_back(3 * i + 2);  // the welded rim
     }
-    MembraneModel model(mesh, std::shared_ptr<MembraneMaterial>(makeStVenantKirchhoff(588e6, 0.4)), t);
+    MembraneModel model(
+        mesh, std::make_shared<WrinklingMaterial>(makeStVenantKirchhoff(588e6, 0.4), 1e-3), t);
     Eigen::Matrix3Xd x = mesh.X;
     ramp(model, x, 10, [&](double s) { model.setChamberPressure(0, s); }, 0.0, 5000.0);
     double w = 0.0;
@@ -163,11 +167,13 @@ double henckyCentreDeflection(double a, double Eh, double nu, double q) {
 }  // namespace
 
 TEST(Verification, HenckyReferenceHasTheClassicalCoefficient) {
-    // Hencky's constant for nu = 0.3: w0 = 0.662 a (q a / E h)^(1/3) (Hencky 1915 corrected by
-    // Chien 1948, as tabulated by Fichter 1997). Our shooting solution within 1 %.
+    // Hencky's constant for nu = 0.3: w0 = 0.653 a (q a / E h)^(1/3) (Hencky 1915 with Chien's
+    // 1948 correction; Fichter, NASA TP-3658, 1997). Our shooting solution within 0.5 %
+    // (measured 0.6534).
     const double a = 0.1, Eh = 1e5, q = 1.0;
     const double w0 = henckyCentreDeflection(a, Eh, 0.3, q);
-    EXPECT_NEAR(w0 / (a * std::cbrt(q * a / Eh)), 0.662, 0.01 * 0.662);
+    EXPECT_NEAR(w0 / (a * std::cbrt(q * a / Eh)), 0.653, 0.005 * 0.653)
+        << "coefficient " << w0 / (a * std::cbrt(q * a / Eh));
 }
 
 TEST(Verification, ClampedCircularMembraneMatchesHencky) {

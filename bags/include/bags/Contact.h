@@ -14,6 +14,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace bags {
@@ -28,6 +29,15 @@ public:
     /// Gradient-of-normal d n / d p (3x3, Ground) at p: the surface curvature seen from p;
     /// zero for flat faces. Used in the contact tangent.
     virtual Mat3 calcNormalDerivative(const Vec3& p_G) const = 0;
+    /// Everything the contact law needs at p in one evaluation (any output may be null):
+    /// signed distance [m], closest point and outward normal (Ground), d n / d p [1/m].
+    virtual void calcContactGeometry(const Vec3& p_G, double* distance, Vec3* closest_G,
+                                     Vec3* normal_G, Mat3* dndp_G) const;
+    /// Radius [m] of a sphere about the frame origin that contains the solid (infinite for
+    /// the plane); lets callers skip far nodes cheaply.
+    virtual double getBoundingRadius() const;
+    /// A cheap lower bound [m] of the signed distance at p (Ground), used to skip far nodes.
+    virtual double calcDistanceLowerBound(const Vec3& p_G) const;
     virtual std::string getName() const = 0;
     void setPose(const Eigen::Isometry3d& X_GS) { m_X_GS = X_GS; }
     const Eigen::Isometry3d& getPose() const { return m_X_GS; }
@@ -54,6 +64,7 @@ public:
         double friction = 0.0;         ///< Coulomb coefficient (0 = frictionless)
         double stickStiffnessRatio = 1.0;  ///< tangential / normal penalty
         double onsetGap = 0.0;          ///< [m] smoothing width of the contact onset (0: C1 quadratic)
+        int minNodesForThreads = 50000; ///< evaluate nodes with OpenMP from this many nodes on
         void validate() const;          ///< throws std::invalid_argument naming the option
     };
     RigidContact(const Mesh& mesh, std::vector<int> nodes, const RigidShape& shape,
@@ -70,6 +81,9 @@ public:
     /// Contact pressure [Pa] per mesh node (0 for nodes not in contact / not in the set).
     Eigen::VectorXd calcNodalPressure(const Eigen::Matrix3Xd& x) const;
     int getNumActive(const Eigen::Matrix3Xd& x) const;
+    /// The contact node set (mesh node indices) and the shape it touches.
+    const std::vector<int>& getNodes() const;
+    const RigidShape& getShape() const;
 private:
     struct Impl;
     std::shared_ptr<Impl> m_impl;
@@ -82,13 +96,19 @@ public:
     struct Options {
         double pressurePenalty = 1e7;  ///< [Pa/m]
         double thickness = 1e-3;       ///< [m] contact offset between two sheets
-        void validate() const;
+        double candidateMargin = 2e-3; ///< [m] extra search distance kept in the candidate list
+        void validate() const;         ///< throws std::invalid_argument naming the option
     };
     SelfContact(const Mesh& mesh, const Options& options);
     /// Rebuilds the candidate pairs at x (call once per load step or when x moved far).
     void updateCandidates(const Eigen::Matrix3Xd& x);
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     int getNumActive(const Eigen::Matrix3Xd& x) const;
+    /// False once some node moved more than candidateMargin/2 since updateCandidates(): the
+    /// candidate list may then miss pairs and should be rebuilt.
+    bool isCandidateListValid(const Eigen::Matrix3Xd& x) const;
+    /// Current candidate pairs as (node, triangle), sorted.
+    std::vector<std::pair<int, int>> getCandidatePairs() const;
 private:
     struct Impl;
     std::shared_ptr<Impl> m_impl;

@@ -10,7 +10,8 @@ namespace bags {
 /// Side profile in the x-z plane: a triangle with the long side on the bed board (z = 0),
 /// apex at height `height`, one sloped side of length `shortSide`; extruded along y by
 /// `width`. An internal vertical diaphragm under the apex splits it into two wedge chambers
-/// ("wedge-steep", "wedge-gentle") joined by the intermediate connection.
+/// ("wedge-steep", "wedge-gentle") joined by the intermediate connection. Without the
+/// diaphragm and with shortSide == height it is a single right-angled wedge.
 struct DoubleWedgeParams {
     double longSide = 0.350;   ///< base length [m]
     double shortSide = 0.200;  ///< steep sloped side [m]

@@ -41,6 +41,9 @@ struct LoadTestOptions {
     RigidContact::Options floorContact;
     bool selfContact = true;
     SolverOptions solver;
+    /// Stabilisation [Pa/m] used when Newton fails on a step (slack, wrinkling bag): a spring
+    /// of this stiffness per unit area to the last converged state; 0 disables it.
+    double stabilization = 1.0e4;
     /// Throws std::invalid_argument naming the option and what would be valid.
     void validate() const;
 };
@@ -51,11 +54,12 @@ struct LoadStep {
     int step = 0;              ///< step within the curve
     bool loading = true;       ///< false on the unloading branch
     double time = 0.0;         ///< test time of this curve [s]
-    double displacement = 0.0; ///< block travel from first touch [m]
+    double displacement = 0.0; ///< block travel [m] from the top of the unloaded bag under the block
     double force = 0.0;        ///< block force [N]
     std::vector<double> gaugePressure;  ///< per chamber [Pa]
     std::vector<double> volume;         ///< per chamber [m^3]
     int newtonIterations = 0;
+    double stabilizationEnergy = 0.0;   ///< [J] held by the stabilisation (0 if not needed)
 };
 
 struct LoadCurve {

@@ -40,6 +40,12 @@ public:
     /// P = dW/dlambda with W(lambda, lambda^-1/2).
     virtual double calcUniaxialNominalStress(double lambda) const;
 
+    /// Natural width of a free strip: the squared lateral stretch e2 = lambda2^2 at which the
+    /// lateral stress vanishes when the strip is stretched to e1 = lambda1^2, with its first
+    /// and second derivatives in e1 (the tension-field law needs them). Default: isotropic
+    /// incompressible, e2 = e1^(-1/2); compressible materials override it.
+    virtual double calcNaturalWidth(double e1, double* d1, double* d2) const;
+
     virtual std::unique_ptr<MembraneMaterial> clone() const = 0;
 };
 

@@ -10,6 +10,8 @@
 
 #include <bags/Types.h>
 
+#include <Eigen/Geometry>
+
 #include <string>
 #include <vector>
 
@@ -38,10 +40,11 @@ struct Mesh {
     Eigen::VectorXd calcNodalAreas() const;
     /// Reference area of each triangle [m^2].
     Eigen::VectorXd calcTriangleAreas() const;
-    /// Checks indices, orientation signs and that each chamber is closed (every edge shared by
-    /// an even number of its triangles) or, if open, that all nodes on its open edges are
-    /// support nodes (then its volume is measured from the fixed rim); throws
-    /// std::invalid_argument with the reason.
+    /// Checks indices, panels, non-degenerate triangles, orientation signs and that each
+    /// chamber is closed and consistently oriented (after flipping its sign -1 triangles,
+    /// every edge is used as often in one direction as in the other) or, if open, that all
+    /// nodes on its open edges are support nodes (then its volume is measured from the fixed
+    /// rim); throws std::invalid_argument with the reason.
     void validate() const;
 
     /// Index of the panel called `name`, -1 if there is none.
@@ -56,7 +59,7 @@ struct MeshQuality {
     int numTris = 0;         ///< number of triangles
     double minAngle = 0.0;   ///< smallest interior angle of any triangle [rad]
     double maxAngle = 0.0;   ///< largest interior angle of any triangle [rad]
-    double meanAspect = 0.0; ///< mean of R/(2 r) (circumradius over twice the inradius; 1 = equilateral)
+    double meanAspect = 0.0; ///< mean R/(2 r), circumradius over twice inradius (1: equilateral)
     double maxAspect = 0.0;  ///< largest R/(2 r)
     double minEdge = 0.0;    ///< shortest edge [m]
     double meanEdge = 0.0;   ///< mean edge length over triangles' edges [m]

@@ -14,6 +14,7 @@
 #include <bags/Mesh.h>
 #include <bags/Types.h>
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -24,7 +25,10 @@ struct SolverOptions {
     double absoluteTolerance = 1e-7;   ///< [N] |r| to converge regardless
     int maxIterations = 60;            ///< Newton iterations per solve
     double pseudoTransientShift = 1e-3;///< initial shift, as a fraction of mean tangent diagonal
-    int numThreads = 0;                ///< OpenMP threads for assembly (0: default)
+    double maxStep = 0.0;              ///< [m] largest nodal move per iteration (0: no limit)
+    /// Observer of each Newton iteration (iteration, residual [N], step length, shift [N/m]);
+    /// for diagnostics, the library itself prints nothing.
+    std::function<void(int, double, double, double)> monitor;
     void validate() const;             ///< throws std::invalid_argument naming the option
 };
 
@@ -59,6 +63,15 @@ public:
     /// Prescribed gauge pressure [Pa] on a chamber not filled by a gas (follower load).
     void setChamberPressure(int chamber, double gaugePressure);
     double getChamberPressure(int chamber) const { return m_chamberPressure[chamber]; }
+
+    /// Viscous-like stabilisation for slack, wrinkling states (as a quasi-static analysis with
+    /// automatic stabilisation): adds 1/2 k A_a |x_a - anchor_a|^2 per node, k [Pa/m], A_a the
+    /// nodal reference area. The anchor is the last converged state; 0 switches it off.
+    void setStabilization(double stiffnessPerArea, const Eigen::Matrix3Xd& anchor);
+    double getStabilization() const { return m_stabilization; }
+    /// Energy [J] held by the stabilisation at x (a measure of how far x is from a true
+    /// equilibrium: its gradient is the artificial force).
+    double calcStabilizationEnergy(const Eigen::Matrix3Xd& x) const;
 
     /// Adds a contact term; the model shares ownership.
     void addRigidContact(std::shared_ptr<RigidContact> contact);
@@ -106,6 +119,9 @@ private:
     std::vector<std::shared_ptr<RigidContact>> m_contacts;
     std::shared_ptr<SelfContact> m_selfContact;
     std::vector<int> m_fixedDofs;
+    double m_stabilization = 0.0;         ///< [Pa/m]
+    Eigen::Matrix3Xd m_anchor;
+    Eigen::VectorXd m_nodalArea;          ///< [m^2]
     // Per triangle: inverse of the reference edge matrix in a local 2D frame, reference area.
     std::vector<Eigen::Matrix2d> m_DmInv;
     std::vector<double> m_area0;

@@ -11,7 +11,7 @@
 namespace io {
 
 class InputError : public std::runtime_error {
-public:
+  public:
     /// @param where file name, or "--set KEY" for a command-line override, or "" if unknown
     /// @param line 1-based line in that file, 0 if unknown
     /// @param key dotted key path ("gas.temperature"), "" for the file as a whole
@@ -20,11 +20,11 @@ public:
                const std::string& message);
 
     const std::string& getWhere() const { return m_where; }      ///< file or "--set KEY"
-    int getLine() const { return m_line; }                         ///< 1-based, 0 if unknown
-    const std::string& getKey() const { return m_key; }           ///< dotted key path
-    const std::string& getMessage() const { return m_message; }   ///< without the location
+    int getLine() const { return m_line; }                       ///< 1-based, 0 if unknown
+    const std::string& getKey() const { return m_key; }          ///< dotted key path
+    const std::string& getMessage() const { return m_message; }  ///< without the location
 
-private:
+  private:
     std::string m_where;
     int m_line;
     std::string m_key;

@@ -5,9 +5,8 @@
 /// names the file, line and key. Every key, unit, default and valid range is listed in
 /// docs/scenario-reference.md.
 
-#include <io/Scenario.h>
-
 #include <bags/LoadTest.h>
+#include <io/Scenario.h>
 
 #include <string>
 #include <vector>
@@ -23,8 +22,8 @@ struct OutputOptions {
 
 /// A scenario of kind seed-load-test, ready to run.
 struct LoadTestScenario {
-    std::string name;          ///< 'name' key, else the file name without extension
-    std::string description;   ///< 'description' key (free text), may be empty
+    std::string name;         ///< 'name' key, else the file name without extension
+    std::string description;  ///< 'description' key (free text), may be empty
     bags::LoadTestOptions options;
     OutputOptions output;
 };

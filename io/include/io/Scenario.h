@@ -11,7 +11,6 @@
 
 #include <io/InputError.h>
 #include <io/Units.h>
-
 #include <yaml-cpp/yaml.h>
 
 #include <memory>
@@ -32,7 +31,7 @@ class ScenarioNode;
 
 /// One scenario: its file name, its text verbatim and its YAML tree (with overrides applied).
 class ScenarioFile {
-public:
+  public:
     /// Reads and parses a file. @throws InputError if it cannot be read or is not valid YAML
     /// (with the line of the syntax error), or if its top level is not a mapping.
     static ScenarioFile load(const std::string& path);
@@ -47,8 +46,8 @@ public:
     /// Parses "key.path=value" (as given to --set) and applies it.
     void applyOverride(const std::string& assignment);
 
-    const std::string& getFileName() const;   ///< as given to load()/parse()
-    const std::string& getText() const;       ///< file text verbatim (without overrides)
+    const std::string& getFileName() const;  ///< as given to load()/parse()
+    const std::string& getText() const;      ///< file text verbatim (without overrides)
     /// The overrides applied, as "key=value" in the order given.
     const std::vector<std::string>& getOverrides() const;
     /// The file name without directories and extension ("seed-load-test").
@@ -57,7 +56,7 @@ public:
 
     struct Source;  ///< shared by all nodes of one file (name, overridden paths)
 
-private:
+  private:
     std::shared_ptr<Source> m_source;
     YAML::Node m_root;
 };
@@ -66,7 +65,7 @@ private:
 /// Getters with a default return it when the key is absent; those without throw InputError
 /// when it is. Quantities are returned in SI.
 class ScenarioNode {
-public:
+  public:
     ScenarioNode(std::shared_ptr<const ScenarioFile::Source> source, YAML::Node node,
                  std::string path, YAML::Mark keyMark);
 
@@ -100,10 +99,10 @@ public:
     std::vector<ScenarioNode> getElements() const;
 
     // Scalars of this node.
-    double asQuantity(Dimension d) const;     ///< SI value
-    double asNumber() const;                  ///< plain number
+    double asQuantity(Dimension d) const;  ///< SI value
+    double asNumber() const;               ///< plain number
     int asInteger() const;
-    bool asBool() const;                      ///< true/false (yes/no, on/off accepted)
+    bool asBool() const;  ///< true/false (yes/no, on/off accepted)
     std::string asString() const;
     /// One of `choices` (exact match); the error lists them and suggests the closest.
     std::string asChoice(const std::vector<std::string>& choices) const;
@@ -126,7 +125,7 @@ public:
     /// Throws an InputError located at the child key (or at this section if it is absent).
     [[noreturn]] void fail(const std::string& key, const std::string& message) const;
 
-private:
+  private:
     /// Finds a child entry; false if absent. Sets the key's mark and the value.
     bool findEntry(const std::string& key, YAML::Node* value, YAML::Mark* keyMark) const;
     std::string getWhere(const std::string& path) const;

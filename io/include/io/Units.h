@@ -30,7 +30,7 @@ enum class Dimension {
 
 /// A unit the parser knows: value_SI = factor * value + offset.
 struct UnitInfo {
-    std::string symbol;   ///< as written, e.g. "mm/min"
+    std::string symbol;  ///< as written, e.g. "mm/min"
     Dimension dimension;
     double factor;        ///< SI per unit
     double offset = 0.0;  ///< SI offset (degC only)
@@ -39,7 +39,7 @@ struct UnitInfo {
 /// Raised by parseQuantity() when the text is not a valid quantity of the wanted kind; the
 /// message says what would be valid. The scenario reader adds file, line and key to it.
 class UnitError : public std::invalid_argument {
-public:
+  public:
     using std::invalid_argument::invalid_argument;
 };
 

@@ -1,0 +1,78 @@
+#pragma once
+/// @file A rigid flat support under the patient: an elastic foundation (Winkler bed) of stiff
+/// springs against the plane z = height, acting on patches of every contact shape's surface,
+/// with damping and regularized Coulomb friction. Good enough to lay the patient down and read
+/// how its weight is shared between body regions; the airbags replace it later.
+///
+/// Pressure on a patch that is below the plane by delta, moving down at -v_z:
+///   p = max(0, k delta - c v_z), normal force p * A * max(0, -n_z) (the patch's area projected
+///   on the plane), friction -mu F_n v_t / sqrt(|v_t|^2 + v_s^2).
+
+#include "body/BodyModel.h"
+
+#include <Simbody.h>
+
+#include <array>
+#include <vector>
+
+namespace body {
+
+/// Settings of the flat support.
+struct PlaneSupportOptions {
+    double height = 0.0;           ///< plane z [m]
+    double stiffness = 2.0e6;      ///< pressure per penetration [Pa/m] (20 kPa at 10 mm)
+    double damping = 4.0e4;        ///< pressure per penetration rate [Pa s/m]
+    double friction = 0.6;         ///< Coulomb coefficient [-]
+    double slipVelocity = 2.0e-3;  ///< friction regularization velocity [m/s]
+    double sampleSpacing = 0.012;  ///< patch size on the shapes' surfaces [m]
+    /// @throws std::invalid_argument naming the option if a value is out of range.
+    void validate() const;
+};
+
+/// How the support carries the body at one state.
+struct SupportLoad {
+    SimTK::Vec3 force{0};      ///< total force of the support on the body, Ground [N]
+    double contactArea = 0;    ///< projected area of the patches in contact [m^2]
+    double peakPressure = 0;   ///< highest patch pressure [Pa]
+    std::vector<double> regionForce;  ///< normal force per region (BodyModel::getRegions()) [N]
+    std::vector<double> regionPeakPressure;  ///< highest pressure per region [Pa]
+    double otherForce = 0;     ///< normal force on patches in no region [N]
+    std::array<double, kSegmentCount> segmentForce{};  ///< normal force per segment [N]
+};
+
+/// The flat support as a Simbody force element.
+class PlaneSupport : public SimTK::Force::Custom::Implementation {
+public:
+    /// Samples the model's shapes. @throws std::invalid_argument if options are invalid.
+    PlaneSupport(const BodyModel& model, const PlaneSupportOptions& options);
+
+    /// Adds the contact forces to bodyForces.
+    void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& bodyForces,
+                   SimTK::Vector_<SimTK::Vec3>& particleForces,
+                   SimTK::Vector& mobilityForces) const override;
+    /// Elastic energy of the foundation springs, sum k delta^2 A_proj / 2 [J].
+    SimTK::Real calcPotentialEnergy(const SimTK::State& state) const override;
+    /// Forces per region and segment. @pre state realized to Velocity.
+    SupportLoad calcSupportLoad(const SimTK::State& state) const;
+    /// Number of surface patches.
+    int getPatchCount() const;
+
+private:
+    struct Patch {
+        SimTK::Vec3 p_B, n_B;
+        double area;
+        int region;
+    };
+    template <class Visit>
+    void forEachContact(const SimTK::State& state, Visit&& visit) const;
+
+    const BodyModel& m_model;
+    PlaneSupportOptions m_options;
+    std::array<std::vector<Patch>, kSegmentCount> m_patches;
+};
+
+/// Adds a PlaneSupport to the model's forces; the returned reference stays valid as long as
+/// the model. @pre topology not yet realized.
+const PlaneSupport& addPlaneSupport(BodyModel& model, const PlaneSupportOptions& options = {});
+
+}  // namespace body

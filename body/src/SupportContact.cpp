@@ -1,0 +1,146 @@
+// Elastic-foundation contact of the body shapes with a flat rigid support (see SupportContact.h).
+#include "body/SupportContact.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace body {
+
+void PlaneSupportOptions::validate() const {
+    auto check = [](bool ok, const char* what) {
+        if (!ok) throw std::invalid_argument(std::string("PlaneSupportOptions.") + what);
+    };
+    check(std::isfinite(height), "height must be finite [m]");
+    check(stiffness > 0 && std::isfinite(stiffness), "stiffness must be > 0 [Pa/m]");
+    check(damping >= 0 && std::isfinite(damping), "damping must be >= 0 [Pa s/m]");
+    check(friction >= 0 && std::isfinite(friction), "friction must be >= 0");
+    check(slipVelocity > 0 && std::isfinite(slipVelocity), "slipVelocity must be > 0 [m/s]");
+    check(sampleSpacing > 0.001 && sampleSpacing < 0.1, "sampleSpacing must be in (1, 100) mm");
+}
+
+PlaneSupport::PlaneSupport(const BodyModel& model, const PlaneSupportOptions& options)
+    : m_model(model), m_options(options) {
+    options.validate();
+    // The patches are made mirror-symmetric about the sagittal plane (body Z = 0 for midline
+    // segments, left = mirrored right), so that a symmetric posture stays symmetric.
+    auto mirror = [](SurfaceSample s) {
+        s.p_B[2] = -s.p_B[2];
+        s.n_B[2] = -s.n_B[2];
+        return s;
+    };
+    for (int i = 0; i < kSegmentCount; ++i) {
+        const Segment seg = static_cast<Segment>(i);
+        const Side side = getSegmentSide(seg);
+        std::vector<SurfaceSample> samples;
+        if (side == Side::Centre) {
+            for (const SurfaceSample& s : model.getContactShape(seg).calcSurfaceSamples(options.sampleSpacing)) {
+                if (s.p_B[2] > 0) {
+                    samples.push_back(s);
+                    samples.push_back(mirror(s));
+                } else if (s.p_B[2] == 0) {
+                    samples.push_back(s);
+                }
+            }
+        } else {
+            // The right segment's samples, mirrored for the left one (segments are in
+            // right-left pairs: the left counterpart has the same shape mirrored).
+            const Segment right = side == Side::Right ? seg : getMirrorSegment(seg);
+            samples = model.getContactShape(right).calcSurfaceSamples(options.sampleSpacing);
+            if (side == Side::Left)
+                for (SurfaceSample& s : samples) s = mirror(s);
+        }
+        for (const SurfaceSample& s : samples)
+            m_patches[i].push_back({s.p_B, s.n_B, s.area, model.findRegion(seg, s.p_B)});
+    }
+}
+
+int PlaneSupport::getPatchCount() const {
+    int n = 0;
+    for (const auto& v : m_patches) n += static_cast<int>(v.size());
+    return n;
+}
+
+// Calls visit(segment, patch, p_G, F_G, pressure, projectedArea, delta) for every patch in contact.
+template <class Visit>
+void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) const {
+    const PlaneSupportOptions& o = m_options;
+    for (int i = 0; i < kSegmentCount; ++i) {
+        const Segment seg = static_cast<Segment>(i);
+        const SimTK::MobilizedBody& mb = m_model.getMobilizedBody(seg);
+        const SimTK::Transform& X_GB = mb.getBodyTransform(state);
+        const ContactShape& shape = m_model.getContactShape(seg);
+        // Broad phase: skip a segment whose bounding sphere is above the plane.
+        if ((X_GB * shape.getBoundingCentre())[2] - shape.getBoundingRadius() > o.height) continue;
+        const SimTK::SpatialVec& V_GB = mb.getBodyVelocity(state);
+        for (const Patch& p : m_patches[i]) {
+            const SimTK::Vec3 r_G = X_GB.R() * p.p_B;
+            const SimTK::Vec3 p_G = X_GB.p() + r_G;
+            const double delta = o.height - p_G[2];
+            if (delta <= 0) continue;
+            const double nz = (X_GB.R() * p.n_B)[2];
+            if (nz >= 0) continue;  // patch faces away from the support
+            const double aProj = -nz * p.area;
+            const SimTK::Vec3 v = V_GB[1] + V_GB[0] % r_G;
+            const double pressure = o.stiffness * delta - o.damping * v[2];
+            if (pressure <= 0) continue;
+            const double fn = pressure * aProj;
+            const double vt = std::sqrt(v[0] * v[0] + v[1] * v[1] + o.slipVelocity * o.slipVelocity);
+            const SimTK::Vec3 F(-o.friction * fn * v[0] / vt, -o.friction * fn * v[1] / vt, fn);
+            visit(i, p, p_G, r_G, F, pressure, aProj, delta);
+        }
+    }
+}
+
+void PlaneSupport::calcForce(const SimTK::State& state,
+                             SimTK::Vector_<SimTK::SpatialVec>& bodyForces,
+                             SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector&) const {
+    forEachContact(state, [&](int i, const Patch&, const SimTK::Vec3&, const SimTK::Vec3& r_G,
+                              const SimTK::Vec3& F, double, double, double) {
+        const SimTK::MobilizedBodyIndex mbx = m_model.getMobilizedBodyIndex(static_cast<Segment>(i));
+        bodyForces[mbx][0] += r_G % F;
+        bodyForces[mbx][1] += F;
+    });
+}
+
+SimTK::Real PlaneSupport::calcPotentialEnergy(const SimTK::State& state) const {
+    double e = 0;
+    const PlaneSupportOptions& o = m_options;
+    for (int i = 0; i < kSegmentCount; ++i) {
+        const SimTK::Transform& X_GB = m_model.getMobilizedBody(static_cast<Segment>(i)).getBodyTransform(state);
+        for (const Patch& p : m_patches[i]) {
+            const double delta = o.height - (X_GB * p.p_B)[2];
+            const double nz = (X_GB.R() * p.n_B)[2];
+            if (delta > 0 && nz < 0) e += 0.5 * o.stiffness * delta * delta * (-nz * p.area);
+        }
+    }
+    return e;
+}
+
+SupportLoad PlaneSupport::calcSupportLoad(const SimTK::State& state) const {
+    SupportLoad load;
+    const int nRegions = static_cast<int>(m_model.getRegions().size());
+    load.regionForce.assign(nRegions, 0.0);
+    load.regionPeakPressure.assign(nRegions, 0.0);
+    forEachContact(state, [&](int i, const Patch& p, const SimTK::Vec3&, const SimTK::Vec3&,
+                              const SimTK::Vec3& F, double pressure, double aProj, double) {
+        load.force += F;
+        load.contactArea += aProj;
+        load.peakPressure = std::max(load.peakPressure, pressure);
+        load.segmentForce[i] += F[2];
+        if (p.region >= 0) {
+            load.regionForce[p.region] += F[2];
+            load.regionPeakPressure[p.region] = std::max(load.regionPeakPressure[p.region], pressure);
+        } else {
+            load.otherForce += F[2];
+        }
+    });
+    return load;
+}
+
+const PlaneSupport& addPlaneSupport(BodyModel& model, const PlaneSupportOptions& options) {
+    auto* impl = new PlaneSupport(model, options);
+    SimTK::Force::Custom(model.updForces(), impl);
+    return *impl;
+}
+
+}  // namespace body

@@ -1,0 +1,105 @@
+#pragma once
+/// @file Writing a run's results into its output folder, streamed as the run goes so that an
+/// interrupted run keeps what it computed: results.h5 (HDF5, layout in docs/output-layout.md),
+/// results.xdmf (opens the deforming membrane in ParaView), load_displacement.csv and
+/// stiffness.csv. Units: SI in results.h5 (each dataset says its unit); mm, N, kPa, g in the
+/// CSV files, as their column names say.
+///
+/// Order: OutputDir (claims the folder, writes the INCOMPLETE marker), LoadTestWriter on it,
+/// addStep() from the load test's observer after every converged step, then either finish()
+/// with the result (status "complete", marker removed) or fail() (status "failed" or
+/// "interrupted", marker kept).
+
+#include <bags/LoadTest.h>
+
+#include <Eigen/Core>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace io {
+
+/// An output folder claimed by one run. While the run writes, the folder holds a marker file
+/// INCOMPLETE saying so (and, after a failure, why); only a finished run removes it.
+class OutputDir {
+  public:
+    static constexpr const char* kMarkerName = "INCOMPLETE";  ///< marker file name
+
+    /// Creates the folder (and its parents) and the marker.
+    /// @throws InputError if the folder exists and is not empty, unless `force` (then files in
+    ///   it are overwritten where the run writes them, others are left alone), or if it cannot
+    ///   be created.
+    OutputDir(const std::filesystem::path& path, bool force);
+
+    const std::filesystem::path& getPath() const { return m_path; }  ///< the folder
+    /// Path of a file in the folder.
+    std::filesystem::path getFile(const std::string& name) const { return m_path / name; }
+    /// Rewrites the marker with a status ("running", "failed", "interrupted") and a detail line.
+    void setStatus(const std::string& status, const std::string& detail) const;
+    /// Removes the marker: the folder's contents are complete.
+    void markComplete() const;
+    /// True while the marker exists.
+    bool isIncomplete() const;
+
+  private:
+    std::filesystem::path m_path;
+};
+
+/// Where a run came from, stored in results.h5 /meta.
+struct RunInfo {
+    std::string scenarioFile;            ///< path as given
+    std::string scenarioText;            ///< file text verbatim
+    std::vector<std::string> overrides;  ///< --set key=value, in order
+    std::string commandLine;             ///< the program's arguments, for the record
+};
+
+/// Streams a load test (bags::runLoadTest) into results.h5, results.xdmf and the CSV files.
+class LoadTestWriter {
+  public:
+    struct Options {
+        /// Save node positions every this many steps, plus the first and last step of each
+        /// loading and unloading branch; 0: no frames.
+        int frameEvery = 5;
+        /// Flush results.h5 and refresh results.xdmf at least this often [s] (and after each
+        /// curve).
+        double flushInterval = 10.0;
+    };
+
+    /// Creates results.h5 (status "running") and load_displacement.csv in `dir`.
+    /// `test` gives the gas masses of the curves. @throws std::runtime_error on I/O failure.
+    LoadTestWriter(const OutputDir& dir, const RunInfo& info, const bags::LoadTestOptions& test,
+                   const Options& options);
+    ~LoadTestWriter();
+    LoadTestWriter(const LoadTestWriter&) = delete;
+    LoadTestWriter& operator=(const LoadTestWriter&) = delete;
+
+    /// Records one converged step (the load test's observer). The first call writes the mesh.
+    void addStep(const bags::LoadStep& step, const bags::Mesh& mesh, const Eigen::Matrix3Xd& x);
+    /// Writes the per-curve results, the stiffness table and the k(m) fits, sets the status
+    /// "complete", closes the files and removes the INCOMPLETE marker.
+    void finish(const bags::LoadTestResult& result);
+    /// Saves what was computed, sets the status (e.g. "failed", "interrupted") and the
+    /// message, closes the files and keeps the INCOMPLETE marker. Never throws.
+    void fail(const std::string& status, const std::string& message) noexcept;
+
+    int getNumFrames() const;  ///< frames saved so far
+    int getNumSteps() const;   ///< steps recorded so far
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// Names of the files a load test writes (for messages and tests).
+inline constexpr const char* kResultsH5 = "results.h5";
+inline constexpr const char* kResultsXdmf = "results.xdmf";
+inline constexpr const char* kLoadDisplacementCsv = "load_displacement.csv";
+inline constexpr const char* kStiffnessCsv = "stiffness.csv";
+
+/// Current UTC time as ISO 8601 ("2026-11-22T05:43:49Z").
+std::string getUtcTimestamp();
+
+}  // namespace io

@@ -1,0 +1,81 @@
+#pragma once
+// Small RAII helpers over the HDF5 C API (serial HDF5 1.10) for the result writers: owned
+// handles, string and number attributes, and datasets that grow along their first axis.
+// Every failure throws std::runtime_error naming the object; HDF5's own error printing is off
+// (libraries print nothing).
+
+#include <hdf5.h>
+
+#include <string>
+#include <vector>
+
+namespace io::h5 {
+
+/// An owned HDF5 identifier, closed with the right H5?close on destruction.
+class Handle {
+  public:
+    Handle() = default;
+    explicit Handle(hid_t id) : m_id(id) {}
+    ~Handle() { reset(); }
+    Handle(Handle&& o) noexcept : m_id(o.m_id) { o.m_id = H5I_INVALID_HID; }
+    Handle& operator=(Handle&& o) noexcept {
+        if (this != &o) {
+            reset();
+            m_id = o.m_id;
+            o.m_id = H5I_INVALID_HID;
+        }
+        return *this;
+    }
+    Handle(const Handle&) = delete;
+    Handle& operator=(const Handle&) = delete;
+    hid_t get() const { return m_id; }
+    bool isValid() const { return m_id >= 0; }
+    void reset();
+
+  private:
+    hid_t m_id = H5I_INVALID_HID;
+};
+
+/// Turns off HDF5's automatic error printing on the default stack.
+void silenceErrors();
+/// Throws std::runtime_error("HDF5: <what>") if status < 0; returns status.
+hid_t check(hid_t status, const std::string& what);
+
+Handle createFile(const std::string& path);
+Handle createGroup(hid_t loc, const std::string& name);
+
+void setAttribute(hid_t obj, const std::string& name, const std::string& value);
+void setAttribute(hid_t obj, const std::string& name, double value);
+void setAttribute(hid_t obj, const std::string& name, int value);
+void setAttribute(hid_t obj, const std::string& name, const std::vector<std::string>& values);
+void setAttribute(hid_t obj, const std::string& name, const std::vector<double>& values);
+
+/// Writes a whole fixed-size dataset of doubles or ints with the given dimensions.
+void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                  const double* data, const std::string& unit);
+void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                  const int* data, const std::string& unit);
+
+/// A chunked dataset of rank 1 + inner.size() that grows along its first axis.
+class GrowingDataset {
+  public:
+    GrowingDataset() = default;
+    /// @param type H5T_NATIVE_DOUBLE, H5T_NATIVE_INT or H5T_NATIVE_INT8
+    /// @param chunkRows rows per chunk
+    GrowingDataset(hid_t loc, const std::string& name, hid_t type, std::vector<hsize_t> inner,
+                   hsize_t chunkRows, const std::string& unit);
+    /// Appends `rows` rows from data (row-major, rows * prod(inner) values of the memory type).
+    void append(const void* data, hsize_t rows = 1);
+    hsize_t getRows() const { return m_rows; }
+    hid_t getId() const { return m_dataset.get(); }
+    bool isValid() const { return m_dataset.isValid(); }
+
+  private:
+    Handle m_dataset;
+    hid_t m_type = H5I_INVALID_HID;  // native memory type (not owned)
+    std::vector<hsize_t> m_inner;
+    hsize_t m_rows = 0;
+    std::string m_name;
+};
+
+}  // namespace io::h5

@@ -1,0 +1,481 @@
+#include <io/LoadTestScenario.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace io {
+
+namespace {
+
+using D = Dimension;
+
+const char* kKind = "seed-load-test";
+
+// The value as written (for messages), or "" if the key is absent.
+std::string getRaw(const ScenarioNode& s, const std::string& key) {
+    if (!s.has(key)) return "";
+    const YAML::Node n = s.get(key).getYaml();
+    return n.IsScalar() ? n.Scalar() : "";
+}
+
+std::string shown(const ScenarioNode& s, const std::string& key) {
+    const std::string raw = getRaw(s, key);
+    return raw.empty() ? "the value" : "\"" + raw + "\"";
+}
+
+std::string fmt(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
+// Checks lo < v (or lo <= v) and v < hi (or v <= hi); values are SI, shown in `unit`.
+void checkRange(const ScenarioNode& s, const std::string& key, double v, double lo, bool loIncl,
+                double hi, bool hiIncl, const std::string& unit, const std::string& why = "") {
+    const bool okLo = loIncl ? v >= lo : v > lo;
+    const bool okHi = hiIncl ? v <= hi : v < hi;
+    if (okLo && okHi && std::isfinite(v)) return;
+    auto show = [&](double x) { return unit.empty() ? fmt(x) : fmt(toUnit(x, unit)) + " " + unit; };
+    std::string range;
+    if (std::isinf(hi))
+        range = std::string("must be ") + (loIncl ? ">= " : "> ") + show(lo);
+    else
+        range = "must be in " + std::string(loIncl ? "[" : "(") + show(lo) + ", " + show(hi) +
+                (hiIncl ? "]" : ")");
+    s.fail(key, shown(s, key) + " " + range + (why.empty() ? "" : " (" + why + ")"));
+}
+
+const double kInf = INFINITY;
+
+// Turns a library's std::invalid_argument into an InputError at the key it names. The
+// libraries name options by their C++ member (peakForce) and the scenario by its key
+// (test.peak_force); both spellings are looked for, longest first.
+struct KeyAlias {
+    const char* token;
+    const char* section;
+    const char* key;
+};
+
+const std::vector<KeyAlias>& getAliases() {
+    static const std::vector<KeyAlias> aliases = {
+        {"longSide", "airbag", "long_side"},
+        {"long_side", "airbag", "long_side"},
+        {"shortSide", "airbag", "short_side"},
+        {"short_side", "airbag", "short_side"},
+        {"meshSize", "airbag", "mesh_size"},
+        {"mesh_size", "airbag", "mesh_size"},
+        {"height", "airbag", "height"},
+        {"width", "airbag", "width"},
+        {"wrinklingResidual", "membrane", "wrinkling_residual"},
+        {"wrinkling_residual", "membrane", "wrinkling_residual"},
+        {"thickness", "membrane", "thickness"},
+        {"density", "membrane", "density"},
+        {"C10", "membrane", "C10"},
+        {"C01", "membrane", "C01"},
+        {"C20", "membrane", "C20"},
+        {"C30", "membrane", "C30"},
+        {"alpha", "membrane", "alpha"},
+        {"mu", "membrane", "mu"},
+        {"molarMass", "gas", "molar_mass"},
+        {"molar_mass", "gas", "molar_mass"},
+        {"ambientPressure", "gas", "ambient_pressure"},
+        {"ambient_pressure", "gas", "ambient_pressure"},
+        {"temperature", "gas", "temperature"},
+        {"polytropicIndex", "gas", "polytropic_index"},
+        {"polytropic_index", "gas", "polytropic_index"},
+        {"gamma", "gas", "gamma"},
+        {"gasMasses", "test", "gas_masses"},
+        {"gas_masses", "test", "gas_masses"},
+        {"gas mass", "test", "gas_masses"},
+        {"blockSize", "test", "block"},
+        {"loadingRate", "test", "rate"},
+        {"peakForce", "test", "peak_force"},
+        {"peak_force", "test", "peak_force"},
+        {"displacementStep", "test", "displacement_step"},
+        {"stiffnessFrom", "test", "stiffness_range"},
+        {"stiffnessTo", "test", "stiffness_range"},
+        {"polynomialOrder", "test", "polynomial_order"},
+        {"pressurePenalty", "contact", "penalty"},
+        {"stickStiffnessRatio", "contact", "stick_ratio"},
+        {"onsetGap", "contact", "onset_gap"},
+        {"friction", "contact", "friction"},
+        {"relativeTolerance", "solver", "relative_tolerance"},
+        {"absoluteTolerance", "solver", "absolute_tolerance"},
+        {"maxIterations", "solver", "max_iterations"},
+        {"pseudoTransientShift", "solver", "pseudo_transient_shift"},
+        {"stabilization", "solver", "stabilization"},
+    };
+    return aliases;
+}
+
+// `node` is the scenario's root or one of its sections; the error goes to the key the message
+// names if that key is in `node` (or, from the root, in the section named), else to `node`.
+[[noreturn]] void failFromLibrary(const ScenarioNode& node, const std::string& message) {
+    const std::string path = node.getPath();
+    const std::string top = path.substr(0, path.find('.'));
+    const KeyAlias* best = nullptr;
+    size_t bestPos = std::string::npos;
+    for (const KeyAlias& a : getAliases()) {
+        if (!path.empty() && top != a.section) continue;
+        const size_t pos = message.find(a.token);
+        // The earliest mention wins (messages name the option first); ties go to the longer token.
+        if (pos != std::string::npos &&
+            (pos < bestPos ||
+             (pos == bestPos && std::string(a.token).size() > std::string(best->token).size()))) {
+            best = &a;
+            bestPos = pos;
+        }
+    }
+    const std::string text = "invalid: " + message;
+    if (best) {
+        if (!path.empty()) node.fail(best->key, text);
+        if (node.has(best->section)) node.getSection(best->section).fail(best->key, text);
+    }
+    node.fail(text);
+}
+
+// ----------------------------------------------------------------------------------- airbag
+
+void readAirbag(const ScenarioNode& s, bags::DoubleWedgeParams& g) {
+    s.checkKeys({"long_side", "short_side", "width", "height"},
+                {"mesh_size", "diaphragm", "bond_base"});
+    g.longSide = s.getQuantity("long_side", D::Length);
+    g.shortSide = s.getQuantity("short_side", D::Length);
+    g.width = s.getQuantity("width", D::Length);
+    g.height = s.getQuantity("height", D::Length);
+    g.meshSize = s.getQuantity("mesh_size", D::Length, g.meshSize);
+    g.diaphragm = s.getBool("diaphragm", g.diaphragm);
+    g.bondBase = s.getBool("bond_base", g.bondBase);
+    checkRange(s, "long_side", g.longSide, 0, false, kInf, false, "mm");
+    checkRange(s, "short_side", g.shortSide, 0, false, kInf, false, "mm");
+    checkRange(s, "width", g.width, 0, false, kInf, false, "mm");
+    checkRange(s, "height", g.height, 0, false, kInf, false, "mm");
+    checkRange(s, "short_side", g.shortSide, g.height, false, kInf, false, "mm",
+               "the steep side rises from the base to the apex, so it must be longer than the "
+               "height");
+    const double smallest = std::min({g.longSide, g.shortSide, g.width, g.height});
+    checkRange(s, "mesh_size", g.meshSize, 1e-3, true, std::min(0.05, 0.5 * smallest), true, "mm",
+               "at least 1 mm; at most 50 mm and half the smallest dimension");
+    // The rest (the apex above the base) is checked by DoubleWedgeParams::validate().
+}
+
+// --------------------------------------------------------------------------------- membrane
+
+struct ModelInfo {
+    std::string name;
+    std::vector<std::string> constants;
+};
+
+const std::vector<ModelInfo>& getModels() {
+    static const std::vector<ModelInfo> models = {
+        {"yeoh", {"C10", "C20", "C30"}},
+        {"neo-hookean", {"C10"}},
+        {"mooney-rivlin", {"C10", "C01"}},
+        {"ogden", {"mu", "alpha"}},
+    };
+    return models;
+}
+
+void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
+    std::vector<std::string> allConstants;
+    std::vector<std::string> modelNames;
+    for (const ModelInfo& m : getModels()) {
+        modelNames.push_back(m.name);
+        for (const std::string& c : m.constants)
+            if (std::find(allConstants.begin(), allConstants.end(), c) == allConstants.end())
+                allConstants.push_back(c);
+    }
+    std::vector<std::string> optional = allConstants;
+    optional.insert(optional.end(), {"density", "wrinkling_residual"});
+    s.checkKeys({"model", "thickness"}, optional);
+    const std::string model = s.getChoice("model", modelNames);
+    const ModelInfo& info = *std::find_if(getModels().begin(), getModels().end(),
+                                          [&](const ModelInfo& m) { return m.name == model; });
+    auto describe = [&] {
+        std::string list;
+        for (const std::string& c : info.constants) list += (list.empty() ? "" : ", ") + c;
+        return "the " + model + " model takes " + list;
+    };
+    for (const std::string& c : allConstants) {
+        const bool mine =
+            std::find(info.constants.begin(), info.constants.end(), c) != info.constants.end();
+        if (!mine && s.has(c)) s.fail(c, "is not a constant of this material; " + describe());
+        if (mine && !s.has(c))
+            s.fail("missing the material constant '" + c + "'; " + describe() +
+                   " (e.g. C10: 31.6 MPa; bagsim fit-material writes them)");
+    }
+
+    try {
+        if (model == "yeoh") {
+            o.material =
+                bags::makeYeoh(s.getQuantity("C10", D::Pressure), s.getQuantity("C20", D::Pressure),
+                               s.getQuantity("C30", D::Pressure));
+        } else if (model == "neo-hookean") {
+            o.material = bags::makeNeoHookean(s.getQuantity("C10", D::Pressure));
+        } else if (model == "mooney-rivlin") {
+            o.material = bags::makeMooneyRivlin(s.getQuantity("C10", D::Pressure),
+                                                s.getQuantity("C01", D::Pressure));
+        } else {
+            const std::vector<ScenarioNode> mu = s.get("mu").getElements();
+            const std::vector<ScenarioNode> alpha = s.get("alpha").getElements();
+            if (mu.empty() || mu.size() > 6)
+                s.fail("mu", "must list 1 to 6 moduli, e.g. [0.5 MPa, 0.01 MPa]");
+            if (alpha.size() != mu.size())
+                s.fail("alpha", "must list as many exponents as mu has moduli (" +
+                                    std::to_string(mu.size()) + ")");
+            std::vector<double> muSi, alphaSi;
+            for (const ScenarioNode& n : mu) muSi.push_back(n.asQuantity(D::Pressure));
+            for (const ScenarioNode& n : alpha) {
+                alphaSi.push_back(n.asNumber());
+                if (alphaSi.back() == 0.0) n.fail("an Ogden exponent must not be zero");
+            }
+            o.material = bags::makeOgden(muSi, alphaSi);
+        }
+    } catch (const std::invalid_argument& e) {
+        const std::string msg = e.what();
+        for (const std::string& c : info.constants)
+            if (msg.find(c) != std::string::npos) s.fail(c, "invalid: " + msg);
+        s.fail("model", "invalid material constants: " + msg);
+    }
+    if (o.material && !(o.material->getInitialShearModulus() > 0.0))
+        s.fail(info.constants.front(), "these constants give a small-strain shear modulus of " +
+                                           fmt(o.material->getInitialShearModulus() / 1e6) +
+                                           " MPa; a membrane material needs a positive one");
+
+    o.thickness = s.getQuantity("thickness", D::Length);
+    o.density = s.getQuantity("density", D::Density, o.density);
+    o.wrinklingResidual = s.getNumber("wrinkling_residual", o.wrinklingResidual);
+    checkRange(s, "thickness", o.thickness, 0, false, 0.01, true, "mm");
+    checkRange(s, "density", o.density, 0, true, kInf, false, "kg/m^3");
+    checkRange(s, "wrinkling_residual", o.wrinklingResidual, 0, false, 0.1, false, "");
+}
+
+// -------------------------------------------------------------------------------------- gas
+
+void readGas(const ScenarioNode& s, bags::GasOptions& g) {
+    s.checkKeys({}, {"molar_mass", "temperature", "ambient_pressure", "process", "polytropic_index",
+                     "gamma"});
+    g.molarMass = s.getQuantity("molar_mass", D::MolarMass, g.molarMass);
+    g.temperature = s.getQuantity("temperature", D::Temperature, g.temperature);
+    g.ambientPressure = s.getQuantity("ambient_pressure", D::Pressure, g.ambientPressure);
+    const std::string process =
+        s.getChoice("process", {"isothermal", "adiabatic", "polytropic"}, "isothermal");
+    g.process = process == "isothermal"  ? bags::GasOptions::Process::Isothermal
+                : process == "adiabatic" ? bags::GasOptions::Process::Adiabatic
+                                         : bags::GasOptions::Process::Polytropic;
+    if (s.has("polytropic_index") && process != "polytropic")
+        s.fail("polytropic_index",
+               "only applies to process: polytropic (process is " + process + ")");
+    g.polytropicIndex = s.getNumber("polytropic_index", g.polytropicIndex);
+    g.gamma = s.getNumber("gamma", g.gamma);
+    checkRange(s, "molar_mass", g.molarMass, 0, false, kInf, false, "g/mol");
+    checkRange(s, "temperature", g.temperature, 0, false, kInf, false, "K", "absolute temperature");
+    checkRange(s, "ambient_pressure", g.ambientPressure, 0, false, kInf, false, "kPa",
+               "absolute pressure");
+    checkRange(s, "polytropic_index", g.polytropicIndex, 1, true, kInf, false, "");
+    checkRange(s, "gamma", g.gamma, 1, false, kInf, false, "");
+    try {
+        g.validate();
+    } catch (const std::invalid_argument& e) {
+        failFromLibrary(s, e.what());
+    }
+}
+
+// ------------------------------------------------------------------------------------- test
+
+std::vector<double> readGasMasses(const ScenarioNode& s) {
+    const ScenarioNode n = s.get("gas_masses");
+    std::vector<double> masses;
+    if (n.isSequence()) {
+        for (const ScenarioNode& e : n.getElements()) {
+            const double m = e.asQuantity(D::Mass);
+            if (!(m > 0)) e.fail("\"" + e.asString() + "\": a gas mass must be greater than zero");
+            masses.push_back(m);
+        }
+    } else if (n.isMap()) {
+        n.checkKeys({"from", "to", "step"}, {});
+        const double from = n.getQuantity("from", D::Mass);
+        const double to = n.getQuantity("to", D::Mass);
+        const double step = n.getQuantity("step", D::Mass);
+        checkRange(n, "from", from, 0, false, kInf, false, "g", "a gas mass");
+        checkRange(n, "to", to, 0, false, kInf, false, "g", "a gas mass");
+        checkRange(n, "step", step, 0, false, kInf, false, "g");
+        const double count = std::fabs(from - to) / step;
+        const long steps = std::lround(count);
+        if (std::fabs(count - steps) > 1e-6 * std::max(1.0, count))
+            n.fail("step", "\"" + getRaw(n, "step") + "\" does not divide the range from " +
+                               getRaw(n, "from") + " to " + getRaw(n, "to") +
+                               " into whole steps; pick a step that does (e.g. 0.25 g)");
+        if (steps > 1000)
+            n.fail("step",
+                   "gives " + std::to_string(steps + 1) + " gas masses; at most 1001 are allowed");
+        for (long i = 0; i <= steps; ++i)
+            masses.push_back(steps == 0 ? from : from + (to - from) * double(i) / double(steps));
+    } else {
+        n.fail(
+            "must be a list of masses, e.g. [3.5 g, 3.0 g], or a range "
+            "{from: 3.5 g, to: 1.0 g, step: 0.25 g}");
+    }
+    if (masses.empty()) n.fail("lists no gas mass; give at least one, e.g. [3.5 g]");
+    return masses;
+}
+
+void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
+    s.checkKeys({"gas_masses"}, {"block", "rate", "peak_force", "unload", "displacement_step",
+                                 "stiffness_range", "polynomial_order", "gravity"});
+    o.gasMasses = readGasMasses(s);
+    o.blockSize = s.getQuantity("block", D::Length, o.blockSize);
+    o.loadingRate = s.getQuantity("rate", D::Velocity, o.loadingRate);
+    o.peakForce = s.getQuantity("peak_force", D::Force, o.peakForce);
+    o.unload = s.getBool("unload", o.unload);
+    o.displacementStep = s.getQuantity("displacement_step", D::Length, o.displacementStep);
+    o.polynomialOrder = s.getInteger("polynomial_order", o.polynomialOrder);
+    o.gravity = s.getBool("gravity", o.gravity);
+    checkRange(s, "block", o.blockSize, 0, false, kInf, false, "mm");
+    checkRange(s, "rate", o.loadingRate, 0, false, kInf, false, "mm/min");
+    checkRange(s, "peak_force", o.peakForce, 0, false, kInf, false, "N");
+    checkRange(s, "displacement_step", o.displacementStep, 0, false, kInf, false, "mm");
+    if (s.has("stiffness_range")) {
+        const ScenarioNode r = s.get("stiffness_range");
+        const std::vector<ScenarioNode> ends = r.getElements();
+        if (ends.size() != 2) r.fail("must be two forces [from, to], e.g. [10 N, 35 N]");
+        o.stiffnessFrom = ends[0].asQuantity(D::Force);
+        o.stiffnessTo = ends[1].asQuantity(D::Force);
+    }
+    if (!(o.stiffnessFrom >= 0.0 && o.stiffnessFrom < o.stiffnessTo &&
+          o.stiffnessTo <= o.peakForce))
+        s.fail("stiffness_range", "[" + fmt(o.stiffnessFrom) + " N, " + fmt(o.stiffnessTo) +
+                                      " N] must satisfy 0 <= from < to <= peak_force (" +
+                                      fmt(o.peakForce) + " N)");
+    const int masses = static_cast<int>(o.gasMasses.size());
+    if (o.polynomialOrder < 1 || o.polynomialOrder > 8 ||
+        (masses > 1 && o.polynomialOrder >= masses))
+        s.fail("polynomial_order", std::to_string(o.polynomialOrder) +
+                                       " must be in [1, 8] and less than the "
+                                       "number of gas masses (" +
+                                       std::to_string(masses) + ") for a least-squares fit");
+}
+
+// ---------------------------------------------------------------------------------- contact
+
+const std::vector<std::string> kContactKeys = {"penalty", "friction", "stick_ratio", "onset_gap"};
+
+void readContactKeys(const ScenarioNode& s, bags::RigidContact::Options& c) {
+    c.pressurePenalty = s.getQuantity("penalty", D::StiffnessPerArea, c.pressurePenalty);
+    c.friction = s.getNumber("friction", c.friction);
+    c.stickStiffnessRatio = s.getNumber("stick_ratio", c.stickStiffnessRatio);
+    c.onsetGap = s.getQuantity("onset_gap", D::Length, c.onsetGap);
+    checkRange(s, "penalty", c.pressurePenalty, 0, false, kInf, false, "Pa/m");
+    checkRange(s, "friction", c.friction, 0, true, kInf, false, "");
+    checkRange(s, "stick_ratio", c.stickStiffnessRatio, 0, false, kInf, false, "");
+    checkRange(s, "onset_gap", c.onsetGap, 0, true, kInf, false, "mm");
+    try {
+        c.validate();
+    } catch (const std::invalid_argument& e) {
+        failFromLibrary(s, e.what());
+    }
+}
+
+void readContact(const ScenarioNode& s, bags::LoadTestOptions& o) {
+    std::vector<std::string> keys = kContactKeys;
+    keys.insert(keys.end(), {"block", "floor", "self"});
+    s.checkKeys({}, keys);
+    // Keys at the top of the section apply to both shapes; block/floor subsections override.
+    readContactKeys(s, o.blockContact);
+    readContactKeys(s, o.floorContact);
+    for (const char* shape : {"block", "floor"}) {
+        const ScenarioNode sub = s.getSection(shape, false);
+        sub.checkKeys({}, kContactKeys);
+        readContactKeys(sub, std::string(shape) == "block" ? o.blockContact : o.floorContact);
+    }
+    o.selfContact = s.getBool("self", o.selfContact);
+}
+
+// ----------------------------------------------------------------------------------- solver
+
+void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabilization) {
+    s.checkKeys({}, {"relative_tolerance", "absolute_tolerance", "max_iterations",
+                     "pseudo_transient_shift", "stabilization"});
+    o.relativeTolerance = s.getNumber("relative_tolerance", o.relativeTolerance);
+    o.absoluteTolerance = s.getQuantity("absolute_tolerance", D::Force, o.absoluteTolerance);
+    o.maxIterations = s.getInteger("max_iterations", o.maxIterations);
+    o.pseudoTransientShift = s.getNumber("pseudo_transient_shift", o.pseudoTransientShift);
+    checkRange(s, "relative_tolerance", o.relativeTolerance, 0, false, 1, false, "");
+    checkRange(s, "absolute_tolerance", o.absoluteTolerance, 0, false, kInf, false, "N");
+    checkRange(s, "max_iterations", o.maxIterations, 1, true, 100000, true, "");
+    checkRange(s, "pseudo_transient_shift", o.pseudoTransientShift, 0, true, kInf, false, "");
+    stabilization = s.getQuantity("stabilization", D::StiffnessPerArea, stabilization);
+    checkRange(s, "stabilization", stabilization, 0, true, kInf, false, "Pa/m", "0 disables it");
+    try {
+        o.validate();
+    } catch (const std::invalid_argument& e) {
+        failFromLibrary(s, e.what());
+    }
+}
+
+void readOutput(const ScenarioNode& s, OutputOptions& o) {
+    s.checkKeys({}, {"frame_every"});
+    o.frameEvery = s.getInteger("frame_every", o.frameEvery);
+    checkRange(s, "frame_every", o.frameEvery, 0, true, kInf, false, "", "0 saves no frames");
+}
+
+}  // namespace
+
+std::vector<std::string> getScenarioKinds() { return {kKind}; }
+
+std::string readScenarioKind(const ScenarioFile& file) {
+    const ScenarioNode root = file.getRoot();
+    if (!root.has("kind"))
+        root.fail("missing required key 'kind' at the top of the scenario; valid kinds: " +
+                  std::string(kKind));
+    return root.getChoice("kind", getScenarioKinds());
+}
+
+LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
+    const ScenarioNode root = file.getRoot();
+    // bagsim fit-material prints "material: {model: ..., C10: ...}": its keys belong here.
+    if (root.has("material"))
+        root.fail("material",
+                  "the material's model and constants go in the membrane section, "
+                  "beside the thickness: membrane: {model: yeoh, C10: 31.6 MPa, "
+                  "C20: ..., C30: ..., thickness: 0.2 mm}");
+    root.checkKeys({"kind", "airbag", "membrane", "test"},
+                   {"name", "description", "gas", "contact", "solver", "output"});
+    root.getChoice("kind", {kKind});
+
+    LoadTestScenario sc;
+    sc.name = root.getString("name", file.getStem());
+    if (sc.name.empty() ||
+        sc.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
+                                  "._-") != std::string::npos)
+        root.fail("name", "\"" + sc.name +
+                              "\" names the output folder: use letters, digits, "
+                              "'.', '_' and '-' only");
+    sc.description = root.getString("description", "");
+
+    bags::LoadTestOptions& o = sc.options;
+    readAirbag(root.getSection("airbag"), o.geometry);
+    readMembrane(root.getSection("membrane"), o);
+    readGas(root.getSection("gas", false), o.gas);
+    readTest(root.getSection("test"), o);
+    readContact(root.getSection("contact", false), o);
+    readSolver(root.getSection("solver", false), o.solver, o.stabilization);
+    readOutput(root.getSection("output", false), sc.output);
+
+    // The libraries' own checks (impossible geometry and the like) as located errors.
+    try {
+        o.geometry.validate();
+    } catch (const std::invalid_argument& e) {
+        failFromLibrary(root.getSection("airbag"), e.what());
+    }
+    try {
+        o.validate();
+    } catch (const std::invalid_argument& e) {
+        failFromLibrary(root, e.what());
+    }
+    return sc;
+}
+
+}  // namespace io

@@ -1,0 +1,87 @@
+// The seed's test rig on a coarse mesh: inflation, loading to the peak force, unloading, the
+// stiffness fit and the stage rule.
+#include <bags/LoadTest.h>
+#include <bags/Polynomial.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace bags;
+
+namespace {
+
+LoadTestOptions coarseOptions() {
+    LoadTestOptions o;
+    o.geometry.meshSize = 0.020;
+    o.material = makeYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.gasMasses = {3.5e-3, 3.0e-3};
+    o.displacementStep = 2e-3;
+    return o;
+}
+
+}  // namespace
+
+TEST(LoadTest, CoarseBagIsLoadedToPeakAndUnloaded) {
+    const LoadTestOptions o = coarseOptions();
+    int observed = 0;
+    const LoadTestResult r =
+        runLoadTest(o, [&](const LoadStep&, const Mesh&, const Eigen::Matrix3Xd&) { ++observed; });
+    ASSERT_EQ(r.curves.size(), 2u);
+    int steps = 0;
+    for (const LoadCurve& c : r.curves) {
+        steps += static_cast<int>(c.steps.size());
+        EXPECT_TRUE(c.reachedPeak) << c.gasMass;
+        // The last loading step lands on the peak force within 2 %.
+        double fmax = 0.0;
+        for (const LoadStep& s : c.steps) fmax = std::max(fmax, s.force);
+        EXPECT_NEAR(fmax, o.peakForce, 0.02 * o.peakForce);
+        // Loading: force and gas pressure rise with the block travel.
+        for (size_t i = 1; i < c.steps.size() && c.steps[i].loading; ++i) {
+            EXPECT_GE(c.steps[i].force, c.steps[i - 1].force - 1e-6);
+            EXPECT_GE(c.steps[i].gaugePressure[0], c.steps[i - 1].gaugePressure[0] - 1e-6);
+        }
+        // Unloading ends with the block back at the start and no force.
+        EXPECT_FALSE(c.steps.back().loading);
+        EXPECT_LT(c.steps.back().force, 0.5);
+        EXPECT_GT(c.stiffness, 0.0);
+        EXPECT_GT(c.inflatedGaugePressure, 0.0);
+    }
+    EXPECT_EQ(observed, steps);
+    // Less gas, lower pressure.
+    EXPECT_LT(r.curves[1].inflatedGaugePressure, r.curves[0].inflatedGaugePressure);
+}
+
+TEST(LoadTest, StageRuleFollowsTheDocumentedDefinition) {
+    // Masses 3.5 ... 1.0 g with a stiffness minimum at 2.0 g: below it stage 3; above it
+    // stage 1 where the 10-35 N range is linear (r2 >= 0.995), stage 2 where it is not.
+    std::vector<LoadCurve> c(6);
+    const double m[] = {3.5, 3.0, 2.5, 2.0, 1.5, 1.0};
+    const double k[] = {8.0, 6.0, 3.0, 1.5, 2.0, 3.5};
+    const double r2[] = {0.999, 0.998, 0.97, 0.96, 0.95, 0.999};
+    for (int i = 0; i < 6; ++i) c[i].gasMass = m[i] * 1e-3, c[i].stiffness = k[i] * 1e3, c[i].r2 = r2[i];
+    classifyStages(c);
+    const int expected[] = {1, 1, 2, 2, 3, 3};
+    for (int i = 0; i < 6; ++i) EXPECT_EQ(c[i].stage, expected[i]) << m[i] << " g";
+}
+
+TEST(LoadTest, SeedPolynomialIsTheSeedsFit) {
+    // Seed eq. (18)-(24): k(3.5 g) = 7.90 N/mm, k(1.0 g) = 3.471 N/mm (hand-evaluated).
+    const std::vector<double> c = getSeedStiffnessPolynomial();
+    EXPECT_NEAR(evalPolynomial(c, 1.0), 3.471, 1e-9);
+    EXPECT_NEAR(evalPolynomial(c, 3.5), -0.945 * std::pow(3.5, 5) + 8.394 * std::pow(3.5, 4) -
+                                            25.707 * std::pow(3.5, 3) + 32.714 * 3.5 * 3.5 -
+                                            17.181 * 3.5 + 6.196, 1e-9);
+}
+
+TEST(LoadTest, RejectsImpossibleOptions) {
+    LoadTestOptions o = coarseOptions();
+    o.gasMasses = {-1.0};
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o = coarseOptions();
+    o.blockSize = 1.0;  // larger than the airbag
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o = coarseOptions();
+    o.material.reset();
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+}

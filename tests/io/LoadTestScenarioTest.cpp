@@ -1,0 +1,257 @@
+// The seed-load-test scenario: scenarios/seed-load-test.yaml maps onto bags::LoadTestOptions in
+// SI, and bad input (missing or misspelt keys, wrong units, negative masses, impossible
+// geometry) is an InputError at the right line and key.
+#include <gtest/gtest.h>
+#include <io/LoadTestScenario.h>
+
+#include <cmath>
+#include <functional>
+#include <string>
+
+using io::InputError;
+using io::ScenarioFile;
+
+namespace {
+
+InputError expectInputError(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e;
+    }
+    ADD_FAILURE() << "no InputError thrown";
+    return InputError("", 0, "", "");
+}
+
+// A valid scenario; tests edit one line of it. Lines counted from 1.
+const std::string kBase =
+    "kind: seed-load-test\n"                 // 1
+    "airbag:\n"                              // 2
+    "  long_side: 350 mm\n"                  // 3
+    "  short_side: 200 mm\n"                 // 4
+    "  width: 100 mm\n"                      // 5
+    "  height: 150 mm\n"                     // 6
+    "membrane:\n"                            // 7
+    "  model: yeoh\n"                        // 8
+    "  C10: 31.587917 MPa\n"                 // 9
+    "  C20: -0.76582566 MPa\n"               // 10
+    "  C30: -3.06587618 MPa\n"               // 11
+    "  thickness: 0.2 mm\n"                  // 12
+    "test:\n"                                // 13
+    "  gas_masses: [3.5 g, 2.5 g, 1.5 g]\n"  // 14
+    "  polynomial_order: 2\n";               // 15
+
+std::string replaceLine(const std::string& text, int line, const std::string& with) {
+    size_t begin = 0;
+    for (int i = 1; i < line; ++i) begin = text.find('\n', begin) + 1;
+    const size_t end = text.find('\n', begin);
+    return text.substr(0, begin) + with + text.substr(end);
+}
+
+InputError errorFor(const std::string& text) {
+    return expectInputError(
+        [&] { io::readLoadTestScenario(ScenarioFile::parse(text, "bad.yaml")); });
+}
+
+}  // namespace
+
+TEST(LoadTestScenario, SeedScenarioMapsToOptionsInSi) {
+    const ScenarioFile f =
+        ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/seed-load-test.yaml");
+    EXPECT_EQ(io::readScenarioKind(f), "seed-load-test");
+    const io::LoadTestScenario sc = io::readLoadTestScenario(f);
+    const bags::LoadTestOptions& o = sc.options;
+    EXPECT_EQ(sc.name, "seed-load-test");
+    // Reference: the seed's values (issue 2) in SI; conversions are exact up to round-off.
+    const double tol = 1e-12;
+    EXPECT_NEAR(o.geometry.longSide, 0.350, tol);
+    EXPECT_NEAR(o.geometry.shortSide, 0.200, tol);
+    EXPECT_NEAR(o.geometry.width, 0.100, tol);
+    EXPECT_NEAR(o.geometry.height, 0.150, tol);
+    EXPECT_GT(o.geometry.meshSize, 0.0);
+    EXPECT_TRUE(o.geometry.diaphragm);
+    ASSERT_TRUE(o.material);
+    EXPECT_EQ(o.material->getName(), "yeoh");
+    // Yeoh small-strain shear modulus is 2 C10 (W = C10 (I1 - 3) + ...): 63.175834 MPa.
+    EXPECT_NEAR(o.material->getInitialShearModulus(), 2.0 * 31.587917e6, 1.0);
+    EXPECT_NEAR(o.thickness, 0.2e-3, tol);
+    EXPECT_NEAR(o.density, 1150.0, tol);
+    EXPECT_NEAR(o.wrinklingResidual, 1e-3, tol);
+    EXPECT_NEAR(o.gas.molarMass, 0.029, tol);
+    EXPECT_NEAR(o.gas.temperature, 296.15, 1e-9);
+    EXPECT_NEAR(o.gas.ambientPressure, 1e5, 1e-6);
+    EXPECT_EQ(o.gas.process, bags::GasOptions::Process::Isothermal);
+    ASSERT_EQ(o.gasMasses.size(), 11u);  // 3.5 g to 1.0 g in 0.25 g steps
+    for (size_t i = 0; i < 11; ++i) EXPECT_NEAR(o.gasMasses[i], 3.5e-3 - 0.25e-3 * i, 1e-15);
+    EXPECT_NEAR(o.blockSize, 0.050, tol);
+    EXPECT_NEAR(o.loadingRate, 10e-3 / 60.0, 1e-15);
+    EXPECT_NEAR(o.peakForce, 50.0, tol);
+    EXPECT_TRUE(o.unload);
+    EXPECT_NEAR(o.stiffnessFrom, 10.0, tol);
+    EXPECT_NEAR(o.stiffnessTo, 35.0, tol);
+    EXPECT_EQ(o.polynomialOrder, 5);
+    EXPECT_NEAR(o.blockContact.pressurePenalty, 1e7, 1e-3);
+    EXPECT_NEAR(o.floorContact.pressurePenalty, 1e7, 1e-3);
+    EXPECT_TRUE(o.selfContact);
+    EXPECT_EQ(sc.output.frameEvery, 5);
+    EXPECT_NO_THROW(o.validate());
+}
+
+TEST(LoadTestScenario, MeshSizeCanBeOverridden) {
+    ScenarioFile f =
+        ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/seed-load-test.yaml");
+    f.applyOverride("airbag.mesh_size=5 mm");
+    EXPECT_NEAR(io::readLoadTestScenario(f).options.geometry.meshSize, 5e-3, 1e-15);
+}
+
+TEST(LoadTestScenario, BaseScenarioIsValidAndUsesDefaults) {
+    const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
+    const bags::LoadTestOptions defaults;
+    EXPECT_EQ(sc.name, "b");
+    EXPECT_EQ(sc.options.gasMasses.size(), 3u);
+    EXPECT_EQ(sc.options.peakForce, defaults.peakForce);
+    EXPECT_EQ(sc.options.geometry.meshSize, defaults.geometry.meshSize);
+    EXPECT_EQ(sc.options.gas.temperature, defaults.gas.temperature);
+    EXPECT_EQ(sc.options.blockContact.friction, defaults.blockContact.friction);
+    EXPECT_EQ(sc.options.stabilization, defaults.stabilization);
+    const io::LoadTestScenario sc2 = io::readLoadTestScenario(ScenarioFile::parse(
+        kBase + "solver: {stabilization: 2 kPa/m, max_iterations: 30}\n", "s.yaml"));
+    EXPECT_DOUBLE_EQ(sc2.options.stabilization, 2000.0);  // 2 kPa/m = 2000 Pa/m
+    EXPECT_EQ(sc2.options.solver.maxIterations, 30);
+}
+
+TEST(LoadTestScenario, MisspeltKeyIsNamedWithSuggestion) {
+    const InputError e = errorFor(replaceLine(kBase, 6, "  hieght: 150 mm"));
+    EXPECT_EQ(e.getLine(), 6);
+    EXPECT_EQ(e.getKey(), "airbag.hieght");
+    EXPECT_NE(std::string(e.what()).find("did you mean 'height'?"), std::string::npos) << e.what();
+    const InputError e2 = errorFor(replaceLine(kBase, 9, "  c10: 31.587917 MPa"));
+    EXPECT_EQ(e2.getLine(), 9);
+    EXPECT_NE(std::string(e2.what()).find("did you mean 'C10'?"), std::string::npos) << e2.what();
+    const InputError e3 = errorFor(replaceLine(kBase, 13, "tset:"));
+    EXPECT_EQ(e3.getLine(), 13);
+    EXPECT_NE(std::string(e3.what()).find("did you mean 'test'?"), std::string::npos) << e3.what();
+}
+
+TEST(LoadTestScenario, MissingKeysListWhatIsRequired) {
+    const InputError e = errorFor(replaceLine(kBase, 5, "  # no width"));
+    EXPECT_EQ(e.getLine(), 2);
+    EXPECT_NE(std::string(e.what()).find("missing required key 'width' in section 'airbag'"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("long_side, short_side, width, height"),
+              std::string::npos);
+    const InputError e2 = errorFor(replaceLine(kBase, 11, "  # no C30"));
+    EXPECT_NE(std::string(e2.what()).find("'C30'"), std::string::npos) << e2.what();
+    EXPECT_NE(std::string(e2.what()).find("the yeoh model takes C10, C20, C30"), std::string::npos);
+    const InputError e3 = errorFor(replaceLine(kBase, 1, "# no kind"));
+    EXPECT_NE(std::string(e3.what()).find("missing required key 'kind'"), std::string::npos)
+        << e3.what();
+}
+
+TEST(LoadTestScenario, WrongUnitAndNegativeMassAreLocated) {
+    const InputError e = errorFor(replaceLine(kBase, 14, "  gas_masses: [3.5 g, 2.5 kg/m]"));
+    EXPECT_EQ(e.getLine(), 14);
+    EXPECT_EQ(e.getKey(), "test.gas_masses[1]");
+    EXPECT_NE(std::string(e.what()).find("is not a mass"), std::string::npos) << e.what();
+    const InputError e2 = errorFor(replaceLine(kBase, 14, "  gas_masses: [3.5 g, -1 g, 2 g]"));
+    EXPECT_EQ(e2.getLine(), 14);
+    EXPECT_NE(std::string(e2.what()).find("greater than zero"), std::string::npos) << e2.what();
+    const InputError e3 = errorFor(replaceLine(kBase, 12, "  thickness: 0.2"));
+    EXPECT_EQ(e3.getLine(), 12);
+    EXPECT_NE(std::string(e3.what()).find("has no unit"), std::string::npos) << e3.what();
+}
+
+TEST(LoadTestScenario, GasMassRangeExpandsAndMustDivide) {
+    const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 14, "  gas_masses: {from: 1.0 g, to: 2.0 g, step: 0.5 g}"), "r.yaml"));
+    ASSERT_EQ(sc.options.gasMasses.size(), 3u);
+    EXPECT_NEAR(sc.options.gasMasses[2], 2e-3, 1e-15);
+    const InputError e =
+        errorFor(replaceLine(kBase, 14, "  gas_masses: {from: 3.5 g, to: 1.0 g, step: 0.3 g}"));
+    EXPECT_EQ(e.getKey(), "test.gas_masses.step");
+    EXPECT_NE(std::string(e.what()).find("does not divide"), std::string::npos) << e.what();
+}
+
+TEST(LoadTestScenario, ImpossibleGeometryIsRejected) {
+    // Steep side shorter than the height: no triangle.
+    const InputError e = errorFor(replaceLine(kBase, 4, "  short_side: 100 mm"));
+    EXPECT_EQ(e.getLine(), 4);
+    EXPECT_EQ(e.getKey(), "airbag.short_side");
+    // Apex beyond the base: caught by DoubleWedgeParams::validate(), mapped to long_side.
+    const InputError e2 = errorFor(replaceLine(kBase, 3, "  long_side: 120 mm"));
+    EXPECT_EQ(e2.getKey(), "airbag.long_side") << e2.what();
+    EXPECT_EQ(e2.getLine(), 3);
+    // Mesh too coarse for the width.
+    std::string t = kBase;
+    t.insert(t.find("membrane:"), "  mesh_size: 80 mm\n");
+    const InputError e3 = errorFor(t);
+    EXPECT_EQ(e3.getKey(), "airbag.mesh_size");
+    EXPECT_EQ(e3.getLine(), 7);
+}
+
+TEST(LoadTestScenario, MaterialModelsAndTheirConstants) {
+    const std::string neo = replaceLine(
+        replaceLine(replaceLine(replaceLine(kBase, 8, "  model: neo-hookean"), 10, "  #"), 11,
+                    "  #"),
+        9, "  C10: 1 MPa");
+    EXPECT_EQ(
+        io::readLoadTestScenario(ScenarioFile::parse(neo, "n.yaml")).options.material->getName(),
+        "neo-hookean");
+    // A constant of another model.
+    const InputError e = errorFor(replaceLine(kBase, 8, "  model: neo-hookean"));
+    EXPECT_EQ(e.getLine(), 10);
+    EXPECT_NE(std::string(e.what()).find("is not a constant of this material"), std::string::npos);
+    const InputError e2 = errorFor(replaceLine(kBase, 8, "  model: yeo"));
+    EXPECT_NE(std::string(e2.what()).find("did you mean 'yeoh'?"), std::string::npos) << e2.what();
+    // Ogden with lists.
+    std::string ogden = replaceLine(kBase, 8, "  model: ogden");
+    ogden = replaceLine(ogden, 9, "  mu: [1 MPa, 0.1 MPa]");
+    ogden = replaceLine(ogden, 10, "  alpha: [2, -2]");
+    ogden = replaceLine(ogden, 11, "  #");
+    EXPECT_EQ(
+        io::readLoadTestScenario(ScenarioFile::parse(ogden, "o.yaml")).options.material->getName(),
+        "ogden");
+    const InputError e3 = errorFor(replaceLine(ogden, 10, "  alpha: [2]"));
+    EXPECT_EQ(e3.getKey(), "membrane.alpha");
+}
+
+TEST(LoadTestScenario, RangesAreCheckedWithTheKeysLine) {
+    EXPECT_EQ(errorFor(replaceLine(kBase, 15, "  polynomial_order: 3")).getKey(),
+              "test.polynomial_order");  // 3 masses allow at most order 2
+    const InputError e = errorFor(kBase + "gas: {temperature: -300 degC}\n");
+    EXPECT_EQ(e.getKey(), "gas.temperature");
+    EXPECT_EQ(e.getLine(), 16);
+    const InputError e2 = errorFor(kBase + "contact: {block: {friction: -0.1}}\n");
+    EXPECT_EQ(e2.getKey(), "contact.block.friction");
+    const InputError e3 = errorFor(kBase + "  stiffness_range: [10 N, 60 N]\n");
+    EXPECT_EQ(e3.getKey(), "test.stiffness_range");
+    EXPECT_EQ(e3.getLine(), 16);
+    const InputError e4 = errorFor(kBase + "  block: 400 mm\n");  // LoadTestOptions::validate
+    EXPECT_EQ(e4.getKey(), "test.block") << e4.what();
+}
+
+TEST(LoadTestScenario, ContactSubsectionsOverrideSharedKeys) {
+    const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
+        kBase +
+            "contact: {penalty: 2e7 Pa/m, friction: 0.3, floor: {friction: 0.5}, self: false}\n",
+        "c.yaml"));
+    EXPECT_DOUBLE_EQ(sc.options.blockContact.pressurePenalty, 2e7);
+    EXPECT_DOUBLE_EQ(sc.options.floorContact.pressurePenalty, 2e7);
+    EXPECT_DOUBLE_EQ(sc.options.blockContact.friction, 0.3);
+    EXPECT_DOUBLE_EQ(sc.options.floorContact.friction, 0.5);
+    EXPECT_FALSE(sc.options.selfContact);
+}
+
+TEST(LoadTestScenario, FitMaterialFormPointsToTheMembraneSection) {
+    const InputError e = errorFor(kBase + "material: {model: yeoh, C10: \"31.6 MPa\"}\n");
+    EXPECT_EQ(e.getLine(), 16);
+    EXPECT_NE(std::string(e.what()).find("go in the membrane section"), std::string::npos);
+}
+
+TEST(LoadTestScenario, UnknownKindListsValidKinds) {
+    const InputError e = expectInputError(
+        [] { io::readScenarioKind(ScenarioFile::parse("kind: seed-load-tset\n", "k.yaml")); });
+    EXPECT_EQ(e.getLine(), 1);
+    EXPECT_NE(std::string(e.what()).find("did you mean 'seed-load-test'?"), std::string::npos);
+}
