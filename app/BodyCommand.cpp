@@ -1,6 +1,4 @@
 // bagsim body: prints the patient's segment table (de Leva 1996 scaled to sex, height, mass).
-#include "Commands.h"
-
 #include <body/Anthropometry.h>
 #include <body/BodyModel.h>
 #include <body/PatientSpec.h>
@@ -10,6 +8,8 @@
 #include <iostream>
 #include <stdexcept>
 #include <string>
+
+#include "Commands.h"
 
 namespace bagsim::app {
 namespace {
@@ -85,28 +85,33 @@ void printTable(const body::BodyModel& model) {
     }
     std::printf("%-13s %8.3f\n\n", "total", total);
     const body::BodyBuild& b = a.build;
-    std::printf("build [m]: shoulder breadth %.3f, chest breadth %.3f depth %.3f, waist breadth "
-                "%.3f depth %.3f,\n",
-                b.shoulderBreadth, b.chestBreadth, b.chestDepth, b.waistBreadth, b.waistDepth);
-    std::printf("           hip breadth %.3f, pelvis depth %.3f, buttock depth %.3f, head %.3f x "
-                "%.3f,\n",
-                b.hipBreadth, b.pelvisDepth, b.buttockDepth, b.headLength, b.headBreadth);
-    std::printf("           joint separation shoulders %.3f hips %.3f, ankle height %.3f, model "
-                "stature %.3f\n",
-                b.shoulderJointSeparation, b.hipJointSeparation, b.ankleHeight, b.modelStature);
+    std::printf(
+        "build [m]: shoulder breadth %.3f, chest breadth %.3f depth %.3f, waist breadth "
+        "%.3f depth %.3f,\n",
+        b.shoulderBreadth, b.chestBreadth, b.chestDepth, b.waistBreadth, b.waistDepth);
+    std::printf(
+        "           hip breadth %.3f, pelvis depth %.3f, buttock depth %.3f, head %.3f x "
+        "%.3f,\n",
+        b.hipBreadth, b.pelvisDepth, b.buttockDepth, b.headLength, b.headBreadth);
+    std::printf(
+        "           joint separation shoulders %.3f hips %.3f, ankle height %.3f, model "
+        "stature %.3f\n",
+        b.shoulderJointSeparation, b.hipJointSeparation, b.ankleHeight, b.modelStature);
 }
 
 void printCsv(const body::BodyModel& model) {
     const body::Anthropometry& a = model.getAnthropometry();
-    std::printf("segment,mass_kg,length_m,com_x_m,com_y_m,com_z_m,Ixx_kgm2,Iyy_kgm2,Izz_kgm2,"
-                "shape,semi_x_m,semi_y_m,semi_z_m,radius_a_m,radius_b_m,axis_length_m\n");
+    std::printf(
+        "segment,mass_kg,length_m,com_x_m,com_y_m,com_z_m,Ixx_kgm2,Iyy_kgm2,Izz_kgm2,"
+        "shape,semi_x_m,semi_y_m,semi_z_m,radius_a_m,radius_b_m,axis_length_m\n");
     for (int i = 0; i < body::kSegmentCount; ++i) {
         const body::SegmentParameters& p = a.segments[i];
         const body::ShapeSize& s = p.shape;
         const bool ell = s.kind == body::ShapeKind::Ellipsoid;
-        std::printf("%s,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%s,", body::getSegmentName(p.segment),
-                    p.mass, p.length, p.p_BC[0], p.p_BC[1], p.p_BC[2], p.inertiaC[0],
-                    p.inertiaC[1], p.inertiaC[2], ell ? "ellipsoid" : "round_cone");
+        std::printf("%s,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%s,",
+                    body::getSegmentName(p.segment), p.mass, p.length, p.p_BC[0], p.p_BC[1],
+                    p.p_BC[2], p.inertiaC[0], p.inertiaC[1], p.inertiaC[2],
+                    ell ? "ellipsoid" : "round_cone");
         if (ell)
             std::printf("%.6g,%.6g,%.6g,,,\n", s.semiAxes[0], s.semiAxes[1], s.semiAxes[2]);
         else
@@ -136,10 +141,14 @@ int runBodyCommand(int argc, char** argv) {
             return fail("unknown argument '" + arg +
                         "'; valid: --sex, --height, --mass, --format, --help");
         }
-        if (arg == "--sex") sex = value;
-        else if (arg == "--height") height = value;
-        else if (arg == "--mass") mass = value;
-        else if (arg == "--format") format = value;
+        if (arg == "--sex")
+            sex = value;
+        else if (arg == "--height")
+            height = value;
+        else if (arg == "--mass")
+            mass = value;
+        else if (arg == "--format")
+            format = value;
         else
             return fail("unknown option '" + arg +
                         "'; valid: --sex, --height, --mass, --format, --help");
@@ -156,7 +165,8 @@ int runBodyCommand(int argc, char** argv) {
         return fail("--sex: '" + sex + "' is not valid; use female or male");
     }
     if (!parseNumber(height, spec.height))
-        return fail("--height: '" + height + "' is not a number; give the stature in metres, 1.4 to 2.1");
+        return fail("--height: '" + height +
+                    "' is not a number; give the stature in metres, 1.4 to 2.1");
     if (!parseNumber(mass, spec.mass))
         return fail("--mass: '" + mass + "' is not a number; give the body mass in kilograms");
     try {

@@ -42,8 +42,9 @@ void expandAdd(const Eigen::VectorXd& red, const std::vector<int>& map, double a
 }
 
 // Lower triangle of the reduced Hessian.
-SpMat assembleLower(const std::vector<Triplet>& trips, const std::vector<int>& map, int nfree) {
-    std::vector<Triplet> red;
+SpMat assembleLower(const std::vector<Triplet>& trips, const std::vector<int>& map, int nfree,
+                    std::vector<Triplet>& red) {
+    red.clear();
     red.reserve(trips.size() / 2 + nfree);
     for (const Triplet& t : trips) {
         const int i = map[t.row()], j = map[t.col()];
@@ -70,10 +71,73 @@ double energyAt(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
     return acc.energy;
 }
 
+// Applies (P + U C U^T)^-1 by Sherman-Morrison-Woodbury, P^-1 from the factorisation.
+struct WoodburySolve {
+    const detail::SparseSpdSolver& P;
+    Eigen::MatrixXd PU;                       // P^-1 U
+    Eigen::LDLT<Eigen::MatrixXd> capacitance; // C^-1 + U^T P^-1 U
+    const Eigen::MatrixXd& U;
+    WoodburySolve(const detail::SparseSpdSolver& p, const Eigen::MatrixXd& u,
+                  const Eigen::VectorXd& c)
+        : P(p), U(u) {
+        if (U.cols() == 0) return;
+        PU = P.solve(U);
+        Eigen::MatrixXd cap = U.transpose() * PU;
+        cap.diagonal() += c.cwiseInverse();
+        capacitance.compute(cap);
+    }
+    Eigen::VectorXd apply(const Eigen::VectorXd& b) const {
+        Eigen::VectorXd y = P.solve(b);
+        if (U.cols() > 0) y -= PU * capacitance.solve(U.transpose() * y);
+        return y;
+    }
+};
+
+// Preconditioned CG on A = K + U C U^T (K stored as its lower triangle). Returns false on
+// negative curvature or when maxIt is reached.
+bool solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c,
+              const WoodburySolve& M, const Eigen::VectorXd& b, double rtol, int maxIt,
+              Eigen::VectorXd& x, int* iterations) {
+    x.setZero(b.size());
+    Eigen::VectorXd res = b, z = M.apply(res), p = z, Ap(b.size());
+    double rz = res.dot(z);
+    const double stop = rtol * b.norm();
+    for (int k = 1; k <= maxIt; ++k) {
+        Ap.noalias() = K.selfadjointView<Eigen::Lower>() * p;
+        if (U.cols() > 0) Ap += U * c.cwiseProduct(U.transpose() * p);
+        const double pAp = p.dot(Ap);
+        *iterations = k;
+        if (!(pAp > 0.0)) return false;
+        const double a = rz / pAp;
+        x += a * p;
+        res -= a * Ap;
+        if (res.norm() <= stop) return true;
+        z = M.apply(res);
+        const double rzNew = res.dot(z);
+        p = z + (rzNew / rz) * p;
+        rz = rzNew;
+    }
+    return false;
+}
+
 }  // namespace
 
+struct SolverWorkspace::Impl {
+    detail::SparseSpdSolver llt;
+    int nfree = -1;
+    bool valid = false;
+    int factorizations = 0;
+};
+
+SolverWorkspace::SolverWorkspace() : m_impl(std::make_unique<Impl>()) {}
+SolverWorkspace::~SolverWorkspace() = default;
+SolverWorkspace::SolverWorkspace(SolverWorkspace&&) noexcept = default;
+SolverWorkspace& SolverWorkspace::operator=(SolverWorkspace&&) noexcept = default;
+void SolverWorkspace::reset() { m_impl->valid = false; }
+int SolverWorkspace::getNumFactorizations() const { return m_impl->factorizations; }
+
 SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
-                              const SolverOptions& options) {
+                              const SolverOptions& options, SolverWorkspace* workspace) {
     options.validate();
     const int nn = model.getMesh().getNumNodes();
     const int ndof = 3 * nn;
@@ -82,13 +146,21 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
     const bool conservative = model.isConservative();
 
     SolveSummary sum;
-    detail::SparseSpdSolver llt;
+    SolverWorkspace localWorkspace;
+    SolverWorkspace::Impl& ws = *(workspace ? workspace : &localWorkspace)->m_impl;
+    if (ws.nfree != nfree) ws.valid = false;
+    ws.nfree = nfree;
+    detail::SparseSpdSolver& llt = ws.llt;
     double shift = 0.0;  // pseudo-transient diagonal shift [N/m]
     double prevResidual = -1.0;
+    double bestResidual = std::numeric_limits<double>::infinity();
+    int sinceBest = 0;  // iterations since the residual last fell below its best by 1 %
 
+    EnergyAccumulator acc(nn);             // reused: its buffers keep their capacity
+    std::vector<Triplet> reducedTriplets;
     for (int it = 0; it <= options.maxIterations; ++it) {
         if (!x.allFinite()) throw NumericalError("non-finite nodal positions", -1, it);
-        EnergyAccumulator acc(nn);
+        acc.resize(nn);
         model.addMembraneEnergy(x, acc);
         const double membraneForce = reduce(acc.grad, map, nfree).norm();
         model.addLoadEnergy(x, acc);
@@ -104,9 +176,17 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
             sum.converged = true;
             return sum;
         }
+        if (rnorm < 0.99 * bestResidual) {
+            bestResidual = rnorm;
+            sinceBest = 0;
+        } else if (++sinceBest >= 8 && rnorm <= options.acceptableResidual) {
+            sum.converged = true;
+            sum.stalled = true;
+            return sum;
+        }
         if (it == options.maxIterations) break;
 
-        SpMat K = assembleLower(acc.hess, map, nfree);
+        SpMat K = assembleLower(acc.hess, map, nfree, reducedTriplets);
         double diagMean = 0.0;
         for (int i = 0; i < nfree; ++i) diagMean += std::abs(K.coeff(i, i));
         diagMean = std::max(diagMean / std::max(nfree, 1), 1e-12);
@@ -122,29 +202,36 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
             cgas(g) = -model.getGas(g).calcPressureDerivative(V);
         }
 
-        // Factor K + shift I, raising the shift until positive definite.
-        bool factored = false;
-        for (int attempt = 0; attempt < 30; ++attempt) {
-            SpMat Ks = K;
-            if (shift > 0.0)
-                for (int i = 0; i < nfree; ++i) Ks.coeffRef(i, i) += shift;
-            ++sum.factorizations;
-            if (llt.factorize(Ks)) {
-                factored = true;
-                break;
-            }
-            shift = shift > 0.0 ? shift * 10.0 : options.pseudoTransientShift * diagMean;
+        // Newton direction: CG preconditioned by the stored factorisation if that converges
+        // fast, otherwise factor K + shift I (shift raised until positive definite).
+        Eigen::VectorXd d;
+        bool solved = false;
+        if (options.reuseFactorization && ws.valid && shift == 0.0) {
+            int kit = 0;
+            const WoodburySolve M(llt, U, cgas);
+            solved = solvePcg(K, U, cgas, M, -r, options.krylovTolerance,
+                              options.maxKrylovIterations, d, &kit);
+            sum.krylovIterations += kit;
         }
-        if (!factored) throw NumericalError("tangent could not be factored", -1, it);
-        if (shift > 0.0) ++sum.shiftedIterations;
-
-        // Sherman-Morrison-Woodbury: (K + U C U^T)^-1 (-r).
-        Eigen::VectorXd d = llt.solve(Eigen::VectorXd(-r));
-        if (ng > 0) {
-            const Eigen::MatrixXd KU = llt.solve(U);
-            Eigen::MatrixXd cap = U.transpose() * KU;
-            cap.diagonal() += cgas.cwiseInverse();
-            d -= KU * cap.ldlt().solve(U.transpose() * d);
+        if (!solved) {
+            bool factored = false;
+            for (int attempt = 0; attempt < 30; ++attempt) {
+                SpMat Ks = K;
+                if (shift > 0.0)
+                    for (int i = 0; i < nfree; ++i) Ks.coeffRef(i, i) += shift;
+                ++sum.factorizations;
+                ++ws.factorizations;
+                if (llt.factorize(Ks)) {
+                    factored = true;
+                    break;
+                }
+                shift = shift > 0.0 ? shift * 10.0 : options.pseudoTransientShift * diagMean;
+            }
+            ws.valid = factored;
+            if (!factored) throw NumericalError("tangent could not be factored", -1, it);
+            if (shift > 0.0) ++sum.shiftedIterations;
+            // Sherman-Morrison-Woodbury: (K + shift I + U C U^T)^-1 (-r).
+            d = WoodburySolve(llt, U, cgas).apply(-r);
         }
 
         // Trust limit on the largest nodal move (slack membranes can propose huge steps).

@@ -28,6 +28,7 @@ struct Rig {
     std::shared_ptr<RigidContact> blockContact;
     Eigen::Matrix3Xd x;
     Vec3 blockCentreXY = Vec3::Zero();
+    SolverWorkspace workspace;  // factorisation reused across steps
 };
 
 double calcTop(const Eigen::Matrix3Xd& x) { return x.row(2).maxCoeff(); }
@@ -60,8 +61,11 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
         bool ok = false;
         SolverOptions so = o.solver;
         if (so.maxStep == 0.0) so.maxStep = o.geometry.meshSize;  // trust limit: one element
+        // Non-smooth self contact can stall Newton a little above the tolerance: accept a
+        // residual below 0.1 % of the peak force then (recorded per step).
+        if (so.acceptableResidual == 0.0) so.acceptableResidual = 1e-3 * o.peakForce;
         try {
-            *sum = solveEquilibrium(*rig.model, x, so);
+            *sum = solveEquilibrium(*rig.model, x, so, &rig.workspace);
             ok = sum->converged;
         } catch (const NumericalError&) {
             ok = false;
@@ -202,14 +206,16 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                   },
                   "inflating the airbag");
         for (int c = 0; c < nc; ++c) rig.model->setChamberPressure(c, 0.0);
-    }
-    GasChamber gas(o.gas, o.gasMasses.front());
-    {
+        // Seal the gas that is in the bag at this pressure; the first curve's ramp then
+        // takes the mass to its value in steps it can cut.
         double V = 0.0;
         for (int c = 0; c < nc; ++c) V += calcChamberVolume(mesh, c, rig.x);
+        const double mSeal = (o.gas.ambientPressure + pTarget) * V /
+                             (o.gas.getSpecificGasConstant() * o.gas.temperature);
+        GasChamber gas(o.gas, mSeal);
         gas.seal(V);
+        rig.model->addGas(gas, allChambers);
     }
-    rig.model->addGas(gas, allChambers);
 
     LoadTestResult result;
     for (size_t k = 0; k < o.gasMasses.size(); ++k) {
@@ -233,7 +239,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         curve.inflatedGaugePressure = rig.model->getGas(0).calcGaugePressure(curve.inflatedVolume);
         if (self) self->updateCandidates(rig.x);
 
-        auto record = [&](double disp, bool loading, int iters, double stabEnergy) {
+        auto record = [&](double disp, bool loading, const SolveSummary& sum, double stabEnergy) {
             LoadStep st;
             st.curve = static_cast<int>(k);
             st.step = static_cast<int>(curve.steps.size());
@@ -249,14 +255,15 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                 st.gaugePressure.push_back(rig.model->calcChamberGaugePressure(c, rig.x));
                 st.volume.push_back(calcChamberVolume(mesh, c, rig.x));
             }
-            st.newtonIterations = iters;
+            st.newtonIterations = sum.iterations;
+            st.residual = sum.residualNorm;
             st.stabilizationEnergy = stabEnergy;
             curve.steps.push_back(st);
             if (observer) observer(st, mesh, rig.x);
             return st.force;
         };
 
-        record(0.0, true, 0, 0.0);
+        record(0.0, true, SolveSummary(), 0.0);
         // Moves the block to travel `to` (from the last converged state); on failure the
         // caller shortens the step.
         auto advance = [&](double to, SolveSummary* sum, double* stab) {
@@ -264,16 +271,16 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             if (self) self->updateCandidates(rig.x);
             return trySolve(rig, o, sum, stab);
         };
+        // A step that cannot be solved even at the smallest increment ends the branch; the
+        // curve keeps what converged and says why it stopped.
         auto fail = [&](const char* branch, double disp) {
             std::ostringstream s;
-            s << "no convergence " << branch << " at gas mass " << curve.gasMass * 1e3
-              << " g, block travel " << disp * 1e3 << " mm";
-            throw NumericalError(s.str(), curve.steps.back().time,
-                                 static_cast<int>(curve.steps.size()));
+            s << "no convergence " << branch << " at block travel " << disp * 1e3 << " mm";
+            curve.failure = s.str();
         };
         // Loading: displacement control, adaptive, aiming the last step at the peak force.
         double disp = 0.0, ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;
-        const double minStep = 1e-6;
+        const double minStep = 1e-5;
         const double maxDisp = top - 0.002;  // the block cannot pass the bed board
         while (force < o.peakForce * (1.0 - 1e-3)) {
             double step = std::min(ds, o.displacementStep);
@@ -286,12 +293,15 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             if (!advance(disp + step, &sum, &stab)) {
                 placeBlock(rig, top - disp);
                 ds = 0.5 * step;
-                if (ds < minStep) fail("loading", disp);
+                if (ds < minStep) {
+                    fail("loading", disp);
+                    break;
+                }
                 continue;
             }
             const double prevForce = force;
             disp += step;
-            force = record(disp, true, sum.iterations, stab);
+            force = record(disp, true, sum, stab);
             const double k = (force - prevForce) / step;
             if (k > 0.0) stiffnessEstimate = k;
             if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
@@ -306,12 +316,20 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             if (!advance(disp - step, &sum, &stab)) {
                 placeBlock(rig, top - disp);
                 ds = 0.5 * step;
-                if (ds < minStep) fail("unloading", disp);
+                if (ds < minStep) {
+                    fail("unloading", disp);
+                    break;
+                }
                 continue;
             }
             disp = std::max(disp - step, 0.0);
-            if (record(disp, false, sum.iterations, stab) <= 0.0) break;  // block has left
+            if (record(disp, false, sum, stab) <= 0.0) break;  // block has left
             if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
+        }
+        if (disp > 0.0) {
+            // Lift the block clear so the next gas mass starts from a free bag.
+            solveRamp(rig, o, disp, 0.0, [&](double d) { placeBlock(rig, top - d); },
+                      "lifting the block after a failed step");
         }
         // Stiffness over the force range, loading branch.
         std::vector<double> d, f;

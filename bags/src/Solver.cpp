@@ -47,6 +47,11 @@ void SolverOptions::validate() const {
     if (maxIterations < 1) fail("maxIterations", maxIterations, "use at least 1");
     if (!(pseudoTransientShift > 0.0)) fail("pseudoTransientShift", pseudoTransientShift, "use > 0");
     if (!(maxStep >= 0.0)) fail("maxStep", maxStep, "use >= 0 m (0: no limit)");
+    if (maxKrylovIterations < 1) fail("maxKrylovIterations", maxKrylovIterations, "use >= 1");
+    if (!(krylovTolerance > 0.0 && krylovTolerance < 1.0))
+        fail("krylovTolerance", krylovTolerance, "use 0 < tol < 1 (e.g. 1e-4)");
+    if (!(acceptableResidual >= 0.0))
+        fail("acceptableResidual", acceptableResidual, "use >= 0 N (0: only the tolerance)");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -176,10 +181,18 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
 
 #pragma omp parallel reduction(+ : energy) if (nt > 4000)
     {
-        std::vector<Triplet> localH;
-        Eigen::VectorXd localG;
-        if (wantG) localG.setZero(acc.grad.size());
-        if (wantH) localH.reserve(static_cast<size_t>(81) * nt / 2 + 81);
+        // One thread writes straight into acc (no copies); a team uses private buffers.
+#ifdef _OPENMP
+        const bool single = omp_get_num_threads() == 1;
+#else
+        const bool single = true;
+#endif
+        std::vector<Triplet> privateH;
+        Eigen::VectorXd privateG;
+        std::vector<Triplet>& localH = single ? acc.hess : privateH;
+        Eigen::VectorXd& localG = single ? acc.grad : privateG;
+        if (!single && wantG) privateG.setZero(acc.grad.size());
+        if (wantH) localH.reserve(localH.size() + static_cast<size_t>(81) * nt);
 #pragma omp for schedule(static)
         for (int e = 0; e < nt; ++e) {
             const int n[3] = {m_mesh.tris(0, e), m_mesh.tris(1, e), m_mesh.tris(2, e)};
@@ -228,10 +241,12 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
                 }
             }
         }
+        if (!single) {
 #pragma omp critical
-        {
-            if (wantG) acc.grad += localG;
-            if (wantH) acc.hess.insert(acc.hess.end(), localH.begin(), localH.end());
+            {
+                if (wantG) acc.grad += privateG;
+                if (wantH) acc.hess.insert(acc.hess.end(), privateH.begin(), privateH.end());
+            }
         }
     }
     if (invalid) {

@@ -18,7 +18,7 @@ SparseSpdSolver::~SparseSpdSolver() = default;
 bool SparseSpdSolver::factorize(const Matrix& A) {
     const std::uint64_t h = hashPattern(A);
     if (!m_llt || !m_analyzed || h != m_patternHash) {
-        m_llt = std::make_unique<Eigen::CholmodSupernodalLLT<Matrix, Eigen::Lower>>();
+        m_llt = std::make_unique<Eigen::CholmodSimplicialLLT<Matrix, Eigen::Lower>>();
         m_llt->cholmod().print = 0;  // the library prints nothing
         m_llt->analyzePattern(A);
         m_patternHash = h;

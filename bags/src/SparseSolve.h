@@ -22,7 +22,7 @@ public:
     int getNumFactorizations() const { return m_numFactorizations; }
     int getNumAnalyses() const { return m_numAnalyses; }
 private:
-    std::unique_ptr<Eigen::CholmodSupernodalLLT<Matrix, Eigen::Lower>> m_llt;
+    std::unique_ptr<Eigen::CholmodSimplicialLLT<Matrix, Eigen::Lower>> m_llt;
     std::uint64_t m_patternHash = 0;
     bool m_analyzed = false;
     int m_numFactorizations = 0;

@@ -39,8 +39,10 @@ const DeLevaRow kMale[kTypeCount] = {
 };
 // de Leva (1996) Table 4, alternative definitions: head VERT-CERV, trunk CERV-MIDH and
 // MIDS-MIDH, hand WJC-DA3 (with its CoM and radii of gyration).
-const DeLevaExtraLengths kFemaleExtra = {0.2437, 0.6148, 0.4979, 0.1701, 0.3427, {0.244, 0.208, 0.154}};
-const DeLevaExtraLengths kMaleExtra = {0.2429, 0.6033, 0.5155, 0.1879, 0.3624, {0.288, 0.235, 0.184}};
+const DeLevaExtraLengths kFemaleExtra = {0.2437, 0.6148, 0.4979,
+                                         0.1701, 0.3427, {0.244, 0.208, 0.154}};
+const DeLevaExtraLengths kMaleExtra = {0.2429, 0.6033, 0.5155,
+                                       0.1879, 0.3624, {0.288, 0.235, 0.184}};
 
 // Drillis & Contini (1966), as drawn in Winter (2009) Fig. 4.1: body dimensions / stature.
 constexpr double kShoulderWidthPerHeight = 0.259;  // outer shoulder breadth
@@ -53,8 +55,8 @@ constexpr double kHipSeparationPerHeight = 0.10;
 constexpr double kLumbarClearancePerHeight = 0.010 / 1.75;
 
 const char* kSegmentNames[kSegmentCount] = {
-    "lower_trunk", "middle_trunk", "upper_trunk", "head",    "upper_arm_r", "forearm_r",
-    "hand_r",      "upper_arm_l",  "forearm_l",   "hand_l",  "thigh_r",     "shank_r",
+    "lower_trunk", "middle_trunk", "upper_trunk", "head",   "upper_arm_r", "forearm_r",
+    "hand_r",      "upper_arm_l",  "forearm_l",   "hand_l", "thigh_r",     "shank_r",
     "foot_r",      "thigh_l",      "shank_l",     "foot_l"};
 
 double sq(double x) { return x * x; }
@@ -65,7 +67,8 @@ SimTK::Vec3 calcEquivalentEllipsoid(const SimTK::Vec3& k) {
     const double kx2 = sq(k[0]), ky2 = sq(k[1]), kz2 = sq(k[2]);
     const SimTK::Vec3 a2(2.5 * (ky2 + kz2 - kx2), 2.5 * (kx2 + kz2 - ky2), 2.5 * (kx2 + ky2 - kz2));
     for (int i = 0; i < 3; ++i)
-        if (!(a2[i] > 0)) throw std::logic_error("body: radii of gyration violate the triangle inequality");
+        if (!(a2[i] > 0))
+            throw std::logic_error("body: radii of gyration violate the triangle inequality");
     return SimTK::Vec3(std::sqrt(a2[0]), std::sqrt(a2[1]), std::sqrt(a2[2]));
 }
 
@@ -112,22 +115,32 @@ const DeLevaExtraLengths& getDeLevaExtraLengths(Sex sex) {
 
 SegmentType getSegmentType(Segment s) {
     switch (s) {
-        case Segment::LowerTrunk: return SegmentType::LowerTrunk;
-        case Segment::MiddleTrunk: return SegmentType::MiddleTrunk;
-        case Segment::UpperTrunk: return SegmentType::UpperTrunk;
-        case Segment::Head: return SegmentType::Head;
+        case Segment::LowerTrunk:
+            return SegmentType::LowerTrunk;
+        case Segment::MiddleTrunk:
+            return SegmentType::MiddleTrunk;
+        case Segment::UpperTrunk:
+            return SegmentType::UpperTrunk;
+        case Segment::Head:
+            return SegmentType::Head;
         case Segment::UpperArmR:
-        case Segment::UpperArmL: return SegmentType::UpperArm;
+        case Segment::UpperArmL:
+            return SegmentType::UpperArm;
         case Segment::ForearmR:
-        case Segment::ForearmL: return SegmentType::Forearm;
+        case Segment::ForearmL:
+            return SegmentType::Forearm;
         case Segment::HandR:
-        case Segment::HandL: return SegmentType::Hand;
+        case Segment::HandL:
+            return SegmentType::Hand;
         case Segment::ThighR:
-        case Segment::ThighL: return SegmentType::Thigh;
+        case Segment::ThighL:
+            return SegmentType::Thigh;
         case Segment::ShankR:
-        case Segment::ShankL: return SegmentType::Shank;
+        case Segment::ShankL:
+            return SegmentType::Shank;
         case Segment::FootR:
-        case Segment::FootL: return SegmentType::Foot;
+        case Segment::FootL:
+            return SegmentType::Foot;
     }
     throw std::logic_error("body: unknown segment");
 }
@@ -139,23 +152,29 @@ Side getSegmentSide(Segment s) {
         case Segment::HandR:
         case Segment::ThighR:
         case Segment::ShankR:
-        case Segment::FootR: return Side::Right;
+        case Segment::FootR:
+            return Side::Right;
         case Segment::UpperArmL:
         case Segment::ForearmL:
         case Segment::HandL:
         case Segment::ThighL:
         case Segment::ShankL:
-        case Segment::FootL: return Side::Left;
-        default: return Side::Centre;
+        case Segment::FootL:
+            return Side::Left;
+        default:
+            return Side::Centre;
     }
 }
 
 Segment getMirrorSegment(Segment s) {
     // Enum order: each left segment follows its right counterpart by three.
     switch (getSegmentSide(s)) {
-        case Side::Right: return static_cast<Segment>(static_cast<int>(s) + 3);
-        case Side::Left: return static_cast<Segment>(static_cast<int>(s) - 3);
-        default: return s;
+        case Side::Right:
+            return static_cast<Segment>(static_cast<int>(s) + 3);
+        case Side::Left:
+            return static_cast<Segment>(static_cast<int>(s) - 3);
+        default:
+            return s;
     }
 }
 
@@ -165,16 +184,26 @@ const char* getSexName(Sex sex) { return sex == Sex::Female ? "female" : "male";
 
 double getSegmentDensity(SegmentType type) {
     switch (type) {
-        case SegmentType::Head: return 1110;         // head and neck
-        case SegmentType::UpperTrunk: return 920;    // thorax
-        case SegmentType::MiddleTrunk: return 1010;  // abdomen and pelvis
-        case SegmentType::LowerTrunk: return 1010;   // abdomen and pelvis
-        case SegmentType::UpperArm: return 1070;
-        case SegmentType::Forearm: return 1130;
-        case SegmentType::Hand: return 1160;
-        case SegmentType::Thigh: return 1050;
-        case SegmentType::Shank: return 1090;
-        case SegmentType::Foot: return 1100;
+        case SegmentType::Head:
+            return 1110;  // head and neck
+        case SegmentType::UpperTrunk:
+            return 920;  // thorax
+        case SegmentType::MiddleTrunk:
+            return 1010;  // abdomen and pelvis
+        case SegmentType::LowerTrunk:
+            return 1010;  // abdomen and pelvis
+        case SegmentType::UpperArm:
+            return 1070;
+        case SegmentType::Forearm:
+            return 1130;
+        case SegmentType::Hand:
+            return 1160;
+        case SegmentType::Thigh:
+            return 1050;
+        case SegmentType::Shank:
+            return 1090;
+        case SegmentType::Foot:
+            return 1100;
     }
     throw std::logic_error("body: unknown segment type");
 }
@@ -288,7 +317,9 @@ Anthropometry calcAnthropometry(Sex sex, double height, double mass) {
                 p.p_WO = SimTK::Vec3(0, -Lth, zSide * hipSep / 2);
                 p.p_BC = SimTK::Vec3(0, -c * L, 0);
                 break;
-            case SegmentType::Foot: p.p_WO = SimTK::Vec3(0, -Lth - Lsh, zSide * hipSep / 2); break;
+            case SegmentType::Foot:
+                p.p_WO = SimTK::Vec3(0, -Lth - Lsh, zSide * hipSep / 2);
+                break;
         }
 
         ShapeSize& shape = p.shape;
@@ -298,7 +329,8 @@ Anthropometry calcAnthropometry(Sex sex, double height, double mass) {
                 // fitted to the mass the head would have at the reference BMI (skull size does
                 // not follow body fat).
                 shape.kind = ShapeKind::Ellipsoid;
-                shape.semiAxes = fitTransverseToMass(calcEquivalentEllipsoid(k), massRefOf(type), rho);
+                shape.semiAxes =
+                    fitTransverseToMass(calcEquivalentEllipsoid(k), massRefOf(type), rho);
                 shape.centre = p.p_BC;
                 break;
             }
@@ -358,7 +390,8 @@ Anthropometry calcAnthropometry(Sex sex, double height, double mass) {
         SegmentParameters& mt = a.segments[static_cast<int>(Segment::MiddleTrunk)];
         const double backUpper = a.get(Segment::UpperTrunk).shape.semiAxes[0];
         const double backLower = a.get(Segment::LowerTrunk).shape.semiAxes[0];
-        const double backMiddle = 0.5 * (backUpper + backLower) - kLumbarClearancePerHeight * height;
+        const double backMiddle =
+            0.5 * (backUpper + backLower) - kLumbarClearancePerHeight * height;
         mt.shape.centre[0] = mt.shape.semiAxes[0] - backMiddle;
     }
 

@@ -67,10 +67,10 @@ BodyModel::BodyModel(const PatientSpec& spec, const BodyModelOptions& options)
             entries.push_back({*joint, m.mobod[static_cast<int>(joint->parent)], m.mobod[i]});
         }
         const ShapeSize& sh = p.shape;
-        m.shapes.push_back(sh.kind == ShapeKind::Ellipsoid
-                               ? ContactShape::makeEllipsoid(sh.semiAxes, sh.centre)
-                               : ContactShape::makeRoundCone(sh.pointA, sh.radiusA, sh.pointB,
-                                                             sh.radiusB));
+        m.shapes.push_back(
+            sh.kind == ShapeKind::Ellipsoid
+                ? ContactShape::makeEllipsoid(sh.semiAxes, sh.centre)
+                : ContactShape::makeRoundCone(sh.pointA, sh.radiusA, sh.pointB, sh.radiusB));
     }
     m.regions = makeBodyRegions(a);
     SimTK::Force::Gravity(m.forces, m.matter, SimTK::UnitVec3(0, 0, -1), options.gravity);

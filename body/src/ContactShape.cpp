@@ -129,7 +129,8 @@ SurfaceQuery ContactShape::calcSurfaceQuery(const SimTK::Vec3& p_B) const {
     const double y = ~v * e;
     SimTK::Vec3 w = v - y * e;
     const double x = w.norm();
-    const SimTK::Vec3 er = x > 1e-14 * h ? SimTK::Vec3(w / x) : SimTK::Vec3(SimTK::UnitVec3(e).perp());
+    const SimTK::Vec3 er =
+        x > 1e-14 * h ? SimTK::Vec3(w / x) : SimTK::Vec3(SimTK::UnitVec3(e).perp());
     const double sinA = (m_rA - m_rB) / h;
     const double cosA = std::sqrt(1 - sinA * sinA);
     const double s = -x * sinA + y * cosA;  // position along the tangent line
@@ -248,7 +249,6 @@ std::vector<SurfaceSample> ContactShape::calcSurfaceSamples(double spacing) cons
             out.push_back({m_pA + y * e + rho * er, cosA * er + sinA * e, dA});
         }
     }
-    (void)R2;
     return out;
 }
 

@@ -26,12 +26,18 @@ std::string fmt(double v) {
 
 const char* getPostureName(Posture p) {
     switch (p) {
-        case Posture::Supine: return "supine";
-        case Posture::TiltLeft30: return "tilt-left-30";
-        case Posture::TiltRight30: return "tilt-right-30";
-        case Posture::SideLeft90: return "side-left-90";
-        case Posture::SideRight90: return "side-right-90";
-        case Posture::HeadOfBedRaised: return "head-of-bed-raised";
+        case Posture::Supine:
+            return "supine";
+        case Posture::TiltLeft30:
+            return "tilt-left-30";
+        case Posture::TiltRight30:
+            return "tilt-right-30";
+        case Posture::SideLeft90:
+            return "side-left-90";
+        case Posture::SideRight90:
+            return "side-right-90";
+        case Posture::HeadOfBedRaised:
+            return "head-of-bed-raised";
     }
     return "?";
 }
@@ -42,11 +48,11 @@ const char* getPostureNames() {
 
 Posture parsePosture(const std::string& name) {
     const std::string n = lower(name);
-    for (Posture p : {Posture::Supine, Posture::TiltLeft30, Posture::TiltRight30, Posture::SideLeft90,
-                      Posture::SideRight90, Posture::HeadOfBedRaised})
+    for (Posture p : {Posture::Supine, Posture::TiltLeft30, Posture::TiltRight30,
+                      Posture::SideLeft90, Posture::SideRight90, Posture::HeadOfBedRaised})
         if (n == getPostureName(p)) return p;
-    throw std::invalid_argument("patient.posture: '" + name + "' is not a posture; valid: " +
-                                getPostureNames());
+    throw std::invalid_argument("patient.posture: '" + name +
+                                "' is not a posture; valid: " + getPostureNames());
 }
 
 Sex parseSex(const std::string& name) {
@@ -68,14 +74,14 @@ void PatientSpec::validate() const {
                                     " kg is not a positive mass in kilograms");
     const double bmi = getBmi();
     if (bmi < 14 - 1e-9 || bmi > 50 + 1e-9)  // tolerance: 14 * h * h / (h * h) may round below 14
-        throw std::invalid_argument("patient.mass: " + fmt(mass) + " kg at " + fmt(height) +
-                                    " m gives a BMI of " + fmt(std::round(bmi * 10) / 10) +
-                                    " kg/m^2, outside the modelled 14-50 (mass between " +
-                                    fmt(std::round(14 * height * height * 10) / 10) + " and " +
-                                    fmt(std::round(50 * height * height * 10) / 10) +
-                                    " kg at this height)");
+        throw std::invalid_argument(
+            "patient.mass: " + fmt(mass) + " kg at " + fmt(height) + " m gives a BMI of " +
+            fmt(std::round(bmi * 10) / 10) + " kg/m^2, outside the modelled 14-50 (mass between " +
+            fmt(std::round(14 * height * height * 10) / 10) + " and " +
+            fmt(std::round(50 * height * height * 10) / 10) + " kg at this height)");
     if (!std::isfinite(position[0]) || !std::isfinite(position[1]))
-        throw std::invalid_argument("patient.position: must be two finite numbers [x, y] in metres");
+        throw std::invalid_argument(
+            "patient.position: must be two finite numbers [x, y] in metres");
     const double deg = headOfBedAngle * 180.0 / 3.14159265358979323846;
     if (!std::isfinite(deg) || deg < 0 || deg > 80)
         throw std::invalid_argument("patient.head_of_bed_angle: " + fmt(deg) +

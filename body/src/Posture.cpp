@@ -1,9 +1,10 @@
 // Lying postures (see Posture.h): root orientation and joint rotations, then placement on z = 0.
-#include "body/BodyModel.h"
 #include "body/Posture.h"
 
 #include <map>
 #include <string>
+
+#include "body/BodyModel.h"
 
 namespace body {
 namespace {
@@ -41,11 +42,14 @@ void BodyModel::setPosture(SimTK::State& state, Posture posture,
         jointRotation["hip_l"] = SimTK::Rotation(15 * kDeg, SimTK::YAxis);
     }
     switch (posture) {
-        case Posture::Supine: break;
+        case Posture::Supine:
+            break;
         case Posture::TiltLeft30:  // +angle about +x puts the left (-y) side down
             R_root = SimTK::Rotation(30 * kDeg, SimTK::XAxis) * R_sup;
             break;
-        case Posture::TiltRight30: R_root = SimTK::Rotation(-30 * kDeg, SimTK::XAxis) * R_sup; break;
+        case Posture::TiltRight30:
+            R_root = SimTK::Rotation(-30 * kDeg, SimTK::XAxis) * R_sup;
+            break;
         case Posture::SideLeft90:
         case Posture::SideRight90: {
             const bool left = posture == Posture::SideLeft90;
@@ -73,11 +77,12 @@ void BodyModel::setPosture(SimTK::State& state, Posture posture,
         }
     }
     const SimTK::MobilizedBody& root = getMobilizedBody(Segment::LowerTrunk);
-    root.setQToFitTransform(state, SimTK::Transform(R_root, SimTK::Vec3(position[0], position[1], 0)));
+    root.setQToFitTransform(state,
+                            SimTK::Transform(R_root, SimTK::Vec3(position[0], position[1], 0)));
     for (const JointSpec& j : getJoints()) {
         const auto it = jointRotation.find(j.name);
-        getMobilizedBody(j.child)
-            .setQToFitRotation(state, it == jointRotation.end() ? SimTK::Rotation() : it->second);
+        getMobilizedBody(j.child).setQToFitRotation(
+            state, it == jointRotation.end() ? SimTK::Rotation() : it->second);
     }
     state.updU() = 0;
     getSystem().realize(state, SimTK::Stage::Position);

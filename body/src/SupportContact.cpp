@@ -33,7 +33,8 @@ PlaneSupport::PlaneSupport(const BodyModel& model, const PlaneSupportOptions& op
         const Side side = getSegmentSide(seg);
         std::vector<SurfaceSample> samples;
         if (side == Side::Centre) {
-            for (const SurfaceSample& s : model.getContactShape(seg).calcSurfaceSamples(options.sampleSpacing)) {
+            for (const SurfaceSample& s :
+                 model.getContactShape(seg).calcSurfaceSamples(options.sampleSpacing)) {
                 if (s.p_B[2] > 0) {
                     samples.push_back(s);
                     samples.push_back(mirror(s));
@@ -84,7 +85,8 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
             const double pressure = o.stiffness * delta - o.damping * v[2];
             if (pressure <= 0) continue;
             const double fn = pressure * aProj;
-            const double vt = std::sqrt(v[0] * v[0] + v[1] * v[1] + o.slipVelocity * o.slipVelocity);
+            const double vt =
+                std::sqrt(v[0] * v[0] + v[1] * v[1] + o.slipVelocity * o.slipVelocity);
             const SimTK::Vec3 F(-o.friction * fn * v[0] / vt, -o.friction * fn * v[1] / vt, fn);
             visit(i, p, p_G, r_G, F, pressure, aProj, delta);
         }
@@ -96,7 +98,8 @@ void PlaneSupport::calcForce(const SimTK::State& state,
                              SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector&) const {
     forEachContact(state, [&](int i, const Patch&, const SimTK::Vec3&, const SimTK::Vec3& r_G,
                               const SimTK::Vec3& F, double, double, double) {
-        const SimTK::MobilizedBodyIndex mbx = m_model.getMobilizedBodyIndex(static_cast<Segment>(i));
+        const SimTK::MobilizedBodyIndex mbx =
+            m_model.getMobilizedBodyIndex(static_cast<Segment>(i));
         bodyForces[mbx][0] += r_G % F;
         bodyForces[mbx][1] += F;
     });
@@ -106,7 +109,8 @@ SimTK::Real PlaneSupport::calcPotentialEnergy(const SimTK::State& state) const {
     double e = 0;
     const PlaneSupportOptions& o = m_options;
     for (int i = 0; i < kSegmentCount; ++i) {
-        const SimTK::Transform& X_GB = m_model.getMobilizedBody(static_cast<Segment>(i)).getBodyTransform(state);
+        const SimTK::Transform& X_GB =
+            m_model.getMobilizedBody(static_cast<Segment>(i)).getBodyTransform(state);
         for (const Patch& p : m_patches[i]) {
             const double delta = o.height - (X_GB * p.p_B)[2];
             const double nz = (X_GB.R() * p.n_B)[2];
@@ -129,7 +133,8 @@ SupportLoad PlaneSupport::calcSupportLoad(const SimTK::State& state) const {
         load.segmentForce[i] += F[2];
         if (p.region >= 0) {
             load.regionForce[p.region] += F[2];
-            load.regionPeakPressure[p.region] = std::max(load.regionPeakPressure[p.region], pressure);
+            load.regionPeakPressure[p.region] =
+                std::max(load.regionPeakPressure[p.region], pressure);
         } else {
             load.otherForce += F[2];
         }

@@ -152,9 +152,10 @@ void readAirbag(const ScenarioNode& s, bags::DoubleWedgeParams& g) {
     checkRange(s, "short_side", g.shortSide, 0, false, kInf, false, "mm");
     checkRange(s, "width", g.width, 0, false, kInf, false, "mm");
     checkRange(s, "height", g.height, 0, false, kInf, false, "mm");
-    checkRange(s, "short_side", g.shortSide, g.height, false, kInf, false, "mm",
-               "the steep side rises from the base to the apex, so it must be longer than the "
-               "height");
+    if (!(g.height < g.shortSide))
+        s.fail("height", shown(s, "height") + " must be less than short_side (" +
+                             getRaw(s, "short_side") +
+                             "): the steep side rises from the base to the apex");
     const double smallest = std::min({g.longSide, g.shortSide, g.width, g.height});
     checkRange(s, "mesh_size", g.meshSize, 1e-3, true, std::min(0.05, 0.5 * smallest), true, "mm",
                "at least 1 mm; at most 50 mm and half the smallest dimension");

@@ -3,6 +3,8 @@
 #include <io/Results.h>
 
 #include <cerrno>
+#include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <cstring>
 #include <ctime>

@@ -15,7 +15,9 @@ LoadTestOptions coarseOptions() {
     LoadTestOptions o;
     o.geometry.meshSize = 0.020;
     o.material = makeYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
-    o.gasMasses = {3.5e-3, 3.0e-3};
+    // Taut bags: this geometry holds about 3.7 g of air at ambient pressure when inflated
+    // (docs/seed-load-test.md), so 4.5 g and 4.0 g are above ambient.
+    o.gasMasses = {4.5e-3, 4.0e-3};
     o.displacementStep = 2e-3;
     return o;
 }

@@ -1,7 +1,6 @@
 // de Leva (1996) scaling: masses, centres of mass, inertias, and the BMI-dependent build.
 #include <body/Anthropometry.h>
 #include <body/ContactShape.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -53,13 +52,17 @@ double comFromProximal(const body::SegmentParameters& p, Sex sex, double scale) 
             return (sex == Sex::Male ? 0.2429 : 0.2437) * scale - p.p_BC[1];
         case body::SegmentType::UpperTrunk:
         case body::SegmentType::MiddleTrunk:
-        case body::SegmentType::LowerTrunk: return p.length - p.p_BC[1];
-        case body::SegmentType::Foot: return p.p_BC[0] + p.shape.radiusA;
-        default: return -p.p_BC[1];
+        case body::SegmentType::LowerTrunk:
+            return p.length - p.p_BC[1];
+        case body::SegmentType::Foot:
+            return p.p_BC[0] + p.shape.radiusA;
+        default:
+            return -p.p_BC[1];
     }
 }
 
-void checkReference(Sex sex, const Row* rows, int n, double height, double mass, double fractionSum) {
+void checkReference(Sex sex, const Row* rows, int n, double height, double mass,
+                    double fractionSum) {
     const body::Anthropometry a = body::calcAnthropometry(sex, height, mass);
     for (int i = 0; i < n; ++i) {
         const Row& r = rows[i];
@@ -135,7 +138,8 @@ TEST(Anthropometry, LengthsScaleWithHeightAndMassesWithMass) {
 
 TEST(Anthropometry, HeavierPatientOfSameHeightIsWiderAndDeeper) {
     const body::Anthropometry slim = body::calcAnthropometry(Sex::Female, 1.65, 18.0 * 1.65 * 1.65);
-    const body::Anthropometry heavy = body::calcAnthropometry(Sex::Female, 1.65, 35.0 * 1.65 * 1.65);
+    const body::Anthropometry heavy =
+        body::calcAnthropometry(Sex::Female, 1.65, 35.0 * 1.65 * 1.65);
     const body::BodyBuild& s = slim.build;
     const body::BodyBuild& h = heavy.build;
     // Soft-tissue breadths and depths grow as sqrt(mass) at a fixed height: sqrt(35/18) = 1.394.
@@ -154,7 +158,8 @@ TEST(Anthropometry, HeavierPatientOfSameHeightIsWiderAndDeeper) {
 
 TEST(Anthropometry, ShapesHoldTheSegmentMassAtTissueDensity) {
     const body::Anthropometry a = body::calcAnthropometry(Sex::Male, 1.80, 85.0);
-    for (Segment seg : {Segment::UpperTrunk, Segment::MiddleTrunk, Segment::LowerTrunk, Segment::HandR}) {
+    for (Segment seg :
+         {Segment::UpperTrunk, Segment::MiddleTrunk, Segment::LowerTrunk, Segment::HandR}) {
         const body::SegmentParameters& p = a.get(seg);
         const SimTK::Vec3& ax = p.shape.semiAxes;
         const double volume = 4.0 / 3.0 * SimTK::Pi * ax[0] * ax[1] * ax[2];
@@ -168,7 +173,8 @@ TEST(Anthropometry, ShapesHoldTheSegmentMassAtTissueDensity) {
         const double r1 = p.shape.radiusA, r2 = p.shape.radiusB, L = p.length;
         const double rho = body::getSegmentDensity(body::getSegmentType(seg));
         const double m = rho * SimTK::Pi * L * (r1 * r1 + r1 * r2 + r2 * r2) / 3;
-        const double c = L * (r1 * r1 + 2 * r1 * r2 + 3 * r2 * r2) / (4 * (r1 * r1 + r1 * r2 + r2 * r2));
+        const double c =
+            L * (r1 * r1 + 2 * r1 * r2 + 3 * r2 * r2) / (4 * (r1 * r1 + r1 * r2 + r2 * r2));
         EXPECT_NEAR(m, p.mass, 1e-9 * p.mass) << body::getSegmentName(seg);
         EXPECT_NEAR(c, -p.p_BC[1], 1e-9) << body::getSegmentName(seg);
     }

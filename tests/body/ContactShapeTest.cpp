@@ -1,7 +1,6 @@
 // Analytic surface queries of ellipsoids and round cones against brute force and finite
 // differences.
 #include <body/ContactShape.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -24,11 +23,13 @@ SimTK::Vec3 randomPoint(std::mt19937& rng, double scale) {
 }
 
 std::vector<ContactShape> makeShapes() {
-    return {ContactShape::makeEllipsoid(SimTK::Vec3(0.09, 0.14, 0.22), SimTK::Vec3(0.01, 0.02, -0.03),
-                                        SimTK::Rotation(0.4, SimTK::UnitVec3(1, 2, 3))),
-            ContactShape::makeEllipsoid(SimTK::Vec3(0.05, 0.05, 0.05), SimTK::Vec3(0)),
-            ContactShape::makeRoundCone(SimTK::Vec3(0, 0, 0), 0.11, SimTK::Vec3(0.05, -0.4, 0.02), 0.06),
-            ContactShape::makeRoundCone(SimTK::Vec3(0, 0, 0), 0.04, SimTK::Vec3(0, -0.28, 0), 0.04)};
+    return {
+        ContactShape::makeEllipsoid(SimTK::Vec3(0.09, 0.14, 0.22), SimTK::Vec3(0.01, 0.02, -0.03),
+                                    SimTK::Rotation(0.4, SimTK::UnitVec3(1, 2, 3))),
+        ContactShape::makeEllipsoid(SimTK::Vec3(0.05, 0.05, 0.05), SimTK::Vec3(0)),
+        ContactShape::makeRoundCone(SimTK::Vec3(0, 0, 0), 0.11, SimTK::Vec3(0.05, -0.4, 0.02),
+                                    0.06),
+        ContactShape::makeRoundCone(SimTK::Vec3(0, 0, 0), 0.04, SimTK::Vec3(0, -0.28, 0), 0.04)};
 }
 
 }  // namespace
@@ -38,7 +39,8 @@ TEST(ContactShape, ClosestPointIsOnSurfaceAlongNormalAndNearest) {
     for (const ContactShape& shape : makeShapes()) {
         const auto dense = shape.calcSurfaceSamples(0.002);
         for (int k = 0; k < 200; ++k) {
-            const SimTK::Vec3 p = shape.getBoundingCentre() + randomPoint(rng, 1.3 * shape.getBoundingRadius());
+            const SimTK::Vec3 p =
+                shape.getBoundingCentre() + randomPoint(rng, 1.3 * shape.getBoundingRadius());
             const body::SurfaceQuery q = shape.calcSurfaceQuery(p);
             // The closest point lies on the surface: its own distance is zero (1e-10 m).
             EXPECT_NEAR(shape.calcSignedDistance(q.closestPoint), 0.0, 1e-10);
@@ -60,14 +62,16 @@ TEST(ContactShape, SignedDistanceGradientIsTheNormal) {
     for (const ContactShape& shape : makeShapes()) {
         int checked = 0;
         for (int k = 0; k < 200 && checked < 60; ++k) {
-            const SimTK::Vec3 p = shape.getBoundingCentre() + randomPoint(rng, 1.3 * shape.getBoundingRadius());
+            const SimTK::Vec3 p =
+                shape.getBoundingCentre() + randomPoint(rng, 1.3 * shape.getBoundingRadius());
             const body::SurfaceQuery q = shape.calcSurfaceQuery(p);
             if (q.distance < -0.01) continue;  // stay clear of the medial surface inside
             SimTK::Vec3 g;
             for (int i = 0; i < 3; ++i) {
                 SimTK::Vec3 dp(0);
                 dp[i] = h;
-                g[i] = (shape.calcSignedDistance(p + dp) - shape.calcSignedDistance(p - dp)) / (2 * h);
+                g[i] =
+                    (shape.calcSignedDistance(p + dp) - shape.calcSignedDistance(p - dp)) / (2 * h);
             }
             EXPECT_NEAR((g - q.normal).norm(), 0.0, 1e-6);
             ++checked;
@@ -77,15 +81,18 @@ TEST(ContactShape, SignedDistanceGradientIsTheNormal) {
 }
 
 TEST(ContactShape, SphereAndCapsuleMatchClosedForms) {
-    const ContactShape sphere = ContactShape::makeEllipsoid(SimTK::Vec3(0.05), SimTK::Vec3(0.1, 0, 0));
+    const ContactShape sphere =
+        ContactShape::makeEllipsoid(SimTK::Vec3(0.05), SimTK::Vec3(0.1, 0, 0));
     EXPECT_NEAR(sphere.calcSignedDistance(SimTK::Vec3(0.1, 0.3, 0.4)), 0.5 - 0.05, 1e-14);
     EXPECT_NEAR(sphere.calcSignedDistance(SimTK::Vec3(0.12, 0, 0)), 0.02 - 0.05, 1e-14);
     // Capsule: distance to the axis segment minus the radius.
-    const ContactShape cap = ContactShape::makeRoundCone(SimTK::Vec3(0), 0.04, SimTK::Vec3(0, -0.3, 0), 0.04);
+    const ContactShape cap =
+        ContactShape::makeRoundCone(SimTK::Vec3(0), 0.04, SimTK::Vec3(0, -0.3, 0), 0.04);
     EXPECT_NEAR(cap.calcSignedDistance(SimTK::Vec3(0.1, -0.1, 0)), 0.1 - 0.04, 1e-14);
     EXPECT_NEAR(cap.calcSignedDistance(SimTK::Vec3(0, -0.4, 0)), 0.1 - 0.04, 1e-14);
     EXPECT_NEAR(cap.calcSignedDistance(SimTK::Vec3(0.01, -0.2, 0)), 0.01 - 0.04, 1e-14);
-    EXPECT_NEAR(cap.calcSurfaceArea(), 4 * SimTK::Pi * 0.04 * 0.04 + 2 * SimTK::Pi * 0.04 * 0.3, 1e-14);
+    EXPECT_NEAR(cap.calcSurfaceArea(), 4 * SimTK::Pi * 0.04 * 0.04 + 2 * SimTK::Pi * 0.04 * 0.3,
+                1e-14);
 }
 
 TEST(ContactShape, SupportPointIsTheFurthestSurfacePoint) {
@@ -99,8 +106,8 @@ TEST(ContactShape, SupportPointIsTheFurthestSurfacePoint) {
             EXPECT_NEAR(shape.calcSignedDistance(s), 0.0, 1e-10);  // on the surface
             double best = -SimTK::Infinity;
             for (const auto& x : dense) best = std::max(best, ~x.p_B * d);
-            EXPECT_GE(~s * d, best - 1e-12);           // no sample goes further
-            EXPECT_LE(~s * d, best + 3e-3);            // within the sampling spacing
+            EXPECT_GE(~s * d, best - 1e-12);  // no sample goes further
+            EXPECT_LE(~s * d, best + 3e-3);   // within the sampling spacing
         }
     }
 }
@@ -127,7 +134,8 @@ TEST(ContactShape, VolumeMatchesMonteCarloOfInsideTest) {
         const int n = 100000;
         int inside = 0;
         for (int k = 0; k < n; ++k)
-            if (shape.calcSignedDistance(shape.getBoundingCentre() + randomPoint(rng, R)) < 0) ++inside;
+            if (shape.calcSignedDistance(shape.getBoundingCentre() + randomPoint(rng, R)) < 0)
+                ++inside;
         const double frac = static_cast<double>(inside) / n;
         const double v = frac * std::pow(2 * R, 3);
         const double sigma = std::sqrt(frac * (1 - frac) / n) * std::pow(2 * R, 3);
@@ -136,7 +144,8 @@ TEST(ContactShape, VolumeMatchesMonteCarloOfInsideTest) {
 }
 
 TEST(ContactShape, RejectsDegenerateShapes) {
-    EXPECT_THROW(ContactShape::makeEllipsoid(SimTK::Vec3(0.1, 0, 0.1), SimTK::Vec3(0)), std::invalid_argument);
+    EXPECT_THROW(ContactShape::makeEllipsoid(SimTK::Vec3(0.1, 0, 0.1), SimTK::Vec3(0)),
+                 std::invalid_argument);
     EXPECT_THROW(ContactShape::makeRoundCone(SimTK::Vec3(0), 0.1, SimTK::Vec3(0, 0.05, 0), 0.02),
                  std::invalid_argument);
 }

@@ -1,6 +1,5 @@
 // Passive joint torques: work-conjugate to the potential (finite differences), damping, mirror.
 #include <body/PassiveJoints.h>
-
 #include <gtest/gtest.h>
 
 #include <random>
@@ -26,14 +25,16 @@ TEST(PassiveJoints, FifteenJointsWithAnatomicalTypes) {
     EXPECT_EQ(joints.size(), 15u);
     for (const char* pin : {"elbow_r", "elbow_l", "knee_r", "knee_l"})
         EXPECT_EQ(find(joints, pin).type, body::JointType::Pin);
-    for (const char* ball : {"neck", "thoracic", "lumbar", "shoulder_r", "hip_l", "ankle_r", "wrist_l"})
+    for (const char* ball :
+         {"neck", "thoracic", "lumbar", "shoulder_r", "hip_l", "ankle_r", "wrist_l"})
         EXPECT_EQ(find(joints, ball).type, body::JointType::Ball);
     EXPECT_EQ(find(joints, "knee_l").parent, body::Segment::ThighL);
     EXPECT_EQ(find(joints, "ankle_l").parent, body::Segment::ShankL);
 }
 
 TEST(PassiveJoints, LeftRangesMirrorTheRight) {
-    const auto joints = body::makeJointSpecs(body::calcAnthropometry(body::Sex::Female, 1.62, 58.0));
+    const auto joints =
+        body::makeJointSpecs(body::calcAnthropometry(body::Sex::Female, 1.62, 58.0));
     for (const char* base : {"shoulder", "wrist", "hip", "ankle"}) {
         const auto& r = find(joints, std::string(base) + "_r");
         const auto& l = find(joints, std::string(base) + "_l");
@@ -59,14 +60,16 @@ TEST(PassiveJoints, TorqueIsMinusPotentialGradientUnderRotation) {
     for (const auto& j : joints) {
         if (j.type != body::JointType::Ball) continue;
         for (int k = 0; k < 20; ++k) {
-            const SimTK::Rotation R = exponential(SimTK::Vec3(u(rng), u(rng), u(rng)));  // often beyond limits
+            const SimTK::Rotation R =
+                exponential(SimTK::Vec3(u(rng), u(rng), u(rng)));    // often beyond limits
             if (body::calcRotationVector(R).norm() > 2.8) continue;  // away from the pi wrap
             const SimTK::Vec3 tau = body::calcJointTorque(j, R, SimTK::Vec3(0), 1.0);
             for (int i = 0; i < 3; ++i) {
                 SimTK::Vec3 e(0);
                 e[i] = h;
                 const double dU = (body::calcJointPotential(j, exponential(e) * R) -
-                                   body::calcJointPotential(j, exponential(-e) * R)) / (2 * h);
+                                   body::calcJointPotential(j, exponential(-e) * R)) /
+                                  (2 * h);
                 EXPECT_NEAR(tau[i], -dU, 1e-5 * (1 + std::abs(dU))) << j.name;
             }
             ++n;
@@ -90,7 +93,8 @@ TEST(PassiveJoints, LimitStiffensBeyondRange) {
     const auto joints = body::makeJointSpecs(body::calcAnthropometry(body::Sex::Male, 1.741, 73.0));
     const auto& knee = find(joints, "knee_r");
     const double hyper = knee.upper[2] + 0.1;  // 0.1 rad past full extension
-    const SimTK::Vec3 tau = body::calcJointTorque(knee, SimTK::Rotation(hyper, SimTK::ZAxis), SimTK::Vec3(0), 1.0);
+    const SimTK::Vec3 tau =
+        body::calcJointTorque(knee, SimTK::Rotation(hyper, SimTK::ZAxis), SimTK::Vec3(0), 1.0);
     // Within the range only k theta; past it k theta + k_lim (theta - upper).
     EXPECT_NEAR(tau[2], -(knee.stiffness[2] * hyper + knee.limitStiffness * 0.1), 1e-9);
 }

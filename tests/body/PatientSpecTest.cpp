@@ -1,6 +1,5 @@
 // Validation of the patient section: refused with a reason, never clamped.
 #include <body/PatientSpec.h>
-
 #include <gtest/gtest.h>
 
 namespace {

@@ -2,7 +2,6 @@
 // body region.
 #include <body/BodyModel.h>
 #include <body/SupportContact.h>
-
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -13,12 +12,12 @@
 namespace {
 
 struct SettleResult {
-    double weight = 0;          // m g [N]
-    body::SupportLoad load;     // at the end
-    double drift = 0;           // horizontal motion of the pelvis over the last second [m]
-    double yawChange = 0;       // rotation of the pelvis about z over the last second [rad]
-    double speed = 0;           // largest body-origin speed at the end [m/s]
-    double seconds = 0;         // wall-clock time of the 2 s simulation [s]
+    double weight = 0;       // m g [N]
+    body::SupportLoad load;  // at the end
+    double drift = 0;        // horizontal motion of the pelvis over the last second [m]
+    double yawChange = 0;    // rotation of the pelvis about z over the last second [rad]
+    double speed = 0;        // largest body-origin speed at the end [m/s]
+    double seconds = 0;      // wall-clock time of the 2 s simulation [s]
     std::vector<std::string> regionNames;
 };
 
@@ -66,10 +65,11 @@ double share(const SettleResult& r, const std::vector<std::string>& names) {
 }
 
 void print(const char* label, const SettleResult& r) {
-    std::printf("%s: weight %.1f N, support %.1f N (%.3f %%), drift %.2e m, yaw %.2e rad, "
-                "speed %.2e m/s, area %.4f m^2, peak %.1f kPa, wall %.2f s\n",
-                label, r.weight, r.load.force[2], 100 * (r.load.force[2] / r.weight - 1), r.drift,
-                r.yawChange, r.speed, r.load.contactArea, r.load.peakPressure / 1000, r.seconds);
+    std::printf(
+        "%s: weight %.1f N, support %.1f N (%.3f %%), drift %.2e m, yaw %.2e rad, "
+        "speed %.2e m/s, area %.4f m^2, peak %.1f kPa, wall %.2f s\n",
+        label, r.weight, r.load.force[2], 100 * (r.load.force[2] / r.weight - 1), r.drift,
+        r.yawChange, r.speed, r.load.contactArea, r.load.peakPressure / 1000, r.seconds);
     for (std::size_t i = 0; i < r.regionNames.size(); ++i)
         if (r.load.regionForce[i] > 0)
             std::printf("  %-13s %6.1f N  %5.1f %%  peak %6.1f kPa\n", r.regionNames[i].c_str(),
@@ -78,10 +78,10 @@ void print(const char* label, const SettleResult& r) {
     std::printf("  %-13s %6.1f N  %5.1f %%\n", "(no region)", r.load.otherForce,
                 100 * r.load.otherForce / r.weight);
     for (int i = 0; i < body::kSegmentCount; ++i)
-        std::printf("  seg %-13s %6.1f N  %5.1f %%\n", body::getSegmentName(static_cast<body::Segment>(i)),
-                    r.load.segmentForce[i], 100 * r.load.segmentForce[i] / r.weight);
+        std::printf("  seg %-13s %6.1f N  %5.1f %%\n",
+                    body::getSegmentName(static_cast<body::Segment>(i)), r.load.segmentForce[i],
+                    100 * r.load.segmentForce[i] / r.weight);
 }
-
 
 double regionShare(const SettleResult& r, const std::string& name) { return share(r, {name}); }
 
@@ -95,7 +95,8 @@ void checkSupine(const SettleResult& r) {
     EXPECT_LT(r.speed, 5e-3);
     // A symmetric body on its back loads both sides alike (1 % of body weight).
     for (const char* base : {"heel", "elbow", "scapula", "ischium", "knee", "malleolus"})
-        EXPECT_NEAR(regionShare(r, std::string(base) + "_r"), regionShare(r, std::string(base) + "_l"), 0.01)
+        EXPECT_NEAR(regionShare(r, std::string(base) + "_r"),
+                    regionShare(r, std::string(base) + "_l"), 0.01)
             << base;
     // Plausibility against the mass distribution (de Leva): the head and neck are 6.7-6.9 % of
     // body mass and rest on the occiput (the neck hands a little to the thorax); the thorax
@@ -140,4 +141,3 @@ TEST(PlaneSupport, SupineFemaleSettlesAndCarriesItsWeight) {
     print("supine female 1.62 m 58 kg", r);
     checkSupine(r);
 }
-

@@ -176,8 +176,11 @@ TEST(LoadTestScenario, GasMassRangeExpandsAndMustDivide) {
 TEST(LoadTestScenario, ImpossibleGeometryIsRejected) {
     // Steep side shorter than the height: no triangle.
     const InputError e = errorFor(replaceLine(kBase, 4, "  short_side: 100 mm"));
-    EXPECT_EQ(e.getLine(), 4);
-    EXPECT_EQ(e.getKey(), "airbag.short_side");
+    EXPECT_EQ(e.getLine(), 6);
+    EXPECT_EQ(e.getKey(), "airbag.height");
+    EXPECT_NE(std::string(e.what()).find("must be less than short_side (100 mm)"),
+              std::string::npos)
+        << e.what();
     // Apex beyond the base: caught by DoubleWedgeParams::validate(), mapped to long_side.
     const InputError e2 = errorFor(replaceLine(kBase, 3, "  long_side: 120 mm"));
     EXPECT_EQ(e2.getKey(), "airbag.long_side") << e2.what();

@@ -60,6 +60,7 @@ struct LoadStep {
     std::vector<double> volume;         ///< per chamber [m^3]
     int newtonIterations = 0;
     double stabilizationEnergy = 0.0;   ///< [J] held by the stabilisation (0 if not needed)
+    double residual = 0.0;              ///< [N] force residual the step was accepted at
 };
 
 struct LoadCurve {
@@ -72,6 +73,7 @@ struct LoadCurve {
     double r2 = 0.0;                 ///< linearity of that range
     int stage = 0;                   ///< 1, 2 or 3 (rule in docs/seed-load-test.md)
     bool reachedPeak = false;
+    std::string failure;             ///< empty, or why the curve stopped early
 };
 
 struct LoadTestResult {

@@ -26,6 +26,15 @@ struct SolverOptions {
     int maxIterations = 60;            ///< Newton iterations per solve
     double pseudoTransientShift = 1e-3;///< initial shift, as a fraction of mean tangent diagonal
     double maxStep = 0.0;              ///< [m] largest nodal move per iteration (0: no limit)
+    /// Solve Newton systems by conjugate gradients preconditioned with the last factorisation
+    /// (kept in a SolverWorkspace across iterations and solves); refactor only when that
+    /// takes more than maxKrylovIterations.
+    bool reuseFactorization = true;
+    int maxKrylovIterations = 40;
+    double krylovTolerance = 1e-4;     ///< relative residual of the inner linear solve
+    /// [N] If Newton stalls (non-smooth contact: the residual stops falling for 8 iterations)
+    /// below this residual, the state is accepted and SolveSummary::stalled is set. 0: never.
+    double acceptableResidual = 0.0;
     /// Observer of each Newton iteration (iteration, residual [N], step length, shift [N/m]);
     /// for diagnostics, the library itself prints nothing.
     std::function<void(int, double, double, double)> monitor;
@@ -39,6 +48,28 @@ struct SolveSummary {
     double residualNorm = 0.0;         ///< [N] free-dof residual at exit
     double energy = 0.0;               ///< [J] at exit
     int shiftedIterations = 0;         ///< iterations that needed the pseudo-transient shift
+    bool stalled = false;              ///< accepted under acceptableResidual, not tolerance
+    int krylovIterations = 0;          ///< preconditioned CG iterations (reused factorisation)
+};
+
+class MembraneModel;
+
+/// State kept between solves: the last factorisation of the tangent, used to precondition
+/// later Newton systems (a load curve then factors rarely). One per model; not thread safe.
+class SolverWorkspace {
+public:
+    SolverWorkspace();
+    ~SolverWorkspace();
+    SolverWorkspace(SolverWorkspace&&) noexcept;
+    SolverWorkspace& operator=(SolverWorkspace&&) noexcept;
+    /// Forgets the stored factorisation (e.g. after the model's structure changed).
+    void reset();
+    int getNumFactorizations() const;  ///< factorisations made through this workspace
+private:
+    friend SolveSummary solveEquilibrium(const MembraneModel&, Eigen::Matrix3Xd&,
+                                         const SolverOptions&, SolverWorkspace*);
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
 };
 
 /// The membrane, its gas, pressures and contacts as one energy.
@@ -130,7 +161,9 @@ private:
 
 /// Minimises the model's energy over the free dofs, starting from x (updated in place).
 /// @throws NumericalError if x becomes non-finite or an element inverts beyond recovery.
+/// `workspace` (optional) carries a factorisation between calls; without it each call factors
+/// afresh.
 SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
-                              const SolverOptions& options);
+                              const SolverOptions& options, SolverWorkspace* workspace = nullptr);
 
 }  // namespace bags

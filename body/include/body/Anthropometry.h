@@ -67,9 +67,11 @@ struct DeLevaRow {
     double length = 0;        ///< segment length of the reference subject [m]
     double massFraction = 0;  ///< segment mass / body mass [-]
     double comFraction = 0;   ///< CoM distance from the proximal landmark / length [-]
-    double rSagittal = 0;     ///< radius of gyration about the sagittal (antero-posterior) axis / length
-    double rTransverse = 0;   ///< radius of gyration about the transverse (medio-lateral) axis / length
-    double rLongitudinal = 0; ///< radius of gyration about the longitudinal axis / length
+    double rSagittal =
+        0;  ///< radius of gyration about the sagittal (antero-posterior) axis / length
+    double rTransverse =
+        0;  ///< radius of gyration about the transverse (medio-lateral) axis / length
+    double rLongitudinal = 0;   ///< radius of gyration about the longitudinal axis / length
     const char* proximal = "";  ///< proximal landmark (de Leva's abbreviation)
     const char* distal = "";    ///< distal landmark
 };
@@ -83,12 +85,13 @@ struct DeLevaReference {
 /// Extra longitudinal distances of de Leva (1996) Table 4 (its alternative segment definitions)
 /// that locate the cervicale, the shoulder joint centres and the fingertip.
 struct DeLevaExtraLengths {
-    double vertexToCervicale = 0;     ///< head length VERT-CERV [m]
-    double cervicaleToMidHip = 0;     ///< trunk length CERV-MIDH [m]
-    double midShoulderToMidHip = 0;   ///< trunk length MIDS-MIDH [m]
-    double wristToFingertip = 0;      ///< hand length WJC-DA3 [m]
+    double vertexToCervicale = 0;         ///< head length VERT-CERV [m]
+    double cervicaleToMidHip = 0;         ///< trunk length CERV-MIDH [m]
+    double midShoulderToMidHip = 0;       ///< trunk length MIDS-MIDH [m]
+    double wristToFingertip = 0;          ///< hand length WJC-DA3 [m]
     double handFingertipComFraction = 0;  ///< hand CoM from WJC / WJC-DA3 length [-]
-    std::array<double, 3> handFingertipGyration{};  ///< hand radii of gyration / WJC-DA3 (sag, trans, long)
+    std::array<double, 3>
+        handFingertipGyration{};  ///< hand radii of gyration / WJC-DA3 (sag, trans, long)
 };
 
 /// The de Leva (1996) Table 4 row for a segment type and sex.
@@ -119,12 +122,12 @@ enum class ShapeKind { Ellipsoid, RoundCone };
 /// Size and placement of a segment's contact shape, in the segment's body frame.
 struct ShapeSize {
     ShapeKind kind = ShapeKind::Ellipsoid;
-    SimTK::Vec3 centre{0};      ///< ellipsoid centre [m]
-    SimTK::Vec3 semiAxes{0};    ///< ellipsoid semi-axes along body X, Y, Z [m]
-    SimTK::Vec3 pointA{0};      ///< round cone: centre of the first sphere [m]
-    SimTK::Vec3 pointB{0};      ///< round cone: centre of the second sphere [m]
-    double radiusA = 0;         ///< round cone: radius at pointA [m]
-    double radiusB = 0;         ///< round cone: radius at pointB [m]
+    SimTK::Vec3 centre{0};    ///< ellipsoid centre [m]
+    SimTK::Vec3 semiAxes{0};  ///< ellipsoid semi-axes along body X, Y, Z [m]
+    SimTK::Vec3 pointA{0};    ///< round cone: centre of the first sphere [m]
+    SimTK::Vec3 pointB{0};    ///< round cone: centre of the second sphere [m]
+    double radiusA = 0;       ///< round cone: radius at pointA [m]
+    double radiusB = 0;       ///< round cone: radius at pointB [m]
 };
 
 /// Inertial parameters and shape of one segment, scaled to the patient.
@@ -134,8 +137,9 @@ struct SegmentParameters {
     double length = 0;                      ///< de Leva segment length, scaled [m]
     SimTK::Vec3 p_BC{0};                    ///< centre of mass in the body frame [m]
     SimTK::Vec3 inertiaC{0};  ///< principal moments about the CoM along body X, Y, Z [kg m^2]
-    SimTK::Vec3 p_WO{0};      ///< body-frame origin (joint centre) in the whole-body reference frame [m]
-    ShapeSize shape;          ///< contact shape in the body frame
+    SimTK::Vec3 p_WO{
+        0};           ///< body-frame origin (joint centre) in the whole-body reference frame [m]
+    ShapeSize shape;  ///< contact shape in the body frame
 };
 
 /// Frame-independent measures of the body build.
@@ -158,13 +162,13 @@ struct BodyBuild {
 
 /// The scaled anthropometry of one patient.
 struct Anthropometry {
-    Sex sex = Sex::Male;  ///< table used
-    double height = 0;    ///< stature [m]
-    double mass = 0;      ///< body mass [kg]
-    double bmi = 0;       ///< body-mass index [kg/m^2]
-    double lengthScale = 0;  ///< height / reference stature [-]
+    Sex sex = Sex::Male;                                    ///< table used
+    double height = 0;                                      ///< stature [m]
+    double mass = 0;                                        ///< body mass [kg]
+    double bmi = 0;                                         ///< body-mass index [kg/m^2]
+    double lengthScale = 0;                                 ///< height / reference stature [-]
     std::array<SegmentParameters, kSegmentCount> segments;  ///< indexed by Segment
-    BodyBuild build;      ///< breadths, depths and joint separations
+    BodyBuild build;  ///< breadths, depths and joint separations
 
     /// The parameters of a segment.
     const SegmentParameters& get(Segment s) const { return segments[static_cast<int>(s)]; }

@@ -9,32 +9,32 @@
 ///
 /// Ground: z up, the bed surface z = 0, head towards +x (see Posture.h).
 
-#include "body/Anthropometry.h"
-#include "body/ContactShape.h"
-#include "body/PassiveJoints.h"
-#include "body/PatientSpec.h"
-#include "body/Regions.h"
-
 #include <Simbody.h>
 
 #include <array>
 #include <memory>
 #include <vector>
 
+#include "body/Anthropometry.h"
+#include "body/ContactShape.h"
+#include "body/PassiveJoints.h"
+#include "body/PatientSpec.h"
+#include "body/Regions.h"
+
 namespace body {
 
 /// How the model is built.
 struct BodyModelOptions {
-    bool passiveJoints = true;      ///< add joint stiffness, damping and range limits
-    double jointDampingScale = 1.0; ///< multiplies the joint damping (0: undamped joints) [-]
-    double gravity = 9.80665;       ///< gravitational acceleration along -z [m/s^2]
+    bool passiveJoints = true;       ///< add joint stiffness, damping and range limits
+    double jointDampingScale = 1.0;  ///< multiplies the joint damping (0: undamped joints) [-]
+    double gravity = 9.80665;        ///< gravitational acceleration along -z [m/s^2]
     /// @throws std::invalid_argument naming the option if a value is negative or not finite.
     void validate() const;
 };
 
 /// The patient model.
 class BodyModel {
-public:
+  public:
     /// Builds the model. @throws std::invalid_argument if spec or options are invalid.
     explicit BodyModel(const PatientSpec& spec, const BodyModelOptions& options = {});
     ~BodyModel();
@@ -82,7 +82,7 @@ public:
     /// Lowest z of all contact shapes [m]. @pre state realized to Position.
     double calcLowestPointHeight(const SimTK::State& state) const;
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;
 };

@@ -17,7 +17,7 @@ namespace body {
 
 /// Result of a surface query.
 struct SurfaceQuery {
-    double distance = 0;        ///< signed distance to the surface, negative inside [m]
+    double distance = 0;          ///< signed distance to the surface, negative inside [m]
     SimTK::Vec3 closestPoint{0};  ///< closest surface point, body frame [m]
     SimTK::Vec3 normal{0};        ///< outward unit normal at the closest point, body frame
 };
@@ -31,7 +31,7 @@ struct SurfaceSample {
 
 /// An ellipsoid or a round cone fixed on a body.
 class ContactShape {
-public:
+  public:
     /// Kind of the shape.
     enum class Kind { Ellipsoid, RoundCone };
 
@@ -53,8 +53,8 @@ public:
     /// Round cone sphere centres (body frame) [m] and radii [m].
     const SimTK::Vec3& getPointA() const { return m_pA; }
     const SimTK::Vec3& getPointB() const { return m_pB; }  ///< second sphere centre [m]
-    double getRadiusA() const { return m_rA; }               ///< first radius [m]
-    double getRadiusB() const { return m_rB; }               ///< second radius [m]
+    double getRadiusA() const { return m_rA; }             ///< first radius [m]
+    double getRadiusB() const { return m_rB; }             ///< second radius [m]
 
     /// Centre [m] and radius [m] of a sphere that encloses the shape (body frame).
     const SimTK::Vec3& getBoundingCentre() const { return m_boundCentre; }
@@ -63,18 +63,20 @@ public:
     /// Signed distance, closest point and normal for a query point p_B (body frame).
     SurfaceQuery calcSurfaceQuery(const SimTK::Vec3& p_B) const;
     /// Signed distance only (same value as calcSurfaceQuery().distance) [m].
-    double calcSignedDistance(const SimTK::Vec3& p_B) const { return calcSurfaceQuery(p_B).distance; }
+    double calcSignedDistance(const SimTK::Vec3& p_B) const {
+        return calcSurfaceQuery(p_B).distance;
+    }
     /// Surface point furthest along the unit direction d_B (body frame) [m].
     SimTK::Vec3 calcSupportPoint(const SimTK::Vec3& d_B) const;
     /// Surface area [m^2] (ellipsoid: Knud Thomsen's approximation, within about 1 %).
     double calcSurfaceArea() const;
     /// Enclosed volume [m^3].
     double calcVolume() const;
-    /// Covers the surface with patches of about spacing x spacing; areas sum to the surface
-    /// area. @pre spacing > 0.
+    /// Covers the surface with patches of about spacing x spacing (point, outward normal,
+    /// area); the areas sum to the surface area within about 1.5 % (tested). @pre spacing > 0.
     std::vector<SurfaceSample> calcSurfaceSamples(double spacing) const;
 
-private:
+  private:
     ContactShape() = default;
     void updateBounds();
 

@@ -8,17 +8,18 @@
 /// so theta_z is flexion/extension, theta_x ab/adduction (lateral bending for the spine,
 /// inversion/eversion at the ankle, ulnar/radial deviation at the wrist) and theta_y axial
 /// rotation. The elastic moment derives from the potential
-///   U = sum_i [ k_i theta_i^2 / 2 + k_lim (theta_i - upper_i)_+^2 / 2 + k_lim (lower_i - theta_i)_+^2 / 2 ],
+///   U = sum_i [ k_i theta_i^2 / 2 + k_lim (theta_i - upper_i)_+^2 / 2 + k_lim (lower_i -
+///   theta_i)_+^2 / 2 ],
 /// and is applied as the exact work-conjugate torque tau_F = -J_l(theta)^-T dU/dtheta, so an
 /// undamped patient conserves energy. Damping adds -c_i w_i with w the relative angular velocity
 /// in F.
-
-#include "body/Anthropometry.h"
 
 #include <Simbody.h>
 
 #include <string>
 #include <vector>
+
+#include "body/Anthropometry.h"
 
 namespace body {
 
@@ -27,10 +28,10 @@ enum class JointType { Ball, Pin };
 
 /// One passive joint.
 struct JointSpec {
-    std::string name;                   ///< e.g. "hip_r"
+    std::string name;                      ///< e.g. "hip_r"
     Segment parent = Segment::LowerTrunk;  ///< segment carrying F
     Segment child = Segment::LowerTrunk;   ///< segment carrying M, whose origin is the joint centre
-    JointType type = JointType::Ball;   ///< mobilizer
+    JointType type = JointType::Ball;      ///< mobilizer
     SimTK::Vec3 stiffness{0};   ///< linear stiffness within the range, about F's X, Y, Z [N m/rad]
     SimTK::Vec3 damping{0};     ///< viscous damping about X, Y, Z [N m s/rad]
     SimTK::Vec3 lower{0};       ///< lower range limit of theta [rad]
@@ -53,12 +54,12 @@ SimTK::Vec3 calcJointTorque(const JointSpec& joint, const SimTK::Rotation& R_FM,
 
 /// The torques of all passive joints as a Simbody force element.
 class PassiveJointForce : public SimTK::Force::Custom::Implementation {
-public:
+  public:
     /// A joint and the mobilized bodies it acts between.
     struct Entry {
-        JointSpec spec;                     ///< the joint
-        SimTK::MobilizedBodyIndex parent;   ///< parent body
-        SimTK::MobilizedBodyIndex child;    ///< child body
+        JointSpec spec;                    ///< the joint
+        SimTK::MobilizedBodyIndex parent;  ///< parent body
+        SimTK::MobilizedBodyIndex child;   ///< child body
     };
     /// @param dampingScale multiplies every damping coefficient (0 for an energy check).
     PassiveJointForce(const SimTK::SimbodyMatterSubsystem& matter, std::vector<Entry> entries,
@@ -73,7 +74,7 @@ public:
     /// The joints acted on.
     const std::vector<Entry>& getEntries() const { return m_entries; }
 
-private:
+  private:
     const SimTK::SimbodyMatterSubsystem& m_matter;
     std::vector<Entry> m_entries;
     double m_dampingScale;

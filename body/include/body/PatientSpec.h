@@ -2,22 +2,23 @@
 /// @file The `patient:` section of a scenario as a plain struct. The YAML reading lives in io;
 /// this is what it fills in, and validate() is where the patient's own rules are checked.
 
-#include "body/Anthropometry.h"
-#include "body/Posture.h"
-
 #include <array>
 #include <string>
+
+#include "body/Anthropometry.h"
+#include "body/Posture.h"
 
 namespace body {
 
 /// Who lies on the bed and how.
 struct PatientSpec {
-    Sex sex = Sex::Male;                 ///< selects the de Leva table
-    double height = 1.75;                ///< stature [m], 1.4 to 2.1
-    double mass = 75.0;                  ///< body mass [kg]; the BMI must be 14 to 50
-    Posture posture = Posture::Supine;   ///< lying posture
+    Sex sex = Sex::Male;                         ///< selects the de Leva table
+    double height = 1.75;                        ///< stature [m], 1.4 to 2.1
+    double mass = 75.0;                          ///< body mass [kg]; the BMI must be 14 to 50
+    Posture posture = Posture::Supine;           ///< lying posture
     std::array<double, 2> position{{0.0, 0.0}};  ///< (x, y) on the bed of the mid-hip point [m]
-    double headOfBedAngle = 30.0 * 3.14159265358979323846 / 180.0;  ///< for HeadOfBedRaised [rad], 0 to 80 deg
+    double headOfBedAngle =
+        30.0 * 3.14159265358979323846 / 180.0;  ///< for HeadOfBedRaised [rad], 0 to 80 deg
 
     /// Body-mass index mass / height^2 [kg/m^2].
     double getBmi() const { return mass / (height * height); }

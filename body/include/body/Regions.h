@@ -8,12 +8,12 @@
 /// lying inside it. Regions are tested in order, the first match wins; a point in none has
 /// region -1 and is reported under its segment.
 
-#include "body/Anthropometry.h"
-
 #include <SimTKcommon.h>
 
 #include <string>
 #include <vector>
+
+#include "body/Anthropometry.h"
 
 namespace body {
 

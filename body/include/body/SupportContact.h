@@ -8,12 +8,12 @@
 ///   p = max(0, k delta - c v_z), normal force p * A * max(0, -n_z) (the patch's area projected
 ///   on the plane), friction -mu F_n v_t / sqrt(|v_t|^2 + v_s^2).
 
-#include "body/BodyModel.h"
-
 #include <Simbody.h>
 
 #include <array>
 #include <vector>
+
+#include "body/BodyModel.h"
 
 namespace body {
 
@@ -31,18 +31,18 @@ struct PlaneSupportOptions {
 
 /// How the support carries the body at one state.
 struct SupportLoad {
-    SimTK::Vec3 force{0};      ///< total force of the support on the body, Ground [N]
-    double contactArea = 0;    ///< projected area of the patches in contact [m^2]
-    double peakPressure = 0;   ///< highest patch pressure [Pa]
+    SimTK::Vec3 force{0};             ///< total force of the support on the body, Ground [N]
+    double contactArea = 0;           ///< projected area of the patches in contact [m^2]
+    double peakPressure = 0;          ///< highest patch pressure [Pa]
     std::vector<double> regionForce;  ///< normal force per region (BodyModel::getRegions()) [N]
-    std::vector<double> regionPeakPressure;  ///< highest pressure per region [Pa]
-    double otherForce = 0;     ///< normal force on patches in no region [N]
+    std::vector<double> regionPeakPressure;            ///< highest pressure per region [Pa]
+    double otherForce = 0;                             ///< normal force on patches in no region [N]
     std::array<double, kSegmentCount> segmentForce{};  ///< normal force per segment [N]
 };
 
 /// The flat support as a Simbody force element.
 class PlaneSupport : public SimTK::Force::Custom::Implementation {
-public:
+  public:
     /// Samples the model's shapes. @throws std::invalid_argument if options are invalid.
     PlaneSupport(const BodyModel& model, const PlaneSupportOptions& options);
 
@@ -57,7 +57,7 @@ public:
     /// Number of surface patches.
     int getPatchCount() const;
 
-private:
+  private:
     struct Patch {
         SimTK::Vec3 p_B, n_B;
         double area;

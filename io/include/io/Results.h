@@ -13,8 +13,6 @@
 #include <bags/LoadTest.h>
 
 #include <Eigen/Core>
-#include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
