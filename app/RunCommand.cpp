@@ -239,13 +239,19 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
                       c.stiffness * 1e-3, c.r2, c.stage);
         out << line;
     }
+    for (const bags::LoadCurve& c : r.curves)
+        if (!c.failure.empty())
+            out << "  " << io::formatQuantity(c.gasMass, "g", 2) << " stopped early: " << c.failure
+                << "\n";
 
     const std::vector<double> seed = bags::getSeedStiffnessPolynomial();
     out << "\nk(m) [N/mm], m [g]:\n";
     out << "  seed:  k = " << formatPolynomial(seed) << "\n";
     if (r.kFit.empty()) {
-        out << "  bagsim: no fit (it needs more gas masses than the polynomial order "
-            << o.polynomialOrder << ")\n";
+        int finite = 0;
+        for (const bags::LoadCurve& c : r.curves) finite += std::isfinite(c.stiffness) ? 1 : 0;
+        out << "  bagsim: no fit (" << finite << " curve(s) have a stiffness; a fit of order "
+            << o.polynomialOrder << " needs " << o.polynomialOrder + 1 << ")\n";
         return;
     }
     out << "  bagsim: k = " << formatPolynomial(r.kFit) << "\n";
@@ -268,9 +274,9 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
         std::snprintf(line, sizeof line, "  %5.2f  %7.3f  %5.3f  %+8.3f\n", m, kb, ks, kb - ks);
         out << line;
     }
-    out << "  difference bagsim - seed over 1.0-3.5 g: max " << fmt("%+.3f", maxDiff)
-        << " N/mm (at " << fmt("%.2f", maxAt) << " g), RMS " << fmt("%.3f", std::sqrt(sumSq / n))
-        << " N/mm\n";
+    out << "  difference bagsim - seed over 1.0-3.5 g: max |d| = "
+        << fmt("%.3f", std::fabs(maxDiff)) << " N/mm (" << fmt("%+.3f", maxDiff) << " at "
+        << fmt("%.2f", maxAt) << " g), RMS " << fmt("%.3f", std::sqrt(sumSq / n)) << " N/mm\n";
 }
 
 }  // namespace

@@ -4,8 +4,8 @@
 
 #include <cerrno>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -89,7 +89,7 @@ namespace {
 struct CurveData {
     h5::Handle group;
     h5::GrowingDataset step, loading, time, displacement, force, iterations, pressure, volume,
-        stabilization;
+        stabilization, residual;
     size_t chambers = 0;  ///< columns of pressure and volume
 };
 
@@ -244,6 +244,7 @@ CurveData& LoadTestWriter::Impl::getCurve(const bags::LoadStep& s) {
         c.iterations = h5::GrowingDataset(g, "newton_iterations", H5T_NATIVE_INT, {}, 256, "");
         c.stabilization =
             h5::GrowingDataset(g, "stabilization_energy", H5T_NATIVE_DOUBLE, {}, 256, "J");
+        c.residual = h5::GrowingDataset(g, "residual", H5T_NATIVE_DOUBLE, {}, 256, "N");
         c.pressure =
             h5::GrowingDataset(g, "gauge_pressure", H5T_NATIVE_DOUBLE, {chambers}, 256, "Pa");
         c.volume = h5::GrowingDataset(g, "volume", H5T_NATIVE_DOUBLE, {chambers}, 256, "m^3");
@@ -413,6 +414,7 @@ void LoadTestWriter::addStep(const bags::LoadStep& s, const bags::Mesh& mesh,
     c.force.append(&s.force);
     c.iterations.append(&s.newtonIterations);
     c.stabilization.append(&s.stabilizationEnergy);
+    c.residual.append(&s.residual);
     std::vector<double> p = s.gaugePressure, v = s.volume;
     p.resize(c.chambers, 0.0);
     v.resize(c.chambers, 0.0);
@@ -471,6 +473,7 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
         h5::setAttribute(g.get(), "r2", c.r2);
         h5::setAttribute(g.get(), "stage", c.stage);
         h5::setAttribute(g.get(), "reached_peak", c.reachedPeak ? 1 : 0);
+        h5::setAttribute(g.get(), "failure", c.failure);
     }
     h5::Handle sum = h5::createGroup(d.file.get(), "summary");
     const hsize_t hn = n;

@@ -71,6 +71,7 @@ bags::LoadStep makeStep(int curve, int step, bool loading, double disp, double f
     s.volume = {1e-3};
     s.newtonIterations = 3 + step;
     s.stabilizationEnergy = 1e-6 * step;
+    s.residual = 1e-8 * step;
     return s;
 }
 
@@ -106,7 +107,8 @@ FakeRun makeRun() {
         curve.stiffness = 6000.0 - 1500.0 * c;
         curve.r2 = 0.99 - 0.1 * c;
         curve.stage = 1 + c;
-        curve.reachedPeak = true;
+        curve.reachedPeak = c == 0;
+        if (c == 1) curve.failure = "no convergence at 9 mm";
         for (const bags::LoadStep& s : r.steps)
             if (s.curve == c) curve.steps.push_back(s);
         r.result.curves.push_back(curve);
@@ -287,10 +289,12 @@ TEST(ResultsWriter, WritesHdf5LayoutThatReadsBack) {
     EXPECT_EQ(readAll<double>(f, "/curves/1/gauge_pressure", H5T_NATIVE_DOUBLE)[3], 5300.0);
     EXPECT_EQ(readAll<int>(f, "/curves/0/newton_iterations", H5T_NATIVE_INT)[4], 7);
     EXPECT_EQ(readAll<double>(f, "/curves/0/stabilization_energy", H5T_NATIVE_DOUBLE)[4], 4e-6);
+    EXPECT_EQ(readAll<double>(f, "/curves/0/residual", H5T_NATIVE_DOUBLE)[2], 2e-8);
     const hid_t c1 = H5Gopen2(f, "/curves/1", H5P_DEFAULT);
     EXPECT_EQ(readDoubleAttr(c1, "gas_mass"), 2.0e-3);
     EXPECT_EQ(readDoubleAttr(c1, "stiffness"), 4500.0);
     EXPECT_EQ(readDoubleAttr(c1, "inflated_gauge_pressure"), 4000.0);
+    EXPECT_EQ(readStringAttr(c1, "failure"), "no convergence at 9 mm");
     H5Gclose(c1);
     const hid_t forceDs = H5Dopen2(f, "/curves/0/force", H5P_DEFAULT);
     EXPECT_EQ(readStringAttr(forceDs, "unit"), "N");
@@ -317,6 +321,7 @@ TEST(ResultsWriter, WritesHdf5LayoutThatReadsBack) {
     EXPECT_EQ(readAll<double>(f, "/summary/stiffness", H5T_NATIVE_DOUBLE),
               (std::vector<double>{6000.0, 4500.0}));
     EXPECT_EQ(readAll<int>(f, "/summary/stage", H5T_NATIVE_INT), (std::vector<int>{1, 2}));
+    EXPECT_EQ(readAll<int>(f, "/summary/reached_peak", H5T_NATIVE_INT), (std::vector<int>{1, 0}));
     EXPECT_EQ(readAll<double>(f, "/summary/k_fit", H5T_NATIVE_DOUBLE),
               (std::vector<double>{1.5, 2.0}));
     EXPECT_EQ(readAll<double>(f, "/summary/k_seed", H5T_NATIVE_DOUBLE).size(), 6u);
