@@ -40,11 +40,6 @@ void placeBlock(Rig& rig, double zBottom) {
     rig.block->setPose(X_GS);
 }
 
-double calcTotalVolume(const MembraneModel& m, const Eigen::Matrix3Xd& x) {
-    double V = 0.0;
-    for (int g = 0; g < m.getNumGases(); ++g) V += m.calcGasVolume(g, x, nullptr);
-    return V;
-}
 
 // Solves with step cutting on a scalar control parameter: apply(s) sets the loads for s in
 // [s0, s1]; on failure the increment is halved. Returns the number of Newton iterations.

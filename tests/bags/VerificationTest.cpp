@@ -97,7 +97,8 @@ TEST(Verification, InflatedSquareAirbagCentreDeflection) {
     // Bletzinger 2009, with wrinkling). Tolerance 2 % (the issue's). St. Venant-Kirchhoff
     // membrane under the tension-field law (residual 1e-3), full bag (two sheets), symmetry
     // planes used only to remove rigid modes. Measured: 0.2150 m at 24 divisions (-0.8 %).
-    // Without the wrinkling law the compressed corners stiffen the bag: 0.183 m (-15 %).
+    // Without the wrinkling law the compressed corners stiffen the bag: 0.1827 m (-15.7 %),
+    // measured with 50 pressure steps and a 10 mm trust limit (docs/verification.md).
     const double edge = 0.8485, t = 0.6e-3;
     Mesh mesh = makeSquareCushion(edge, 24, 1e-3);
     const Vec3 c = mesh.X.rowwise().mean();

@@ -97,6 +97,10 @@ public:
         double pressurePenalty = 1e7;  ///< [Pa/m]
         double thickness = 1e-3;       ///< [m] contact offset between two sheets
         double candidateMargin = 2e-3; ///< [m] extra search distance kept in the candidate list
+        /// beta * thickness [-] of the soft minimum over the facets a node sees on one side:
+        /// the energy is C2 where the nearest facet changes, smoothed over distance
+        /// differences of ~ thickness / softMinSharpness (docs/contact.md).
+        double softMinSharpness = 20.0;
         void validate() const;         ///< throws std::invalid_argument naming the option
     };
     SelfContact(const Mesh& mesh, const Options& options);
