@@ -233,6 +233,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         curve.inflatedVolume = rig.model->calcGasVolume(0, rig.x, nullptr);
         curve.inflatedGaugePressure = rig.model->getGas(0).calcGaugePressure(curve.inflatedVolume);
         if (self) self->updateCandidates(rig.x);
+        const Eigen::Matrix3Xd xUnloaded = rig.x;
 
         auto record = [&](double disp, bool loading, const SolveSummary& sum, double stabEnergy) {
             LoadStep st;
@@ -322,9 +323,18 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             if (sum.iterations < 6) ds = std::min(2.0 * step, o.displacementStep);
         }
         if (disp > 0.0) {
-            // Lift the block clear so the next gas mass starts from a free bag.
-            solveRamp(rig, o, disp, 0.0, [&](double d) { placeBlock(rig, top - d); },
-                      "lifting the block after a failed step");
+            // Lift the block clear so the next gas mass starts from a free bag; if even that
+            // cannot be solved, go back to this mass's unloaded equilibrium (the contacts are
+            // frictionless or their history is reset by the return).
+            try {
+                solveRamp(rig, o, disp, 0.0, [&](double d) { placeBlock(rig, top - d); },
+                          "lifting the block after a failed step");
+            } catch (const NumericalError&) {
+                placeBlock(rig, top + 0.05);
+                rig.x = xUnloaded;
+                rig.model->commitStep(rig.x);
+                rig.workspace.reset();
+            }
         }
         // Stiffness over the force range, loading branch.
         std::vector<double> d, f;
