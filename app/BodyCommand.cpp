@@ -2,6 +2,9 @@
 #include <body/Anthropometry.h>
 #include <body/BodyModel.h>
 #include <body/PatientSpec.h>
+#include <io/InputError.h>
+#include <io/PatientScenario.h>
+#include <io/Scenario.h>
 
 #include <cstdio>
 #include <cstring>
@@ -16,6 +19,7 @@ namespace {
 
 const char* kBodyUsage =
     "usage: bagsim body --sex female|male --height H --mass M [--format table|csv]\n"
+    "       bagsim body --scenario FILE.yaml [--format table|csv]\n"
     "\n"
     "Prints the patient model's segment table: de Leva (1996) segment masses, centres of mass\n"
     "and principal moments of inertia scaled to the given sex, height and mass, and the size of\n"
@@ -25,6 +29,8 @@ const char* kBodyUsage =
     "  --sex S        female or male (selects the de Leva table)\n"
     "  --height H     stature in metres, 1.4 to 2.1\n"
     "  --mass M       body mass in kilograms; BMI = M / H^2 must be 14 to 50\n"
+    "  --scenario F   take the patient from the scenario's patient section (units as\n"
+    "                 written there, e.g. height: 1.62 m; docs/scenario-reference.md)\n"
     "  --format F     table (default) or csv\n"
     "  --help         this text\n"
     "\n"
@@ -122,7 +128,7 @@ void printCsv(const body::BodyModel& model) {
 }  // namespace
 
 int runBodyCommand(int argc, char** argv) {
-    std::string sex, height, mass, format = "table";
+    std::string sex, height, mass, scenario, format = "table";
     for (int i = 0; i < argc; ++i) {
         std::string arg = argv[i];
         if (arg == "--help" || arg == "-h") {
@@ -134,12 +140,13 @@ int runBodyCommand(int argc, char** argv) {
         if (arg.rfind("--", 0) == 0 && eq != std::string::npos) {
             value = arg.substr(eq + 1);
             arg = arg.substr(0, eq);
-        } else if (arg == "--sex" || arg == "--height" || arg == "--mass" || arg == "--format") {
+        } else if (arg == "--sex" || arg == "--height" || arg == "--mass" || arg == "--format" ||
+                   arg == "--scenario") {
             if (i + 1 >= argc) return fail(arg + " needs a value (see bagsim body --help)");
             value = argv[++i];
         } else {
             return fail("unknown argument '" + arg +
-                        "'; valid: --sex, --height, --mass, --format, --help");
+                        "'; valid: --sex, --height, --mass, --scenario, --format, --help");
         }
         if (arg == "--sex")
             sex = value;
@@ -149,11 +156,31 @@ int runBodyCommand(int argc, char** argv) {
             mass = value;
         else if (arg == "--format")
             format = value;
+        else if (arg == "--scenario")
+            scenario = value;
         else
             return fail("unknown option '" + arg +
-                        "'; valid: --sex, --height, --mass, --format, --help");
+                        "'; valid: --sex, --height, --mass, --scenario, --format, --help");
     }
-    if (sex.empty()) return fail("--sex is required: female or male");
+    if (format != "table" && format != "csv")
+        return fail("--format: '" + format + "' is not valid; use table or csv");
+    if (!scenario.empty()) {
+        if (!sex.empty() || !height.empty() || !mass.empty())
+            return fail("--scenario gives the patient; leave out --sex, --height and --mass");
+        try {
+            const io::ScenarioFile file = io::ScenarioFile::load(scenario);
+            const body::BodyModel model(io::readScenarioPatient(file));
+            if (format == "csv")
+                printCsv(model);
+            else
+                printTable(model);
+        } catch (const io::InputError& e) {
+            std::cerr << "bagsim: error: " << e.what() << "\n";
+            return 2;
+        }
+        return 0;
+    }
+    if (sex.empty()) return fail("--sex is required: female or male (or give --scenario FILE)");
     if (height.empty()) return fail("--height is required: stature in metres, 1.4 to 2.1");
     if (mass.empty()) return fail("--mass is required: body mass in kilograms (BMI 14 to 50)");
     if (format != "table" && format != "csv")

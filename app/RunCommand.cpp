@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "Commands.h"
+#include "PatientRun.h"
 
 namespace bagsim::app {
 
@@ -302,7 +303,8 @@ int runRunCommand(int argc, char** argv) {
     try {
         file = io::ScenarioFile::load(args.scenario);
         for (const std::string& s : args.sets) file.applyOverride(s);
-        io::readScenarioKind(file);
+        if (io::readScenarioKind(file) == "patient-on-support")
+            return runPatientOnSupport(file, args.out, args.force, args.quiet);
         sc = io::readLoadTestScenario(file);
         outPath = args.out.empty() ? std::filesystem::path("out") / sc.name
                                    : std::filesystem::path(args.out);

@@ -21,7 +21,7 @@
 // Energy 0.5 k (h - d_w)^2 for d_w < h with k = pressurePenalty * A_v / 2: every pair of sheets
 // is seen twice (nodes of A against triangles of B and the reverse), so two parallel sheets at
 // gap g < h press on each other with pressurePenalty * (h - g), the same law as rigid contact.
-// Facets with beta (d_i - min d) > 40 (weight < 4e-18) are dropped from the sums.
+// Facets with beta (d_i - min d) > 30 (weight < 1e-13) are dropped from the sums.
 
 #include <bags/Contact.h>
 
@@ -320,7 +320,7 @@ struct SelfContact::Impl {
         }
         return dw;
     }
-    static constexpr double kWeightCut = 40.0;  // drop facets with weight < exp(-40)
+    static constexpr double kWeightCut = 30.0;  // drop facets with weight < exp(-30)
 };
 
 SelfContact::SelfContact(const Mesh& mesh, const Options& options)
@@ -468,11 +468,21 @@ void SelfContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) c
                                     " nodes, the mesh " + std::to_string(m.numNodes));
     const double h = m.opt.thickness, beta = m.opt.softMinSharpness / h;
     const bool derivs = acc.wantGradient || acc.wantHessian;
-    // Scratch sized once per call (no allocation per node).
+    // Scratch sized once per call to the largest group (no allocation per node): the group's
+    // facets, its distinct nodes, their gradients as columns and the group's dense Hessian.
+    const int maxGroup = static_cast<int>(m.maxGroup);
+    const int maxLocal = 1 + 3 * maxGroup;
     std::vector<Term> terms(m.maxGroup);
-    std::vector<Vec12, Eigen::aligned_allocator<Vec12>> g(derivs ? m.maxGroup : 0);
-    std::vector<std::array<int, 4>> ids(derivs ? m.maxGroup : 0);
-    std::vector<double> cw(derivs ? m.maxGroup : 0);
+    std::vector<int> local(derivs ? maxLocal : 0);
+    std::vector<double> cw(derivs ? maxGroup : 0);
+    Eigen::MatrixXd Hloc;
+    Eigen::VectorXd u, v;
+    if (acc.wantHessian) {
+        Hloc.resize(3 * maxLocal, 3 * maxLocal);
+        u.resize(3 * maxLocal);
+        v.resize(3 * maxLocal);
+    }
+    Vec12 gd;
     Mat12 Hd;
     m.forEachGroup([&](size_t i, size_t j) {
         int n = 0;
@@ -483,45 +493,61 @@ void SelfContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) c
         const double gap = h - dw;
         acc.energy += 0.5 * k * gap * gap;
         if (!derivs) return;
-        // d_w = sum w_i d_i: grad = sum c_i g_i with c_i = w_i (1 - beta (d_i - d_w));
+        // d_w = sum w_i d_i: grad = G = sum c_i g_i with c_i = w_i (1 - beta (d_i - d_w));
         // Hessian = sum c_i H_i - beta [sum a_i g_i g_i^T - G gbar^T - gbar G^T] with
-        // a_i = w_i (2 - beta (d_i - d_w)), G = grad d_w, gbar = sum w_i g_i.
-        // E = k (h - d_w)^2 / 2: dE = -k gap G; d2E = k G G^T - k gap d2(d_w).
+        // a_i = w_i (2 - beta (d_i - d_w)), gbar = sum w_i g_i.
+        // E = k (h - d_w)^2 / 2: dE = -k gap G; d2E = k G G^T - k gap d2(d_w), i.e.
+        // d2E = sum_i (-k gap c_i) H_i + sum_ij M_ij g_i g_j^T with
+        // M_ij = k c_i c_j + k gap beta (delta_ij a_i - c_i w_j - w_i c_j), assembled as
+        // k u u^T - k gap beta (u v^T + v u^T) + sum_i k gap beta a_i g_i g_i^T with
+        // u = G = sum c_i g_i, v = gbar = sum w_i g_i over the group's distinct nodes.
         const Vec3 p = x.col(node);
+        int numLocal = 1;
+        local[0] = node;
+        for (int a = 0; a < n; ++a) {  // the group's distinct nodes
+            const int tri = m.cands[terms[a].cand].tri;
+            for (int q = 0; q < 3; ++q) {
+                int l = 0;
+                while (l < numLocal && local[l] != m.tris(q, tri)) ++l;
+                if (l == numLocal) local[numLocal++] = m.tris(q, tri);
+            }
+        }
+        if (acc.wantHessian) {
+            Hloc.topLeftCorner(3 * numLocal, 3 * numLocal).setZero();
+            u.head(3 * numLocal).setZero();
+            v.head(3 * numLocal).setZero();
+        }
         for (int a = 0; a < n; ++a) {
             const Candidate& c = m.cands[terms[a].cand];
-            ids[a] = {node, m.tris(0, c.tri), m.tris(1, c.tri), m.tris(2, c.tri)};
-            facetDistance(p, x.col(ids[a][1]), x.col(ids[a][2]), x.col(ids[a][3]), c.side,
-                          &g[a], &Hd);
+            int ids[4] = {node, m.tris(0, c.tri), m.tris(1, c.tri), m.tris(2, c.tri)};
+            int slot[4] = {0, 0, 0, 0};
+            for (int q = 1; q < 4; ++q)
+                while (local[slot[q]] != ids[q]) ++slot[q];
+            facetDistance(p, x.col(ids[1]), x.col(ids[2]), x.col(ids[3]), c.side, &gd, &Hd);
             const double delta = terms[a].d - dw;
             cw[a] = terms[a].w * (1.0 - beta * delta);
             if (acc.wantGradient)
                 for (int q = 0; q < 4; ++q)
-                    acc.addGrad(ids[a][q], -k * gap * cw[a] * g[a].segment<3>(3 * q));
+                    acc.addGrad(ids[q], -k * gap * cw[a] * gd.segment<3>(3 * q));
             if (acc.wantHessian) {
-                const double Maa = k * cw[a] * cw[a] +
-                                   k * gap * beta *
-                                       (terms[a].w * (2.0 - beta * delta) -
-                                        2.0 * cw[a] * terms[a].w);
-                const Mat12 H = Maa * g[a] * g[a].transpose() - k * gap * cw[a] * Hd;
-                for (int q = 0; q < 4; ++q)
+                const double aa = terms[a].w * (2.0 - beta * delta);
+                const Mat12 Hf = k * gap * (beta * aa * gd * gd.transpose() - cw[a] * Hd);
+                for (int q = 0; q < 4; ++q) {
+                    u.segment<3>(3 * slot[q]) += cw[a] * gd.segment<3>(3 * q);
+                    v.segment<3>(3 * slot[q]) += terms[a].w * gd.segment<3>(3 * q);
                     for (int r = 0; r < 4; ++r)
-                        acc.addHessBlock(ids[a][q], ids[a][r], H.block<3, 3>(3 * q, 3 * r));
+                        Hloc.block<3, 3>(3 * slot[q], 3 * slot[r]) += Hf.block<3, 3>(3 * q, 3 * r);
+                }
             }
         }
         if (!acc.wantHessian) return;
-        for (int a = 0; a < n; ++a)
-            for (int b = 0; b < n; ++b) {
-                if (a == b) continue;
-                const double Mab =
-                    k * cw[a] * cw[b] -
-                    k * gap * beta * (cw[a] * terms[b].w + terms[a].w * cw[b]);
-                for (int q = 0; q < 4; ++q)
-                    for (int r = 0; r < 4; ++r)
-                        acc.addHessBlock(ids[a][q], ids[b][r],
-                                         Mab * g[a].segment<3>(3 * q) *
-                                             g[b].segment<3>(3 * r).transpose());
-            }
+        const int dim = 3 * numLocal;
+        const auto uu = u.head(dim), vv = v.head(dim);
+        Hloc.topLeftCorner(dim, dim).noalias() +=
+            k * uu * uu.transpose() - k * gap * beta * (uu * vv.transpose() + vv * uu.transpose());
+        for (int q = 0; q < numLocal; ++q)
+            for (int r = 0; r < numLocal; ++r)
+                acc.addHessBlock(local[q], local[r], Hloc.block<3, 3>(3 * q, 3 * r));
     });
 }
 

@@ -424,13 +424,13 @@ void readOutput(const ScenarioNode& s, OutputOptions& o) {
 
 }  // namespace
 
-std::vector<std::string> getScenarioKinds() { return {kKind}; }
+std::vector<std::string> getScenarioKinds() { return {kKind, "patient-on-support"}; }
 
 std::string readScenarioKind(const ScenarioFile& file) {
     const ScenarioNode root = file.getRoot();
     if (!root.has("kind"))
         root.fail("missing required key 'kind' at the top of the scenario; valid kinds: " +
-                  std::string(kKind));
+                  std::string(kKind) + ", patient-on-support");
     return root.getChoice("kind", getScenarioKinds());
 }
 
