@@ -58,8 +58,8 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
         std::cerr << "bagsim " << bagsim::kVersion << ": " << file.getFileName() << " (" << sc.name
                   << ")\n  patient " << patient << "\n  rigid flat support: "
                   << io::formatSignificant(o.support.stiffness, "Pa/m") << ", friction "
-                  << fmt("%g", o.support.friction) << "; settling for "
-                  << fmt("%g", o.settleTime) << " s\n  writing to " << outPath.string() << "/\n";
+                  << fmt("%g", o.support.friction) << "; settling for " << fmt("%g", o.settleTime)
+                  << " s\n  writing to " << outPath.string() << "/\n";
 
     body::SettleReport r;
     try {
@@ -75,7 +75,8 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
     std::ostringstream table;
     table << "support force " << fmt("%.1f", support) << " N vs body weight "
           << fmt("%.1f", r.weight) << " N (" << fmt("%.2f", r.mass) << " kg): ratio "
-          << fmt("%.4f", support / r.weight) << "\n";
+          << fmt("%.5f", support / r.weight) << " (" << fmt("%+.3f", 100 * (support / r.weight - 1))
+          << " %)\n";
     table << "after " << fmt("%g", r.simulatedTime) << " s: pelvis drift over the last 0.5 s "
           << fmt("%.2e", r.drift) << " m, largest segment speed " << fmt("%.2e", r.maxSpeed)
           << " m/s; contact area " << fmt("%.4f", r.load.contactArea) << " m^2, peak pressure "
@@ -90,9 +91,8 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
             << "\n";
         if (f <= 0) continue;
         char line[128];
-        std::snprintf(line, sizeof line, "  %-15s %10.1f %10.1f %11.1f\n",
-                      r.regionNames[i].c_str(), f, 100 * f / r.weight,
-                      r.load.regionPeakPressure[i] * 1e-3);
+        std::snprintf(line, sizeof line, "  %-15s %10.1f %10.1f %11.1f\n", r.regionNames[i].c_str(),
+                      f, 100 * f / r.weight, r.load.regionPeakPressure[i] * 1e-3);
         table << line;
     }
     csv << "other," << fmt("%.4f", r.load.otherForce) << ","
@@ -106,15 +106,14 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
         std::ofstream c(outDir->getFile("region_loads.csv"));
         c << csv.str();
         std::ofstream s(outDir->getFile("summary.txt"));
-        s << "bagsim " << bagsim::kVersion << " patient-on-support: " << file.getFileName()
-          << " (" << sc.name << ")\n";
+        s << "bagsim " << bagsim::kVersion << " patient-on-support: " << file.getFileName() << " ("
+          << sc.name << ")\n";
         if (!sc.description.empty()) s << sc.description << "\n";
         s << "patient " << patient << "\n"
           << "support: flat, rigid, stiffness " << fmt("%g", o.support.stiffness)
           << " Pa/m, damping " << fmt("%g", o.support.damping) << " Pa s/m, friction "
-          << fmt("%g", o.support.friction) << "; settle time " << fmt("%g", o.settleTime)
-          << " s, " << r.steps << " integrator steps, " << fmt("%.2f", r.wallSeconds)
-          << " s wall-clock\n"
+          << fmt("%g", o.support.friction) << "; settle time " << fmt("%g", o.settleTime) << " s, "
+          << r.steps << " integrator steps, " << fmt("%.2f", r.wallSeconds) << " s wall-clock\n"
           << table.str();
         c.close();
         s.close();

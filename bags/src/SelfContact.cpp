@@ -21,7 +21,7 @@
 // Energy 0.5 k (h - d_w)^2 for d_w < h with k = pressurePenalty * A_v / 2: every pair of sheets
 // is seen twice (nodes of A against triangles of B and the reverse), so two parallel sheets at
 // gap g < h press on each other with pressurePenalty * (h - g), the same law as rigid contact.
-// Facets with beta (d_i - min d) > 30 (weight < 1e-13) are dropped from the sums.
+// Facets with beta (d_i - min d) > 40 (weight < 4e-18) are dropped from the sums.
 
 #include <bags/Contact.h>
 
@@ -320,7 +320,7 @@ struct SelfContact::Impl {
         }
         return dw;
     }
-    static constexpr double kWeightCut = 30.0;  // drop facets with weight < exp(-30)
+    static constexpr double kWeightCut = 40.0;  // drop facets with weight < exp(-40)
 };
 
 SelfContact::SelfContact(const Mesh& mesh, const Options& options)
@@ -469,7 +469,7 @@ void SelfContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) c
     const double h = m.opt.thickness, beta = m.opt.softMinSharpness / h;
     const bool derivs = acc.wantGradient || acc.wantHessian;
     // Scratch sized once per call to the largest group (no allocation per node): the group's
-    // facets, its distinct nodes, their gradients as columns and the group's dense Hessian.
+    // facets, its distinct nodes, the vectors u, v below and the group's dense Hessian.
     const int maxGroup = static_cast<int>(m.maxGroup);
     const int maxLocal = 1 + 3 * maxGroup;
     std::vector<Term> terms(m.maxGroup);

@@ -46,9 +46,12 @@ std::vector<std::string> getPostureChoices() {
         const char* key;
     };
     static const Alias aliases[] = {
-        {"stiffness", "support", "stiffness"}, {"damping", "support", "damping"},
-        {"friction", "support", "friction"},   {"slipVelocity", "support", "slip_velocity"},
-        {"sampleSpacing", "support", "sample_spacing"}, {"height", "support", "height"},
+        {"stiffness", "support", "stiffness"},
+        {"damping", "support", "damping"},
+        {"friction", "support", "friction"},
+        {"slipVelocity", "support", "slip_velocity"},
+        {"sampleSpacing", "support", "sample_spacing"},
+        {"height", "support", "height"},
         {"settleTime", "", "settle_time"},
     };
     const Alias* best = nullptr;
@@ -81,8 +84,9 @@ void checkName(const ScenarioNode& root, const std::string& name) {
 
 body::PatientSpec readPatientSection(const ScenarioNode& s) {
     if (!s.isMap())
-        s.fail("must be a section {sex, height, mass, posture, position}, e.g. "
-               "patient: {sex: female, height: 1.62 m, mass: 58 kg}");
+        s.fail(
+            "must be a section {sex, height, mass, posture, position}, e.g. "
+            "patient: {sex: female, height: 1.62 m, mass: 58 kg}");
     s.checkKeys({"sex", "height", "mass"}, {"posture", "position", "head_of_bed_angle"});
     body::PatientSpec p;
 
@@ -102,16 +106,17 @@ body::PatientSpec readPatientSection(const ScenarioNode& s) {
             p.posture = body::parsePosture(name);
         } catch (const std::invalid_argument&) {
             s.getChoice("posture", getPostureChoices());  // throws with the list and suggestion
-            s.fail("posture", "\"" + name + "\" is not a posture; valid: " +
-                                  body::getPostureNames());
+            s.fail("posture",
+                   "\"" + name + "\" is not a posture; valid: " + body::getPostureNames());
         }
     }
 
     if (s.has("position")) {
         const ScenarioNode pos = s.get("position");
         if (!pos.isSequence() || pos.getElements().size() != 2)
-            s.fail("position", "must be two lengths [x, y] of the mid-hip point on the bed, "
-                               "e.g. [0 m, 0 m] (head towards +x)");
+            s.fail("position",
+                   "must be two lengths [x, y] of the mid-hip point on the bed, "
+                   "e.g. [0 m, 0 m] (head towards +x)");
         const std::vector<ScenarioNode> xy = pos.getElements();
         p.position = {xy[0].asQuantity(D::Length), xy[1].asQuantity(D::Length)};
     }
@@ -136,8 +141,9 @@ body::PatientSpec readPatientSection(const ScenarioNode& s) {
 body::PatientSpec readScenarioPatient(const ScenarioFile& file) {
     const ScenarioNode root = file.getRoot();
     if (!root.has("patient"))
-        root.fail("the scenario has no 'patient' section; add one, e.g. patient: {sex: female, "
-                  "height: 1.62 m, mass: 58 kg, posture: supine, position: [0 m, 0 m]}");
+        root.fail(
+            "the scenario has no 'patient' section; add one, e.g. patient: {sex: female, "
+            "height: 1.62 m, mass: 58 kg, posture: supine, position: [0 m, 0 m]}");
     return readPatientSection(root.getSection("patient"));
 }
 
@@ -155,8 +161,8 @@ PatientOnSupportScenario readPatientOnSupportScenario(const ScenarioFile& file) 
     body::SettleOptions& o = sc.settle;
     const ScenarioNode sup = root.getSection("support", false);
     if (!sup.isNull()) {
-        sup.checkKeys({}, {"height", "stiffness", "damping", "friction", "slip_velocity",
-                           "sample_spacing"});
+        sup.checkKeys(
+            {}, {"height", "stiffness", "damping", "friction", "slip_velocity", "sample_spacing"});
         body::PlaneSupportOptions& so = o.support;
         so.height = sup.getQuantity("height", D::Length, so.height);
         so.stiffness = sup.getQuantity("stiffness", D::StiffnessPerArea, so.stiffness);

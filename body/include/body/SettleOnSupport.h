@@ -28,8 +28,8 @@ struct SettleReport {
     double weight = 0;                     ///< m g with the model's gravity [N]
     SupportLoad load;                      ///< support force, per region and segment, at the end
     std::vector<std::string> regionNames;  ///< names of load.regionForce's entries
-    double drift = 0;     ///< horizontal motion of the pelvis over the last 0.5 s [m]
-    double maxSpeed = 0;  ///< largest segment-origin speed at the end [m/s]
+    double drift = 0;          ///< horizontal motion of the pelvis over the last 0.5 s [m]
+    double maxSpeed = 0;       ///< largest segment-origin speed at the end [m/s]
     double simulatedTime = 0;  ///< [s]
     double wallSeconds = 0;    ///< wall-clock time of the integration [s]
     int steps = 0;             ///< integrator steps taken
