@@ -276,7 +276,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         };
         // Loading: displacement control, adaptive, aiming the last step at the peak force.
         double disp = 0.0, ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;
-        const double minStep = 1e-5;
+        const double minStep = 5e-5;  // [m] smaller steps rarely rescue a slack curve
         const double maxDisp = top - 0.002;  // the block cannot pass the bed board
         while (force < o.peakForce * (1.0 - 1e-3)) {
             double step = std::min(ds, o.displacementStep);

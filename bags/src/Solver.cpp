@@ -33,6 +33,16 @@ ShapeGradients calcShapeGradients(const Mat2& DmInv) {
     return s;
 }
 
+using Mat32 = Eigen::Matrix<double, 3, 2>;
+
+// Deformation gradient F = sum_a x_a dN_a^T (3 x 2) of triangle e at positions x.
+Mat32 calcDeformationGradient(const Eigen::Matrix3Xi& tris, int e, const ShapeGradients& sg,
+                              const Eigen::Matrix3Xd& x) {
+    Mat32 F = Mat32::Zero();
+    for (int a = 0; a < 3; ++a) F += x.col(tris(a, e)) * sg.dN[a].transpose();
+    return F;
+}
+
 }  // namespace
 
 void SolverOptions::validate() const {
@@ -197,8 +207,7 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
         for (int e = 0; e < nt; ++e) {
             const int n[3] = {m_mesh.tris(0, e), m_mesh.tris(1, e), m_mesh.tris(2, e)};
             const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
-            Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
-            for (int a = 0; a < 3; ++a) F += x.col(n[a]) * sg.dN[a].transpose();
+            const Mat32 F = calcDeformationGradient(m_mesh.tris, e, sg, x);
             const Mat2 C = F.transpose() * F;
             if (!(C.determinant() > 1e-12)) {
 #pragma omp critical
@@ -217,7 +226,7 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
             Sm << S(0), S(2), S(2), S(1);
             const Vec3 f1 = F.col(0), f2 = F.col(1);
             if (wantG) {
-                const Eigen::Matrix<double, 3, 2> P = F * Sm;
+                const Mat32 P = F * Sm;
                 for (int a = 0; a < 3; ++a) localG.segment<3>(3 * n[a]) += vol * (P * sg.dN[a]);
             }
             if (wantH) {
@@ -317,8 +326,7 @@ std::vector<int> MembraneModel::calcWrinkleStates(const Eigen::Matrix3Xd& x) con
     if (!w) return states;
     for (int e = 0; e < m_mesh.getNumTris(); ++e) {
         const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
-        Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
-        for (int a = 0; a < 3; ++a) F += x.col(m_mesh.tris(a, e)) * sg.dN[a].transpose();
+        const Mat32 F = calcDeformationGradient(m_mesh.tris, e, sg, x);
         states[e] = w->calcState(F.transpose() * F);
     }
     return states;
@@ -328,8 +336,7 @@ Eigen::VectorXd MembraneModel::calcPrincipalStress(const Eigen::Matrix3Xd& x) co
     Eigen::VectorXd s(m_mesh.getNumTris());
     for (int e = 0; e < m_mesh.getNumTris(); ++e) {
         const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
-        Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
-        for (int a = 0; a < 3; ++a) F += x.col(m_mesh.tris(a, e)) * sg.dN[a].transpose();
+        const Mat32 F = calcDeformationGradient(m_mesh.tris, e, sg, x);
         const Mat2 C = F.transpose() * F;
         Eigen::Vector3d S;
         m_material->calcEnergy(C, &S, nullptr);
