@@ -1,5 +1,7 @@
 // Membrane materials: stress and tangent against central finite differences, the small-strain
 // limit, and uniaxial/equibiaxial closed forms.
+#include "MaterialTestUtil.h"
+
 #include <bags/Material.h>
 #include <gtest/gtest.h>
 
@@ -12,31 +14,11 @@
 namespace {
 
 using bags::Mat2;
-
-// Seed study, Table 2 [Pa].
-constexpr double kC10 = 31.587917e6, kC20 = -0.76582566e6, kC30 = -3.06587618e6;
-
-/// C = R diag(l1^2, l2^2) R^T.
-Mat2 makeC(double l1, double l2, double angle) {
-    Eigen::Matrix2d R;
-    R << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
-    Eigen::Matrix2d L = Eigen::Matrix2d::Zero();
-    L(0, 0) = l1 * l1;
-    L(1, 1) = l2 * l2;
-    return R * L * R.transpose();
-}
-
-/// C + the change of E_v component k by h (E_v = [E11, E22, 2 E12]).
-Mat2 perturb(const Mat2& C, int k, double h) {
-    Mat2 Cp = C;
-    if (k == 0) Cp(0, 0) += 2.0 * h;
-    if (k == 1) Cp(1, 1) += 2.0 * h;
-    if (k == 2) {
-        Cp(0, 1) += h;
-        Cp(1, 0) += h;
-    }
-    return Cp;
-}
+using bags::test::kC10;
+using bags::test::kC20;
+using bags::test::kC30;
+using bags::test::makeC;
+using bags::test::perturb;
 
 std::vector<std::unique_ptr<bags::MembraneMaterial>> makeAllModels() {
     std::vector<std::unique_ptr<bags::MembraneMaterial>> m;

@@ -1,5 +1,7 @@
 // Tension-field (wrinkling) relaxation: states, derivatives, the free strip, slack energy and
 // C1 continuity across the state boundaries.
+#include "MaterialTestUtil.h"
+
 #include <bags/Material.h>
 #include <gtest/gtest.h>
 
@@ -11,28 +13,11 @@
 namespace {
 
 using bags::Mat2;
-
-constexpr double kC10 = 31.587917e6, kC20 = -0.76582566e6, kC30 = -3.06587618e6;
-
-Mat2 makeC(double l1, double l2, double angle) {
-    Eigen::Matrix2d R;
-    R << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
-    Eigen::Matrix2d L = Eigen::Matrix2d::Zero();
-    L(0, 0) = l1 * l1;
-    L(1, 1) = l2 * l2;
-    return R * L * R.transpose();
-}
-
-Mat2 perturb(const Mat2& C, int k, double h) {
-    Mat2 Cp = C;
-    if (k == 0) Cp(0, 0) += 2.0 * h;
-    if (k == 1) Cp(1, 1) += 2.0 * h;
-    if (k == 2) {
-        Cp(0, 1) += h;
-        Cp(1, 0) += h;
-    }
-    return Cp;
-}
+using bags::test::kC10;
+using bags::test::kC20;
+using bags::test::kC30;
+using bags::test::makeC;
+using bags::test::perturb;
 
 /// S vs central differences of W, D vs central differences of S; tolerance 1e-6 relative
 /// to the largest entry (h = 1e-7 keeps the stencil inside one state: the states used are at
