@@ -337,11 +337,15 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             }
         }
         // Stiffness over the force range, loading branch.
+        // Only a curve that spans the whole range has a stiffness over it.
         std::vector<double> d, f;
-        for (const LoadStep& st : curve.steps)
+        double fmax = 0.0;
+        for (const LoadStep& st : curve.steps) {
+            if (st.loading) fmax = std::max(fmax, st.force);
             if (st.loading && st.force >= o.stiffnessFrom && st.force <= o.stiffnessTo)
                 d.push_back(st.displacement), f.push_back(st.force);
-        if (d.size() >= 2) {
+        }
+        if (d.size() >= 3 && fmax >= o.stiffnessTo * (1.0 - 1e-3)) {
             const LinearFit lf = fitLine(d, f);
             curve.stiffness = lf.slope;
             curve.r2 = lf.r2;

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 using namespace bags;
 
 TEST(LoadTest, SlackBagCurveEndsCleanlyWhateverHappens) {
@@ -22,6 +25,13 @@ TEST(LoadTest, SlackBagCurveEndsCleanlyWhateverHappens) {
         EXPECT_TRUE(c.reachedPeak || !c.failure.empty()) << c.gasMass;
         EXPECT_GE(c.steps.size(), 2u);
         EXPECT_LT(c.inflatedGaugePressure, 50.0);  // slack: about ambient [Pa]
+        // A curve that never spans the 10-15 N range has no stiffness and stage 0.
+        double fmax = 0.0;
+        for (const LoadStep& s : c.steps) fmax = std::max(fmax, s.force);
+        if (fmax < o.stiffnessTo) {
+            EXPECT_TRUE(std::isnan(c.stiffness));
+            EXPECT_EQ(c.stage, 0);
+        }
     }
 }
 
