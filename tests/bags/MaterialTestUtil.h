@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the material tests: the seed's Yeoh constants, building C from principal
 // stretches, and perturbing one Voigt strain component.
+#include <bags/Material.h>
 #include <bags/Types.h>
 
 #include <cmath>
@@ -30,6 +31,18 @@ inline Mat2 perturb(const Mat2& C, int k, double h) {
         Cp(1, 0) += h;
     }
     return Cp;
+}
+
+/// Central differences of W (giving S) and of S (giving D) in the Voigt convention, step h.
+inline void calcFiniteDifferenceDerivatives(const MembraneMaterial& mat, const Mat2& C, double h,
+                                            Eigen::Vector3d* Sfd, Eigen::Matrix3d* Dfd) {
+    for (int k = 0; k < 3; ++k) {
+        Eigen::Vector3d Sp, Sm;
+        const double Wp = mat.calcEnergy(perturb(C, k, h), &Sp, nullptr);
+        const double Wm = mat.calcEnergy(perturb(C, k, -h), &Sm, nullptr);
+        (*Sfd)(k) = (Wp - Wm) / (2.0 * h);
+        Dfd->col(k) = (Sp - Sm) / (2.0 * h);
+    }
 }
 
 }  // namespace bags::test

@@ -26,16 +26,9 @@ void checkDerivatives(const bags::MembraneMaterial& mat, const Mat2& C) {
     Eigen::Vector3d S;
     Eigen::Matrix3d D;
     mat.calcEnergy(C, &S, &D);
-    const double h = 1e-7;
     Eigen::Vector3d Sfd;
     Eigen::Matrix3d Dfd;
-    for (int k = 0; k < 3; ++k) {
-        Eigen::Vector3d Sp, Sm;
-        const double Wp = mat.calcEnergy(perturb(C, k, h), &Sp, nullptr);
-        const double Wm = mat.calcEnergy(perturb(C, k, -h), &Sm, nullptr);
-        Sfd(k) = (Wp - Wm) / (2.0 * h);
-        Dfd.col(k) = (Sp - Sm) / (2.0 * h);
-    }
+    bags::test::calcFiniteDifferenceDerivatives(mat, C, 1e-7, &Sfd, &Dfd);
     const double sScale = std::max(S.cwiseAbs().maxCoeff(), 1.0);
     const double dScale = D.cwiseAbs().maxCoeff();
     EXPECT_LE((S - Sfd).cwiseAbs().maxCoeff(), 1e-6 * sScale) << "S\n" << S << "\nFD\n" << Sfd;
