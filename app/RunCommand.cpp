@@ -156,14 +156,10 @@ class Progress {
             m_pressure0 = calcPressure(s);
             m_height0 = x.row(2).maxCoeff();
             m_curveStart = std::chrono::steady_clock::now();
-            m_rangeDisplacement.clear();
-            m_rangeForce.clear();
+            m_curveSteps.clear();
         }
         ++m_steps;
-        if (s.loading && s.force >= m_options.stiffnessFrom && s.force <= m_options.stiffnessTo) {
-            m_rangeDisplacement.push_back(s.displacement);
-            m_rangeForce.push_back(s.force);
-        }
+        m_curveSteps.push_back(s);
         if (s.force > m_peakForce) {
             m_peakForce = s.force;
             m_peakDisplacement = s.displacement;
@@ -197,16 +193,12 @@ class Progress {
         if (m_quiet) return;
         const double secs =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - m_curveStart).count();
-        // Stiffness preview: the library's rule (straight line through the loading steps in the
-        // force range); the table printed at the end is the library's own result.
+        // The library's stiffness rule, applied to the steps seen so far.
         std::string k = "k n/a";
-        if (m_rangeForce.size() >= 2) {
-            try {
-                k = fmt("k = %.3f N/mm",
-                        1e-3 * bags::fitLine(m_rangeDisplacement, m_rangeForce).slope);
-            } catch (const std::invalid_argument&) {
-            }
-        }
+        const double slope = bags::calcRangeStiffness(m_curveSteps, m_options.stiffnessFrom,
+                                                      m_options.stiffnessTo)
+                                 .slope;
+        if (std::isfinite(slope)) k = fmt("k = %.3f N/mm", 1e-3 * slope);
         if (m_tty) std::fprintf(stderr, "\r\033[K");
         std::fprintf(stderr,
                      "  curve %d/%zu  %s: p = %.2f kPa, top %.1f mm before loading; %d steps, "
@@ -224,7 +216,7 @@ class Progress {
     int m_steps = 0;
     double m_peakForce = 0.0, m_peakDisplacement = 0.0;
     double m_pressure0 = 0.0, m_height0 = 0.0;
-    std::vector<double> m_rangeDisplacement, m_rangeForce;  ///< loading steps in the k range
+    std::vector<bags::LoadStep> m_curveSteps;  ///< steps of the current curve
     std::chrono::steady_clock::time_point m_curveStart, m_lastLive;
 };
 

@@ -337,22 +337,9 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             }
         }
         // Stiffness over the force range, loading branch.
-        // Only a curve that spans the whole range has a stiffness over it.
-        std::vector<double> d, f;
-        double fmax = 0.0;
-        for (const LoadStep& st : curve.steps) {
-            if (st.loading) fmax = std::max(fmax, st.force);
-            if (st.loading && st.force >= o.stiffnessFrom && st.force <= o.stiffnessTo)
-                d.push_back(st.displacement), f.push_back(st.force);
-        }
-        if (d.size() >= 3 && fmax >= o.stiffnessTo * (1.0 - 1e-3)) {
-            const LinearFit lf = fitLine(d, f);
-            curve.stiffness = lf.slope;
-            curve.r2 = lf.r2;
-        } else {
-            curve.stiffness = std::numeric_limits<double>::quiet_NaN();
-            curve.r2 = std::numeric_limits<double>::quiet_NaN();
-        }
+        const LinearFit lf = calcRangeStiffness(curve.steps, o.stiffnessFrom, o.stiffnessTo);
+        curve.stiffness = lf.slope;
+        curve.r2 = lf.r2;
         result.curves.push_back(std::move(curve));
     }
     classifyStages(result.curves);
@@ -365,6 +352,21 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
     return result;
+}
+
+LinearFit calcRangeStiffness(const std::vector<LoadStep>& steps, double from, double to) {
+    // Only a curve that spans the whole range has a stiffness over it.
+    std::vector<double> d, f;
+    double fmax = 0.0;
+    for (const LoadStep& st : steps) {
+        if (!st.loading) continue;
+        fmax = std::max(fmax, st.force);
+        if (st.force >= from && st.force <= to) d.push_back(st.displacement), f.push_back(st.force);
+    }
+    if (d.size() >= 3 && fmax >= to * (1.0 - 1e-3)) return fitLine(d, f);
+    LinearFit none;
+    none.slope = none.intercept = none.r2 = std::numeric_limits<double>::quiet_NaN();
+    return none;
 }
 
 void classifyStages(std::vector<LoadCurve>& curves, double linearR2) {

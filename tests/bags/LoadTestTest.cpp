@@ -87,3 +87,25 @@ TEST(LoadTest, RejectsImpossibleOptions) {
     o.material.reset();
     EXPECT_THROW(o.validate(), std::invalid_argument);
 }
+
+TEST(LoadTest, RangeStiffnessNeedsTheWholeRange) {
+    // F = 2 N/mm x d on loading: slope 2000 N/m, r2 = 1 over 10-35 N when the curve reaches
+    // 35 N; a curve stopping at 20 N has no stiffness over that range (NaN), and unloading
+    // steps are ignored.
+    std::vector<LoadStep> steps;
+    for (int i = 0; i <= 20; ++i) {
+        LoadStep s;
+        s.displacement = 1e-3 * i;
+        s.force = 2.0 * i;
+        steps.push_back(s);
+    }
+    LoadStep back = steps.back();
+    back.loading = false;
+    back.force = 12.0;  // hysteresis on unloading must not enter the fit
+    steps.push_back(back);
+    const LinearFit full = calcRangeStiffness(steps, 10.0, 35.0);
+    EXPECT_NEAR(full.slope, 2000.0, 1e-9);
+    EXPECT_NEAR(full.r2, 1.0, 1e-12);
+    steps.resize(11);  // loading up to 20 N only
+    EXPECT_TRUE(std::isnan(calcRangeStiffness(steps, 10.0, 35.0).slope));
+}

@@ -11,6 +11,7 @@
 #include <bags/Gas.h>
 #include <bags/Geometry.h>
 #include <bags/Material.h>
+#include <bags/Polynomial.h>
 #include <bags/Solver.h>
 
 #include <functional>
@@ -86,6 +87,11 @@ struct LoadTestResult {
 using LoadTestObserver = std::function<void(const LoadStep&, const Mesh&, const Eigen::Matrix3Xd&)>;
 
 LoadTestResult runLoadTest(const LoadTestOptions& options, const LoadTestObserver& observer = {});
+
+/// Stiffness of a curve's loading branch over the force range [from, to] [N]: least-squares
+/// slope [N/m] and r^2 of force against displacement; NaN for both when the loading never
+/// reached `to` or fewer than three loading steps lie in the range.
+LinearFit calcRangeStiffness(const std::vector<LoadStep>& steps, double from, double to);
 
 /// Sets LoadCurve::stage: stage 3 for masses below the one of least stiffness (stiffness rises
 /// again as gas is let out); above it, stage 1 where the stiffness range is linear
