@@ -2,6 +2,8 @@
 // SI, and bad input (missing or misspelt keys, wrong units, negative masses, impossible
 // geometry) is an InputError at the right line and key.
 #include <gtest/gtest.h>
+#include "InputErrorTestUtil.h"
+
 #include <io/LoadTestScenario.h>
 
 #include <cmath>
@@ -13,15 +15,7 @@ using io::ScenarioFile;
 
 namespace {
 
-InputError expectInputError(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const InputError& e) {
-        return e;
-    }
-    ADD_FAILURE() << "no InputError thrown";
-    return InputError("", 0, "", "");
-}
+using io::test::expectInputError;
 
 // A valid scenario; tests edit one line of it. Lines counted from 1.
 const std::string kBase =

@@ -1,6 +1,8 @@
 // Located errors: every mistake in a scenario names the file, the line, the key and what is
 // valid; misspelt keys suggest the closest valid one; --set overrides point at themselves.
 #include <gtest/gtest.h>
+#include "InputErrorTestUtil.h"
+
 #include <io/Scenario.h>
 
 #include <functional>
@@ -13,16 +15,7 @@ using io::ScenarioNode;
 
 namespace {
 
-// Runs f, expects an InputError and returns it.
-InputError expectInputError(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const InputError& e) {
-        return e;
-    }
-    ADD_FAILURE() << "no InputError thrown";
-    return InputError("", 0, "", "");
-}
+using io::test::expectInputError;
 
 // Line numbers below count from 1 at "kind:".
 const char* kText =
