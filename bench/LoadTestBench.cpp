@@ -5,6 +5,7 @@
 //   build/bin/bench_load_test [mesh_mm=5] [gas masses in g ... | seed]
 // "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps.
 #include <bags/LoadTest.h>
+#include <bags/MaterialFit.h>
 
 #include <sys/resource.h>
 
@@ -18,7 +19,7 @@ int main(int argc, char** argv) {
     const double meshMm = argc > 1 ? std::atof(argv[1]) : 5.0;
     bags::LoadTestOptions o;
     o.geometry.meshSize = meshMm * 1e-3;
-    o.material = bags::makeYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     for (int i = 2; i < argc; ++i)
         if (std::strcmp(argv[i], "seed") != 0) o.gasMasses.push_back(std::atof(argv[i]) * 1e-3);
     if (o.gasMasses.empty())

@@ -1,6 +1,7 @@
 #include <bags/Gas.h>
 #include <bags/Types.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -8,6 +9,7 @@
 namespace bags {
 
 namespace {
+constexpr double kPi = 3.14159265358979323846;
 void require(bool ok, const char* option, double value, const char* valid) {
     if (ok) return;
     std::ostringstream s;
@@ -88,6 +90,77 @@ double GasChamber::calcWorkPotential(double V) const {
 
 double GasChamber::calcTemperature(double V) const {
     return calcPressure(V) * V / (m_mass * m_options.getSpecificGasConstant());
+}
+
+void GasChamber::transferMass(double dm, double volume) {
+    if (m_VRef <= 0.0) throw std::logic_error("GasChamber used before seal()");
+    const double m = m_mass + dm;
+    if (!(m > 0.0)) throw NumericalError("gas mass would become non-positive in a transfer");
+    m_pRef *= m / m_mass;
+    m_mass = m;
+    (void)volume;  // p(V) scales by the same factor at every volume
+}
+
+void OrificeOptions::validate() const {
+    require(diameter > 0.0 && diameter < 1.0, "diameter", diameter,
+            "use 0 < diameter < 1 m (e.g. 4 mm)");
+    require(dischargeCoefficient > 0.0 && dischargeCoefficient <= 1.0, "dischargeCoefficient",
+            dischargeCoefficient, "use 0 < Cd <= 1 (sharp-edged orifice: 0.6)");
+    require(laminarPressure > 0.0 && laminarPressure < 1e4, "laminarPressure", laminarPressure,
+            "use 0 < dpLam < 10 kPa (e.g. 1 Pa)");
+}
+
+double OrificeOptions::getArea() const { return 0.25 * kPi * diameter * diameter; }
+
+double calcOrificeMassFlow(const OrificeOptions& o, double pa, double pb, double rhoUp,
+                           double* dmdotdp) {
+    const double dp = pa - pb;
+    const double L2 = o.laminarPressure * o.laminarPressure;
+    const double q = dp * dp + L2;
+    const double c = o.dischargeCoefficient * o.getArea() * std::sqrt(2.0 * rhoUp);
+    const double root = std::pow(q, 0.25);
+    // d/ddp [dp q^-1/4] = q^-1/4 - dp^2 / 2 q^-5/4 = q^-5/4 (dp^2 / 2 + L2)
+    if (dmdotdp) *dmdotdp = c * (0.5 * dp * dp + L2) / (q * root);
+    return c * dp / root;
+}
+
+double calcOrificeTransfer(const OrificeOptions& o, const GasChamber& a, double Va,
+                           const GasChamber& b, double Vb, double dt) {
+    o.validate();
+    if (!(dt >= 0.0)) throw std::invalid_argument("orifice transfer needs dt >= 0");
+    const double pa0 = a.calcPressure(Va), pb0 = b.calcPressure(Vb);
+    if (dt == 0.0 || pa0 == pb0) return 0.0;
+    const double ma = a.getMass(), mb = b.getMass();
+    // At fixed volumes each pressure is proportional to its mass (transferMass keeps T).
+    auto pressures = [&](double dm, double* pa, double* pb) {
+        *pa = pa0 * (ma - dm) / ma;
+        *pb = pb0 * (mb + dm) / mb;
+    };
+    // dm that equalises the pressures: pa0 (ma - dm)/ma = pb0 (mb + dm)/mb.
+    const double dmEq = (pa0 - pb0) / (pa0 / ma + pb0 / mb);
+    auto residual = [&](double dm, double* dRdm) {
+        double pa, pb;
+        pressures(dm, &pa, &pb);
+        const double rhoUp = pa >= pb ? (ma - dm) / Va : (mb + dm) / Vb;
+        double g = 0.0;
+        const double mdot = calcOrificeMassFlow(o, pa, pb, rhoUp, &g);
+        if (dRdm) *dRdm = 1.0 + dt * g * (pa0 / ma + pb0 / mb);  // density change neglected
+        return dm - dt * mdot;
+    };
+    // R(0) = -dt mdot(0) and R(dmEq) = dmEq have opposite signs: safeguarded Newton.
+    double lo = std::min(0.0, dmEq), hi = std::max(0.0, dmEq);
+    double dm = 0.0;
+    for (int it = 0; it < 100; ++it) {
+        double dR = 0.0;
+        const double R = residual(dm, &dR);
+        if (std::abs(R) <= 1e-14 * std::abs(dmEq)) break;
+        (R > 0.0 ? hi : lo) = dm;  // R increases with dm
+        double next = dm - R / dR;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (next == dm) break;
+        dm = next;
+    }
+    return dm;
 }
 
 }  // namespace bags

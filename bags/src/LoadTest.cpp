@@ -31,6 +31,38 @@ struct Rig {
     SolverWorkspace workspace;  // factorisation reused across steps
 };
 
+// The gas bodies: one (open connection) or one per chamber (orifices).
+double getTotalGasMass(const MembraneModel& model) {
+    double m = 0.0;
+    for (int g = 0; g < model.getNumGases(); ++g) m += model.getGas(g).getMass();
+    return m;
+}
+
+// Sets the total gas mass, shared among the gas bodies at equal pressure (at a fixed
+// temperature a body's share is its volume's share), each resealed at its current volume.
+void setTotalGasMass(MembraneModel& model, const Eigen::Matrix3Xd& x, double m) {
+    const int ng = model.getNumGases();
+    std::vector<double> V(ng);
+    double Vsum = 0.0;
+    for (int g = 0; g < ng; ++g) Vsum += V[g] = model.calcGasVolume(g, x, nullptr);
+    for (int g = 0; g < ng; ++g) model.updGas(g).setMass(m * V[g] / Vsum, V[g]);
+}
+
+// Lets gas flow through the orifices between neighbouring gas bodies for dt [s], volumes held
+// at x (operator split: the membrane then finds its equilibrium at the new masses).
+void exchangeGas(MembraneModel& model, const Eigen::Matrix3Xd& x, const LoadTestOptions& o,
+                 double dt) {
+    if (o.connection != LoadTestOptions::Connection::Orifice || dt <= 0.0) return;
+    for (int g = 0; g + 1 < model.getNumGases(); ++g) {
+        const double Va = model.calcGasVolume(g, x, nullptr);
+        const double Vb = model.calcGasVolume(g + 1, x, nullptr);
+        const double dm =
+            calcOrificeTransfer(o.orifice, model.getGas(g), Va, model.getGas(g + 1), Vb, dt);
+        model.updGas(g).transferMass(-dm, Va);
+        model.updGas(g + 1).transferMass(dm, Vb);
+    }
+}
+
 double calcTop(const Eigen::Matrix3Xd& x) { return x.row(2).maxCoeff(); }
 
 void placeBlock(Rig& rig, double zBottom) {
@@ -133,6 +165,13 @@ void LoadTestOptions::validate() const {
             "stiffnessTo", stiffnessTo, "use 0 <= from < to <= peak force");
     require(polynomialOrder >= 1 && polynomialOrder <= 8, "polynomialOrder", polynomialOrder,
             "use an order from 1 to 8");
+    if (connection == Connection::Orifice) {
+        orifice.validate();
+        if (!geometry.diaphragm)
+            throw std::invalid_argument(
+                "load test option 'connection' = orifice needs two chambers; set the geometry's "
+                "diaphragm (or use the open connection)");
+    }
     require(stabilization >= 0.0, "stabilization", stabilization,
             "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
     blockContact.validate();
@@ -201,15 +240,23 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                   },
                   "inflating the airbag");
         for (int c = 0; c < nc; ++c) rig.model->setChamberPressure(c, 0.0);
-        // Seal the gas that is in the bag at this pressure; the first curve's ramp then
-        // takes the mass to its value in steps it can cut.
-        double V = 0.0;
-        for (int c = 0; c < nc; ++c) V += calcChamberVolume(mesh, c, rig.x);
-        const double mSeal = (o.gas.ambientPressure + pTarget) * V /
-                             (o.gas.getSpecificGasConstant() * o.gas.temperature);
-        GasChamber gas(o.gas, mSeal);
-        gas.seal(V);
-        rig.model->addGas(gas, allChambers);
+        // Seal the gas that is in the bag at this pressure (one body, or one per chamber
+        // behind orifices); the first curve's ramp then takes the mass to its value in steps
+        // it can cut.
+        auto sealGas = [&](const std::vector<int>& chambers) {
+            double V = 0.0;
+            for (int c : chambers) V += calcChamberVolume(mesh, c, rig.x);
+            const double mSeal = (o.gas.ambientPressure + pTarget) * V /
+                                 (o.gas.getSpecificGasConstant() * o.gas.temperature);
+            GasChamber gas(o.gas, mSeal);
+            gas.seal(V);
+            rig.model->addGas(gas, chambers);
+        };
+        if (o.connection == LoadTestOptions::Connection::Orifice) {
+            for (int c = 0; c < nc; ++c) sealGas({c});
+        } else {
+            sealGas(allChambers);
+        }
     }
 
     LoadTestResult result;
@@ -218,20 +265,19 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         curve.gasMass = o.gasMasses[k];
         // Let the gas out (or in) to this curve's mass in small mass steps, block clear.
         placeBlock(rig, calcTop(rig.x) + 0.05);
-        const double m0 = rig.model->getGas(0).getMass();
+        const double m0 = getTotalGasMass(*rig.model);
         solveRamp(rig, o, m0, curve.gasMass,
-                  [&](double m) {
-                      const double V = rig.model->calcGasVolume(0, rig.x, nullptr);
-                      rig.model->updGas(0).setMass(m, V);
-                  },
+                  [&](double m) { setTotalGasMass(*rig.model, rig.x, m); },
                   "changing the gas mass");
         // setMass reseals at the current volume: isothermal p V = m R T holds whatever the
         // sealing volume, so the state is exact; for adiabatic gases the reference is the
         // state at this mass, as in a slow let-down at room temperature.
         const double top = calcTopUnderBlock(rig.x, rig.blockCentreXY, 0.5 * o.blockSize);
         curve.unloadedHeight = top;
-        curve.inflatedVolume = rig.model->calcGasVolume(0, rig.x, nullptr);
-        curve.inflatedGaugePressure = rig.model->getGas(0).calcGaugePressure(curve.inflatedVolume);
+        curve.inflatedVolume = 0.0;
+        for (int g = 0; g < rig.model->getNumGases(); ++g)
+            curve.inflatedVolume += rig.model->calcGasVolume(g, rig.x, nullptr);
+        curve.inflatedGaugePressure = rig.model->calcChamberGaugePressure(0, rig.x);
         if (self) self->updateCandidates(rig.x);
         const Eigen::Matrix3Xd xUnloaded = rig.x;
 
@@ -251,6 +297,12 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                 st.gaugePressure.push_back(rig.model->calcChamberGaugePressure(c, rig.x));
                 st.volume.push_back(calcChamberVolume(mesh, c, rig.x));
             }
+            for (int c = 0; c < nc; ++c) {
+                // A chamber's share of its gas body, by volume (equal pressure inside a body).
+                const int g = rig.model->getChamberGas(c);
+                const double Vg = rig.model->calcGasVolume(g, rig.x, nullptr);
+                st.gasMass.push_back(rig.model->getGas(g).getMass() * st.volume[c] / Vg);
+            }
             st.newtonIterations = sum.iterations;
             st.residual = sum.residualNorm;
             st.stabilizationEnergy = stabEnergy;
@@ -262,10 +314,19 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         record(0.0, true, SolveSummary(), 0.0);
         // Moves the block to travel `to` (from the last converged state); on failure the
         // caller shortens the step.
+        // Gas flows through the orifices over the step's time first (volumes of the last
+        // state), then the membrane settles; a failed step restores the gas.
         auto advance = [&](double to, SolveSummary* sum, double* stab) {
+            std::vector<GasChamber> gasBefore;
+            for (int g = 0; g < rig.model->getNumGases(); ++g)
+                gasBefore.push_back(rig.model->getGas(g));
+            const double dispBefore = curve.steps.back().displacement;
+            exchangeGas(*rig.model, rig.x, o, std::abs(to - dispBefore) / o.loadingRate);
             placeBlock(rig, top - to);
             if (self) self->updateCandidates(rig.x);
-            return trySolve(rig, o, sum, stab);
+            if (trySolve(rig, o, sum, stab)) return true;
+            for (int g = 0; g < rig.model->getNumGases(); ++g) rig.model->updGas(g) = gasBefore[g];
+            return false;
         };
         // A step that cannot be solved even at the smallest increment ends the branch; the
         // curve keeps what converged and says why it stopped.

@@ -155,10 +155,22 @@ class MooneyRivlin : public InvariantMaterial {
 
 class Yeoh : public InvariantMaterial {
   public:
-    Yeoh(double C10, double C20, double C30) : m_C10(C10), m_C20(C20), m_C30(C30) {
+    Yeoh(double C10, double C20, double C30, double limit)
+        : m_C10(C10), m_C20(C20), m_C30(C30), m_limit(limit) {
         if (!(C10 > 0.0) || !std::isfinite(C10) || !std::isfinite(C20) || !std::isfinite(C30))
             throw std::invalid_argument("Yeoh: C10 = " + std::to_string(C10) +
                                         " Pa; valid: C10 > 0 and finite C20, C30");
+        if (!(limit > 0.0))
+            throw std::invalid_argument("Yeoh: continuation limit I1 - 3 = " +
+                                        std::to_string(limit) + "; valid: > 0 (or infinite)");
+        if (std::isfinite(limit)) {
+            double W1, W2, W11, W12, W22;
+            calcPolynomial(limit, &W1, &W11);
+            (void)W2, (void)W12, (void)W22;
+            if (!(W1 > 0.0))
+                throw std::invalid_argument("Yeoh: dW/dI1 = " + std::to_string(W1) +
+                                            " Pa at the continuation limit; valid: > 0");
+        }
     }
     double getInitialShearModulus() const override { return 2.0 * m_C10; }
     std::string getName() const override { return "yeoh"; }
@@ -170,14 +182,26 @@ class Yeoh : public InvariantMaterial {
     double calcW(double I1, double, double* W1, double* W2, double* W11, double* W12,
                  double* W22) const override {
         const double x = I1 - 3.0;
-        *W1 = m_C10 + 2.0 * m_C20 * x + 3.0 * m_C30 * x * x;
-        *W11 = 2.0 * m_C20 + 6.0 * m_C30 * x;
         *W2 = *W12 = *W22 = 0.0;
-        return x * (m_C10 + x * (m_C20 + x * m_C30));
+        if (x <= m_limit) return calcPolynomial(x, W1, W11);
+        // Beyond the limit: W continues with its value and slope there and no curvature lost
+        // (W11 = max(W11(limit), 0)), i.e. as a neo-Hookean-like law that stays stable.
+        double W1c, W11c;
+        const double Wc = calcPolynomial(m_limit, &W1c, &W11c);
+        const double k = std::max(W11c, 0.0), dx = x - m_limit;
+        *W1 = W1c + k * dx;
+        *W11 = k;
+        return Wc + dx * (W1c + 0.5 * k * dx);
     }
 
   private:
+    double calcPolynomial(double x, double* W1, double* W11) const {
+        *W1 = m_C10 + 2.0 * m_C20 * x + 3.0 * m_C30 * x * x;
+        *W11 = 2.0 * m_C20 + 6.0 * m_C30 * x;
+        return x * (m_C10 + x * (m_C20 + x * m_C30));
+    }
     double m_C10, m_C20, m_C30;
+    double m_limit;  ///< I1 - 3 beyond which W continues linearly (infinite: never)
 };
 
 /// W = sum_i k_i (G_i + J^-p_i - 3), k_i = 2 mu_i / alpha_i^2, p_i = alpha_i / 2, where
@@ -295,8 +319,9 @@ std::unique_ptr<MembraneMaterial> makeMooneyRivlin(double C10, double C01) {
     return std::make_unique<MooneyRivlin>(C10, C01);
 }
 
-std::unique_ptr<MembraneMaterial> makeYeoh(double C10, double C20, double C30) {
-    return std::make_unique<Yeoh>(C10, C20, C30);
+std::unique_ptr<MembraneMaterial> makeYeoh(double C10, double C20, double C30,
+                                           double continuationLimit) {
+    return std::make_unique<Yeoh>(C10, C20, C30, continuationLimit);
 }
 
 std::unique_ptr<MembraneMaterial> makeOgden(const std::vector<double>& mu,

@@ -610,4 +610,21 @@ std::string MaterialFitResult::formatScenarioYaml(const std::string& indent) con
     return os.str();
 }
 
+double calcYeohStableLimit(double C10, double C20, double C30) {
+    const auto raw = makeYeoh(C10, C20, C30);
+    const StabilityRange r = calcStabilityRange(*raw, 3.0, 1e-3);
+    double limit = std::numeric_limits<double>::infinity();
+    // I1 - 3 along each path at its last stable stretch.
+    const double lu = r.uniaxial.getStable(), lp = r.planar.getStable(),
+                 le = r.equibiaxial.getStable();
+    if (lu < r.maxChecked) limit = std::min(limit, lu * lu + 2.0 / lu - 3.0);
+    if (lp < r.maxChecked) limit = std::min(limit, lp * lp + 1.0 / (lp * lp) - 2.0);
+    if (le < r.maxChecked) limit = std::min(limit, 2.0 * le * le + 1.0 / (le * le * le * le) - 3.0);
+    return limit;
+}
+
+std::unique_ptr<MembraneMaterial> makeStableYeoh(double C10, double C20, double C30) {
+    return makeYeoh(C10, C20, C30, calcYeohStableLimit(C10, C20, C30));
+}
+
 }  // namespace bags

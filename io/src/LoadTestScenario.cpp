@@ -1,5 +1,7 @@
 #include <io/LoadTestScenario.h>
 
+#include <bags/MaterialFit.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -138,9 +140,11 @@ const std::vector<KeyAlias>& getAliases() {
 
 // ----------------------------------------------------------------------------------- airbag
 
-void readAirbag(const ScenarioNode& s, bags::DoubleWedgeParams& g) {
+void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
+    bags::DoubleWedgeParams& g = o.geometry;
     s.checkKeys({"long_side", "short_side", "width", "height"},
-                {"mesh_size", "diaphragm", "bond_base"});
+                {"mesh_size", "diaphragm", "bond_base", "connection", "orifice_diameter",
+                 "discharge_coefficient"});
     g.longSide = s.getQuantity("long_side", D::Length);
     g.shortSide = s.getQuantity("short_side", D::Length);
     g.width = s.getQuantity("width", D::Length);
@@ -160,6 +164,25 @@ void readAirbag(const ScenarioNode& s, bags::DoubleWedgeParams& g) {
     checkRange(s, "mesh_size", g.meshSize, 1e-3, true, std::min(0.05, 0.5 * smallest), true, "mm",
                "at least 1 mm; at most 50 mm and half the smallest dimension");
     // The rest (the apex above the base) is checked by DoubleWedgeParams::validate().
+
+    // How the two wedge chambers share their air.
+    const std::string connection = s.getChoice("connection", {"open", "orifice"}, "open");
+    o.connection = connection == "orifice" ? bags::LoadTestOptions::Connection::Orifice
+                                           : bags::LoadTestOptions::Connection::Open;
+    for (const char* key : {"orifice_diameter", "discharge_coefficient"})
+        if (s.has(key) && connection != "orifice")
+            s.fail(key, std::string("only applies to connection: orifice (connection is ") +
+                            connection + ")");
+    if (connection == "orifice" && !g.diaphragm)
+        s.fail("connection", "orifice needs two chambers: set diaphragm: true, or use "
+                             "connection: open");
+    o.orifice.diameter = s.getQuantity("orifice_diameter", D::Length, o.orifice.diameter);
+    o.orifice.dischargeCoefficient =
+        s.getNumber("discharge_coefficient", o.orifice.dischargeCoefficient);
+    checkRange(s, "orifice_diameter", o.orifice.diameter, 0, false, std::min(g.width, g.height),
+               false, "mm", "greater than zero and smaller than the diaphragm");
+    checkRange(s, "discharge_coefficient", o.orifice.dischargeCoefficient, 0, false, 1, true, "",
+               "0 < Cd <= 1 (sharp-edged orifice: about 0.6)");
 }
 
 // --------------------------------------------------------------------------------- membrane
@@ -189,9 +212,14 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
                 allConstants.push_back(c);
     }
     std::vector<std::string> optional = allConstants;
-    optional.insert(optional.end(), {"density", "wrinkling_residual"});
+    optional.insert(optional.end(), {"density", "wrinkling_residual", "extrapolation"});
     s.checkKeys({"model", "thickness"}, optional);
     const std::string model = s.getChoice("model", modelNames);
+    // Beyond the stable range a Yeoh continues linearly in I1 (default) or as its polynomial.
+    const std::string extrapolation =
+        s.getChoice("extrapolation", {"linear", "polynomial"}, "linear");
+    if (s.has("extrapolation") && model != "yeoh")
+        s.fail("extrapolation", "only applies to model: yeoh (model is " + model + ")");
     const ModelInfo& info = *std::find_if(getModels().begin(), getModels().end(),
                                           [&](const ModelInfo& m) { return m.name == model; });
     auto describe = [&] {
@@ -210,9 +238,11 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
 
     try {
         if (model == "yeoh") {
-            o.material =
-                bags::makeYeoh(s.getQuantity("C10", D::Pressure), s.getQuantity("C20", D::Pressure),
-                               s.getQuantity("C30", D::Pressure));
+            const double C10 = s.getQuantity("C10", D::Pressure);
+            const double C20 = s.getQuantity("C20", D::Pressure);
+            const double C30 = s.getQuantity("C30", D::Pressure);
+            o.material = extrapolation == "polynomial" ? bags::makeYeoh(C10, C20, C30)
+                                                       : bags::makeStableYeoh(C10, C20, C30);
         } else if (model == "neo-hookean") {
             o.material = bags::makeNeoHookean(s.getQuantity("C10", D::Pressure));
         } else if (model == "mooney-rivlin") {
@@ -457,7 +487,7 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     sc.description = root.getString("description", "");
 
     bags::LoadTestOptions& o = sc.options;
-    readAirbag(root.getSection("airbag"), o.geometry);
+    readAirbag(root.getSection("airbag"), o);
     readMembrane(root.getSection("membrane"), o);
     readGas(root.getSection("gas", false), o.gas);
     readTest(root.getSection("test"), o);

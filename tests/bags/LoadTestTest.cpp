@@ -1,6 +1,7 @@
 // The seed's test rig on a coarse mesh: inflation, loading to the peak force, unloading, the
 // stiffness fit and the stage rule.
 #include <bags/LoadTest.h>
+#include <bags/MaterialFit.h>
 #include <bags/Polynomial.h>
 
 #include <gtest/gtest.h>
@@ -14,7 +15,7 @@ namespace {
 LoadTestOptions coarseOptions() {
     LoadTestOptions o;
     o.geometry.meshSize = 0.020;
-    o.material = makeYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.material = makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     // Taut bags: this geometry holds about 3.7 g of air at ambient pressure when inflated
     // (docs/seed-load-test.md), so 4.5 g and 4.0 g are above ambient.
     o.gasMasses = {4.5e-3, 4.0e-3};

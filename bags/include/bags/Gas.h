@@ -49,6 +49,10 @@ public:
     double calcWorkPotential(double volume) const;
     /// Temperature [K] at volume V (varies in adiabatic/polytropic processes).
     double calcTemperature(double volume) const;
+    /// Adds dm [kg] (negative: removes) at volume V [m^3] without changing the gas's
+    /// temperature at that volume: p(V) scales by (m + dm) / m. Exact for an isothermal gas;
+    /// for adiabatic and polytropic gases it neglects the heat carried by the flow.
+    void transferMass(double dm, double volume);
     const GasOptions& getOptions() const { return m_options; }
 private:
     GasOptions m_options;
@@ -57,5 +61,33 @@ private:
     double m_pRef = 0.0;
     double m_VRef = 0.0;
 };
+
+/// A flow restriction between two gas bodies (the double wedge's intermediate connection, a
+/// valve port): mass flow driven by the pressure difference,
+///   mdot = Cd A sqrt(2 rho_up) dp / (dp^2 + dpLam^2)^(1/4)   (from the higher pressure),
+/// the incompressible orifice law Cd A sqrt(2 rho dp) for |dp| >> dpLam and a linear (laminar)
+/// law for |dp| << dpLam, which keeps the flow smooth where the pressures equalise. rho_up is
+/// the upstream gas density. Valid while dp is a few percent of the absolute pressure (the
+/// compressible expansion factor then stays above 0.98); choked flow is not modelled.
+struct OrificeOptions {
+    double diameter = 4.0e-3;          ///< [m] of the equivalent round opening
+    double dischargeCoefficient = 0.62;///< Cd (sharp-edged orifice: about 0.6)
+    double laminarPressure = 1.0;      ///< [Pa] dpLam, where the law turns linear
+    void validate() const;             ///< throws std::invalid_argument naming the option
+    double getArea() const;            ///< [m^2]
+};
+
+/// Mass flow [kg/s] from gas a to gas b through an orifice for absolute pressures pa, pb [Pa]
+/// and the upstream density rhoUp [kg/m^3]; dmdotdp (optional) is d(mdot)/d(pa - pb) at fixed
+/// density [kg/(s Pa)].
+double calcOrificeMassFlow(const OrificeOptions& o, double pa, double pb, double rhoUp,
+                           double* dmdotdp = nullptr);
+
+/// Mass [kg] that flows from gas a (at volume Va) to gas b (at Vb) through the orifice during
+/// dt [s] with both volumes held fixed, by backward Euler: dm = dt mdot(pa(ma - dm),
+/// pb(mb + dm)). The root is unique and lies between 0 and the transfer that equalises the
+/// pressures, so any dt is stable. Does not change the gases.
+double calcOrificeTransfer(const OrificeOptions& o, const GasChamber& a, double Va,
+                           const GasChamber& b, double Vb, double dt);
 
 }  // namespace bags

@@ -29,6 +29,13 @@ struct LoadTestOptions {
     double wrinklingResidual = 1e-3;    ///< residual stiffness fraction of slack states
     bool gravity = true;                ///< self-weight of the sheet
     GasOptions gas;
+    /// How the chambers share their air: Open, one gas body filling all chambers (pressures
+    /// always equal); Orifice, one gas body per chamber, neighbouring chambers (c, c + 1)
+    /// joined by `orifice`, the mass flow integrated over the test's time (needs two or more
+    /// chambers, i.e. the diaphragm).
+    enum class Connection { Open, Orifice };
+    Connection connection = Connection::Open;
+    OrificeOptions orifice;
     std::vector<double> gasMasses;      ///< [kg], run in this order (seed: 3.5 g down to 1.0 g)
     double blockSize = 0.050;           ///< square block edge [m]
     double loadingRate = 10.0e-3 / 60.0;///< [m/s] (10 mm/min)
@@ -59,6 +66,7 @@ struct LoadStep {
     double force = 0.0;        ///< block force [N]
     std::vector<double> gaugePressure;  ///< per chamber [Pa]
     std::vector<double> volume;         ///< per chamber [m^3]
+    std::vector<double> gasMass;        ///< per chamber [kg] (its share of a shared gas)
     int newtonIterations = 0;
     double stabilizationEnergy = 0.0;   ///< [J] held by the stabilisation (0 if not needed)
     double residual = 0.0;              ///< [N] force residual the step was accepted at

@@ -15,6 +15,7 @@
 
 #include <bags/Types.h>
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -53,8 +54,13 @@ public:
 std::unique_ptr<MembraneMaterial> makeNeoHookean(double C10);
 /// W = C10 (I1 - 3) + C01 (I2 - 3).
 std::unique_ptr<MembraneMaterial> makeMooneyRivlin(double C10, double C01);
-/// W = C10 (I1 - 3) + C20 (I1 - 3)^2 + C30 (I1 - 3)^3.
-std::unique_ptr<MembraneMaterial> makeYeoh(double C10, double C20, double C30);
+/// W = C10 (I1 - 3) + C20 (I1 - 3)^2 + C30 (I1 - 3)^3 up to I1 - 3 = continuationLimit;
+/// beyond it W goes on with its value, slope and (non-negative part of its) curvature there.
+/// A fit with C30 < 0 has W -> -infinity at large I1: the limit keeps the energy bounded below
+/// (see makeStableYeoh). Default: the polynomial everywhere.
+std::unique_ptr<MembraneMaterial> makeYeoh(double C10, double C20, double C30,
+                                           double continuationLimit =
+                                               std::numeric_limits<double>::infinity());
 /// W = sum_i 2 mu_i / alpha_i^2 (l1^a_i + l2^a_i + l3^a_i - 3) (Abaqus convention).
 std::unique_ptr<MembraneMaterial> makeOgden(const std::vector<double>& mu,
                                             const std::vector<double>& alpha);

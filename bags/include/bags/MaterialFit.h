@@ -109,6 +109,17 @@ struct StabilityRange {
 StabilityRange calcStabilityRange(const MembraneMaterial& material, double maxStretch = 3.0,
                                   double step = 1e-3);
 
+/// I1 - 3 at which a Yeoh material (C10, C20, C30) first leaves its stable range on the
+/// uniaxial, planar or equibiaxial path (calcStabilityRange scanned to stretch 3 in steps of
+/// 1e-3); infinity if it stays stable there.
+double calcYeohStableLimit(double C10, double C20, double C30);
+
+/// A Yeoh material that follows the polynomial inside its stable range and continues it
+/// linearly in I1 beyond (makeYeoh with calcYeohStableLimit): the same response wherever the
+/// fit is usable, and an energy bounded below everywhere, which a Newton solver needs when
+/// its trial states overstretch elements (a fit with C30 < 0 otherwise has W -> -infinity).
+std::unique_ptr<MembraneMaterial> makeStableYeoh(double C10, double C20, double C30);
+
 /// Outcome of fitting one model to one data set.
 struct MaterialFitResult {
     MaterialModel model = MaterialModel::NeoHookean;

@@ -94,6 +94,8 @@ public:
     /// Prescribed gauge pressure [Pa] on a chamber not filled by a gas (follower load).
     void setChamberPressure(int chamber, double gaugePressure);
     double getChamberPressure(int chamber) const { return m_chamberPressure[chamber]; }
+    /// Index of the gas body filling chamber c, or -1 (prescribed pressure).
+    int getChamberGas(int chamber) const { return m_chamberGas.at(chamber); }
 
     /// Viscous-like stabilisation for slack, wrinkling states (as a quasi-static analysis with
     /// automatic stabilisation): adds 1/2 k A_a |x_a - anchor_a|^2 per node, k [Pa/m], A_a the
