@@ -48,19 +48,20 @@ void setTotalGasMass(MembraneModel& model, const Eigen::Matrix3Xd& x, double m) 
     for (int g = 0; g < ng; ++g) model.updGas(g).setMass(m * V[g] / Vsum, V[g]);
 }
 
-// Lets gas flow through the orifices between neighbouring gas bodies for dt [s], volumes held
-// at x (operator split: the membrane then finds its equilibrium at the new masses).
-void exchangeGas(MembraneModel& model, const Eigen::Matrix3Xd& x, const LoadTestOptions& o,
-                 double dt) {
-    if (o.connection != LoadTestOptions::Connection::Orifice || dt <= 0.0) return;
-    for (int g = 0; g + 1 < model.getNumGases(); ++g) {
-        const double Va = model.calcGasVolume(g, x, nullptr);
-        const double Vb = model.calcGasVolume(g + 1, x, nullptr);
-        const double dm =
-            calcOrificeTransfer(o.orifice, model.getGas(g), Va, model.getGas(g + 1), Vb, dt);
-        model.updGas(g).transferMass(-dm, Va);
-        model.updGas(g + 1).transferMass(dm, Vb);
-    }
+// Sets the two gas bodies to `start` with dm [kg] moved from body 0 to body 1 at x.
+void moveGas(MembraneModel& model, const std::vector<GasChamber>& start,
+             const Eigen::Matrix3Xd& x, double dm) {
+    for (int g = 0; g < 2; ++g) model.updGas(g) = start[g];
+    model.updGas(0).transferMass(-dm, model.calcGasVolume(0, x, nullptr));
+    model.updGas(1).transferMass(dm, model.calcGasVolume(1, x, nullptr));
+}
+
+// Mass [kg] the orifice passes from body 0 to body 1 during dt [s] from the `start` masses,
+// by backward Euler with the volumes held at x.
+double calcTransfer(const MembraneModel& model, const std::vector<GasChamber>& start,
+                    const Eigen::Matrix3Xd& x, const LoadTestOptions& o, double dt) {
+    return calcOrificeTransfer(o.orifice, start[0], model.calcGasVolume(0, x, nullptr), start[1],
+                               model.calcGasVolume(1, x, nullptr), dt);
 }
 
 double calcTop(const Eigen::Matrix3Xd& x) { return x.row(2).maxCoeff(); }
@@ -104,6 +105,33 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
             rig.model->commitStep(x);
             return true;
         }
+    }
+    return false;
+}
+
+// Solves the current loads with the gas flowing through the orifice over dt [s] from the
+// `start` gas states: the transferred mass dm and the membrane's equilibrium are found together
+// by a secant iteration on R(dm) = dm - T(dm), T the backward-Euler transfer at the volumes of
+// the equilibrium reached with dm (the diaphragm moves with the pressure difference, so plain
+// fixed-point iteration can diverge). Open connection: a plain solve.
+bool solveWithFlow(Rig& rig, const LoadTestOptions& o, const std::vector<GasChamber>& start,
+                   double dt, SolveSummary* sum, double* stab) {
+    if (o.connection != LoadTestOptions::Connection::Orifice) return trySolve(rig, o, sum, stab);
+    double dm = calcTransfer(*rig.model, start, rig.x, o, dt);  // predictor: last volumes
+    double dmPrev = 0.0, rPrev = 0.0;
+    for (int k = 0; k < 30; ++k) {
+        moveGas(*rig.model, start, rig.x, dm);
+        if (!trySolve(rig, o, sum, stab)) return false;
+        const double t = calcTransfer(*rig.model, start, rig.x, o, dt);
+        const double r = dm - t;
+        if (std::abs(r) <= 1e-4 * std::abs(t) + 1e-12 * (start[0].getMass() + start[1].getMass())) {
+            moveGas(*rig.model, start, rig.x, t);  // gas at the final volumes
+            return true;
+        }
+        const double next = (k == 0 || r == rPrev) ? t : dm - r * (dm - dmPrev) / (r - rPrev);
+        dmPrev = dm;
+        rPrev = r;
+        dm = next;
     }
     return false;
 }
@@ -169,8 +197,8 @@ void LoadTestOptions::validate() const {
         orifice.validate();
         if (!geometry.diaphragm)
             throw std::invalid_argument(
-                "load test option 'connection' = orifice needs two chambers; set the geometry's "
-                "diaphragm (or use the open connection)");
+                "load test option 'connection' = orifice needs the two chambers; set the "
+                "geometry's diaphragm (or use the open connection)");
     }
     require(stabilization >= 0.0, "stabilization", stabilization,
             "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
@@ -269,6 +297,15 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         solveRamp(rig, o, m0, curve.gasMass,
                   [&](double m) { setTotalGasMass(*rig.model, rig.x, m); },
                   "changing the gas mass");
+        if (o.connection == LoadTestOptions::Connection::Orifice) {
+            // Before loading, the chambers settle to one pressure (a long wait: 1000 s).
+            std::vector<GasChamber> start;
+            for (int g = 0; g < rig.model->getNumGases(); ++g) start.push_back(rig.model->getGas(g));
+            SolveSummary sum;
+            double stab = 0.0;
+            if (!solveWithFlow(rig, o, start, 1000.0, &sum, &stab))
+                throw NumericalError("no convergence while the chambers settle through the orifice");
+        }
         // setMass reseals at the current volume: isothermal p V = m R T holds whatever the
         // sealing volume, so the state is exact; for adiabatic gases the reference is the
         // state at this mass, as in a slow let-down at room temperature.
@@ -314,18 +351,20 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         record(0.0, true, SolveSummary(), 0.0);
         // Moves the block to travel `to` (from the last converged state); on failure the
         // caller shortens the step.
-        // Gas flows through the orifices over the step's time first (volumes of the last
-        // state), then the membrane settles; a failed step restores the gas.
+        // With an orifice the gas flows over the step's time while the membrane settles
+        // (solveWithFlow). A failed step restores state and gas.
         auto advance = [&](double to, SolveSummary* sum, double* stab) {
+            const int ng = rig.model->getNumGases();
             std::vector<GasChamber> gasBefore;
-            for (int g = 0; g < rig.model->getNumGases(); ++g)
-                gasBefore.push_back(rig.model->getGas(g));
-            const double dispBefore = curve.steps.back().displacement;
-            exchangeGas(*rig.model, rig.x, o, std::abs(to - dispBefore) / o.loadingRate);
+            for (int g = 0; g < ng; ++g) gasBefore.push_back(rig.model->getGas(g));
+            const Eigen::Matrix3Xd xBefore = rig.x;
+            const double dt = std::abs(to - curve.steps.back().displacement) / o.loadingRate;
             placeBlock(rig, top - to);
             if (self) self->updateCandidates(rig.x);
-            if (trySolve(rig, o, sum, stab)) return true;
-            for (int g = 0; g < rig.model->getNumGases(); ++g) rig.model->updGas(g) = gasBefore[g];
+            if (solveWithFlow(rig, o, gasBefore, dt, sum, stab)) return true;
+            for (int g = 0; g < ng; ++g) rig.model->updGas(g) = gasBefore[g];
+            rig.x = xBefore;
+            rig.model->commitStep(rig.x);
             return false;
         };
         // A step that cannot be solved even at the smallest increment ends the branch; the

@@ -89,7 +89,7 @@ namespace {
 struct CurveData {
     h5::Handle group;
     h5::GrowingDataset step, loading, time, displacement, force, iterations, pressure, volume,
-        stabilization, residual;
+        gasMass, stabilization, residual;
     size_t chambers = 0;  ///< columns of pressure and volume
 };
 
@@ -248,6 +248,7 @@ CurveData& LoadTestWriter::Impl::getCurve(const bags::LoadStep& s) {
         c.pressure =
             h5::GrowingDataset(g, "gauge_pressure", H5T_NATIVE_DOUBLE, {chambers}, 256, "Pa");
         c.volume = h5::GrowingDataset(g, "volume", H5T_NATIVE_DOUBLE, {chambers}, 256, "m^3");
+        c.gasMass = h5::GrowingDataset(g, "gas_mass", H5T_NATIVE_DOUBLE, {chambers}, 256, "kg");
     }
     return c;
 }
@@ -415,11 +416,13 @@ void LoadTestWriter::addStep(const bags::LoadStep& s, const bags::Mesh& mesh,
     c.iterations.append(&s.newtonIterations);
     c.stabilization.append(&s.stabilizationEnergy);
     c.residual.append(&s.residual);
-    std::vector<double> p = s.gaugePressure, v = s.volume;
+    std::vector<double> p = s.gaugePressure, v = s.volume, m = s.gasMass;
     p.resize(c.chambers, 0.0);
     v.resize(c.chambers, 0.0);
+    m.resize(c.chambers, 0.0);
     c.pressure.append(p.data());
     c.volume.append(v.data());
+    c.gasMass.append(m.data());
 
     d.csv << fmtG(d.gasMasses[s.curve] * 1e3, 6) << ',' << fmtG(s.displacement * 1e3) << ','
           << fmtG(s.force) << ',' << fmtG(calcMeanPressure(s) * 1e-3) << ','

@@ -55,6 +55,44 @@ TEST(LoadTest, CoarseBagIsLoadedToPeakAndUnloaded) {
     EXPECT_LT(r.curves[1].inflatedGaugePressure, r.curves[0].inflatedGaugePressure);
 }
 
+TEST(LoadTest, OrificeBetweenTheWedgesConservesGasAndLimitsTheFlow) {
+    // One taut curve three ways: open connection (one gas), a wide orifice (20 mm: the
+    // pressures equalise within each step), a nearly closed one (0.01 mm: Cd A sqrt(2 rho dp)
+    // t is about 8e-8 kg for dp ~ 100 Pa over the curve's ~100 s, 3e-5 of a chamber's gas).
+    LoadTestOptions o = coarseOptions();
+    o.gasMasses = {4.5e-3};
+    o.unload = false;
+    const LoadTestResult open = runLoadTest(o);
+    o.connection = LoadTestOptions::Connection::Orifice;
+    o.orifice.diameter = 20e-3;
+    const LoadTestResult wide = runLoadTest(o);
+    o.orifice.diameter = 0.01e-3;
+    const LoadTestResult shut = runLoadTest(o);
+    for (const LoadTestResult* r : {&open, &wide, &shut}) {
+        ASSERT_EQ(r->curves.size(), 1u);
+        EXPECT_TRUE(r->curves[0].reachedPeak);
+        // The gas is only moved, never made or lost (1e-12 relative).
+        for (const LoadStep& st : r->curves[0].steps) {
+            ASSERT_EQ(st.gasMass.size(), 2u);
+            EXPECT_NEAR(st.gasMass[0] + st.gasMass[1], 4.5e-3, 1e-12 * 4.5e-3);
+        }
+    }
+    // Wide orifice: the chambers stay within 1 Pa of each other and the curve is the open
+    // connection's (block travel at the peak within 1 %).
+    for (const LoadStep& st : wide.curves[0].steps)
+        EXPECT_NEAR(st.gaugePressure[0], st.gaugePressure[1], 1.0);
+    const double dOpen = open.curves[0].steps.back().displacement;
+    EXPECT_NEAR(wide.curves[0].steps.back().displacement, dOpen, 0.01 * dOpen);
+    // Nearly shut: the chamber under more of the block (different share of the compression)
+    // ends at a clearly different pressure (> 50 Pa apart; open: 0), and each chamber keeps
+    // its gas to 1e-4.
+    const LoadStep& first = shut.curves[0].steps.front();
+    const LoadStep& last = shut.curves[0].steps.back();
+    EXPECT_GT(std::abs(last.gaugePressure[0] - last.gaugePressure[1]), 50.0);
+    for (int c = 0; c < 2; ++c)
+        EXPECT_NEAR(last.gasMass[c], first.gasMass[c], 1e-4 * first.gasMass[c]);
+}
+
 TEST(LoadTest, StageRuleFollowsTheDocumentedDefinition) {
     // Masses 3.5 ... 1.0 g with a stiffness minimum at 2.0 g: below it stage 3; above it
     // stage 1 where the 10-35 N range is linear (r2 >= 0.995), stage 2 where it is not.

@@ -114,6 +114,50 @@ TEST(LoadTestScenario, BaseScenarioIsValidAndUsesDefaults) {
     EXPECT_EQ(sc2.options.solver.maxIterations, 30);
 }
 
+TEST(LoadTestScenario, OrificeAndExtrapolationKeys) {
+    // connection: orifice with its opening; the yeoh is continued beyond its stable range
+    // unless extrapolation: polynomial.
+    const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 6,
+                    "  height: 150 mm\n  connection: orifice\n  orifice_diameter: 3 mm\n"
+                    "  discharge_coefficient: 0.7"),
+        "o.yaml"));
+    EXPECT_EQ(sc.options.connection, bags::LoadTestOptions::Connection::Orifice);
+    EXPECT_NEAR(sc.options.orifice.diameter, 3e-3, 1e-15);
+    EXPECT_NEAR(sc.options.orifice.dischargeCoefficient, 0.7, 1e-15);
+    EXPECT_EQ(io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml")).options.connection,
+              bags::LoadTestOptions::Connection::Open);
+    // Equibiaxial stretch 2: the polynomial's energy is negative (C30 < 0), the continued
+    // one positive.
+    bags::Mat2 C = bags::Mat2::Identity() * 4.0;
+    const auto linear = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
+    EXPECT_GT(linear.options.material->calcEnergy(C, nullptr, nullptr), 0.0);
+    const auto poly = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 12, "  thickness: 0.2 mm\n  extrapolation: polynomial"), "p.yaml"));
+    EXPECT_LT(poly.options.material->calcEnergy(C, nullptr, nullptr), 0.0);
+
+    // Errors name the line, the key and what is valid.
+    const InputError e = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  orifice_diameter: 3 mm"));
+    EXPECT_EQ(e.getLine(), 7);
+    EXPECT_EQ(e.getKey(), "airbag.orifice_diameter");
+    EXPECT_NE(std::string(e.what()).find("only applies to connection: orifice"), std::string::npos)
+        << e.what();
+    const InputError e2 = errorFor(
+        replaceLine(kBase, 6, "  height: 150 mm\n  diaphragm: false\n  connection: orifice"));
+    EXPECT_EQ(e2.getKey(), "airbag.connection");
+    EXPECT_NE(std::string(e2.what()).find("diaphragm: true"), std::string::npos) << e2.what();
+    const InputError e3 = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  connection: valve"));
+    EXPECT_EQ(e3.getLine(), 7);
+    EXPECT_NE(std::string(e3.what()).find("open"), std::string::npos) << e3.what();
+    const InputError e4 = errorFor(
+        replaceLine(kBase, 6, "  height: 150 mm\n  connection: orifice\n  orifice_diameter: 0 mm"));
+    EXPECT_EQ(e4.getKey(), "airbag.orifice_diameter");
+    const InputError e5 = errorFor(replaceLine(
+        replaceLine(kBase, 8, "  model: neo-hookean"), 10,
+        "  extrapolation: linear"));
+    EXPECT_EQ(e5.getKey(), "membrane.extrapolation");
+}
+
 TEST(LoadTestScenario, MisspeltKeyIsNamedWithSuggestion) {
     const InputError e = errorFor(replaceLine(kBase, 6, "  hieght: 150 mm"));
     EXPECT_EQ(e.getLine(), 6);
