@@ -224,16 +224,21 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
     std::ostream& out = std::cout;
     out << "\nstiffness over " << fmt("%g", o.stiffnessFrom) << "-" << fmt("%g", o.stiffnessTo)
         << " N (slope of force vs displacement on loading):\n";
-    out << "  gas [g]  height [mm]  p0 [kPa]  V0 [mL]  steps  peak  k [N/mm]      r2  stage\n";
+    out << "  gas [g]  height [mm]  p0 [kPa]  V0 [mL]  steps  peak  k [N/mm]      r2  stage"
+           "  stabilised\n";
     for (const bags::LoadCurve& c : r.curves) {
-        char line[160];
+        char line[200];
         std::snprintf(line, sizeof line,
-                      "  %7.3f  %11.1f  %8.2f  %7.0f  %5zu  %4s  %8.3f  %6.4f  %5d\n",
+                      "  %7.3f  %11.1f  %8.2f  %7.0f  %5zu  %4s  %8.3f  %6.4f  %5d  %3d steps, "
+                      "%.1f %% of work\n",
                       c.gasMass * 1e3, c.unloadedHeight * 1e3, c.inflatedGaugePressure * 1e-3,
                       c.inflatedVolume * 1e6, c.steps.size(), c.reachedPeak ? "yes" : "no",
-                      c.stiffness * 1e-3, c.r2, c.stage);
+                      c.stiffness * 1e-3, c.r2, c.stage, c.stabilizedSteps,
+                      100.0 * c.stabilizationShare);
         out << line;
     }
+    out << "  (stabilised: steps accepted with the stabilisation springs, and the largest share of\n"
+           "   the block's work they held; docs/solver.md)\n";
     for (const bags::LoadCurve& c : r.curves)
         if (!c.failure.empty())
             out << "  " << io::formatQuantity(c.gasMass, "g", 2) << " stopped early: " << c.failure

@@ -76,14 +76,16 @@ void placeBlock(Rig& rig, double zBottom) {
 
 // Solves with step cutting on a scalar control parameter: apply(s) sets the loads for s in
 // [s0, s1]; on failure the increment is halved. Returns the number of Newton iterations.
-// Solves the current loads starting from rig.x. If Newton fails, retries once with the
-// stabilisation anchored at rig.x (slack, wrinkling states). On success rig.x is updated and
-// contact history committed. Returns false if both fail.
+// Solves the current loads starting from rig.x. If Newton fails, retries with the
+// stabilisation anchored at rig.x (slack, wrinkling states), then with 10 and 100 times that
+// stiffness (the energy it holds is recorded per step). On success rig.x is updated and
+// contact history committed. Returns false if every pass fails.
 bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* stabEnergy) {
-    for (int pass = 0; pass < 2; ++pass) {
-        if (pass == 1) {
+    constexpr int kPasses = 4;  // none, then 1x, 10x, 100x the stabilisation
+    for (int pass = 0; pass < kPasses; ++pass) {
+        if (pass >= 1) {
             if (o.stabilization <= 0.0) return false;
-            rig.model->setStabilization(o.stabilization, rig.x);
+            rig.model->setStabilization(o.stabilization * std::pow(10.0, pass - 1), rig.x);
         }
         Eigen::Matrix3Xd x = rig.x;
         bool ok = false;
@@ -99,7 +101,7 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
             ok = false;
         }
         *stabEnergy = ok ? rig.model->calcStabilizationEnergy(x) : 0.0;
-        if (pass == 1) rig.model->setStabilization(0.0, rig.x);
+        if (pass >= 1) rig.model->setStabilization(0.0, rig.x);
         if (ok) {
             rig.x = x;
             rig.model->commitStep(x);
@@ -434,6 +436,21 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                 rig.x = xUnloaded;
                 rig.model->commitStep(rig.x);
                 rig.workspace.reset();
+            }
+        }
+        // How much the stabilisation carried: steps that needed it, and its energy against
+        // the block's work (trapezoidal) along the loading branch.
+        {
+            double work = 0.0;
+            for (size_t i = 0; i < curve.steps.size(); ++i) {
+                const LoadStep& st = curve.steps[i];
+                if (st.stabilizationEnergy > 0.0) ++curve.stabilizedSteps;
+                if (!st.loading || i == 0) continue;
+                const LoadStep& prev = curve.steps[i - 1];
+                work += 0.5 * (st.force + prev.force) * (st.displacement - prev.displacement);
+                if (work > 0.0 && st.stabilizationEnergy > 0.0)
+                    curve.stabilizationShare =
+                        std::max(curve.stabilizationShare, st.stabilizationEnergy / work);
             }
         }
         // Stiffness over the force range, loading branch.

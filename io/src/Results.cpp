@@ -477,6 +477,8 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
         h5::setAttribute(g.get(), "stage", c.stage);
         h5::setAttribute(g.get(), "reached_peak", c.reachedPeak ? 1 : 0);
         h5::setAttribute(g.get(), "failure", c.failure);
+        h5::setAttribute(g.get(), "stabilized_steps", c.stabilizedSteps);
+        h5::setAttribute(g.get(), "stabilization_share", c.stabilizationShare);
     }
     h5::Handle sum = h5::createGroup(d.file.get(), "summary");
     const hsize_t hn = n;

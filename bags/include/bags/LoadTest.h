@@ -83,6 +83,11 @@ struct LoadCurve {
     int stage = 0;                   ///< 1, 2 or 3 (rule in docs/seed-load-test.md)
     bool reachedPeak = false;
     std::string failure;             ///< empty, or why the curve stopped early
+    int stabilizedSteps = 0;         ///< steps accepted only with the stabilisation
+    /// Largest ratio, over the loading steps, of the energy held by the stabilisation to the
+    /// work the block has done so far [-]: how far the curve is from a true equilibrium path
+    /// (Abaqus' rule of thumb for its automatic stabilisation: keep it below about 0.05).
+    double stabilizationShare = 0.0;
 };
 
 struct LoadTestResult {
