@@ -76,37 +76,65 @@ void placeBlock(Rig& rig, double zBottom) {
 
 // Solves with step cutting on a scalar control parameter: apply(s) sets the loads for s in
 // [s0, s1]; on failure the increment is halved. Returns the number of Newton iterations.
+// Newton from x under the model's current stabilisation; false if it does not converge.
+bool runNewton(Rig& rig, const LoadTestOptions& o, Eigen::Matrix3Xd& x, SolveSummary* sum) {
+    SolverOptions so = o.solver;
+    if (so.maxStep == 0.0) so.maxStep = o.geometry.meshSize;  // trust limit: one element
+    // Non-smooth self contact can stall Newton a little above the tolerance: accept a
+    // residual below 0.1 % of the peak force then (recorded per step).
+    if (so.acceptableResidual == 0.0) so.acceptableResidual = 1e-3 * o.peakForce;
+    try {
+        const int before = sum->iterations;
+        *sum = solveEquilibrium(*rig.model, x, so, &rig.workspace);
+        sum->iterations += before;  // summed over the solves of one step
+        return sum->converged;
+    } catch (const NumericalError&) {
+        return false;
+    }
+}
+
 // Solves the current loads starting from rig.x. If Newton fails, retries with the
-// stabilisation anchored at rig.x (slack, wrinkling states), then with 10 and 100 times that
-// stiffness (the energy it holds is recorded per step). On success rig.x is updated and
-// contact history committed. Returns false if every pass fails.
-bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* stabEnergy) {
-    constexpr int kPasses = 4;  // none, then 1x, 10x, 100x the stabilisation
-    for (int pass = 0; pass < kPasses; ++pass) {
-        if (pass >= 1) {
-            if (o.stabilization <= 0.0) return false;
-            rig.model->setStabilization(o.stabilization * std::pow(10.0, pass - 1), rig.x);
+// stabilisation springs anchored at rig.x (slack, wrinkling states), at up to `levels`
+// stiffnesses (1x, 10x, 100x the option). A stabilised state is then relaxed: the springs are
+// re-anchored at it and the step solved again (a pseudo-time step that moves towards the true
+// equilibrium), up to kRelaxations times, each time first trying without springs; the energy
+// the springs hold at the accepted state (zero if the last solve needed none) is returned.
+// On success rig.x is updated and contact history committed.
+bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* stabEnergy,
+              int levels = 1) {
+    constexpr int kRelaxations = 4;
+    *sum = SolveSummary();
+    *stabEnergy = 0.0;
+    auto accept = [&](const Eigen::Matrix3Xd& x, double energy) {
+        rig.x = x;
+        rig.model->commitStep(x);
+        *stabEnergy = energy;
+        return true;
+    };
+    Eigen::Matrix3Xd x = rig.x;
+    if (runNewton(rig, o, x, sum)) return accept(x, 0.0);
+    if (o.stabilization <= 0.0) return false;
+    for (int level = 0; level < levels; ++level) {
+        const double k = o.stabilization * std::pow(10.0, level);
+        x = rig.x;
+        rig.model->setStabilization(k, x);
+        const bool ok = runNewton(rig, o, x, sum);
+        double energy = ok ? rig.model->calcStabilizationEnergy(x) : 0.0;
+        rig.model->setStabilization(0.0, rig.x);
+        if (!ok) continue;
+        for (int r = 0; r < kRelaxations; ++r) {
+            Eigen::Matrix3Xd free = x;
+            if (runNewton(rig, o, free, sum)) return accept(free, 0.0);
+            Eigen::Matrix3Xd next = x;
+            rig.model->setStabilization(k, x);
+            const bool relaxed = runNewton(rig, o, next, sum);
+            const double e = relaxed ? rig.model->calcStabilizationEnergy(next) : 0.0;
+            rig.model->setStabilization(0.0, rig.x);
+            if (!relaxed) break;
+            x = next;
+            energy = e;
         }
-        Eigen::Matrix3Xd x = rig.x;
-        bool ok = false;
-        SolverOptions so = o.solver;
-        if (so.maxStep == 0.0) so.maxStep = o.geometry.meshSize;  // trust limit: one element
-        // Non-smooth self contact can stall Newton a little above the tolerance: accept a
-        // residual below 0.1 % of the peak force then (recorded per step).
-        if (so.acceptableResidual == 0.0) so.acceptableResidual = 1e-3 * o.peakForce;
-        try {
-            *sum = solveEquilibrium(*rig.model, x, so, &rig.workspace);
-            ok = sum->converged;
-        } catch (const NumericalError&) {
-            ok = false;
-        }
-        *stabEnergy = ok ? rig.model->calcStabilizationEnergy(x) : 0.0;
-        if (pass >= 1) rig.model->setStabilization(0.0, rig.x);
-        if (ok) {
-            rig.x = x;
-            rig.model->commitStep(x);
-            return true;
-        }
+        return accept(x, energy);
     }
     return false;
 }
@@ -118,12 +146,12 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
 // fixed-point iteration can diverge). Open connection: a plain solve.
 bool solveWithFlow(Rig& rig, const LoadTestOptions& o, const std::vector<GasChamber>& start,
                    double dt, SolveSummary* sum, double* stab) {
-    if (o.connection != LoadTestOptions::Connection::Orifice) return trySolve(rig, o, sum, stab);
+    if (o.connection != LoadTestOptions::Connection::Orifice) return trySolve(rig, o, sum, stab, 3);
     double dm = calcTransfer(*rig.model, start, rig.x, o, dt);  // predictor: last volumes
     double dmPrev = 0.0, rPrev = 0.0;
     for (int k = 0; k < 30; ++k) {
         moveGas(*rig.model, start, rig.x, dm);
-        if (!trySolve(rig, o, sum, stab)) return false;
+        if (!trySolve(rig, o, sum, stab, 3)) return false;
         const double t = calcTransfer(*rig.model, start, rig.x, o, dt);
         const double r = dm - t;
         if (std::abs(r) <= 1e-4 * std::abs(t) + 1e-12 * (start[0].getMass() + start[1].getMass())) {
