@@ -36,3 +36,22 @@ TEST(LoadTest, SlackBagCurveEndsCleanlyWhateverHappens) {
     }
 }
 
+
+TEST(LoadTest, NearlyEmptyBagBottomsOutWithTheReasonStated) {
+    // 1.0 g fills about a quarter of this bag: the block folds the slack top down to the bed
+    // board long before 50 N (the seed's third stage is this bottoming). The curve must stop
+    // there with that reason, having travelled to within 2 mm (+ one step) of the board.
+    LoadTestOptions o;
+    o.geometry.meshSize = 0.020;
+    o.material = makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.displacementStep = 2e-3;
+    o.gasMasses = {1.0e-3};
+    const LoadTestResult r = runLoadTest(o);
+    ASSERT_EQ(r.curves.size(), 1u);
+    const LoadCurve& c = r.curves[0];
+    EXPECT_FALSE(c.reachedPeak);
+    EXPECT_NE(c.failure.find("bottomed out"), std::string::npos) << c.failure;
+    double dmax = 0.0;
+    for (const LoadStep& s : c.steps) dmax = std::max(dmax, s.displacement);
+    EXPECT_GT(dmax, c.unloadedHeight - 0.002 - o.displacementStep);
+}
