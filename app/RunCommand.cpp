@@ -1,6 +1,7 @@
 // bagsim run: reads a scenario, runs it, streams the results into the output folder and
 // prints progress and a summary. Exit status: 0 complete, 1 the run failed (numerical or I/O),
 // 2 bad input (scenario, options, output folder), 130 interrupted (Ctrl-C).
+#include <algorithm>
 #include <bags/LoadTest.h>
 #include <bags/Polynomial.h>
 #include <bagsim/Version.h>
@@ -255,6 +256,22 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
         return;
     }
     out << "  bagsim: k = " << formatPolynomial(r.kFit) << "\n";
+    {
+        int finite = 0;
+        double lo = 1e9, hi = -1e9;
+        for (const bags::LoadCurve& c : r.curves)
+            if (std::isfinite(c.stiffness)) {
+                ++finite;
+                lo = std::min(lo, c.gasMass * 1e3);
+                hi = std::max(hi, c.gasMass * 1e3);
+            }
+        if (finite == o.polynomialOrder + 1)
+            out << "  note: " << finite << " curves have a stiffness, so the order-"
+                << o.polynomialOrder << " fit passes through them exactly; it is not a fit\n";
+        if (lo > 1.0 + 1e-9 || hi < 3.5 - 1e-9)
+            out << "  note: stiffness known from " << fmt("%.2f", lo) << " to " << fmt("%.2f", hi)
+                << " g only; outside that the polynomial is an extrapolation\n";
+    }
     // Both fits on a fine grid over the seed's range, 1.0-3.5 g.
     const int n = 251;
     double maxDiff = 0.0, sumSq = 0.0, maxAt = 1.0;
