@@ -122,6 +122,7 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
         double energy = ok ? rig.model->calcStabilizationEnergy(x) : 0.0;
         rig.model->setStabilization(0.0, rig.x);
         if (!ok) continue;
+        SolveSummary acceptedSum = *sum;  // the summary of the state that is kept
         for (int r = 0; r < kRelaxations; ++r) {
             Eigen::Matrix3Xd free = x;
             if (runNewton(rig, o, free, sum)) return accept(free, 0.0);
@@ -133,7 +134,11 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
             if (!relaxed) break;
             x = next;
             energy = e;
+            acceptedSum = *sum;
         }
+        const int iterations = sum->iterations;  // all solves of the step
+        *sum = acceptedSum;
+        sum->iterations = iterations;
         return accept(x, energy);
     }
     return false;
