@@ -186,6 +186,17 @@ void RigidContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) 
 
 bool RigidContact::isConservative() const { return m_impl->opt.friction == 0.0; }
 
+RigidContact::History RigidContact::getHistory() const {
+    return History{m_impl->anchor_S, m_impl->hasAnchor};
+}
+
+void RigidContact::setHistory(const History& h) {
+    if (h.anchor_S.size() != m_impl->anchor_S.size() || h.hasAnchor.size() != m_impl->hasAnchor.size())
+        throw std::invalid_argument("RigidContact::setHistory: history of another contact set");
+    m_impl->anchor_S = h.anchor_S;
+    m_impl->hasAnchor = h.hasAnchor;
+}
+
 void RigidContact::commitStep(const Eigen::Matrix3Xd& x) {
     Impl& m = *m_impl;
     if (m.opt.friction == 0.0) return;

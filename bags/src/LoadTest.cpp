@@ -93,12 +93,24 @@ bool runNewton(Rig& rig, const LoadTestOptions& o, Eigen::Matrix3Xd& x, SolveSum
     }
 }
 
+// Norm [N] of the force residual over the free dofs at x, without the stabilisation springs
+// (for a stabilised state: the springs' force).
+double calcFreeResidual(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
+    EnergyAccumulator acc(static_cast<int>(x.cols()));
+    acc.wantHessian = false;
+    model.addEnergy(x, acc);
+    for (int d : model.getFixedDofs()) acc.grad(d) = 0.0;
+    return acc.grad.norm();
+}
+
 // Solves the current loads starting from rig.x. If Newton fails, retries with the
 // stabilisation springs anchored at rig.x (slack, wrinkling states), at up to `levels`
 // stiffnesses (1x, 10x, 100x the option). A stabilised state is then relaxed: the springs are
 // re-anchored at it and the step solved again (a pseudo-time step that moves towards the true
-// equilibrium), up to kRelaxations times, each time first trying without springs; the energy
-// the springs hold at the accepted state (zero if the last solve needed none) is returned.
+// equilibrium), up to kRelaxations times, each time first trying without springs.
+// *stabEnergy is the energy the springs held, summed over the stabilised solves whose states
+// were kept (each is dissipated when the springs are re-anchored; zero if Newton needed no
+// springs). A state accepted with springs records its spring-free residual in sum->residualNorm.
 // On success rig.x is updated and contact history committed.
 bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* stabEnergy,
               int levels = 1) {
@@ -125,7 +137,7 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
         SolveSummary acceptedSum = *sum;  // the summary of the state that is kept
         for (int r = 0; r < kRelaxations; ++r) {
             Eigen::Matrix3Xd free = x;
-            if (runNewton(rig, o, free, sum)) return accept(free, 0.0);
+            if (runNewton(rig, o, free, sum)) return accept(free, energy);
             Eigen::Matrix3Xd next = x;
             rig.model->setStabilization(k, x);
             const bool relaxed = runNewton(rig, o, next, sum);
@@ -133,12 +145,13 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
             rig.model->setStabilization(0.0, rig.x);
             if (!relaxed) break;
             x = next;
-            energy = e;
+            energy += e;
             acceptedSum = *sum;
         }
         const int iterations = sum->iterations;  // all solves of the step
         *sum = acceptedSum;
         sum->iterations = iterations;
+        sum->residualNorm = calcFreeResidual(*rig.model, x);
         return accept(x, energy);
     }
     return false;
@@ -152,9 +165,15 @@ bool trySolve(Rig& rig, const LoadTestOptions& o, SolveSummary* sum, double* sta
 bool solveWithFlow(Rig& rig, const LoadTestOptions& o, const std::vector<GasChamber>& start,
                    double dt, SolveSummary* sum, double* stab) {
     if (o.connection != LoadTestOptions::Connection::Orifice) return trySolve(rig, o, sum, stab, 3);
+    // Every iterate starts from the step's friction history (a rejected iterate committed its
+    // own), and dm stays inside what either body holds (a secant step can overshoot).
+    const std::vector<RigidContact::History> history = rig.model->getContactHistory();
+    const double dmMax = 0.99 * start[0].getMass(), dmMin = -0.99 * start[1].getMass();
     double dm = calcTransfer(*rig.model, start, rig.x, o, dt);  // predictor: last volumes
     double dmPrev = 0.0, rPrev = 0.0;
     for (int k = 0; k < 30; ++k) {
+        dm = std::clamp(dm, dmMin, dmMax);
+        rig.model->setContactHistory(history);
         moveGas(*rig.model, start, rig.x, dm);
         if (!trySolve(rig, o, sum, stab, 3)) return false;
         const double t = calcTransfer(*rig.model, start, rig.x, o, dt);
@@ -334,12 +353,20 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                   "changing the gas mass");
         if (o.connection == LoadTestOptions::Connection::Orifice) {
             // Before loading, the chambers settle to one pressure (a long wait: 1000 s).
-            std::vector<GasChamber> start;
-            for (int g = 0; g < rig.model->getNumGases(); ++g) start.push_back(rig.model->getGas(g));
-            SolveSummary sum;
-            double stab = 0.0;
-            if (!solveWithFlow(rig, o, start, 1000.0, &sum, &stab))
-                throw NumericalError("no convergence while the chambers settle through the orifice");
+            // Backward Euler in 10 steps growing geometrically (0.5 s first): one 1000 s step
+            // would settle a small orifice far more than its flow law allows.
+            constexpr int kSettleSteps = 10;
+            const double first = 1000.0 / (std::pow(2.0, kSettleSteps) - 1.0);
+            for (int i = 0; i < kSettleSteps; ++i) {
+                std::vector<GasChamber> start;
+                for (int g = 0; g < rig.model->getNumGases(); ++g)
+                    start.push_back(rig.model->getGas(g));
+                SolveSummary sum;
+                double stab = 0.0;
+                if (!solveWithFlow(rig, o, start, first * std::pow(2.0, i), &sum, &stab))
+                    throw NumericalError(
+                        "no convergence while the chambers settle through the orifice");
+            }
         }
         // setMass reseals at the current volume: isothermal p V = m R T holds whatever the
         // sealing volume, so the state is exact; for adiabatic gases the reference is the
@@ -393,13 +420,18 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             std::vector<GasChamber> gasBefore;
             for (int g = 0; g < ng; ++g) gasBefore.push_back(rig.model->getGas(g));
             const Eigen::Matrix3Xd xBefore = rig.x;
+            const std::vector<RigidContact::History> history = rig.model->getContactHistory();
             const double dt = std::abs(to - curve.steps.back().displacement) / o.loadingRate;
             placeBlock(rig, top - to);
             if (self) self->updateCandidates(rig.x);
-            if (solveWithFlow(rig, o, gasBefore, dt, sum, stab)) return true;
+            try {
+                if (solveWithFlow(rig, o, gasBefore, dt, sum, stab)) return true;
+            } catch (const NumericalError&) {
+                // e.g. a gas transfer no chamber could give: the step fails like any other
+            }
             for (int g = 0; g < ng; ++g) rig.model->updGas(g) = gasBefore[g];
             rig.x = xBefore;
-            rig.model->commitStep(rig.x);
+            rig.model->setContactHistory(history);
             return false;
         };
         // A step that cannot be solved even at the smallest increment ends the branch; the
@@ -418,7 +450,8 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             if (stiffnessEstimate > 0.0)
                 step = std::min(step, 1.05 * (o.peakForce - force) / stiffnessEstimate);
             step = std::max(step, minStep);
-            if (disp + step > maxDisp) {
+            step = std::min(step, maxDisp - disp);  // the last step ends on the stop
+            if (step < minStep) {
                 // The slack bag is pressed flat under the block: with penalty contact (1 mm
                 // of penetration per 10 kPa by default) the last 2 mm cannot be resolved.
                 std::ostringstream r;
@@ -479,19 +512,20 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                 rig.workspace.reset();
             }
         }
-        // How much the stabilisation carried: steps that needed it, and its energy against
-        // the block's work (trapezoidal) along the loading branch.
+        // How much the stabilisation carried: steps that needed it, and the energy its
+        // springs dissipated so far (summed over steps: re-anchoring releases it) against the
+        // block's work so far (trapezoidal), the largest ratio along the loading branch.
         {
-            double work = 0.0;
+            double work = 0.0, dissipated = 0.0;
             for (size_t i = 0; i < curve.steps.size(); ++i) {
                 const LoadStep& st = curve.steps[i];
                 if (st.stabilizationEnergy > 0.0) ++curve.stabilizedSteps;
                 if (!st.loading || i == 0) continue;
                 const LoadStep& prev = curve.steps[i - 1];
                 work += 0.5 * (st.force + prev.force) * (st.displacement - prev.displacement);
-                if (work > 0.0 && st.stabilizationEnergy > 0.0)
-                    curve.stabilizationShare =
-                        std::max(curve.stabilizationShare, st.stabilizationEnergy / work);
+                dissipated += st.stabilizationEnergy;
+                if (work > 0.0 && dissipated > 0.0)
+                    curve.stabilizationShare = std::max(curve.stabilizationShare, dissipated / work);
             }
         }
         // Stiffness over the force range, loading branch.

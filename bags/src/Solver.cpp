@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -162,6 +163,18 @@ bool MembraneModel::isConservative() const {
 
 void MembraneModel::commitStep(const Eigen::Matrix3Xd& x) {
     for (auto& c : m_contacts) c->commitStep(x);
+}
+
+std::vector<RigidContact::History> MembraneModel::getContactHistory() const {
+    std::vector<RigidContact::History> h;
+    for (const auto& c : m_contacts) h.push_back(c->getHistory());
+    return h;
+}
+
+void MembraneModel::setContactHistory(const std::vector<RigidContact::History>& h) {
+    if (h.size() != m_contacts.size())
+        throw std::invalid_argument("MembraneModel::setContactHistory: wrong number of contacts");
+    for (size_t i = 0; i < h.size(); ++i) m_contacts[i]->setHistory(h[i]);
 }
 
 double MembraneModel::calcGasVolume(int gas, const Eigen::Matrix3Xd& x,

@@ -513,6 +513,40 @@ TEST(RigidContact, FrictionIsLinearInStickCappedInSlipAndAnchorsFollowCommit) {
     EXPECT_EQ(forceAt(0.02, 0.0).head<2>().norm(), 0.0);
 }
 
+TEST(RigidContact, RestoredHistoryUndoesCommitsOfAnAbandonedStep) {
+    // A step that committed trial states and was then abandoned must leave the friction anchors
+    // as they were: the restored contact gives the same forces as one that never saw the trial
+    // (exactly: the same stored numbers).
+    const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
+    auto plane = bags::makePlane();
+    bags::RigidContact::Options o;
+    o.friction = 0.3;
+    bags::RigidContact contact(mesh, {4}, *plane, o);
+    auto at = [&](double ux) {
+        Eigen::Matrix3Xd x = mesh.X;
+        x.col(4) = Vec3(ux, 0.0, -1e-3);
+        return x;
+    };
+    auto forceX = [&](double ux) {
+        bags::EnergyAccumulator acc(mesh.getNumNodes());
+        contact.addEnergy(at(ux), acc);
+        return -acc.grad(12);
+    };
+    contact.commitStep(at(0.01));  // anchor at 10 mm
+    const bags::RigidContact::History h = contact.getHistory();
+    const double before = forceX(0.0101);
+    contact.commitStep(at(0.012));  // trial: slips 2 mm, anchor dragged along
+    EXPECT_GT(std::abs(forceX(0.0101) - before), 1e-3);  // the trial moved the anchor
+    contact.setHistory(h);
+    EXPECT_EQ(forceX(0.0101), before);
+    contact.commitStep(at(0.015));  // a second trial, restored again
+    contact.setHistory(h);
+    EXPECT_EQ(forceX(0.0101), before);
+    // A history of another contact set is refused.
+    bags::RigidContact other(mesh, {3, 4}, *plane, o);
+    EXPECT_THROW(other.setHistory(h), std::invalid_argument);
+}
+
 TEST(RigidContact, StickTangentMatchesFiniteDifferencesOnPlane) {
     const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
     auto plane = bags::makePlane();

@@ -40,7 +40,7 @@ TEST(LoadTest, SlackBagCurveEndsCleanlyWhateverHappens) {
 TEST(LoadTest, NearlyEmptyBagBottomsOutWithTheReasonStated) {
     // 1.0 g fills about a quarter of this bag: the block folds the slack top down to the bed
     // board long before 50 N (the seed's third stage is this bottoming). The curve must stop
-    // there with that reason, having travelled to within 2 mm (+ one step) of the board.
+    // there with that reason, having travelled to 2 mm above the board (the last step is shortened to end there).
     LoadTestOptions o;
     o.geometry.meshSize = 0.020;
     o.material = makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
@@ -53,7 +53,7 @@ TEST(LoadTest, NearlyEmptyBagBottomsOutWithTheReasonStated) {
     EXPECT_NE(c.failure.find("bottomed out"), std::string::npos) << c.failure;
     double dmax = 0.0;
     for (const LoadStep& s : c.steps) dmax = std::max(dmax, s.displacement);
-    EXPECT_GT(dmax, c.unloadedHeight - 0.002 - o.displacementStep);
+    EXPECT_GT(dmax, c.unloadedHeight - 0.002 - 1e-4);  // the last step ends on the stop (0.1 mm)
 }
 
 TEST(LoadTest, SlackBagsReachThePeakForceWithLittleStabilisation) {

@@ -75,6 +75,15 @@ public:
     bool isConservative() const;
     /// Accepts x as converged: friction anchors follow the slip.
     void commitStep(const Eigen::Matrix3Xd& x);
+    /// The friction history (anchors) committed so far, to be restored when a step that has
+    /// committed trial states is abandoned.
+    struct History {
+        std::vector<Vec3> anchor_S;
+        std::vector<char> hasAnchor;
+    };
+    History getHistory() const;
+    /// Restores a history taken from this contact by getHistory().
+    void setHistory(const History& h);
     /// Total force [N] the membrane exerts on the shape, and torque [N m] about the shape's
     /// frame origin, both in Ground.
     void calcWrenchOnShape(const Eigen::Matrix3Xd& x, Vec3* force, Vec3* torque) const;

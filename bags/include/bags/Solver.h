@@ -127,6 +127,9 @@ public:
     const std::vector<int>& getFixedDofs() const { return m_fixedDofs; }
     /// Commits contact history at a converged x.
     void commitStep(const Eigen::Matrix3Xd& x);
+    /// Snapshot of every rigid contact's friction history, and its restore (abandoned steps).
+    std::vector<RigidContact::History> getContactHistory() const;
+    void setContactHistory(const std::vector<RigidContact::History>& h);
 
     /// Membrane state per triangle: 0 taut, 1 wrinkled, 2 slack (needs a WrinklingMaterial).
     std::vector<int> calcWrinkleStates(const Eigen::Matrix3Xd& x) const;
