@@ -610,11 +610,25 @@ std::string MaterialFitResult::formatScenarioYaml(const std::string& indent) con
     return os.str();
 }
 
-double calcYeohStableLimit(double C10, double C20, double C30) {
-    const auto raw = makeYeoh(C10, C20, C30);
-    const StabilityRange r = calcStabilityRange(*raw, 3.0, 1e-3);
+namespace {
+
+/// True if W = C10 x + C20 x^2 + C30 x^3 (x = I1 - 3 >= 0) falls to minus infinity.
+bool isYeohEnergyUnbounded(double C20, double C30) {
+    return C30 < 0.0 || (C30 == 0.0 && C20 < 0.0);
+}
+
+/// The positive root x0 of dW/dI1 = C10 + 2 C20 x + 3 C30 x^2 (C10 > 0) for an unbounded
+/// energy (isYeohEnergyUnbounded), in the form free of cancellation.
+double calcYeohSlopeRoot(double C10, double C20, double C30) {
+    if (C30 == 0.0) return -C10 / (2.0 * C20);
+    const double sq = std::sqrt(C20 * C20 - 3.0 * C10 * C30);  // > |C20| since C10 C30 < 0
+    return C20 >= 0.0 ? (C20 + sq) / (-3.0 * C30) : C10 / (sq - C20);
+}
+
+/// I1 - 3 at the smallest last stable stretch over the three paths of a scan; infinity if
+/// every path stays stable up to the scan limit.
+double calcLimitFromRange(const StabilityRange& r) {
     double limit = std::numeric_limits<double>::infinity();
-    // I1 - 3 along each path at its last stable stretch.
     const double lu = r.uniaxial.getStable(), lp = r.planar.getStable(),
                  le = r.equibiaxial.getStable();
     if (lu < r.maxChecked) limit = std::min(limit, lu * lu + 2.0 / lu - 3.0);
@@ -623,7 +637,31 @@ double calcYeohStableLimit(double C10, double C20, double C30) {
     return limit;
 }
 
+}  // namespace
+
+double calcYeohStableLimit(double C10, double C20, double C30) {
+    const auto raw = makeYeoh(C10, C20, C30);
+    double limit = calcLimitFromRange(calcStabilityRange(*raw, 3.0, 1e-3));
+    if (!isYeohEnergyUnbounded(C20, C30)) return limit;
+    // Unbounded energy: W1 = dW/dI1 falls to zero at x0 and stays negative beyond with
+    // W11 < 0, so the equibiaxial nominal stress 4 (l - l^-5) W1 is positive before x0 and
+    // decreasing from x0 on; the path's monotone check therefore fails before x0. The path
+    // reaches x0 no later than le0 = sqrt((x0 + 3) / 2) (2 l^2 + l^-4 - 3 >= 2 l^2 - 3): scan
+    // there if the first scan (to stretch 3) found nothing, with at most 1e5 steps.
+    const double x0 = calcYeohSlopeRoot(C10, C20, C30);
+    const double le0 = std::sqrt(0.5 * (x0 + 3.0));
+    if (std::isinf(limit) && le0 > 3.0)
+        limit = calcLimitFromRange(
+            calcStabilityRange(*raw, le0, std::max(1e-3, (le0 - 1.0) / 1e5)));
+    // Not reached by the argument above; kept so the limit is always finite with W1 > 0.
+    if (!(limit < x0)) limit = 0.5 * x0;
+    return limit;
+}
+
 std::unique_ptr<MembraneMaterial> makeStableYeoh(double C10, double C20, double C30) {
+    // A bounded energy keeps its polynomial: a fit unstable only in a middle band (C20 < 0,
+    // C30 > 0) stiffens again beyond it, which a continuation from the band would discard.
+    if (!isYeohEnergyUnbounded(C20, C30)) return makeYeoh(C10, C20, C30);
     return makeYeoh(C10, C20, C30, calcYeohStableLimit(C10, C20, C30));
 }
 

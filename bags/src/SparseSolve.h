@@ -1,5 +1,5 @@
 #pragma once
-// Sparse symmetric positive-definite factorisation (CHOLMOD supernodal LL^T) that keeps its
+// Sparse symmetric positive-definite factorisation (CHOLMOD simplicial LL^T) that keeps its
 // symbolic analysis while the sparsity pattern stays the same.
 
 #include <Eigen/CholmodSupport>

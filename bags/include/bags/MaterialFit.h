@@ -111,13 +111,25 @@ StabilityRange calcStabilityRange(const MembraneMaterial& material, double maxSt
 
 /// I1 - 3 at which a Yeoh material (C10, C20, C30) first leaves its stable range on the
 /// uniaxial, planar or equibiaxial path (calcStabilityRange scanned to stretch 3 in steps of
-/// 1e-3); infinity if it stays stable there.
+/// 1e-3; the last stable stretch, to within the step).
+/// - Energy unbounded below (C30 < 0, or C30 == 0 and C20 < 0): always finite and below x0,
+///   the positive root of dW/dI1 = C10 + 2 C20 x + 3 C30 x^2 (the equibiaxial stress peaks
+///   before it). If the scan to stretch 3 finds nothing, it is repeated up to the equibiaxial
+///   stretch sqrt((x0 + 3) / 2), which reaches x0, in steps of 1e-3 or, if larger, a 1e5th of
+///   the range.
+/// - Otherwise: infinity if the material stays stable up to stretch 3. A finite value may then
+///   be the start of a band only (e.g. C20 < 0 < C30 is stable again beyond it).
 double calcYeohStableLimit(double C10, double C20, double C30);
 
-/// A Yeoh material that follows the polynomial inside its stable range and continues it
-/// linearly in I1 beyond (makeYeoh with calcYeohStableLimit): the same response wherever the
-/// fit is usable, and an energy bounded below everywhere, which a Newton solver needs when
-/// its trial states overstretch elements (a fit with C30 < 0 otherwise has W -> -infinity).
+/// A Yeoh material whose energy is bounded below, for solvers whose trial states may
+/// overstretch elements (a Newton line search accepts an energy that falls without bound).
+/// - Energy unbounded below (C30 < 0, or C30 == 0 and C20 < 0): the polynomial up to
+///   I1 - 3 = calcYeohStableLimit() (finite, with dW/dI1 > 0 there), continued linearly in I1
+///   beyond it (makeYeoh with that limit): the same response wherever the fit is stable, an
+///   energy that rises beyond.
+/// - Otherwise (C30 > 0, or C30 == 0 and C20 >= 0): the plain polynomial, makeYeoh(C10, C20,
+///   C30), even where it is unstable in a middle band: its energy is bounded below already,
+///   and the large-strain stiffening of C30 > 0 is kept.
 std::unique_ptr<MembraneMaterial> makeStableYeoh(double C10, double C20, double C30);
 
 /// Outcome of fitting one model to one data set.
