@@ -68,8 +68,8 @@ struct LoadStep {
     std::vector<double> volume;         ///< per chamber [m^3]
     std::vector<double> gasMass;        ///< per chamber [kg] (its share of a shared gas)
     int newtonIterations = 0;
-    /// [J] held by the stabilisation springs, summed over the stabilised solves of the step
-    /// whose states were kept (0 if Newton needed no springs)
+    /// [J] held by the stabilisation springs at the accepted state (0 if the step ended on a
+    /// spring-free equilibrium)
     double stabilizationEnergy = 0.0;
     /// [N] force residual at the accepted state, without the springs (for a state accepted
     /// with springs this is the springs' force)
@@ -87,9 +87,10 @@ struct LoadCurve {
     int stage = 0;                   ///< 1, 2 or 3 (rule in docs/seed-load-test.md)
     bool reachedPeak = false;
     std::string failure;             ///< empty, or why the curve stopped early
-    int stabilizedSteps = 0;         ///< steps that needed the stabilisation in some solve
-    /// Largest ratio, over the loading steps, of the energy the stabilisation has dissipated so
-    /// far (LoadStep::stabilizationEnergy summed) to the work the block has done so far [-]:
+    int stabilizedSteps = 0;         ///< steps accepted with the stabilisation springs
+    /// Largest ratio, over the loading steps, of the energy the stabilisation springs held at
+    /// the accepted states so far (LoadStep::stabilizationEnergy summed) to the work the block
+    /// has done so far [-]:
     /// how far the curve is from a true equilibrium path
     /// (Abaqus' rule of thumb for its automatic stabilisation: keep it below about 0.05).
     double stabilizationShare = 0.0;
