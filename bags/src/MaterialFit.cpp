@@ -1,5 +1,6 @@
 // Fitting membrane materials to uniaxial tensile data, and their stable stretch range.
 #include <bags/MaterialFit.h>
+#include <bags/Text.h>
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -16,18 +17,12 @@ namespace bags {
 
 namespace {
 
-std::string trim(const std::string& s) {
-    const auto b = s.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) return "";
-    const auto e = s.find_last_not_of(" \t\r\n");
-    return s.substr(b, e - b + 1);
-}
 
 std::vector<std::string> splitCsv(const std::string& line) {
     std::vector<std::string> cells;
     std::string cell;
     std::istringstream is(line);
-    while (std::getline(is, cell, ',')) cells.push_back(trim(cell));
+    while (std::getline(is, cell, ',')) cells.push_back(trimBlanks(cell));
     if (!line.empty() && line.back() == ',') cells.push_back("");
     return cells;
 }
@@ -93,7 +88,7 @@ TensileData parseTensileCsv(std::istream& in, const std::string& name,
     while (std::getline(in, raw)) {
         ++lineNo;
         if (lineNo == 1 && raw.rfind("\xEF\xBB\xBF", 0) == 0) raw.erase(0, 3);  // UTF-8 BOM
-        const std::string line = trim(raw);
+        const std::string line = trimBlanks(raw);
         if (line.empty() || line[0] == '#') continue;
         const std::vector<std::string> cells = splitCsv(line);
         if (!haveHeader) {

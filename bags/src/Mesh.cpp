@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace bags {
@@ -196,26 +197,22 @@ MeshQuality calcMeshQuality(const Mesh& mesh) {
     return q;
 }
 
-double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x, EnergyAccumulator* acc,
-                         double scale) {
-    checkChamberIndex(mesh, c);
+namespace {
+
+// 6 V of chamber c at x by the divergence theorem over its signed boundary triangles; adds
+// scale * dV/dx into grad and scale * d2V/dx2 into hess when they are given.
+double sumChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x,
+                        Eigen::VectorXd* grad, std::vector<Triplet>* hess, double scale) {
     const ChamberBoundary& ch = mesh.chambers[c];
     const int nt = static_cast<int>(ch.tris.size());
-    const bool wantG = acc && acc->wantGradient;
-    const bool wantH = acc && acc->wantHessian;
-    if (wantG && acc->grad.size() != 3 * x.cols())
-        throw std::invalid_argument("calcChamberVolume: accumulator gradient has size " +
-                                    std::to_string(acc->grad.size()) + ", expected " +
-                                    std::to_string(3 * x.cols()));
-    if (wantH) {
+    if (hess) {
         // Grow geometrically: an exact reserve per call would copy the caller's (large)
         // triplet list on every chamber evaluation.
-        const size_t need = acc->hess.size() + 36 * static_cast<size_t>(nt);
-        if (acc->hess.capacity() < need)
-            acc->hess.reserve(std::max(need, 2 * acc->hess.capacity()));
+        const size_t need = hess->size() + 36 * static_cast<size_t>(nt);
+        if (hess->capacity() < need) hess->reserve(std::max(need, 2 * hess->capacity()));
     }
     const double sixth = 1.0 / 6.0;
-    double v6 = 0.0;  // 6 V
+    double v6 = 0.0;
     for (int i = 0; i < nt; ++i) {
         const int t = ch.tris[i];
         const int a = mesh.tris(0, t), b = mesh.tris(1, t), d = mesh.tris(2, t);
@@ -223,25 +220,43 @@ double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x, Ene
         const double s = ch.signs[i];
         const Vec3 c12 = x1.cross(x2);
         v6 += s * x0.dot(c12);
-        if (wantG) {
-            const double f = scale * s * sixth;
-            acc->grad.segment<3>(3 * a) += f * c12;
-            acc->grad.segment<3>(3 * b) += f * x2.cross(x0);
-            acc->grad.segment<3>(3 * d) += f * x0.cross(x1);
+        const double f = scale * s * sixth;
+        if (grad) {
+            grad->segment<3>(3 * a) += f * c12;
+            grad->segment<3>(3 * b) += f * x2.cross(x0);
+            grad->segment<3>(3 * d) += f * x0.cross(x1);
         }
-        if (wantH) {
+        if (hess) {
             // dV/dx0 = s/6 x1 x x2 = -s/6 [x2]_x x1  =>  d2V/dx0 dx1 = -s/6 [x2]_x, and
             // cyclically; the transposed blocks are +s/6 [.]_x since [v]_x^T = -[v]_x.
-            const double f = scale * s * sixth;
-            pushSkew(acc->hess, a, b, x2, -f);
-            pushSkew(acc->hess, b, a, x2, f);
-            pushSkew(acc->hess, b, d, x0, -f);
-            pushSkew(acc->hess, d, b, x0, f);
-            pushSkew(acc->hess, d, a, x1, -f);
-            pushSkew(acc->hess, a, d, x1, f);
+            pushSkew(*hess, a, b, x2, -f);
+            pushSkew(*hess, b, a, x2, f);
+            pushSkew(*hess, b, d, x0, -f);
+            pushSkew(*hess, d, b, x0, f);
+            pushSkew(*hess, d, a, x1, -f);
+            pushSkew(*hess, a, d, x1, f);
         }
     }
-    const double V = v6 * sixth;
+    return v6;
+}
+
+void checkGradientSize(const char* what, const Eigen::VectorXd& g, const Eigen::Matrix3Xd& x) {
+    if (g.size() != 3 * x.cols())
+        throw std::invalid_argument(std::string(what) + ": gradient has size " +
+                                    std::to_string(g.size()) + ", expected " +
+                                    std::to_string(3 * x.cols()));
+}
+
+}  // namespace
+
+double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x, EnergyAccumulator* acc,
+                         double scale) {
+    checkChamberIndex(mesh, c);
+    const bool wantG = acc && acc->wantGradient;
+    const bool wantH = acc && acc->wantHessian;
+    if (wantG) checkGradientSize("calcChamberVolume: accumulator", acc->grad, x);
+    const double V = sumChamberVolume(mesh, c, x, wantG ? &acc->grad : nullptr,
+                                      wantH ? &acc->hess : nullptr, scale) * (1.0 / 6.0);
     if (acc) acc->energy += scale * V;
     return V;
 }
@@ -249,26 +264,8 @@ double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x, Ene
 double addChamberVolumeGradient(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x,
                                 Eigen::VectorXd& grad, double scale) {
     checkChamberIndex(mesh, c);
-    if (grad.size() != 3 * x.cols())
-        throw std::invalid_argument("addChamberVolumeGradient: gradient has size " +
-                                    std::to_string(grad.size()) + ", expected " +
-                                    std::to_string(3 * x.cols()));
-    const ChamberBoundary& ch = mesh.chambers[c];
-    const double sixth = 1.0 / 6.0;
-    double v6 = 0.0;
-    for (size_t i = 0; i < ch.tris.size(); ++i) {
-        const int t = ch.tris[i];
-        const int a = mesh.tris(0, t), b = mesh.tris(1, t), d = mesh.tris(2, t);
-        const Vec3 x0 = x.col(a), x1 = x.col(b), x2 = x.col(d);
-        const double s = ch.signs[i];
-        const Vec3 c12 = x1.cross(x2);
-        v6 += s * x0.dot(c12);
-        const double f = scale * s * sixth;
-        grad.segment<3>(3 * a) += f * c12;
-        grad.segment<3>(3 * b) += f * x2.cross(x0);
-        grad.segment<3>(3 * d) += f * x0.cross(x1);
-    }
-    return v6 * sixth;
+    checkGradientSize("addChamberVolumeGradient", grad, x);
+    return sumChamberVolume(mesh, c, x, &grad, nullptr, scale) * (1.0 / 6.0);
 }
 
 Eigen::VectorXd calcChamberVolumeGradient(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x) {

@@ -1,4 +1,5 @@
 #include <io/Scenario.h>
+#include <bags/Text.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -20,12 +21,7 @@ struct ScenarioFile::Source {
 
 namespace {
 
-std::string trim(const std::string& s) {
-    const auto b = s.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) return "";
-    const auto e = s.find_last_not_of(" \t\r\n");
-    return s.substr(b, e - b + 1);
-}
+using bags::trimBlanks;
 
 std::string joinQuoted(const std::vector<std::string>& words) {
     std::string out;
@@ -172,7 +168,7 @@ void ScenarioFile::applyOverride(const std::string& assignment) {
     if (eq == std::string::npos)
         throw InputError("--set " + assignment, 0, "",
                          "expected KEY=VALUE, e.g. --set airbag.mesh_size=\"5 mm\"");
-    applyOverride(trim(assignment.substr(0, eq)), trim(assignment.substr(eq + 1)));
+    applyOverride(trimBlanks(assignment.substr(0, eq)), trimBlanks(assignment.substr(eq + 1)));
 }
 
 const std::string& ScenarioFile::getFileName() const { return m_source->fileName; }

@@ -1,4 +1,5 @@
 #include <io/Units.h>
+#include <bags/Text.h>
 
 #include <charconv>
 #include <cmath>
@@ -74,12 +75,7 @@ const std::vector<UnitInfo>& getUnitTable() {
     return table;
 }
 
-std::string trim(const std::string& s) {
-    const auto b = s.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) return "";
-    const auto e = s.find_last_not_of(" \t\r\n");
-    return s.substr(b, e - b + 1);
-}
+using bags::trimBlanks;
 
 std::string quote(const std::string& s) { return "\"" + s + "\""; }
 
@@ -210,7 +206,7 @@ const UnitInfo* findUnit(const std::string& symbol) {
 }
 
 double parseQuantity(const std::string& text, Dimension d) {
-    const std::string s = trim(text);
+    const std::string s = trimBlanks(text);
     if (s.empty()) throw UnitError("empty value; " + describeValid(d));
     // The number: from_chars is locale independent; it does not take a leading '+'.
     const char* begin = s.data();
@@ -221,7 +217,7 @@ double parseQuantity(const std::string& text, Dimension d) {
     if (ec != std::errc() || ptr == begin)
         throw UnitError(quote(s) + " does not start with a number; " + describeValid(d));
     if (!std::isfinite(value)) throw UnitError(quote(s) + " is not a finite number");
-    const std::string unit = trim(std::string(ptr, end));
+    const std::string unit = trimBlanks(std::string(ptr, end));
 
     if (d == Dimension::Dimensionless) {
         if (!unit.empty())
