@@ -2,25 +2,43 @@
 // mesh size. Prints wall time, Newton iterations and peak memory. Not a test: run by hand,
 // see docs/performance.md.
 //
-//   build/bin/bench_load_test [mesh_mm=5] [gas masses in g ... | seed]
-// "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps.
+//   build/bin/bench_load_test [--step MM] [mesh_mm=5] [gas masses in g ... | seed]
+// "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps; --step sets
+// the target block increment (default 1 mm, as the scenario).
 #include <bags/LoadTest.h>
 #include <bags/MaterialFit.h>
 
 #include <sys/resource.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
 
+// Force [N] at block travel d [m] on a curve's loading branch (linear between steps), NaN if
+// the branch does not reach d.
+double forceAt(const bags::LoadCurve& c, double d) {
+    for (size_t i = 1; i < c.steps.size(); ++i) {
+        const bags::LoadStep &a = c.steps[i - 1], &b = c.steps[i];
+        if (!a.loading || !b.loading || b.displacement < d) continue;
+        return a.force + (b.force - a.force) * (d - a.displacement) / (b.displacement - a.displacement);
+    }
+    return std::nan("");
+}
+
 int main(int argc, char** argv) {
-    const double meshMm = argc > 1 ? std::atof(argv[1]) : 5.0;
     bags::LoadTestOptions o;
+    int first = 1;
+    if (argc > 2 && std::strcmp(argv[1], "--step") == 0) {
+        o.displacementStep = std::atof(argv[2]) * 1e-3;
+        first = 3;
+    }
+    const double meshMm = argc > first ? std::atof(argv[first]) : 5.0;
     o.geometry.meshSize = meshMm * 1e-3;
     o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
-    for (int i = 2; i < argc; ++i)
+    for (int i = first + 1; i < argc; ++i)
         if (std::strcmp(argv[i], "seed") != 0) o.gasMasses.push_back(std::atof(argv[i]) * 1e-3);
     if (o.gasMasses.empty())
         for (int i = 0; i <= 10; ++i) o.gasMasses.push_back((3.5 - 0.25 * i) * 1e-3);
@@ -44,9 +62,10 @@ int main(int argc, char** argv) {
     getrusage(RUSAGE_SELF, &ru);
     std::printf("mesh %.2f mm: %d nodes, %d triangles\n", meshMm, nodes, tris);
     for (const auto& c : r.curves)
-        std::printf("  %.2f g: p0 %.2f kPa, %zu steps, k = %.3f N/mm, r2 = %.4f, stage %d, peak %s%s%s\n",
+        std::printf("  %.2f g: p0 %.2f kPa, %zu steps, k = %.3f N/mm, r2 = %.4f, F(5 mm) = %.2f N, "
+                    "stage %d, peak %s%s%s\n",
                     c.gasMass * 1e3, c.inflatedGaugePressure * 1e-3, c.steps.size(),
-                    c.stiffness * 1e-3, c.r2, c.stage, c.reachedPeak ? "yes" : "no",
+                    c.stiffness * 1e-3, c.r2, forceAt(c, 5e-3), c.stage, c.reachedPeak ? "yes" : "no",
                     c.failure.empty() ? "" : ", stopped: ", c.failure.c_str());
     std::printf("steps %d (loading %d), Newton iterations %d\n", steps, loadingSteps, iterations);
     if (tFirst > 0) std::printf("inflation + first curve (loading and unloading): %.2f s\n", tFirst);
