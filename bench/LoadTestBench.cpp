@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <stdexcept>
 
 
 // Force [N] at block travel d [m] on a curve's loading branch (linear between steps), NaN if
@@ -45,7 +46,15 @@ int main(int argc, char** argv) {
     int nodes = 0, tris = 0, steps = 0, iterations = 0, loadingSteps = 0;
     const auto t0 = std::chrono::steady_clock::now();
     double tFirst = -1.0, tInflated = -1.0;
-    const bags::LoadTestResult r = bags::runLoadTest(
+    bags::LoadTestResult r;
+    try {
+        o.validate();
+    } catch (const std::invalid_argument& e) {
+        std::fprintf(stderr, "bench_load_test: %s\nusage: bench_load_test [--step MM] MESH_MM "
+                             "[GAS_MASS_G ... | seed]\n", e.what());
+        return 2;
+    }
+    r = bags::runLoadTest(
         o, [&](const bags::LoadStep& s, const bags::Mesh& m, const Eigen::Matrix3Xd&) {
             nodes = m.getNumNodes();
             tris = m.getNumTris();

@@ -38,6 +38,13 @@ double getTotalGasMass(const MembraneModel& model) {
     return m;
 }
 
+// Copies of the model's gas bodies (a state to go back to or to integrate the flow from).
+std::vector<GasChamber> copyGases(const MembraneModel& model) {
+    std::vector<GasChamber> gases;
+    for (int g = 0; g < model.getNumGases(); ++g) gases.push_back(model.getGas(g));
+    return gases;
+}
+
 // Sets the total gas mass, shared among the gas bodies at equal pressure (at a fixed
 // temperature a body's share is its volume's share), each resealed at its current volume.
 void setTotalGasMass(MembraneModel& model, const Eigen::Matrix3Xd& x, double m) {
@@ -360,12 +367,10 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             constexpr int kSettleSteps = 10;
             const double first = 1000.0 / (std::pow(2.0, kSettleSteps) - 1.0);
             for (int i = 0; i < kSettleSteps; ++i) {
-                std::vector<GasChamber> start;
-                for (int g = 0; g < rig.model->getNumGases(); ++g)
-                    start.push_back(rig.model->getGas(g));
                 SolveSummary sum;
                 double stab = 0.0;
-                if (!solveWithFlow(rig, o, start, first * std::pow(2.0, i), &sum, &stab))
+                if (!solveWithFlow(rig, o, copyGases(*rig.model), first * std::pow(2.0, i), &sum,
+                                   &stab))
                     throw NumericalError(
                         "no convergence while the chambers settle through the orifice");
             }
@@ -418,9 +423,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         // With an orifice the gas flows over the step's time while the membrane settles
         // (solveWithFlow). A failed step restores state and gas.
         auto advance = [&](double to, SolveSummary* sum, double* stab) {
-            const int ng = rig.model->getNumGases();
-            std::vector<GasChamber> gasBefore;
-            for (int g = 0; g < ng; ++g) gasBefore.push_back(rig.model->getGas(g));
+            const std::vector<GasChamber> gasBefore = copyGases(*rig.model);
             const Eigen::Matrix3Xd xBefore = rig.x;
             const std::vector<RigidContact::History> history = rig.model->getContactHistory();
             const double dt = std::abs(to - curve.steps.back().displacement) / o.loadingRate;
@@ -431,7 +434,8 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             } catch (const NumericalError&) {
                 // e.g. a gas transfer no chamber could give: the step fails like any other
             }
-            for (int g = 0; g < ng; ++g) rig.model->updGas(g) = gasBefore[g];
+            for (size_t g = 0; g < gasBefore.size(); ++g)
+                rig.model->updGas(static_cast<int>(g)) = gasBefore[g];
             rig.x = xBefore;
             rig.model->setContactHistory(history);
             return false;
@@ -519,16 +523,16 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         // it), against the block's work so far (trapezoidal): the largest ratio along the
         // loading branch.
         {
-            double work = 0.0, dissipated = 0.0;
+            double work = 0.0, held = 0.0;
             for (size_t i = 0; i < curve.steps.size(); ++i) {
                 const LoadStep& st = curve.steps[i];
                 if (st.stabilizationEnergy > 0.0) ++curve.stabilizedSteps;
                 if (!st.loading || i == 0) continue;
                 const LoadStep& prev = curve.steps[i - 1];
                 work += 0.5 * (st.force + prev.force) * (st.displacement - prev.displacement);
-                dissipated += st.stabilizationEnergy;
-                if (work > 0.0 && dissipated > 0.0)
-                    curve.stabilizationShare = std::max(curve.stabilizationShare, dissipated / work);
+                held += st.stabilizationEnergy;
+                if (work > 0.0 && held > 0.0)
+                    curve.stabilizationShare = std::max(curve.stabilizationShare, held / work);
             }
         }
         // Stiffness over the force range, loading branch.
