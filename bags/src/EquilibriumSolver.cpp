@@ -41,22 +41,6 @@ void expandAdd(const Eigen::VectorXd& red, const std::vector<int>& map, double a
         if (map[i] >= 0) xp[i] += alpha * red(map[i]);
 }
 
-// Lower triangle of the reduced Hessian.
-SpMat assembleLower(const std::vector<Triplet>& trips, const std::vector<int>& map, int nfree,
-                    std::vector<Triplet>& red) {
-    red.clear();
-    red.reserve(trips.size() / 2 + nfree);
-    for (const Triplet& t : trips) {
-        const int i = map[t.row()], j = map[t.col()];
-        if (i < 0 || j < 0 || i < j) continue;
-        red.emplace_back(i, j, t.value());
-    }
-    for (int i = 0; i < nfree; ++i) red.emplace_back(i, i, 0.0);  // keep the diagonal in the pattern
-    SpMat K(nfree, nfree);
-    K.setFromTriplets(red.begin(), red.end());
-    return K;
-}
-
 double energyAt(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
     EnergyAccumulator acc(0);
     acc.grad.resize(0);
@@ -124,6 +108,7 @@ bool solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c
 
 struct SolverWorkspace::Impl {
     detail::SparseSpdSolver llt;
+    detail::HessianAssembler assembler;
     int nfree = -1;
     bool valid = false;
     int factorizations = 0;
@@ -157,7 +142,7 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
     int sinceBest = 0;  // iterations since the residual last fell below its best by 1 %
 
     EnergyAccumulator acc(nn);             // reused: its buffers keep their capacity
-    std::vector<Triplet> reducedTriplets;
+    SpMat shifted;                         // K + shift I when the pseudo-transient shift is on
     for (int it = 0; it <= options.maxIterations; ++it) {
         if (!x.allFinite()) throw NumericalError("non-finite nodal positions", -1, it);
         acc.resize(nn);
@@ -186,9 +171,10 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
         }
         if (it == options.maxIterations) break;
 
-        SpMat K = assembleLower(acc.hess, map, nfree, reducedTriplets);
+        const SpMat& K = ws.assembler.assemble(acc.hess, map, nfree);
         double diagMean = 0.0;
-        for (int i = 0; i < nfree; ++i) diagMean += std::abs(K.coeff(i, i));
+        for (int i = 0; i < nfree; ++i)
+            diagMean += std::abs(K.valuePtr()[ws.assembler.diagonalSlot(i)]);
         diagMean = std::max(diagMean / std::max(nfree, 1), 1e-12);
 
         // Dense rank-one gas terms: c g g^T, c = -dp/dV > 0.
@@ -216,12 +202,18 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
         if (!solved) {
             bool factored = false;
             for (int attempt = 0; attempt < 30; ++attempt) {
-                SpMat Ks = K;
-                if (shift > 0.0)
-                    for (int i = 0; i < nfree; ++i) Ks.coeffRef(i, i) += shift;
                 ++sum.factorizations;
                 ++ws.factorizations;
-                if (llt.factorize(Ks)) {
+                bool ok = false;
+                if (shift > 0.0) {
+                    shifted = K;  // same pattern: the diagonal slots hold
+                    for (int i = 0; i < nfree; ++i)
+                        shifted.valuePtr()[ws.assembler.diagonalSlot(i)] += shift;
+                    ok = llt.factorize(shifted);
+                } else {
+                    ok = llt.factorize(K);
+                }
+                if (ok) {
                     factored = true;
                     break;
                 }

@@ -264,11 +264,20 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
             }
         }
         if (!single) {
-#pragma omp critical
-            {
-                if (wantG) acc.grad += privateG;
-                if (wantH) acc.hess.insert(acc.hess.end(), privateH.begin(), privateH.end());
+            // Merged in thread order: with the static schedule above that is element order,
+            // so the triplets come in the same sequence every call (the solver reuses their
+            // scatter map) and the gradient's roundoff does not depend on thread timing.
+#ifdef _OPENMP
+            const int nthreads = omp_get_num_threads();
+#pragma omp for ordered schedule(static, 1)
+            for (int t = 0; t < nthreads; ++t) {
+#pragma omp ordered
+                {
+                    if (wantG) acc.grad += privateG;
+                    if (wantH) acc.hess.insert(acc.hess.end(), privateH.begin(), privateH.end());
+                }
             }
+#endif
         }
     }
     if (invalid) {

@@ -1,5 +1,7 @@
 #include "SparseSolve.h"
 
+#include <algorithm>
+
 namespace bags::detail {
 
 namespace {
@@ -39,5 +41,84 @@ bool SparseSpdSolver::factorize(const Matrix& A) {
 Eigen::VectorXd SparseSpdSolver::solve(const Eigen::VectorXd& b) const { return m_llt->solve(b); }
 
 Eigen::MatrixXd SparseSpdSolver::solve(const Eigen::MatrixXd& B) const { return m_llt->solve(B); }
+
+namespace {
+bool dropped(int i, int j) { return i < 0 || j < 0 || i < j; }
+}  // namespace
+
+const HessianAssembler::Matrix& HessianAssembler::assemble(
+    const std::vector<Eigen::Triplet<double>>& trips, const std::vector<int>& map, int nfree) {
+    if (!remap(trips, map, nfree)) {
+        rebuild(trips, map, nfree);
+        return m_K;
+    }
+    double* v = m_K.valuePtr();
+    std::fill(v, v + m_K.nonZeros(), 0.0);
+    const size_t n = trips.size();
+    for (size_t t = 0; t < n; ++t)
+        if (m_slot[t] >= 0) v[m_slot[t]] += trips[t].value();
+    return m_K;
+}
+
+// Slot of (i, j), i >= j, in the compressed pattern; -1 if the pattern lacks it.
+int HessianAssembler::find(int i, int j) const {
+    const int* inner = m_K.innerIndexPtr();
+    const int* begin = inner + m_K.outerIndexPtr()[j];
+    const int* end = inner + m_K.outerIndexPtr()[j + 1];
+    const int* it = std::lower_bound(begin, end, i);
+    return (it != end && *it == i) ? static_cast<int>(it - inner) : -1;
+}
+
+// Updates the slots of the triplets after the prefix shared with the last call; false if one
+// of them is not in the pattern.
+bool HessianAssembler::remap(const std::vector<Eigen::Triplet<double>>& trips,
+                             const std::vector<int>& map, int nfree) {
+    if (m_patterns == 0 || m_K.rows() != nfree || map != m_map) return false;
+    const size_t n = trips.size(), m = std::min(n, m_rows.size());
+    size_t t = 0;
+    while (t < m && trips[t].row() == m_rows[t] && trips[t].col() == m_cols[t]) ++t;
+    m_rows.resize(n);
+    m_cols.resize(n);
+    m_slot.resize(n);
+    for (; t < n; ++t) {
+        m_rows[t] = trips[t].row();
+        m_cols[t] = trips[t].col();
+        const int i = map[m_rows[t]], j = map[m_cols[t]];
+        if (dropped(i, j)) {
+            m_slot[t] = -1;
+        } else if ((m_slot[t] = find(i, j)) < 0) {
+            return false;  // rebuild() rewrites every slot
+        }
+    }
+    return true;
+}
+
+void HessianAssembler::rebuild(const std::vector<Eigen::Triplet<double>>& trips,
+                               const std::vector<int>& map, int nfree) {
+    m_red.clear();
+    m_red.reserve(trips.size() / 2 + nfree);
+    for (const Eigen::Triplet<double>& t : trips) {
+        const int i = map[t.row()], j = map[t.col()];
+        if (!dropped(i, j)) m_red.emplace_back(i, j, t.value());
+    }
+    for (int i = 0; i < nfree; ++i) m_red.emplace_back(i, i, 0.0);  // diagonal in the pattern
+    m_K.resize(nfree, nfree);
+    m_K.setFromTriplets(m_red.begin(), m_red.end());
+    m_K.makeCompressed();
+    const size_t n = trips.size();
+    m_rows.resize(n);
+    m_cols.resize(n);
+    m_slot.resize(n);
+    for (size_t t = 0; t < n; ++t) {
+        m_rows[t] = trips[t].row();
+        m_cols[t] = trips[t].col();
+        const int i = map[m_rows[t]], j = map[m_cols[t]];
+        m_slot[t] = dropped(i, j) ? -1 : find(i, j);
+    }
+    m_diag.resize(nfree);
+    for (int i = 0; i < nfree; ++i) m_diag[i] = find(i, i);
+    m_map = map;
+    ++m_patterns;
+}
 
 }  // namespace bags::detail

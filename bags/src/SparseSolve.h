@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace bags::detail {
 
@@ -27,6 +28,36 @@ private:
     bool m_analyzed = false;
     int m_numFactorizations = 0;
     int m_numAnalyses = 0;
+};
+
+// Lower triangle of the reduced Hessian K(map[r], map[c]) (fixed dofs map to -1 and are
+// dropped; duplicates summed), assembled through a scatter map (triplet -> slot in the value
+// array) kept between calls. The membrane's triplets come first and in element order on every
+// call, so the sequence repeats but for a short tail (contact terms that come and go): the
+// common prefix keeps its slots, each tail triplet is looked up in the pattern, and only an
+// entry the pattern lacks (e.g. a new self-contact pair) makes a new pattern (one
+// setFromTriplets, i.e. a sort, and a search per triplet). The diagonal is always stored.
+class HessianAssembler {
+public:
+    using Matrix = SparseSpdSolver::Matrix;
+    const Matrix& assemble(const std::vector<Eigen::Triplet<double>>& trips,
+                           const std::vector<int>& map, int nfree);
+    /// Index in the value array of diagonal entry i of the last assembled matrix.
+    int diagonalSlot(int i) const { return m_diag[i]; }
+    /// Sparsity patterns built so far (1 + the number of times the map was rebuilt).
+    int getNumPatterns() const { return m_patterns; }
+
+private:
+    int find(int i, int j) const;
+    bool remap(const std::vector<Eigen::Triplet<double>>& trips, const std::vector<int>& map,
+               int nfree);
+    void rebuild(const std::vector<Eigen::Triplet<double>>& trips, const std::vector<int>& map,
+                 int nfree);
+
+    Matrix m_K;
+    std::vector<Eigen::Triplet<double>> m_red;
+    std::vector<int> m_rows, m_cols, m_slot, m_diag, m_map;
+    int m_patterns = 0;
 };
 
 }  // namespace bags::detail

@@ -36,6 +36,11 @@ struct LoadTestOptions {
     enum class Connection { Open, Orifice };
     Connection connection = Connection::Open;
     OrificeOptions orifice;
+    /// Orifice only: before each curve the chambers settle for settleTime [s], integrated by
+    /// backward Euler in settleSteps steps of doubling length (10 steps agree with 40 to
+    /// 1e-5 of the remaining pressure difference on the 20 mm rig).
+    double settleTime = 1000.0;
+    int settleSteps = 10;
     std::vector<double> gasMasses;      ///< [kg], run in this order (seed: 3.5 g down to 1.0 g)
     double blockSize = 0.050;           ///< square block edge [m]
     double loadingRate = 10.0e-3 / 60.0;///< [m/s] (10 mm/min)
