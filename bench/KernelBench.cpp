@@ -1,0 +1,107 @@
+// Cost of the solver's kernels on the inflated double wedge: one energy + gradient, one
+// energy + gradient + Hessian triplets, one assembly through the kept scatter map, one sparse
+// factorisation and one solve. These bound what any Newton step can cost (docs/performance.md).
+// Not a test: run by hand.
+//
+//   build/bin/bench_kernels [mesh_mm=5]
+#include "SparseSolve.h"
+
+#include <bags/LoadTest.h>
+#include <bags/Material.h>
+#include <bags/MaterialFit.h>
+#include <bags/Solver.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+template <class F>
+double millisecondsPerCall(int calls, const F& f) {
+    const auto t0 = Clock::now();
+    for (int k = 0; k < calls; ++k) f();
+    return 1e3 * std::chrono::duration<double>(Clock::now() - t0).count() / calls;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const double meshMm = argc > 1 ? std::atof(argv[1]) : 5.0;
+    if (!(meshMm >= 2.0 && meshMm <= 50.0)) {
+        std::fprintf(stderr, "bench_kernels: mesh size %s is invalid; use 2 to 50 (mm)\n",
+                     argv[1]);
+        return 2;
+    }
+    // The inflated shape: the load test's state before its first curve (4.5 g, taut).
+    bags::LoadTestOptions o;
+    o.geometry.meshSize = meshMm * 1e-3;
+    o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.gasMasses = {4.5e-3};
+    o.peakForce = 1.0;
+    o.stiffnessFrom = 0.2;
+    o.stiffnessTo = 0.8;
+    o.unload = false;
+    Eigen::Matrix3Xd x;
+    bags::Mesh mesh;
+    double pressure = 0.0;
+    bags::runLoadTest(o, [&](const bags::LoadStep& s, const bags::Mesh& m, const Eigen::Matrix3Xd& y) {
+        if (s.step != 0) return;
+        x = y;
+        mesh = m;
+        pressure = s.gaugePressure[0];
+    });
+    // The membrane with the gas as a follower pressure at that state (the Hessian's pattern and
+    // size are the load test's; the gas's rank-one term is outside the factorisation anyway).
+    bags::MembraneModel model(
+        mesh, std::make_shared<bags::WrinklingMaterial>(o.material->clone(), o.wrinklingResidual),
+        o.thickness);
+    for (int c = 0; c < static_cast<int>(mesh.chambers.size()); ++c)
+        model.setChamberPressure(c, pressure);
+    const int nn = mesh.getNumNodes();
+    std::vector<int> map(3 * nn, 0);
+    for (int d : model.getFixedDofs()) map[d] = -1;
+    int nfree = 0;
+    for (int& m : map)
+        if (m >= 0) m = nfree++;
+
+    bags::EnergyAccumulator acc(nn);
+    acc.wantHessian = false;
+    const double tGrad = millisecondsPerCall(50, [&] {
+        acc.resize(nn);
+        model.addEnergy(x, acc);
+    });
+    acc.wantHessian = true;
+    const double tHess = millisecondsPerCall(20, [&] {
+        acc.resize(nn);
+        model.addEnergy(x, acc);
+    });
+    bags::detail::HessianAssembler assembler;
+    assembler.assemble(acc.hess, map, nfree);  // builds the map
+    const double tAssemble =
+        millisecondsPerCall(20, [&] { assembler.assemble(acc.hess, map, nfree); });
+    // A small shift (1e-3 of the mean diagonal) makes the wrinkled sheet's tangent definite,
+    // as the solver's pseudo-transient shift does.
+    bags::detail::SparseSpdSolver::Matrix K = assembler.assemble(acc.hess, map, nfree);
+    const double shift = 1e-3 * K.diagonal().cwiseAbs().mean();
+    for (int i = 0; i < nfree; ++i) K.coeffRef(i, i) += shift;
+    bags::detail::SparseSpdSolver llt;
+    bool ok = llt.factorize(K);  // with the symbolic analysis
+    const double tFactor = millisecondsPerCall(10, [&] { ok = llt.factorize(K) && ok; });
+    Eigen::VectorXd b = Eigen::VectorXd::Ones(nfree);
+    const double tSolve = millisecondsPerCall(50, [&] { b = llt.solve(b).normalized(); });
+    if (!ok) {
+        std::fprintf(stderr, "bench_kernels: the shifted tangent could not be factored\n");
+        return 1;
+    }
+    std::printf("mesh %.2f mm: %d nodes, %d triangles, %d free dofs, %zu Hessian triplets\n",
+                meshMm, nn, mesh.getNumTris(), nfree, acc.hess.size());
+    std::printf("energy + gradient           %8.2f ms\n", tGrad);
+    std::printf("  + Hessian triplets        %8.2f ms\n", tHess);
+    std::printf("assembly (kept scatter map) %8.2f ms\n", tAssemble);
+    std::printf("factorisation (CHOLMOD)     %8.2f ms\n", tFactor);
+    std::printf("solve                       %8.2f ms\n", tSolve);
+    return 0;
+}
