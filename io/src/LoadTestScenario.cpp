@@ -108,6 +108,7 @@ const std::vector<KeyAlias>& getAliases() {
         {"maxIterations", "solver", "max_iterations"},
         {"pseudoTransientShift", "solver", "pseudo_transient_shift"},
         {"stabilization", "solver", "stabilization"},
+        {"residualTolerance", "solver", "residual_tolerance"},
     };
     return aliases;
 }
@@ -426,9 +427,10 @@ void readContact(const ScenarioNode& s, bags::LoadTestOptions& o) {
 
 // ----------------------------------------------------------------------------------- solver
 
-void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabilization) {
+void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabilization,
+                double& residualTolerance) {
     s.checkKeys({}, {"relative_tolerance", "absolute_tolerance", "max_iterations",
-                     "pseudo_transient_shift", "stabilization"});
+                     "pseudo_transient_shift", "stabilization", "residual_tolerance"});
     o.relativeTolerance = s.getNumber("relative_tolerance", o.relativeTolerance);
     o.absoluteTolerance = s.getQuantity("absolute_tolerance", D::Force, o.absoluteTolerance);
     o.maxIterations = s.getInteger("max_iterations", o.maxIterations);
@@ -439,6 +441,9 @@ void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabiliza
     checkRange(s, "pseudo_transient_shift", o.pseudoTransientShift, 0, true, kInf, false, "");
     stabilization = s.getQuantity("stabilization", D::StiffnessPerArea, stabilization);
     checkRange(s, "stabilization", stabilization, 0, true, kInf, false, "Pa/m", "0 disables it");
+    residualTolerance = s.getNumber("residual_tolerance", residualTolerance);
+    checkRange(s, "residual_tolerance", residualTolerance, 0, true, 0.05, true, "",
+               "a fraction of the peak force; 0 leaves the absolute and relative tolerances");
     try {
         o.validate();
     } catch (const std::invalid_argument& e) {
@@ -492,7 +497,8 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     readGas(root.getSection("gas", false), o.gas);
     readTest(root.getSection("test"), o);
     readContact(root.getSection("contact", false), o);
-    readSolver(root.getSection("solver", false), o.solver, o.stabilization);
+    readSolver(root.getSection("solver", false), o.solver, o.stabilization,
+               o.residualTolerance);
     readOutput(root.getSection("output", false), sc.output);
 
     // The libraries' own checks (impossible geometry and the like) as located errors.

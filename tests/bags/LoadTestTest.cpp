@@ -130,15 +130,15 @@ TEST(LoadTest, ChambersSettleThroughTheOrificeBeforeEachCurve) {
         if (c > 0) continue;
         // The first curve starts its settle from the same state for all three (same
         // inflation, mass shared by volume at the same shape): same sign, and the wider
-        // orifice settles further (measured: 67.5, 52.8 and 0.0 Pa). Later curves start from
+        // orifice settles further (measured: 66.9, 52.0 and 0.0 Pa). Later curves start from
         // states that carry each run's own history, so only the two bounds above apply there.
         EXPECT_GT(dp[1] * dp[2], 0.0);
         EXPECT_LT(std::abs(dp[1]), 0.9 * std::abs(dp[2]));
         EXPECT_GT(std::abs(dp[1]), 5.0);
     }
     // The settle's integration is converged in its step count: 40 steps instead of 10 move
-    // the 0.01 mm orifice's remaining difference by less than 1e-3 of it (measured 1e-5;
-    // one step: 1 %).
+    // the 0.01 mm orifice's remaining difference by less than 1e-3 of it (measured 3e-5;
+    // one step: 2.6 %).
     o.orifice.diameter = 0.01e-3;
     o.gasMasses = {4.5e-3};
     o.settleSteps = 40;
@@ -147,6 +147,35 @@ TEST(LoadTest, ChambersSettleThroughTheOrificeBeforeEachCurve) {
     const LoadStep& c0 = r[1].curves[0].steps.front();
     const double dpFine = f0.gaugePressure[0] - f0.gaugePressure[1];
     EXPECT_NEAR(c0.gaugePressure[0] - c0.gaugePressure[1], dpFine, 1e-3 * std::abs(dpFine));
+}
+
+TEST(LoadTest, ResidualToleranceIsAFractionOfThePeakForce) {
+    // The same taut curve solved to 1e-7 N (residualTolerance 0) and to 1e-3 of the peak force
+    // (the default, 0.05 N): every step ends within its tolerance, and the block force, the
+    // quantity the test reports, agrees within 0.02 N (0.04 % of the peak) at every step
+    // (measured: 0.003 N at most, 58 Newton iterations instead of 83).
+    LoadTestOptions o = coarseOptions();
+    o.gasMasses = {4.5e-3};
+    o.residualTolerance = 0.0;
+    const LoadTestResult strict = runLoadTest(o);
+    o.residualTolerance = 1e-3;
+    const LoadTestResult loose = runLoadTest(o);
+    const std::vector<LoadStep>& a = strict.curves[0].steps;
+    const std::vector<LoadStep>& b = loose.curves[0].steps;
+    ASSERT_EQ(a.size(), b.size());
+    int iterationsStrict = 0, iterationsLoose = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        // Same steps; the unloaded height differs by the inflation's tolerance (< 10 um).
+        EXPECT_NEAR(b[i].displacement, a[i].displacement, 1e-5) << "step " << i;
+        EXPECT_NEAR(b[i].force, a[i].force, 0.02) << "step " << i;
+        EXPECT_LE(b[i].residual, 1e-3 * o.peakForce) << "step " << i;
+        EXPECT_LE(a[i].residual, 1e-3 * o.peakForce) << "step " << i;  // stall rule at worst
+        iterationsStrict += a[i].newtonIterations;
+        iterationsLoose += b[i].newtonIterations;
+    }
+    EXPECT_LT(iterationsLoose, iterationsStrict);
+    EXPECT_NEAR(loose.curves[0].stiffness, strict.curves[0].stiffness,
+                1e-3 * strict.curves[0].stiffness);
 }
 
 TEST(LoadTest, StageRuleFollowsTheDocumentedDefinition) {

@@ -112,6 +112,15 @@ TEST(LoadTestScenario, BaseScenarioIsValidAndUsesDefaults) {
         kBase + "solver: {stabilization: 2 kPa/m, max_iterations: 30}\n", "s.yaml"));
     EXPECT_DOUBLE_EQ(sc2.options.stabilization, 2000.0);  // 2 kPa/m = 2000 Pa/m
     EXPECT_EQ(sc2.options.solver.maxIterations, 30);
+    EXPECT_EQ(sc.options.residualTolerance, defaults.residualTolerance);
+    const io::LoadTestScenario sc3 = io::readLoadTestScenario(
+        ScenarioFile::parse(kBase + "solver: {residual_tolerance: 0}\n", "r.yaml"));
+    EXPECT_EQ(sc3.options.residualTolerance, 0.0);
+    // A tolerance of more than 5 % of the peak force is refused, naming the key.
+    const InputError e = errorFor(kBase + "solver:\n  residual_tolerance: 0.2\n");
+    EXPECT_EQ(e.getKey(), "solver.residual_tolerance");
+    EXPECT_NE(std::string(e.what()).find("fraction of the peak force"), std::string::npos)
+        << e.what();
 }
 
 TEST(LoadTestScenario, OrificeAndExtrapolationKeys) {
