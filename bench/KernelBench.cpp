@@ -53,8 +53,12 @@ int main(int argc, char** argv) {
         mesh = m;
         pressure = s.gaugePressure[0];
     });
-    // The membrane with the gas as a follower pressure at that state (the Hessian's pattern and
-    // size are the load test's; the gas's rank-one term is outside the factorisation anyway).
+    // The membrane with the gas as a follower pressure at that state: the load test's mesh,
+    // dofs and element terms, without its contacts (block, bed board, self contact) and gas
+    // bodies. The contacts add node-diagonal blocks and, for self contact, a few couplings, so
+    // the pattern here is the load test's minus those couplings; the gas's rank-one term stays
+    // outside the factorisation anyway. The assembly time is the best case (the whole
+    // triplet sequence repeats).
     bags::MembraneModel model(
         mesh, std::make_shared<bags::WrinklingMaterial>(o.material->clone(), o.wrinklingResidual),
         o.thickness);

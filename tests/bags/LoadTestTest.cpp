@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 using namespace bags;
 
@@ -130,23 +131,35 @@ TEST(LoadTest, ChambersSettleThroughTheOrificeBeforeEachCurve) {
         if (c > 0) continue;
         // The first curve starts its settle from the same state for all three (same
         // inflation, mass shared by volume at the same shape): same sign, and the wider
-        // orifice settles further (measured: 66.9, 52.0 and 0.0 Pa). Later curves start from
+        // orifice settles further (measured: 0.0, 52.8 and 67.5 Pa for 2, 0.01 and 0.001 mm). Later curves start from
         // states that carry each run's own history, so only the two bounds above apply there.
         EXPECT_GT(dp[1] * dp[2], 0.0);
         EXPECT_LT(std::abs(dp[1]), 0.9 * std::abs(dp[2]));
         EXPECT_GT(std::abs(dp[1]), 5.0);
     }
-    // The settle's integration is converged in its step count: 40 steps instead of 10 move
-    // the 0.01 mm orifice's remaining difference by less than 1e-3 of it (measured 3e-5;
-    // one step: 2.6 %).
+    // The settle's integration, 0.01 mm orifice: converged in its step count (40 steps instead
+    // of 10 move the remaining difference by less than 1e-3 of it), while one step or no wait
+    // give clearly different states (measured: 52.80, 52.80, 53.34 and 67.69 Pa). The orifice
+    // solves ignore the load test's residual tolerance: at 1e-2 of the peak force (0.05 N) the
+    // settle ends where it does at 1e-3 within 2e-3 (measured 52.83 Pa: the inflation before
+    // it is solved to the looser tolerance; orifice solves at 0.05 N once left 48.54 Pa).
     o.orifice.diameter = 0.01e-3;
     o.gasMasses = {4.5e-3};
-    o.settleSteps = 40;
-    const LoadTestResult fine = runLoadTest(o);
-    const LoadStep& f0 = fine.curves[0].steps.front();
     const LoadStep& c0 = r[1].curves[0].steps.front();
-    const double dpFine = f0.gaugePressure[0] - f0.gaugePressure[1];
-    EXPECT_NEAR(c0.gaugePressure[0] - c0.gaugePressure[1], dpFine, 1e-3 * std::abs(dpFine));
+    const double dp10 = c0.gaugePressure[0] - c0.gaugePressure[1];
+    auto settled = [&](int steps, double time, double residualTolerance) {
+        LoadTestOptions v = o;
+        v.settleSteps = steps;
+        v.settleTime = time;
+        v.residualTolerance = residualTolerance;
+        const LoadTestResult res = runLoadTest(v);
+        const LoadStep& s0 = res.curves[0].steps.front();
+        return s0.gaugePressure[0] - s0.gaugePressure[1];
+    };
+    EXPECT_NEAR(settled(40, 1000.0, o.residualTolerance), dp10, 1e-3 * std::abs(dp10));
+    EXPECT_GT(std::abs(settled(1, 1000.0, o.residualTolerance) - dp10), 5e-3 * std::abs(dp10));
+    EXPECT_GT(std::abs(settled(10, 0.0, o.residualTolerance)), std::abs(dp10) + 5.0);
+    EXPECT_NEAR(settled(10, 1000.0, 1e-2), dp10, 2e-3 * std::abs(dp10));
 }
 
 TEST(LoadTest, ResidualToleranceIsAFractionOfThePeakForce) {
@@ -211,8 +224,17 @@ TEST(LoadTest, RejectsImpossibleOptions) {
     o.connection = LoadTestOptions::Connection::Orifice;
     o.settleSteps = 0;
     EXPECT_THROW(o.validate(), std::invalid_argument);
+    o.settleSteps = 61;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
     o.settleSteps = 10;
     o.settleTime = -1.0;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o.settleTime = std::numeric_limits<double>::infinity();
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o = coarseOptions();
+    o.residualTolerance = 0.06;  // above 5 % of the peak force
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o.residualTolerance = -1e-3;
     EXPECT_THROW(o.validate(), std::invalid_argument);
     o = coarseOptions();
     o.material.reset();

@@ -38,7 +38,7 @@ struct LoadTestOptions {
     OrificeOptions orifice;
     /// Orifice only: before each curve the chambers settle for settleTime [s], integrated by
     /// backward Euler in settleSteps steps of doubling length (10 steps agree with 40 to
-    /// 3e-5 of the remaining pressure difference on the 20 mm rig).
+    /// 1e-5 of the remaining pressure difference on the 20 mm rig). 0 s: no settling.
     double settleTime = 1000.0;
     int settleSteps = 10;
     std::vector<double> gasMasses;      ///< [kg], run in this order (seed: 3.5 g down to 1.0 g)
