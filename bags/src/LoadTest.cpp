@@ -56,10 +56,15 @@ void setTotalGasMass(MembraneModel& model, const Eigen::Matrix3Xd& x, double m) 
     for (int g = 0; g < ng; ++g) model.updGas(g).setMass(m * V[g] / Vsum, V[g]);
 }
 
+// Puts back gas bodies copied by copyGases.
+void setGases(MembraneModel& model, const std::vector<GasChamber>& gases) {
+    for (size_t g = 0; g < gases.size(); ++g) model.updGas(static_cast<int>(g)) = gases[g];
+}
+
 // Sets the two gas bodies to `start` with dm [kg] moved from body 0 to body 1 at x.
 void moveGas(MembraneModel& model, const std::vector<GasChamber>& start,
              const Eigen::Matrix3Xd& x, double dm) {
-    for (int g = 0; g < 2; ++g) model.updGas(g) = start[g];
+    setGases(model, start);
     model.updGas(0).transferMass(-dm, model.calcGasVolume(0, x, nullptr));
     model.updGas(1).transferMass(dm, model.calcGasVolume(1, x, nullptr));
 }
@@ -454,8 +459,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
             } catch (const NumericalError&) {
                 // e.g. a gas transfer no chamber could give: the step fails like any other
             }
-            for (size_t g = 0; g < gasBefore.size(); ++g)
-                rig.model->updGas(static_cast<int>(g)) = gasBefore[g];
+            setGases(*rig.model, gasBefore);
             rig.x = xBefore;
             rig.model->setContactHistory(history);
             return false;
@@ -533,8 +537,7 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
                           "lifting the block after a failed step");
             } catch (const NumericalError&) {
                 placeBlock(rig, top + 0.05);
-                rig.x = xUnloaded;
-                if (self) self->updateCandidates(rig.x);
+                rig.x = xUnloaded;  // the next ramp rebuilds the self-contact candidates
                 rig.model->commitStep(rig.x);
                 rig.workspace.reset();
             }

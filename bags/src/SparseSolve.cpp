@@ -69,28 +69,36 @@ int HessianAssembler::find(int i, int j) const {
     return (it != end && *it == i) ? static_cast<int>(it - inner) : -1;
 }
 
-// Updates the slots of the triplets after the prefix shared with the last call; false if one
-// of them is not in the pattern.
-bool HessianAssembler::remap(const std::vector<Eigen::Triplet<double>>& trips,
-                             const std::vector<int>& map, int nfree) {
-    if (m_patterns == 0 || m_K.rows() != nfree || map != m_map) return false;
-    const size_t n = trips.size(), m = std::min(n, m_rows.size());
-    size_t t = 0;
-    while (t < m && trips[t].row() == m_rows[t] && trips[t].col() == m_cols[t]) ++t;
+// Records the rows and columns of trips[from, end) and their slots in the current pattern;
+// false (and the rest left unset) at the first entry the pattern lacks.
+bool HessianAssembler::mapSlots(const std::vector<Eigen::Triplet<double>>& trips,
+                                const std::vector<int>& map, size_t from) {
+    const size_t n = trips.size();
     m_rows.resize(n);
     m_cols.resize(n);
     m_slot.resize(n);
-    for (; t < n; ++t) {
+    for (size_t t = from; t < n; ++t) {
         m_rows[t] = trips[t].row();
         m_cols[t] = trips[t].col();
         const int i = map[m_rows[t]], j = map[m_cols[t]];
         if (dropped(i, j)) {
             m_slot[t] = -1;
         } else if ((m_slot[t] = find(i, j)) < 0) {
-            return false;  // rebuild() rewrites every slot
+            return false;
         }
     }
     return true;
+}
+
+// Keeps the slots of the prefix shared with the last call and maps the rest; false if an entry
+// is not in the pattern (rebuild() then rewrites every slot).
+bool HessianAssembler::remap(const std::vector<Eigen::Triplet<double>>& trips,
+                             const std::vector<int>& map, int nfree) {
+    if (m_patterns == 0 || m_K.rows() != nfree || map != m_map) return false;
+    const size_t m = std::min(trips.size(), m_rows.size());
+    size_t t = 0;
+    while (t < m && trips[t].row() == m_rows[t] && trips[t].col() == m_cols[t]) ++t;
+    return mapSlots(trips, map, t);
 }
 
 void HessianAssembler::rebuild(const std::vector<Eigen::Triplet<double>>& trips,
@@ -105,16 +113,7 @@ void HessianAssembler::rebuild(const std::vector<Eigen::Triplet<double>>& trips,
     m_K.resize(nfree, nfree);
     m_K.setFromTriplets(m_red.begin(), m_red.end());
     m_K.makeCompressed();
-    const size_t n = trips.size();
-    m_rows.resize(n);
-    m_cols.resize(n);
-    m_slot.resize(n);
-    for (size_t t = 0; t < n; ++t) {
-        m_rows[t] = trips[t].row();
-        m_cols[t] = trips[t].col();
-        const int i = map[m_rows[t]], j = map[m_cols[t]];
-        m_slot[t] = dropped(i, j) ? -1 : find(i, j);
-    }
+    mapSlots(trips, map, 0);  // every entry is in the pattern just built
     m_diag.resize(nfree);
     for (int i = 0; i < nfree; ++i) m_diag[i] = find(i, i);
     m_map = map;

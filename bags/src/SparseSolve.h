@@ -49,6 +49,8 @@ public:
 
 private:
     int find(int i, int j) const;
+    bool mapSlots(const std::vector<Eigen::Triplet<double>>& trips, const std::vector<int>& map,
+                  size_t from);
     bool remap(const std::vector<Eigen::Triplet<double>>& trips, const std::vector<int>& map,
                int nfree);
     void rebuild(const std::vector<Eigen::Triplet<double>>& trips, const std::vector<int>& map,
