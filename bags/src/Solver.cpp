@@ -112,6 +112,13 @@ void MembraneModel::precompute() {
     m_nodalArea = m_mesh.calcNodalAreas();
 }
 
+void MembraneModel::setBendingStiffness(double D) {
+    BendingOptions o;
+    o.stiffness = D;
+    o.validate();
+    m_bending = D > 0.0 ? std::make_shared<const DiscreteBending>(m_mesh, o) : nullptr;
+}
+
 void MembraneModel::setStabilization(double k, const Eigen::Matrix3Xd& anchor) {
     if (!(k >= 0.0)) throw std::invalid_argument("stabilisation stiffness must be >= 0");
     m_stabilization = k;
@@ -289,6 +296,7 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
         return;
     }
     acc.energy += energy;
+    if (m_bending) m_bending->addEnergy(x, acc);
 }
 
 void MembraneModel::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {

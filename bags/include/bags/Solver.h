@@ -8,6 +8,7 @@
 /// sparse), a backtracking line search, and a pseudo-transient shift when the tangent is not
 /// positive definite or Newton stalls.
 
+#include <bags/Bending.h>
 #include <bags/Contact.h>
 #include <bags/Gas.h>
 #include <bags/Material.h>
@@ -111,10 +112,16 @@ public:
     void setSelfContact(std::shared_ptr<SelfContact> contact) { m_selfContact = std::move(contact); }
     std::shared_ptr<SelfContact> getSelfContact() const { return m_selfContact; }
     bool isConservative() const;
+    /// Bending stiffness D [N m] of the sheet (DiscreteBending: plate law, nu = 0.5, seams
+    /// bend with their reference angle as rest angle); 0 (the default) switches it off.
+    /// calcPlateBendingStiffness() gives the homogeneous film's value.
+    void setBendingStiffness(double D);
+    double getBendingStiffness() const { return m_bending ? m_bending->getOptions().stiffness : 0.0; }
 
     /// Total potential energy and its derivatives at x, added into acc.
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
-    /// Only the membrane elements (strain energy, internal forces, material+geometric tangent).
+    /// Only the membrane: its elements (strain energy, internal forces, material+geometric
+    /// tangent) and its bending (DiscreteBending, if a bending stiffness is set).
     void addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     /// Everything but the membrane: pressures, gases (sparse part), gravity, contact.
     void addLoadEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
@@ -155,6 +162,7 @@ private:
     std::vector<std::shared_ptr<RigidContact>> m_contacts;
     std::shared_ptr<SelfContact> m_selfContact;
     std::vector<int> m_fixedDofs;
+    std::shared_ptr<const DiscreteBending> m_bending;  ///< null: no bending
     double m_stabilization = 0.0;         ///< [Pa/m]
     Eigen::Matrix3Xd m_anchor;
     Eigen::VectorXd m_nodalArea;          ///< [m^2]
