@@ -71,6 +71,11 @@ const std::vector<UnitInfo>& getUnitTable() {
         {"MPa/m", D::StiffnessPerArea, 1e6},
         {"N/mm^3", D::StiffnessPerArea, 1e9},
         {"N/m^3", D::StiffnessPerArea, 1.0},
+
+        {"N m", D::Moment, 1.0},
+        {"N*m", D::Moment, 1.0},
+        {"N mm", D::Moment, 1e-3},
+        {"mN m", D::Moment, 1e-3},
     };
     return table;
 }
@@ -131,6 +136,8 @@ std::string getDimensionName(Dimension d) {
             return "a stiffness (force per length)";
         case Dimension::StiffnessPerArea:
             return "a pressure per length";
+        case Dimension::Moment:
+            return "a moment (force times length)";
     }
     return "a quantity";
 }
@@ -163,6 +170,8 @@ std::string getSiUnit(Dimension d) {
             return "N/m";
         case Dimension::StiffnessPerArea:
             return "Pa/m";
+        case Dimension::Moment:
+            return "N m";
     }
     return "";
 }
@@ -195,6 +204,8 @@ std::string getExample(Dimension d) {
             return "5 N/mm";
         case Dimension::StiffnessPerArea:
             return "1e7 Pa/m";
+        case Dimension::Moment:
+            return "1.7e-4 N m";
     }
     return "";
 }

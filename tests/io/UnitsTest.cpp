@@ -53,7 +53,8 @@ TEST(Units, ConvertsEveryListedUnitByItsFactor) {
         Dimension::Length,   Dimension::Mass,      Dimension::Force,
         Dimension::Pressure, Dimension::Velocity,  Dimension::Temperature,
         Dimension::Density,  Dimension::MolarMass, Dimension::Time,
-        Dimension::Angle,    Dimension::Stiffness, Dimension::StiffnessPerArea};
+        Dimension::Angle,    Dimension::Stiffness, Dimension::StiffnessPerArea,
+        Dimension::Moment};
     int count = 0;
     for (Dimension d : all) {
         ASSERT_FALSE(io::getUnits(d).empty());
@@ -72,6 +73,8 @@ TEST(Units, ConvertsEveryListedUnitByItsFactor) {
     expectSi("1 h", Dimension::Time, 3600.0);
     expectSi("5 N/mm", Dimension::Stiffness, 5000.0);
     expectSi("1 kPa/mm", Dimension::StiffnessPerArea, 1e6);
+    expectSi("0.168 N mm", Dimension::Moment, 1.68e-4);
+    expectSi("1.68e-4 N m", Dimension::Moment, 1.68e-4);
     expectSi("1 rad", Dimension::Angle, 1.0);
     expectSi("-0.76582566 MPa", Dimension::Pressure, -0.76582566e6);
     expectSi("+3 mm", Dimension::Length, 3e-3);

@@ -26,6 +26,7 @@ enum class Dimension {
     Angle,             ///< [rad]
     Stiffness,         ///< force per length [N/m]
     StiffnessPerArea,  ///< pressure per length, e.g. a contact penalty [Pa/m]
+    Moment,            ///< force times length, e.g. a plate's bending stiffness [N m]
 };
 
 /// A unit the parser knows: value_SI = factor * value + offset.
