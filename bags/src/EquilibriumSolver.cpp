@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace bags {
 
@@ -280,6 +281,38 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
     }
     sum.converged = false;
     return sum;
+}
+
+Eigen::MatrixXd solveTangent(const MembraneModel& model, const Eigen::Matrix3Xd& x,
+                             const Eigen::MatrixXd& B) {
+    const int nn = model.getMesh().getNumNodes();
+    const int ndof = 3 * nn;
+    if (B.rows() != ndof) throw std::invalid_argument("solveTangent: B must have 3N rows");
+    int nfree = 0;
+    const std::vector<int> map = makeFreeMap(ndof, model.getFixedDofs(), &nfree);
+    EnergyAccumulator acc(nn);
+    model.addEnergy(x, acc);
+    detail::HessianAssembler assembler;
+    const SpMat& K = assembler.assemble(acc.hess, map, nfree);
+    detail::SparseSpdSolver llt;
+    if (!llt.factorize(K)) throw NumericalError("solveTangent: the tangent is not positive definite");
+    const int ng = model.getNumGases();
+    Eigen::MatrixXd U(nfree, ng);
+    Eigen::VectorXd cgas(ng);
+    for (int g = 0; g < ng; ++g) {
+        Eigen::VectorXd grad;
+        const double V = model.calcGasVolume(g, x, &grad);
+        U.col(g) = reduce(grad, map, nfree);
+        cgas(g) = -model.getGas(g).calcPressureDerivative(V);
+    }
+    const WoodburySolve solve(llt, U, cgas);
+    Eigen::MatrixXd Y = Eigen::MatrixXd::Zero(ndof, B.cols());
+    for (int j = 0; j < B.cols(); ++j) {
+        const Eigen::VectorXd y = solve.apply(reduce(B.col(j), map, nfree));
+        for (int i = 0; i < ndof; ++i)
+            if (map[i] >= 0) Y(i, j) = y(map[i]);
+    }
+    return Y;
 }
 
 }  // namespace bags

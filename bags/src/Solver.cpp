@@ -205,26 +205,35 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
     const int nt = m_mesh.getNumTris();
     const MembraneMaterial& mat = *m_material;
     const bool wantG = acc.wantGradient, wantH = acc.wantHessian;
-    double energy = 0.0;
     bool invalid = false;
     int badElement = -1;
 
-#pragma omp parallel reduction(+ : energy) if (nt > 4000)
-    {
-        // One thread writes straight into acc (no copies); a team uses private buffers.
+    // The elements are cut into a number of chunks that depends only on the mesh (one below
+    // 4000 triangles); each chunk sums its energy and gradient on its own, and the chunks are
+    // merged in chunk order, so the roundoff is the same for any number of threads. Every
+    // element writes its 81 Hessian triplets at a fixed place: the triplet sequence is the
+    // same on every call (the solver reuses its scatter map).
+    const int nchunks = nt > 4000 ? 16 : 1;
+    std::vector<double> chunkEnergy(nchunks, 0.0);
+    std::vector<Eigen::VectorXd> chunkGrad(nchunks > 1 && wantG ? nchunks : 0);
+    const size_t hessBase = acc.hess.size();
+    if (wantH) acc.hess.resize(hessBase + static_cast<size_t>(81) * nt);
 #ifdef _OPENMP
-        const bool single = omp_get_num_threads() == 1;
+    const int nthreads = std::min(nchunks, m_threads > 0 ? m_threads : omp_get_max_threads());
 #else
-        const bool single = true;
+    const int nthreads = 1;
 #endif
-        std::vector<Triplet> privateH;
-        Eigen::VectorXd privateG;
-        std::vector<Triplet>& localH = single ? acc.hess : privateH;
-        Eigen::VectorXd& localG = single ? acc.grad : privateG;
-        if (!single && wantG) privateG.setZero(acc.grad.size());
-        if (wantH) localH.reserve(localH.size() + static_cast<size_t>(81) * nt);
-#pragma omp for schedule(static)
-        for (int e = 0; e < nt; ++e) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads) if (nthreads > 1)
+    for (int chunk = 0; chunk < nchunks; ++chunk) {
+        Eigen::VectorXd* localG = &acc.grad;
+        if (nchunks > 1 && wantG) {
+            chunkGrad[chunk].setZero(acc.grad.size());
+            localG = &chunkGrad[chunk];
+        }
+        double energy = 0.0;
+        const int e0 = static_cast<int>(static_cast<long>(nt) * chunk / nchunks);
+        const int e1 = static_cast<int>(static_cast<long>(nt) * (chunk + 1) / nchunks);
+        for (int e = e0; e < e1; ++e) {
             const int n[3] = {m_mesh.tris(0, e), m_mesh.tris(1, e), m_mesh.tris(2, e)};
             const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
             const Mat32 F = calcDeformationGradient(m_mesh.tris, e, sg, x);
@@ -232,9 +241,13 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
             if (!(C.determinant() > 1e-12)) {
 #pragma omp critical
                 {
+                    if (!invalid || e < badElement) badElement = e;
                     invalid = true;
-                    badElement = e;
                 }
+                if (wantH)
+                    std::fill(acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e),
+                              acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e + 1),
+                              Triplet(0, 0, 0.0));
                 continue;
             }
             Eigen::Vector3d S;
@@ -247,9 +260,10 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
             const Vec3 f1 = F.col(0), f2 = F.col(1);
             if (wantG) {
                 const Mat32 P = F * Sm;
-                for (int a = 0; a < 3; ++a) localG.segment<3>(3 * n[a]) += vol * (P * sg.dN[a]);
+                for (int a = 0; a < 3; ++a) localG->segment<3>(3 * n[a]) += vol * (P * sg.dN[a]);
             }
             if (wantH) {
+                Triplet* out = acc.hess.data() + hessBase + 81 * static_cast<size_t>(e);
                 Eigen::Matrix3d B[3];  // dE_v / dx_a
                 for (int a = 0; a < 3; ++a) {
                     const Vec2& g = sg.dN[a];
@@ -265,27 +279,17 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
                         K *= vol;
                         for (int i = 0; i < 3; ++i)
                             for (int j = 0; j < 3; ++j)
-                                localH.emplace_back(3 * n[b] + i, 3 * n[a] + j, K(i, j));
+                                *out++ = Triplet(3 * n[b] + i, 3 * n[a] + j, K(i, j));
                     }
                 }
             }
         }
-        if (!single) {
-            // Merged in thread order: with the static schedule above that is element order,
-            // so the triplets come in the same sequence every call (the solver reuses their
-            // scatter map) and the gradient's roundoff does not depend on thread timing.
-#ifdef _OPENMP
-            const int nthreads = omp_get_num_threads();
-#pragma omp for ordered schedule(static, 1)
-            for (int t = 0; t < nthreads; ++t) {
-#pragma omp ordered
-                {
-                    if (wantG) acc.grad += privateG;
-                    if (wantH) acc.hess.insert(acc.hess.end(), privateH.begin(), privateH.end());
-                }
-            }
-#endif
-        }
+        chunkEnergy[chunk] = energy;
+    }
+    double energy = 0.0;
+    for (int c = 0; c < nchunks; ++c) {
+        energy += chunkEnergy[c];
+        if (nchunks > 1 && wantG) acc.grad += chunkGrad[c];
     }
     if (invalid) {
         acc.energy = kInf;

@@ -7,6 +7,7 @@
 /// called after every converged step (so a writer can stream frames and survive an interrupt);
 /// the result holds the curves, the stiffness per gas mass and the k(m) fit.
 
+#include <bags/Airbag.h>
 #include <bags/Contact.h>
 #include <bags/Gas.h>
 #include <bags/Geometry.h>
@@ -27,6 +28,9 @@ struct LoadTestOptions {
     double thickness = 0.2e-3;          ///< membrane thickness [m]
     double density = 1150.0;            ///< membrane density [kg/m^3] (gravity on the sheet)
     double wrinklingResidual = 1e-3;    ///< residual stiffness fraction of slack states
+    double bendingStiffness = 0.0;      ///< film bending stiffness [N m] (0: pure membrane)
+    Imperfection imperfection;          ///< stated geometric imperfection of the bag
+    int threads = 0;                    ///< element-loop threads (0: default; results identical)
     bool gravity = true;                ///< self-weight of the sheet
     GasOptions gas;
     /// How the chambers share their air: Open, one gas body filling all chambers (pressures
@@ -58,8 +62,9 @@ struct LoadTestOptions {
     /// of this stiffness per unit area to the last converged state; 0 disables it.
     double stabilization = 1.0e4;
     /// A step is converged when the norm of the out-of-balance nodal forces is below this
-    /// fraction of peakForce (or below solver.absoluteTolerance, whichever is larger); 0 leaves
-    /// only the solver's own tolerances. The residual that lingers longest sits in the slack
+    /// fraction of the peak force, the peak force counted at most kToleranceForceCap (50 N), or
+    /// below solver.absoluteTolerance, whichever is larger; 0 leaves only the solver's own
+    /// tolerances. The cap keeps a large load from loosening the solve. The residual that lingers longest sits in the slack
     /// folds of the internal wall, away from the block (docs/solver.md).
     double residualTolerance = 1.0e-3;
     /// Throws std::invalid_argument naming the option and what would be valid.
@@ -116,6 +121,13 @@ struct LoadTestResult {
 using LoadTestObserver = std::function<void(const LoadStep&, const Mesh&, const Eigen::Matrix3Xd&)>;
 
 LoadTestResult runLoadTest(const LoadTestOptions& options, const LoadTestObserver& observer = {});
+
+/// [N] the most of the peak force that LoadTestOptions::residualTolerance scales.
+inline constexpr double kToleranceForceCap = 50.0;
+/// The bag's force tolerance [N] for these options (see residualTolerance).
+double calcLoadTestForceTolerance(const LoadTestOptions& options);
+/// The airbag the load test drives (geometry, material, gas, contact, solver of the options).
+AirbagSpec makeAirbagSpec(const LoadTestOptions& options);
 
 /// Stiffness of a curve's loading branch over the force range [from, to] [N]: least-squares
 /// slope [N/m] and r^2 of force against displacement; NaN for both when the loading never

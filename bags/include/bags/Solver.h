@@ -117,6 +117,10 @@ public:
     /// calcPlateBendingStiffness() gives the homogeneous film's value.
     void setBendingStiffness(double D);
     double getBendingStiffness() const { return m_bending ? m_bending->getOptions().stiffness : 0.0; }
+    /// Threads of the element loops: 0 the OpenMP default, 1 single-threaded. The results are
+    /// bit-identical for any value (fixed chunks merged in a fixed order).
+    void setNumThreads(int threads) { m_threads = threads; }
+    int getNumThreads() const { return m_threads; }
 
     /// Total potential energy and its derivatives at x, added into acc.
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
@@ -163,6 +167,7 @@ private:
     std::shared_ptr<SelfContact> m_selfContact;
     std::vector<int> m_fixedDofs;
     std::shared_ptr<const DiscreteBending> m_bending;  ///< null: no bending
+    int m_threads = 0;                    ///< 0: OpenMP default
     double m_stabilization = 0.0;         ///< [Pa/m]
     Eigen::Matrix3Xd m_anchor;
     Eigen::VectorXd m_nodalArea;          ///< [m^2]
@@ -178,5 +183,12 @@ private:
 /// afresh.
 SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
                               const SolverOptions& options, SolverWorkspace* workspace = nullptr);
+
+/// Solves K Y = B with K the model's whole tangent at x (membrane, loads, contacts and the
+/// dense gas terms) over the free dofs; B is 3N x m, Y has zero rows at fixed dofs. Used for
+/// the sensitivity of an equilibrium to a load parameter (dx/dq = -K^-1 dr/dq).
+/// @throws NumericalError if K is not positive definite (an unstable state).
+Eigen::MatrixXd solveTangent(const MembraneModel& model, const Eigen::Matrix3Xd& x,
+                             const Eigen::MatrixXd& B);
 
 }  // namespace bags

@@ -1,0 +1,190 @@
+#pragma once
+/// @file One airbag as a module: the membrane, its gas bodies, the bed board, the rigid shapes
+/// that may touch it and its own self contact, with the state, stepping, retry and rollback
+/// that everything above the bag (the load-test rig, the co-simulation, studies, calibration)
+/// drives.
+///
+/// Call protocol (an Airbag is not thread safe; different Airbags are independent and may run
+/// on different threads, each with AirbagSpec::threads = 1):
+///  1. Construct from an AirbagSpec (validated; the mesh is built and the stated imperfection
+///     applied to it).
+///  2. addShape() for every rigid shape that may touch the bag (their poses in Ground).
+///  3. inflate(mass): from the flat panels to a sealed gas of that total mass, shapes where
+///     they are (park them clear first). Committed.
+///  4. Per step: setShapePose() to the poses at the end of the step; optionally
+///     setMassFlow() / setTargetMass() (gas in or out over the step) or changeGasMass() (a
+///     quasi-static let-down, solved at once); then advance(dt). advance() goes from the
+///     committed state to the new poses and gas, cutting the step into sub-steps when a solve
+///     fails; if even its smallest sub-step fails it restores the committed state and returns
+///     converged = false (the caller cuts its own step). After a converged advance the new
+///     state is current but not yet committed: commit() makes it the state to go back to,
+///     rollback() returns to the last commit (positions, gas, friction history, shape poses,
+///     time). getSnapshot()/setSnapshot() do the same for any number of checkpoints (an
+///     implicit coupling iterates a macro step from one).
+///  5. Read back at the current state: calcShapeWrench() (force and torque on the shape, at its
+///     origin, Ground), calcShapeWrenchTangent() (d wrench / d pose, with the bag
+///     re-equilibrated), calcShapeContactPressure() (per node [Pa]), getChamberState() (gauge
+///     pressure, volume, mass per chamber).
+///
+/// Units SI; frames: Ground (G); the mesh is built in the bag frame B and placed by X_GB.
+
+#include <bags/Contact.h>
+#include <bags/Gas.h>
+#include <bags/Geometry.h>
+#include <bags/Material.h>
+#include <bags/Mesh.h>
+#include <bags/Solver.h>
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace bags {
+
+/// A stated geometric imperfection: every node of the reference (as-made) panels is moved
+/// along its reference normal by amplitude * f(X), f a smooth random field of unit largest
+/// magnitude (a sum of plane waves, wavelengths 60-240 mm, drawn from `seed`). Support
+/// nodes stay. Real bags have seams and tolerances; the imperfection, not roundoff, then
+/// chooses which way a symmetric fold goes.
+struct Imperfection {
+    double amplitude = 0.0;      ///< [m] largest normal offset (0: the perfect bag)
+    std::uint64_t seed = 1;      ///< random field
+    void validate() const;       ///< throws std::invalid_argument naming the option
+};
+
+/// Moves the free nodes of mesh.X by the imperfection (in place); a no-op at zero amplitude.
+/// Deterministic: the same seed gives the same bits on every machine and thread count.
+void applyImperfection(Mesh& mesh, const Imperfection& imperfection);
+
+/// Everything an Airbag is built from.
+struct AirbagSpec {
+    DoubleWedgeParams geometry;          ///< the double wedge, used when `mesh` has no nodes
+    Mesh mesh;                           ///< a ready mesh in the bag frame (optional)
+    Eigen::Isometry3d X_GB = Eigen::Isometry3d::Identity();  ///< bag frame in Ground
+    std::shared_ptr<const MembraneMaterial> material;  ///< base material (wrinkling added)
+    double thickness = 0.2e-3;           ///< membrane thickness [m]
+    double density = 1150.0;             ///< membrane density [kg/m^3]
+    double wrinklingResidual = 1e-3;     ///< residual stiffness fraction of slack states
+    /// Bending stiffness of the film [N m] (discrete hinges); 0: a pure membrane.
+    double bendingStiffness = 0.0;
+    Vec3 gravity = Vec3(0, 0, -9.81);    ///< [m/s^2] in Ground, on the sheet's own weight
+    GasOptions gas;
+    /// Open: one gas body fills all chambers; Orifice: one per chamber, neighbours (c, c+1)
+    /// joined by `orifice`, the flow integrated over advance()'s time.
+    enum class Connection { Open, Orifice };
+    Connection connection = Connection::Open;
+    OrificeOptions orifice;
+    Imperfection imperfection;
+    bool bedBoard = true;                ///< a rigid plane z_B = 0 under the bag
+    RigidContact::Options bedContact;    ///< its contact options
+    bool selfContact = true;
+    double selfContactPenalty = 1e7;     ///< [Pa/m]
+    SolverOptions solver;                ///< Newton options (maxStep 0: one mesh size)
+    /// [Pa/m] springs to the last converged state per unit area, used when Newton fails on a
+    /// slack, wrinkling state (escalated 1x, 10x, 100x); 0 disables them.
+    double stabilization = 1.0e4;
+    /// [N] a step is converged when the out-of-balance nodal force norm is below this (or
+    /// the solver's own tolerances). A property of the bag, never scaled by a load.
+    double forceTolerance = 0.05;
+    /// Threads for the bag's element loops: 0 the OpenMP default, 1 single-threaded (for many
+    /// bags in parallel). The result is bit-identical for any value.
+    int threads = 0;
+    void validate() const;               ///< throws std::invalid_argument naming the option
+};
+
+/// Force [N] and torque [N m] about the shape frame's origin, both in Ground.
+struct Wrench {
+    Vec3 torque = Vec3::Zero();
+    Vec3 force = Vec3::Zero();
+};
+
+/// State of one chamber.
+struct ChamberState {
+    double gaugePressure = 0.0;  ///< [Pa]
+    double volume = 0.0;         ///< [m^3]
+    double mass = 0.0;           ///< [kg] (its share of a shared gas, by volume)
+};
+
+/// What one advance() did.
+struct AdvanceSummary {
+    bool converged = false;
+    int substeps = 0;              ///< sub-steps solved (1 without cutting)
+    int newtonIterations = 0;      ///< over every solve of the call
+    int factorizations = 0;
+    double residual = 0.0;         ///< [N] spring-free force residual at the accepted state
+    double stabilizationEnergy = 0.0;  ///< [J] held by springs at the accepted state
+};
+
+class Airbag {
+public:
+    explicit Airbag(const AirbagSpec& spec);
+    ~Airbag();
+    Airbag(Airbag&&) noexcept;
+    Airbag& operator=(Airbag&&) noexcept;
+
+    // --- set-up
+    /// Adds a rigid shape that may touch the bag's free nodes (shared: the caller may keep
+    /// it, but moves it only through setShapePose). Returns its index.
+    int addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options);
+    int getNumShapes() const;
+
+    // --- gas
+    /// Inflates the flat bag (a pressure ramp shapes the panels), seals its gas and takes it
+    /// to `mass` [kg] in all; commits. @throws NumericalError if it cannot be solved.
+    void inflate(double mass);
+    /// Takes the total gas mass to `mass` [kg] now, quasi-statically (shapes held), in
+    /// steps it cuts as needed; commits. @throws NumericalError if it cannot be solved.
+    void changeGasMass(double mass);
+    /// Gas mass flow [kg/s] into the bag (negative: out) during the following advance()
+    /// calls, shared among the gas bodies by volume.
+    void setMassFlow(double massFlow);
+    /// Flow at |rate| [kg/s] during the following advance() calls until the total mass is
+    /// `mass` [kg], then none.
+    void setTargetMass(double mass, double rate);
+    double getTotalGasMass() const;       ///< [kg]
+
+    // --- shapes
+    void setShapePose(int shape, const Eigen::Isometry3d& X_GS);
+    const Eigen::Isometry3d& getShapePose(int shape) const;
+
+    // --- stepping
+    /// Goes from the committed state to the set shape poses and gas over dt [s] (the time
+    /// drives the gas flows), with up to maxCuts halvings of a failing (sub-)step.
+    AdvanceSummary advance(double dt, int maxCuts = 6);
+    void commit();
+    void rollback();
+    struct Snapshot;
+    /// A copy of the whole current state (positions, gas, friction history, poses, time).
+    std::shared_ptr<const Snapshot> getSnapshot() const;
+    /// Makes a snapshot current (and the commit point).
+    void setSnapshot(const std::shared_ptr<const Snapshot>& snapshot);
+    double getTime() const;               ///< [s] accumulated by advance()
+
+    // --- results at the current state
+    Wrench calcShapeWrench(int shape) const;
+    /// d(torque, force)/d(rotation, translation) of the shape's pose [6x6]: rows torque then
+    /// force (Ground), columns a small rotation of the shape about Ground axes through its
+    /// origin [rad] then a translation of it [m]; the bag re-equilibrates (its tangent
+    /// stiffness, gas included, solved once). Units N m/rad, N m/m, N/rad, N/m.
+    /// @throws NumericalError if the bag's tangent is not positive definite.
+    Eigen::Matrix<double, 6, 6> calcShapeWrenchTangent(int shape) const;
+    /// Contact pressure [Pa] per mesh node from this shape.
+    Eigen::VectorXd calcShapeContactPressure(int shape) const;
+    /// Force [N] on the bed board (Ground).
+    Vec3 calcBedForce() const;
+    int getNumChambers() const;
+    ChamberState getChamberState(int chamber) const;
+    const Mesh& getMesh() const;          ///< in Ground (X_GB applied), imperfection included
+    const Eigen::Matrix3Xd& getPositions() const;  ///< nodes [m], Ground
+    const MembraneModel& getModel() const;
+    /// Force [N] residual of the current state without stabilisation springs.
+    double calcResidual() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace bags

@@ -1,0 +1,686 @@
+#include <bags/Airbag.h>
+#include <bags/Material.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace bags {
+
+namespace {
+
+void require(bool ok, const char* option, double value, const char* valid) {
+    if (ok) return;
+    std::ostringstream s;
+    s << "airbag option '" << option << "' = " << value << " is invalid; " << valid;
+    throw std::invalid_argument(s.str());
+}
+
+// splitmix64: a fixed, portable generator (std:: distributions differ between libraries).
+struct SplitMix64 {
+    std::uint64_t state;
+    std::uint64_t next() {
+        std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  ///< [0, 1)
+};
+
+constexpr double kPi = 3.14159265358979323846;
+
+Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
+                                  double s) {
+    if (s >= 1.0) return b;
+    if (s <= 0.0) return a;
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    const Eigen::Quaterniond qa(a.rotation()), qb(b.rotation());
+    X.linear() = qa.slerp(s, qb).toRotationMatrix();
+    X.translation() = (1.0 - s) * a.translation() + s * b.translation();
+    return X;
+}
+
+// Pose rotated by the rotation vector w [rad] about Ground axes through its origin and moved
+// by t [m].
+Eigen::Isometry3d perturbPose(const Eigen::Isometry3d& X, const Vec3& w, const Vec3& t) {
+    Eigen::Isometry3d Y = X;
+    const double angle = w.norm();
+    if (angle > 0.0) Y.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * X.linear();
+    Y.translation() += t;
+    return Y;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Imperfection
+
+void Imperfection::validate() const {
+    require(amplitude >= 0.0 && amplitude <= 0.01, "imperfection.amplitude", amplitude,
+            "use 0 to 10 mm (e.g. 0.5 mm)");
+}
+
+void applyImperfection(Mesh& mesh, const Imperfection& imp) {
+    imp.validate();
+    if (imp.amplitude == 0.0) return;
+    const int nn = mesh.getNumNodes();
+    // Reference vertex normals (area weighted); a node of a seam or of the internal wall gets
+    // the mean of its panels' normals (orientation is immaterial for a random offset).
+    Eigen::Matrix3Xd normal = Eigen::Matrix3Xd::Zero(3, nn);
+    for (int e = 0; e < mesh.getNumTris(); ++e) {
+        const Vec3 a = mesh.X.col(mesh.tris(0, e)), b = mesh.X.col(mesh.tris(1, e)),
+                   c = mesh.X.col(mesh.tris(2, e));
+        Vec3 n = (b - a).cross(c - a);
+        // Align with a fixed hemisphere so that the two sides of a shared wall do not cancel.
+        const int k = [&] { int i; n.cwiseAbs().maxCoeff(&i); return i; }();
+        if (n(k) < 0.0) n = -n;
+        for (int v = 0; v < 3; ++v) normal.col(mesh.tris(v, e)) += n;
+    }
+    // Smooth random field: a sum of plane waves, wavelengths 60-240 mm, random directions and
+    // phases, drawn in a fixed order from the seed.
+    constexpr int kWaves = 12;
+    SplitMix64 rng{imp.seed * 0x2545F4914F6CDD1Dull + 0x1234567ull};
+    Vec3 k[kWaves];
+    double phase[kWaves];
+    for (int w = 0; w < kWaves; ++w) {
+        const double z = 2.0 * rng.uniform() - 1.0, phi = 2.0 * kPi * rng.uniform();
+        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double lambda = 0.060 * std::pow(4.0, rng.uniform());
+        k[w] = (2.0 * kPi / lambda) * Vec3(r * std::cos(phi), r * std::sin(phi), z);
+        phase[w] = 2.0 * kPi * rng.uniform();
+    }
+    std::vector<char> support(nn, 0);
+    for (int n : mesh.supportNodes) support[n] = 1;
+    Eigen::VectorXd f(nn);
+    double fmax = 0.0;
+    for (int i = 0; i < nn; ++i) {
+        double s = 0.0;
+        for (int w = 0; w < kWaves; ++w) s += std::sin(k[w].dot(mesh.X.col(i)) + phase[w]);
+        f(i) = support[i] ? 0.0 : s;
+        fmax = std::max(fmax, std::abs(f(i)));
+    }
+    if (fmax == 0.0) return;
+    for (int i = 0; i < nn; ++i) {
+        const double len = normal.col(i).norm();
+        if (support[i] || len == 0.0) continue;
+        mesh.X.col(i) += (imp.amplitude * f(i) / fmax / len) * normal.col(i);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// AirbagSpec
+
+void AirbagSpec::validate() const {
+    if (mesh.getNumNodes() == 0) geometry.validate();
+    if (!material) throw std::invalid_argument("airbag option 'material' is not set");
+    require(thickness > 0.0 && thickness < 0.01, "thickness", thickness, "use 0 < t < 10 mm");
+    require(density >= 0.0, "density", density, "use a density >= 0 kg/m^3");
+    require(wrinklingResidual > 0.0 && wrinklingResidual < 0.1, "wrinklingResidual",
+            wrinklingResidual, "use 0 < residual < 0.1 (e.g. 1e-3)");
+    require(bendingStiffness >= 0.0 && bendingStiffness < 1.0, "bendingStiffness",
+            bendingStiffness, "use 0 (a pure membrane) to 1 N m");
+    require(gravity.allFinite(), "gravity", gravity.norm(), "use a finite acceleration");
+    gas.validate();
+    if (connection == Connection::Orifice) orifice.validate();
+    imperfection.validate();
+    bedContact.validate();
+    require(selfContactPenalty > 0.0, "selfContactPenalty", selfContactPenalty, "use > 0 Pa/m");
+    require(stabilization >= 0.0, "stabilization", stabilization,
+            "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
+    require(forceTolerance > 0.0 && forceTolerance <= 1.0, "forceTolerance", forceTolerance,
+            "use 0 < tolerance <= 1 N (e.g. 0.05 N)");
+    require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
+    solver.validate();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Airbag
+
+struct Airbag::Snapshot {
+    Eigen::Matrix3Xd x;
+    std::vector<GasChamber> gases;
+    std::vector<RigidContact::History> history;
+    std::vector<Eigen::Isometry3d> poses;
+    double time = 0.0;
+};
+
+struct Airbag::Impl {
+    AirbagSpec spec;
+    Mesh mesh;
+    std::shared_ptr<MembraneModel> model;
+    std::shared_ptr<SelfContact> self;
+    std::vector<int> freeNodes;
+    struct Shape {
+        std::shared_ptr<RigidShape> shape;
+        std::shared_ptr<RigidContact> contact;
+        Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+    };
+    std::vector<Shape> shapes;
+    std::unique_ptr<RigidShape> bed;
+    std::shared_ptr<RigidContact> bedContact;
+    Eigen::Matrix3Xd x;
+    SolverWorkspace workspace;
+    double time = 0.0;
+    double meanEdge = 0.0;
+    // Gas flow for the following advance() calls.
+    double massFlow = 0.0;
+    bool hasTarget = false;
+    double targetMass = 0.0;
+    std::shared_ptr<const Snapshot> committed;
+    bool inflated = false;
+
+    // --- state
+    std::vector<GasChamber> copyGases() const {
+        std::vector<GasChamber> g;
+        for (int i = 0; i < model->getNumGases(); ++i) g.push_back(model->getGas(i));
+        return g;
+    }
+    void setGases(const std::vector<GasChamber>& g) {
+        for (size_t i = 0; i < g.size(); ++i) model->updGas(static_cast<int>(i)) = g[i];
+    }
+    double totalMass() const {
+        double m = 0.0;
+        for (int g = 0; g < model->getNumGases(); ++g) m += model->getGas(g).getMass();
+        return m;
+    }
+    std::shared_ptr<Snapshot> snapshot() const {
+        auto s = std::make_shared<Snapshot>();
+        s->x = x;
+        s->gases = copyGases();
+        s->history = model->getContactHistory();
+        for (const Shape& sh : shapes) s->poses.push_back(sh.shape->getPose());
+        s->time = time;
+        return s;
+    }
+    void restore(const Snapshot& s) {
+        x = s.x;
+        setGases(s.gases);
+        model->setContactHistory(s.history);
+        for (size_t i = 0; i < shapes.size(); ++i) shapes[i].shape->setPose(s.poses[i]);
+        time = s.time;
+    }
+
+    // Sets the total gas mass, shared among the gas bodies at equal pressure (a body's share
+    // is its volume's share at a fixed temperature), each resealed at its current volume.
+    void setTotalGasMass(double m) {
+        const int ng = model->getNumGases();
+        std::vector<double> V(ng);
+        double Vsum = 0.0;
+        for (int g = 0; g < ng; ++g) Vsum += V[g] = model->calcGasVolume(g, x, nullptr);
+        for (int g = 0; g < ng; ++g) model->updGas(g).setMass(m * V[g] / Vsum, V[g]);
+    }
+    // Adds dm [kg] to the gas bodies in proportion to their volumes at x.
+    void addGasMass(double dm) {
+        if (dm == 0.0) return;
+        const int ng = model->getNumGases();
+        std::vector<double> V(ng);
+        double Vsum = 0.0;
+        for (int g = 0; g < ng; ++g) Vsum += V[g] = model->calcGasVolume(g, x, nullptr);
+        for (int g = 0; g < ng; ++g) model->updGas(g).transferMass(dm * V[g] / Vsum, V[g]);
+    }
+
+    // --- solving
+    // Newton from xs under the model's current stabilisation; false if it does not converge.
+    bool runNewton(Eigen::Matrix3Xd& xs, SolveSummary* sum, const SolverOptions& base) {
+        SolverOptions so = base;
+        if (so.maxStep == 0.0) so.maxStep = meanEdge;  // trust limit: about one element
+        so.absoluteTolerance = std::max(so.absoluteTolerance, spec.forceTolerance);
+        // Non-smooth self contact can stall Newton a little above the tolerance: accept a
+        // residual below the bag's force tolerance then.
+        if (so.acceptableResidual == 0.0) so.acceptableResidual = spec.forceTolerance;
+        try {
+            const int before = sum->iterations, fBefore = sum->factorizations;
+            *sum = solveEquilibrium(*model, xs, so, &workspace);
+            sum->iterations += before;  // summed over the solves of one step
+            sum->factorizations += fBefore;
+            return sum->converged;
+        } catch (const NumericalError&) {
+            return false;
+        }
+    }
+
+    double calcFreeResidual(const Eigen::Matrix3Xd& xs) const {
+        EnergyAccumulator acc(static_cast<int>(xs.cols()));
+        acc.wantHessian = false;
+        model->addEnergy(xs, acc);
+        for (int d : model->getFixedDofs()) acc.grad(d) = 0.0;
+        return acc.grad.norm();
+    }
+
+    // Solves the current loads starting from x. If Newton fails, retries with the
+    // stabilisation springs anchored at x (slack, wrinkling states), at up to `levels`
+    // stiffnesses (1x, 10x, 100x). A stabilised state is then relaxed: the springs are
+    // re-anchored at it and the step solved again (a pseudo-time step towards the true
+    // equilibrium), up to kRelaxations times, each time first trying without springs.
+    // *stabEnergy is the energy the springs hold at the accepted state: zero when the step ends
+    // on a spring-free equilibrium. On success x is updated and contact history committed.
+    bool trySolve(SolveSummary* sum, double* stabEnergy, int levels, const SolverOptions& so) {
+        constexpr int kRelaxations = 4;
+        *sum = SolveSummary();
+        *stabEnergy = 0.0;
+        auto accept = [&](const Eigen::Matrix3Xd& xs, double energy) {
+            x = xs;
+            model->commitStep(xs);
+            *stabEnergy = energy;
+            return true;
+        };
+        Eigen::Matrix3Xd xs = x;
+        if (runNewton(xs, sum, so)) return accept(xs, 0.0);
+        if (spec.stabilization <= 0.0) return false;
+        for (int level = 0; level < levels; ++level) {
+            const double k = spec.stabilization * std::pow(10.0, level);
+            xs = x;
+            model->setStabilization(k, xs);
+            const bool ok = runNewton(xs, sum, so);
+            double energy = ok ? model->calcStabilizationEnergy(xs) : 0.0;
+            model->setStabilization(0.0, x);
+            if (!ok) continue;
+            SolveSummary acceptedSum = *sum;
+            for (int r = 0; r < kRelaxations; ++r) {
+                Eigen::Matrix3Xd free = xs;
+                if (runNewton(free, sum, so)) return accept(free, 0.0);
+                Eigen::Matrix3Xd next = xs;
+                model->setStabilization(k, xs);
+                const bool relaxed = runNewton(next, sum, so);
+                const double e = relaxed ? model->calcStabilizationEnergy(next) : 0.0;
+                model->setStabilization(0.0, x);
+                if (!relaxed) break;
+                xs = next;
+                energy = e;
+                acceptedSum = *sum;
+            }
+            const int iterations = sum->iterations, factorizations = sum->factorizations;
+            *sum = acceptedSum;
+            sum->iterations = iterations;
+            sum->factorizations = factorizations;
+            sum->residualNorm = calcFreeResidual(xs);
+            return accept(xs, energy);
+        }
+        return false;
+    }
+
+    // Mass [kg] the orifice passes from body 0 to body 1 during dt from the `start` masses
+    // (backward Euler, volumes held at x).
+    double calcTransfer(const std::vector<GasChamber>& start, double dt) const {
+        return calcOrificeTransfer(spec.orifice, start[0], model->calcGasVolume(0, x, nullptr),
+                                   start[1], model->calcGasVolume(1, x, nullptr), dt);
+    }
+    void moveGas(const std::vector<GasChamber>& start, double dm) {
+        setGases(start);
+        model->updGas(0).transferMass(-dm, model->calcGasVolume(0, x, nullptr));
+        model->updGas(1).transferMass(dm, model->calcGasVolume(1, x, nullptr));
+    }
+
+    // Solves the current loads with the gas flowing through the orifice over dt [s] from the
+    // `start` gas states: the transferred mass dm and the membrane's equilibrium are found
+    // together by a secant iteration on R(dm) = dm - T(dm), T the backward-Euler transfer at
+    // the volumes of the equilibrium reached with dm. Every iterate is solved to the solver's
+    // own tolerances (under the loose force tolerance a state close to the last one would be
+    // accepted unmoved and T evaluated at unchanged volumes: 48.5 Pa instead of 52.8 Pa after
+    // the settle of a 0.01 mm orifice) and starts from the step's friction history. Open
+    // connection or dt = 0: a plain solve.
+    bool solveWithFlow(const std::vector<GasChamber>& start, double dt, SolveSummary* sum,
+                       double* stab) {
+        if (spec.connection != AirbagSpec::Connection::Orifice || model->getNumGases() < 2 ||
+            dt <= 0.0)
+            return trySolve(sum, stab, 3, spec.solver);
+        const double tolerance = spec.forceTolerance;
+        spec.forceTolerance = spec.solver.absoluteTolerance;  // strict: see above
+        struct Restore {
+            double& t;
+            double v;
+            ~Restore() { t = v; }
+        } restore{spec.forceTolerance, tolerance};
+        const std::vector<RigidContact::History> history = model->getContactHistory();
+        const double dmMax = 0.99 * start[0].getMass(), dmMin = -0.99 * start[1].getMass();
+        double dm = calcTransfer(start, dt);  // predictor: last volumes
+        double dmPrev = 0.0, rPrev = 0.0;
+        for (int k = 0; k < 30; ++k) {
+            dm = std::clamp(dm, dmMin, dmMax);
+            model->setContactHistory(history);
+            moveGas(start, dm);
+            if (!trySolve(sum, stab, 3, spec.solver)) return false;
+            const double t = calcTransfer(start, dt);
+            const double r = dm - t;
+            if (std::abs(r) <=
+                1e-4 * std::abs(t) + 1e-12 * (start[0].getMass() + start[1].getMass())) {
+                moveGas(start, t);  // gas at the final volumes
+                return true;
+            }
+            const double next = (k == 0 || r == rPrev) ? t : dm - r * (dm - dmPrev) / (r - rPrev);
+            dmPrev = dm;
+            rPrev = r;
+            dm = next;
+        }
+        return false;
+    }
+
+    // Ramps a scalar load parameter from s0 to s1 (apply(s) sets the loads), halving the
+    // increment on failure; always solves at least once. Each solve starts with the
+    // self-contact candidates rebuilt at the current state and may use the springs at up to
+    // 100 times their stiffness.
+    template <class Apply>
+    void solveRamp(double s0, double s1, const Apply& apply, const char* what) {
+        double s = s0, ds = s1 - s0;
+        int cuts = 0;
+        bool solved = false;
+        while (!solved || s != s1) {
+            const double next = std::abs(s1 - s) <= std::abs(ds) * (1.0 + 1e-9) ? s1 : s + ds;
+            apply(next);
+            SolveSummary sum;
+            double stab = 0.0;
+            if (self) self->updateCandidates(x);
+            if (trySolve(&sum, &stab, 3, spec.solver)) {
+                s = next;
+                solved = true;
+                if (sum.iterations < 8) ds *= 2.0;
+            } else {
+                apply(s);
+                ds *= 0.5;
+                if (++cuts > 30) throw NumericalError(std::string("no convergence while ") + what);
+            }
+        }
+    }
+
+    // One (sub-)step from the current state: shapes to the poses at fraction s1 of the way
+    // from `from` to their targets, gas flow over dt. Restores everything on failure.
+    bool solveSubstep(const std::vector<Eigen::Isometry3d>& from, double s1, double dt,
+                      AdvanceSummary* out) {
+        const std::shared_ptr<Snapshot> before = snapshot();
+        for (size_t i = 0; i < shapes.size(); ++i)
+            shapes[i].shape->setPose(interpolatePose(from[i], shapes[i].target, s1));
+        SolveSummary sum;
+        double stab = 0.0;
+        bool ok = false;
+        try {
+            // Gas in or out over the step, at the volumes of the start of the step.
+            double dm = massFlow * dt;
+            if (hasTarget) {
+                const double left = targetMass - totalMass();
+                dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
+            }
+            addGasMass(dm);
+            if (self) self->updateCandidates(x);
+            ok = solveWithFlow(copyGases(), dt, &sum, &stab);
+        } catch (const NumericalError&) {
+            ok = false;  // e.g. a gas transfer no chamber could give
+        }
+        out->newtonIterations += sum.iterations;
+        out->factorizations += sum.factorizations;
+        if (!ok) {
+            restore(*before);
+            return false;
+        }
+        ++out->substeps;
+        out->residual = sum.residualNorm;
+        out->stabilizationEnergy = stab;
+        time += dt;
+        return true;
+    }
+
+    // Contact-force gradient dg/dq [3N x 6] of shape i's contact w.r.t. its pose (rotation
+    // about Ground axes through its origin, translation), by central differences at x.
+    Eigen::MatrixXd calcContactPoseDerivative(int i, Eigen::Matrix<double, 6, 6>* dWdq) const {
+        const Shape& sh = shapes[i];
+        const Eigen::Isometry3d X0 = sh.shape->getPose();
+        const double hRot = 1e-6, hLin = 1e-7;  // [rad], [m]
+        Eigen::MatrixXd B(3 * mesh.getNumNodes(), 6);
+        for (int j = 0; j < 6; ++j) {
+            const double h = j < 3 ? hRot : hLin;
+            Vec3 w = Vec3::Zero(), t = Vec3::Zero();
+            (j < 3 ? w : t)(j % 3) = h;
+            Eigen::VectorXd g[2];
+            Vec3 F[2], T[2];
+            for (int side = 0; side < 2; ++side) {
+                const double sgn = side == 0 ? 1.0 : -1.0;
+                sh.shape->setPose(perturbPose(X0, sgn * w, sgn * t));
+                EnergyAccumulator acc(mesh.getNumNodes());
+                acc.wantHessian = false;
+                sh.contact->addEnergy(x, acc);
+                g[side] = acc.grad;
+                sh.contact->calcWrenchOnShape(x, &F[side], &T[side]);
+            }
+            sh.shape->setPose(X0);
+            B.col(j) = (g[0] - g[1]) / (2.0 * h);
+            dWdq->col(j).head<3>() = (T[0] - T[1]) / (2.0 * h);
+            dWdq->col(j).tail<3>() = (F[0] - F[1]) / (2.0 * h);
+        }
+        return B;
+    }
+};
+
+Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
+    spec.validate();
+    Impl& m = *m_impl;
+    m.spec = spec;
+    Mesh mesh = spec.mesh.getNumNodes() > 0 ? spec.mesh : makeDoubleWedgeBag(spec.geometry);
+    applyImperfection(mesh, spec.imperfection);
+    for (int i = 0; i < mesh.getNumNodes(); ++i) mesh.X.col(i) = spec.X_GB * Vec3(mesh.X.col(i));
+    m.mesh = mesh;
+    m.meanEdge = calcMeshQuality(mesh).meanEdge;
+    auto material =
+        std::make_shared<WrinklingMaterial>(spec.material->clone(), spec.wrinklingResidual);
+    m.model = std::make_shared<MembraneModel>(mesh, material, spec.thickness);
+    if (spec.density > 0.0 && spec.gravity.squaredNorm() > 0.0)
+        m.model->setGravity(spec.density, spec.gravity);
+    if (spec.bendingStiffness > 0.0) m.model->setBendingStiffness(spec.bendingStiffness);
+    m.model->setNumThreads(spec.threads);
+    std::vector<char> isSupport(mesh.getNumNodes(), 0);
+    for (int n : mesh.supportNodes) isSupport[n] = 1;
+    for (int n = 0; n < mesh.getNumNodes(); ++n)
+        if (!isSupport[n]) m.freeNodes.push_back(n);
+    if (spec.bedBoard) {
+        m.bed = makePlane();
+        m.bed->setPose(spec.X_GB);
+        m.bedContact = std::make_shared<RigidContact>(mesh, m.freeNodes, *m.bed, spec.bedContact);
+        m.model->addRigidContact(m.bedContact);
+    }
+    if (spec.selfContact) {
+        SelfContact::Options so;
+        so.pressurePenalty = spec.selfContactPenalty;
+        so.thickness = std::max(2.0 * spec.thickness, 0.5e-3);
+        m.self = std::make_shared<SelfContact>(mesh, so);
+        m.model->setSelfContact(m.self);
+    }
+    m.x = mesh.X;
+    m.committed = m.snapshot();
+}
+
+Airbag::~Airbag() = default;
+Airbag::Airbag(Airbag&&) noexcept = default;
+Airbag& Airbag::operator=(Airbag&&) noexcept = default;
+
+int Airbag::addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options) {
+    if (!shape) throw std::invalid_argument("Airbag::addShape: no shape");
+    Impl& m = *m_impl;
+    Impl::Shape s;
+    s.contact = std::make_shared<RigidContact>(m.mesh, m.freeNodes, *shape, options);
+    s.target = shape->getPose();
+    s.shape = std::move(shape);
+    m.model->addRigidContact(s.contact);
+    m.shapes.push_back(std::move(s));
+    m.workspace.reset();
+    m.committed = m.snapshot();
+    return static_cast<int>(m.shapes.size()) - 1;
+}
+
+int Airbag::getNumShapes() const { return static_cast<int>(m_impl->shapes.size()); }
+
+void Airbag::inflate(double mass) {
+    Impl& m = *m_impl;
+    if (!(mass > 0.0 && mass < 1.0))
+        throw std::invalid_argument("Airbag::inflate: use a gas mass > 0 and < 1 kg");
+    if (m.inflated) throw std::logic_error("Airbag::inflate called twice");
+    const Mesh& mesh = m.mesh;
+    const int nc = static_cast<int>(mesh.chambers.size());
+    for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].target = m.shapes[i].shape->getPose();
+    // A prescribed pressure ramp shapes the flat panels, then the gas takes over.
+    double Vflat = 0.0;
+    for (int c = 0; c < nc; ++c) Vflat += calcChamberVolume(mesh, c, m.x);
+    GasChamber probe(m.spec.gas, mass);
+    probe.seal(Vflat);
+    const double pTarget = std::clamp(probe.calcGaugePressure(Vflat), 200.0, 5000.0);
+    m.solveRamp(0.0, pTarget,
+                [&](double p) {
+                    for (int c = 0; c < nc; ++c) m.model->setChamberPressure(c, p);
+                },
+                "inflating the airbag");
+    for (int c = 0; c < nc; ++c) m.model->setChamberPressure(c, 0.0);
+    // Seal the gas that is in the bag at this pressure (one body, or one per chamber behind
+    // orifices); the mass ramp then takes it to its value in steps it can cut.
+    auto sealGas = [&](const std::vector<int>& chambers) {
+        double V = 0.0;
+        for (int c : chambers) V += calcChamberVolume(mesh, c, m.x);
+        const GasOptions& g = m.spec.gas;
+        const double mSeal =
+            (g.ambientPressure + pTarget) * V / (g.getSpecificGasConstant() * g.temperature);
+        GasChamber gas(g, mSeal);
+        gas.seal(V);
+        m.model->addGas(gas, chambers);
+    };
+    if (m.spec.connection == AirbagSpec::Connection::Orifice && nc >= 2) {
+        for (int c = 0; c < nc; ++c) sealGas({c});
+    } else {
+        std::vector<int> all(nc);
+        for (int c = 0; c < nc; ++c) all[c] = c;
+        sealGas(all);
+    }
+    m.inflated = true;
+    changeGasMass(mass);
+}
+
+void Airbag::changeGasMass(double mass) {
+    Impl& m = *m_impl;
+    if (!m.inflated) throw std::logic_error("Airbag::changeGasMass before inflate");
+    if (!(mass > 0.0 && mass < 1.0))
+        throw std::invalid_argument("Airbag::changeGasMass: use a gas mass > 0 and < 1 kg");
+    m.solveRamp(m.totalMass(), mass, [&](double mm) { m.setTotalGasMass(mm); },
+                "changing the gas mass");
+    m.committed = m.snapshot();
+}
+
+void Airbag::setMassFlow(double massFlow) {
+    if (!std::isfinite(massFlow)) throw std::invalid_argument("Airbag::setMassFlow: not finite");
+    m_impl->massFlow = massFlow;
+    m_impl->hasTarget = false;
+}
+
+void Airbag::setTargetMass(double mass, double rate) {
+    if (!(mass > 0.0 && mass < 1.0) || !(rate > 0.0) || !std::isfinite(rate))
+        throw std::invalid_argument(
+            "Airbag::setTargetMass: use a mass > 0 and < 1 kg and a positive rate");
+    m_impl->massFlow = rate;
+    m_impl->hasTarget = true;
+    m_impl->targetMass = mass;
+}
+
+double Airbag::getTotalGasMass() const { return m_impl->totalMass(); }
+
+void Airbag::setShapePose(int shape, const Eigen::Isometry3d& X_GS) {
+    m_impl->shapes.at(shape).target = X_GS;
+}
+
+const Eigen::Isometry3d& Airbag::getShapePose(int shape) const {
+    return m_impl->shapes.at(shape).shape->getPose();
+}
+
+AdvanceSummary Airbag::advance(double dt, int maxCuts) {
+    Impl& m = *m_impl;
+    if (!m.inflated) throw std::logic_error("Airbag::advance before inflate");
+    if (!(dt >= 0.0) || !std::isfinite(dt))
+        throw std::invalid_argument("Airbag::advance: use a time step >= 0 s");
+    AdvanceSummary out;
+    // Start from the committed state (a repeated advance of one macro step starts over).
+    m.restore(*m.committed);
+    std::vector<Eigen::Isometry3d> from;
+    for (const Impl::Shape& s : m.shapes) from.push_back(s.shape->getPose());
+    double s = 0.0, ds = 1.0;
+    int cuts = 0;
+    while (s < 1.0) {
+        const double s1 = (ds >= 1.0 - s - 1e-12) ? 1.0 : s + ds;
+        if (m.solveSubstep(from, s1, dt * (s1 - s), &out)) {
+            s = s1;
+            if (cuts > 0) ds = std::min(2.0 * ds, 1.0);
+        } else {
+            if (++cuts > maxCuts) {
+                m.restore(*m.committed);
+                out.converged = false;
+                return out;
+            }
+            ds *= 0.5;
+        }
+    }
+    out.converged = true;
+    return out;
+}
+
+void Airbag::commit() { m_impl->committed = m_impl->snapshot(); }
+
+void Airbag::rollback() {
+    m_impl->restore(*m_impl->committed);
+    m_impl->workspace.reset();
+}
+
+std::shared_ptr<const Airbag::Snapshot> Airbag::getSnapshot() const { return m_impl->snapshot(); }
+
+void Airbag::setSnapshot(const std::shared_ptr<const Snapshot>& snapshot) {
+    if (!snapshot) throw std::invalid_argument("Airbag::setSnapshot: no snapshot");
+    m_impl->committed = snapshot;
+    m_impl->restore(*snapshot);
+    m_impl->workspace.reset();
+}
+
+double Airbag::getTime() const { return m_impl->time; }
+
+Wrench Airbag::calcShapeWrench(int shape) const {
+    Wrench w;
+    m_impl->shapes.at(shape).contact->calcWrenchOnShape(m_impl->x, &w.force, &w.torque);
+    return w;
+}
+
+Eigen::Matrix<double, 6, 6> Airbag::calcShapeWrenchTangent(int shape) const {
+    const Impl& m = *m_impl;
+    m.shapes.at(shape);
+    // W = -dE_c/dq at fixed x, so dW/dx = -B^T with B = d(grad E)/dq; the bag re-equilibrates,
+    // dx/dq = -K^-1 B, hence dW/dq = dW/dq|_x + B^T K^-1 B.
+    Eigen::Matrix<double, 6, 6> T;
+    const Eigen::MatrixXd B = m.calcContactPoseDerivative(shape, &T);
+    const Eigen::MatrixXd Y = solveTangent(*m.model, m.x, B);
+    T += B.transpose() * Y;
+    return T;
+}
+
+Eigen::VectorXd Airbag::calcShapeContactPressure(int shape) const {
+    return m_impl->shapes.at(shape).contact->calcNodalPressure(m_impl->x);
+}
+
+Vec3 Airbag::calcBedForce() const {
+    Vec3 f = Vec3::Zero(), t;
+    if (m_impl->bedContact) m_impl->bedContact->calcWrenchOnShape(m_impl->x, &f, &t);
+    return f;
+}
+
+int Airbag::getNumChambers() const { return static_cast<int>(m_impl->mesh.chambers.size()); }
+
+ChamberState Airbag::getChamberState(int c) const {
+    const Impl& m = *m_impl;
+    ChamberState s;
+    s.volume = calcChamberVolume(m.mesh, c, m.x);
+    s.gaugePressure = m.model->calcChamberGaugePressure(c, m.x);
+    const int g = m.model->getChamberGas(c);
+    if (g >= 0) {
+        const double Vg = m.model->calcGasVolume(g, m.x, nullptr);
+        s.mass = m.model->getGas(g).getMass() * s.volume / Vg;
+    }
+    return s;
+}
+
+const Mesh& Airbag::getMesh() const { return m_impl->mesh; }
+const Eigen::Matrix3Xd& Airbag::getPositions() const { return m_impl->x; }
+const MembraneModel& Airbag::getModel() const { return *m_impl->model; }
+double Airbag::calcResidual() const { return m_impl->calcFreeResidual(m_impl->x); }
+
+}  // namespace bags

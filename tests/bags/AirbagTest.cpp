@@ -1,0 +1,228 @@
+// The airbag module: its call protocol (inflate, shapes, gas, advance, commit, rollback,
+// snapshots), the wrench tangent against finite differences of re-solved equilibria, the
+// imperfection, and results that do not depend on the number of threads.
+#include <bags/Airbag.h>
+#include <bags/MaterialFit.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+using namespace bags;
+
+namespace {
+
+AirbagSpec coarseSpec(double meshSize = 0.020) {
+    AirbagSpec s;
+    s.geometry.meshSize = meshSize;
+    s.material = makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    return s;
+}
+
+Eigen::Isometry3d translation(const Vec3& p) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = p;
+    return X;
+}
+
+// A rigid ellipsoid above the apex ridge of the inflated bag (frictionless), parked clear.
+struct PressedBag {
+    std::unique_ptr<Airbag> bag;
+    int shape = -1;
+    Vec3 centre;
+    double top = 0.0;
+    Vec3 semi{0.04, 0.03, 0.02};
+    explicit PressedBag(const AirbagSpec& spec, double mass = 4.5e-3) {
+        bag = std::make_unique<Airbag>(spec);
+        const Mesh& mesh = bag->getMesh();
+        int apex = 0;
+        mesh.X.row(2).maxCoeff(&apex);
+        std::shared_ptr<RigidShape> e(makeEllipsoid(semi));
+        e->setPose(translation(Vec3(mesh.X(0, apex), 0.0, 0.5)));
+        shape = bag->addShape(e, RigidContact::Options());
+        bag->inflate(mass);
+        top = bag->getPositions().row(2).maxCoeff();
+        centre = Vec3(mesh.X(0, apex), 0.0, top + semi.z());
+    }
+    // Presses the ellipsoid `depth` [m] into the bag, slightly tilted and off centre.
+    Eigen::Isometry3d pose(double depth) const {
+        Eigen::Isometry3d X = translation(centre + Vec3(0.004, -0.003, -depth));
+        X.linear() = Eigen::AngleAxisd(0.05, Vec3(1, 1, 0).normalized()).toRotationMatrix();
+        return X;
+    }
+};
+
+}  // namespace
+
+TEST(Airbag, ProtocolInflatesPressesCommitsAndRollsBack) {
+    PressedBag p(coarseSpec());
+    Airbag& bag = *p.bag;
+    EXPECT_NEAR(bag.getTotalGasMass(), 4.5e-3, 1e-12);
+    ASSERT_EQ(bag.getNumChambers(), 2);
+    const ChamberState c0 = bag.getChamberState(0);
+    EXPECT_GT(c0.gaugePressure, 1000.0);
+    EXPECT_NEAR(bag.getChamberState(0).mass + bag.getChamberState(1).mass, 4.5e-3, 1e-12);
+    EXPECT_EQ(bag.calcShapeWrench(p.shape).force.norm(), 0.0);  // parked clear
+
+    const Eigen::Matrix3Xd x0 = bag.getPositions();
+    bag.setShapePose(p.shape, p.pose(0.010));
+    const AdvanceSummary a = bag.advance(60.0);
+    ASSERT_TRUE(a.converged);
+    EXPECT_GE(a.substeps, 1);
+    EXPECT_DOUBLE_EQ(bag.getTime(), 60.0);
+    const Wrench w = bag.calcShapeWrench(p.shape);
+    EXPECT_GT(w.force.z(), 1.0);  // the bag pushes the shape up
+    EXPECT_GT(bag.calcShapeContactPressure(p.shape).maxCoeff(), 0.0);
+    // The base is bonded to the bed board: no free node reaches it here.
+    EXPECT_EQ(bag.calcBedForce().norm(), 0.0);
+    const Eigen::Matrix3Xd x1 = bag.getPositions();
+
+    // Not committed: rollback returns to the inflated state, bit for bit.
+    bag.rollback();
+    EXPECT_EQ((bag.getPositions() - x0).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(bag.getTime(), 0.0);
+    EXPECT_EQ(bag.calcShapeWrench(p.shape).force.norm(), 0.0);
+    // The same step again reaches the same state within the solve's tolerance (the
+    // factorisation that preconditions the solve is the first attempt's, so the roundoff
+    // differs; whole runs are bit-identical, see below).
+    bag.setShapePose(p.shape, p.pose(0.010));
+    ASSERT_TRUE(bag.advance(60.0).converged);
+    EXPECT_LT((bag.getPositions() - x1).cwiseAbs().maxCoeff(), 1e-6);
+    const Eigen::Matrix3Xd x1b = bag.getPositions();
+    bag.commit();
+    const auto checkpoint = bag.getSnapshot();
+    // A deeper press, then back to the checkpoint.
+    bag.setShapePose(p.shape, p.pose(0.020));
+    ASSERT_TRUE(bag.advance(60.0).converged);
+    EXPECT_GT(bag.calcShapeWrench(p.shape).force.z(), w.force.z());
+    bag.commit();
+    bag.setSnapshot(checkpoint);
+    EXPECT_EQ((bag.getPositions() - x1b).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_DOUBLE_EQ(bag.getTime(), 60.0);
+    EXPECT_NEAR((bag.calcShapeWrench(p.shape).force - w.force).norm(), 0.0, 1e-4);
+}
+
+TEST(Airbag, GasFlowsInAndOutOverTheStepAndStopsAtTheTarget) {
+    PressedBag p(coarseSpec());
+    Airbag& bag = *p.bag;
+    const double p0 = bag.getChamberState(0).gaugePressure;
+    bag.setMassFlow(-1e-5);  // 0.01 g/s out
+    ASSERT_TRUE(bag.advance(20.0).converged);
+    EXPECT_NEAR(bag.getTotalGasMass(), 4.5e-3 - 2e-4, 1e-12);
+    EXPECT_LT(bag.getChamberState(0).gaugePressure, p0);
+    bag.commit();
+    bag.setTargetMass(4.4e-3, 1e-5);  // in again, but only up to 4.4 g
+    ASSERT_TRUE(bag.advance(30.0).converged);
+    EXPECT_NEAR(bag.getTotalGasMass(), 4.4e-3, 1e-12);
+    bag.commit();
+    ASSERT_TRUE(bag.advance(30.0).converged);  // target reached: no more flow
+    EXPECT_NEAR(bag.getTotalGasMass(), 4.4e-3, 1e-12);
+    bag.changeGasMass(4.0e-3);  // a quasi-static let-down, committed
+    EXPECT_NEAR(bag.getTotalGasMass(), 4.0e-3, 1e-12);
+}
+
+TEST(Airbag, WrenchTangentMatchesFiniteDifferencesOfReSolvedEquilibria) {
+    // Reference: central differences of the wrench over equilibria re-solved at perturbed
+    // poses (tight tolerances). Tolerance: 2 % of the largest entry of each block (rows
+    // torque / force, columns rotation / translation): the finite differences carry the
+    // solve tolerance and the contact's active-set changes.
+    AirbagSpec spec = coarseSpec();
+    spec.forceTolerance = 1e-7;
+    spec.solver.absoluteTolerance = 1e-9;
+    spec.solver.relativeTolerance = 1e-12;
+    spec.selfContact = false;
+    PressedBag p(spec);
+    Airbag& bag = *p.bag;
+    bag.setShapePose(p.shape, p.pose(0.012));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    bag.commit();
+    const Eigen::Matrix<double, 6, 6> T = bag.calcShapeWrenchTangent(p.shape);
+    const Eigen::Isometry3d X0 = bag.getShapePose(p.shape);
+    Eigen::Matrix<double, 6, 6> fd;
+    for (int j = 0; j < 6; ++j) {
+        const double h = j < 3 ? 2e-4 : 2e-5;  // [rad], [m]
+        Eigen::Matrix<double, 6, 1> w[2];
+        for (int side = 0; side < 2; ++side) {
+            const double sgn = side == 0 ? 1.0 : -1.0;
+            Eigen::Isometry3d X = X0;
+            if (j < 3) {
+                X.linear() = Eigen::AngleAxisd(sgn * h, Vec3::Unit(j)).toRotationMatrix() *
+                             X0.linear();
+            } else {
+                X.translation() += sgn * h * Vec3::Unit(j - 3);
+            }
+            bag.setShapePose(p.shape, X);
+            ASSERT_TRUE(bag.advance(0.0).converged);
+            const Wrench wr = bag.calcShapeWrench(p.shape);
+            w[side] << wr.torque, wr.force;
+            bag.rollback();
+        }
+        fd.col(j) = (w[0] - w[1]) / (2.0 * h);
+    }
+    for (int bi = 0; bi < 2; ++bi)
+        for (int bj = 0; bj < 2; ++bj) {
+            const Eigen::Matrix3d a = T.block<3, 3>(3 * bi, 3 * bj);
+            const Eigen::Matrix3d b = fd.block<3, 3>(3 * bi, 3 * bj);
+            const double scale = b.cwiseAbs().maxCoeff();
+            EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 0.02 * scale)
+                << "block " << bi << "," << bj << "\ntangent\n" << a << "\nfinite differences\n" << b;
+        }
+    // The vertical stiffness the shape feels is positive and well below the contact penalty
+    // over the contact patch (the bag, not the penalty, governs it).
+    EXPECT_LT(T(5, 5), 0.0);  // pushing down (+z translation raises it; force falls)
+}
+
+TEST(Airbag, ImperfectionIsSmoothDeterministicAndOfTheStatedAmplitude) {
+    DoubleWedgeParams g;
+    g.meshSize = 0.010;
+    const Mesh perfect = makeDoubleWedgeBag(g);
+    Imperfection imp;
+    imp.amplitude = 0.5e-3;
+    imp.seed = 7;
+    Mesh a = perfect, b = perfect, c = perfect;
+    applyImperfection(a, imp);
+    applyImperfection(b, imp);
+    imp.seed = 8;
+    applyImperfection(c, imp);
+    EXPECT_EQ((a.X - b.X).cwiseAbs().maxCoeff(), 0.0);        // same seed, same bits
+    EXPECT_GT((a.X - c.X).cwiseAbs().maxCoeff(), 1e-4);       // another seed, another bag
+    const Eigen::VectorXd d = (a.X - perfect.X).colwise().norm();
+    EXPECT_NEAR(d.maxCoeff(), 0.5e-3, 1e-12);                 // the stated amplitude
+    for (int n : perfect.supportNodes) EXPECT_EQ(d(n), 0.0);  // bonded nodes stay
+    // Smooth: neighbouring free nodes (one element apart) differ on average by far less than
+    // the amplitude (a node-by-node random offset would give about a third of it; the bonded
+    // base holds its nodes, so the row above it may step off).
+    std::vector<char> support(perfect.getNumNodes(), 0);
+    for (int n : perfect.supportNodes) support[n] = 1;
+    double jump = 0.0;
+    int edges = 0;
+    for (int e = 0; e < a.getNumTris(); ++e)
+        for (int k = 0; k < 3; ++k) {
+            const int i = a.tris(k, e), j = a.tris((k + 1) % 3, e);
+            if (support[i] || support[j]) continue;
+            jump += std::abs(d(i) - d(j));
+            ++edges;
+        }
+    EXPECT_LT(jump / edges, 0.15 * imp.amplitude);  // measured 0.11
+    a.validate();  // still a valid closed bag
+}
+
+TEST(Airbag, ResultsAreBitIdenticalOnOneAndTwoThreads) {
+    // 6 mm: over 4000 triangles, so the element loop is cut into chunks and runs on a team.
+    auto run = [](int threads) {
+        AirbagSpec spec = coarseSpec(0.006);
+        spec.threads = threads;
+        spec.imperfection.amplitude = 0.3e-3;
+        PressedBag p(spec);
+        p.bag->setShapePose(p.shape, p.pose(0.008));
+        EXPECT_TRUE(p.bag->advance(48.0).converged);
+        return std::make_pair(Eigen::Matrix3Xd(p.bag->getPositions()),
+                              p.bag->calcShapeWrench(p.shape).force);
+    };
+    const auto one = run(1), two = run(2), again = run(2);
+    EXPECT_GT(one.first.cols(), 3000);
+    EXPECT_EQ((one.first - two.first).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ((two.first - again.first).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(one.second, two.second);
+}
