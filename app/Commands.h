@@ -1,6 +1,7 @@
 #pragma once
 /// @file The subcommands of the bagsim program. Each takes the arguments after its name and
-/// returns the process exit code (0 ok, 1 run failed, 2 bad input or usage).
+/// returns the process exit code (0 ok, 1 run failed, 2 bad input or usage; bagsim run also 3
+/// partial and 130/143 interrupted, docs/output-layout.md#exit-status-and-status).
 
 namespace bagsim::app {
 

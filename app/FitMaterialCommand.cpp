@@ -1,6 +1,8 @@
 // bagsim fit-material: fits membrane materials to a uniaxial tensile test and prints the
 // constants, the fit error, the stable stretch range and the scenario form.
 #include <bags/MaterialFit.h>
+#include <io/InputError.h>
+#include <io/Scenario.h>
 #include <io/Units.h>
 
 #include <cmath>
@@ -259,8 +261,13 @@ std::string makeYamlComment(const bags::MaterialFitResult& r, const Args& a) {
     return os.str();
 }
 
+/// Largest tensile file read [bytes], 10 MiB: a test logged at 100 points a second for an hour
+/// is about 7 MiB; a larger file is the wrong file (or a pipe that never ends).
+constexpr std::uintmax_t kMaxTensileBytes = 10 * 1024 * 1024;
+
 int run(const Args& a) {
-    const bags::TensileData data = bags::readTensileCsv(a.file, a.strainUnit, a.stressUnit);
+    std::istringstream text(io::readInputFile(a.file, kMaxTensileBytes, "tensile data file"));
+    const bags::TensileData data = bags::parseTensileCsv(text, a.file, a.strainUnit, a.stressUnit);
     std::vector<bags::MaterialModel> models;
     if (a.model == "all")
         models = bags::getMaterialModels();
@@ -345,6 +352,9 @@ int runFitMaterialCommand(int argc, char** argv) {
         a.fit.validate();
         return run(a);
     } catch (const UsageError& e) {
+        std::cerr << "bagsim fit-material: " << e.what() << "\n";
+        return 2;
+    } catch (const io::InputError& e) {
         std::cerr << "bagsim fit-material: " << e.what() << "\n";
         return 2;
     } catch (const std::invalid_argument& e) {

@@ -1,6 +1,8 @@
 // bagsim run, kind patient-on-support: the patient settled on a rigid flat support.
 #include "PatientRun.h"
 
+#include "Interrupt.h"
+
 #include <bagsim/Version.h>
 #include <body/SettleOnSupport.h>
 #include <io/InputError.h>
@@ -52,19 +54,34 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
         std::cerr << "bagsim: error: " << e.what() << "\n";
         return 2;
     }
-    const body::SettleOptions& o = sc.settle;
+    body::SettleOptions& o = sc.settle;
+    // SIGINT or SIGTERM (InterruptGuard in RunCommand.cpp) stops the settle within 0.1 s of
+    // simulated time.
+    double settled = 0.0;
+    o.monitor = [&settled](double t) {
+        settled = t;
+        throwIfInterrupted();
+    };
     const std::string patient = describePatient(sc.patient);
     if (!quiet)
         std::cerr << "bagsim " << bagsim::kVersion << ": " << file.getFileName() << " (" << sc.name
                   << ")\n  patient " << patient << "\n  rigid flat support: "
                   << io::formatSignificant(o.support.stiffness, "Pa/m") << ", friction "
                   << fmt("%g", o.support.friction) << "; settling for " << fmt("%g", o.settleTime)
-                  << " s\n  writing to " << outPath.string() << "/\n";
+                  << " s\n  writing to " << outPath.string()
+                  << "/ (Ctrl-C stops and marks it INCOMPLETE)\n";
 
     body::SettleReport r;
     try {
         outDir->setStatus("running", "settling the patient on the flat support");
         r = body::settleOnSupport(sc.patient, o);
+    } catch (const Interrupted& e) {
+        // The loads are known only once the patient has settled: nothing to keep but the mark.
+        const std::string msg = std::string(e.what()) + " at " + fmt("%.1f", settled) + " s of " +
+                                fmt("%g", o.settleTime) + " s settling; no loads written";
+        outDir->setStatus("interrupted", msg);
+        std::cerr << "bagsim: " << msg << " (" << outPath.string() << "/ marked INCOMPLETE)\n";
+        return getInterruptExitCode(e.signal);
     } catch (const std::exception& e) {
         outDir->setStatus("failed", e.what());
         std::cerr << "bagsim: run failed: " << e.what() << "\n";

@@ -1,6 +1,7 @@
 // bagsim run: reads a scenario, runs it, streams the results into the output folder and
 // prints progress and a summary. Exit status: 0 complete, 1 the run failed (numerical or I/O),
-// 2 bad input (scenario, options, output folder), 130 interrupted (Ctrl-C).
+// 2 bad input (scenario, options, output folder), 3 partial (a curve stopped on a numerical
+// failure), 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM (docs/output-layout.md).
 #include <algorithm>
 #include <bags/LoadTest.h>
 #include <bags/Polynomial.h>
@@ -14,7 +15,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "Commands.h"
+#include "Interrupt.h"
 #include "PatientRun.h"
 
 namespace bagsim::app {
@@ -51,23 +52,13 @@ const char* kHelp =
     "\n"
     "outputs (docs/output-layout.md): results.h5, results.xdmf (open in ParaView),\n"
     "load_displacement.csv, stiffness.csv. While the run writes, the folder holds a file\n"
-    "INCOMPLETE; it is removed only when the run finishes. Ctrl-C stops the run after the\n"
-    "current step and keeps what was computed.\n"
+    "INCOMPLETE; it is removed only when the run finishes with every curve at its peak force\n"
+    "or bottomed out. Ctrl-C (SIGINT) or SIGTERM stops the run within a solver iteration and\n"
+    "keeps what was computed, marked INCOMPLETE.\n"
     "\n"
-    "exit status: 0 complete, 1 run failed, 2 bad input, 130 interrupted.\n";
-
-volatile std::sig_atomic_t g_interrupted = 0;
-
-extern "C" void onInterrupt(int sig) {
-    g_interrupted = sig;
-    // A second Ctrl-C ends the program at once.
-    std::signal(sig, SIG_DFL);
-}
-
-/// Thrown from the observer when the user interrupts; unwinds out of the solver.
-struct Interrupted : std::runtime_error {
-    Interrupted() : std::runtime_error("interrupted by the user") {}
-};
+    "exit status: 0 complete, 1 run failed (results so far kept, marked INCOMPLETE), 2 bad\n"
+    "input, 3 partial (a curve stopped on a numerical failure; all results written, marked\n"
+    "INCOMPLETE), 130 interrupted by SIGINT, 143 by SIGTERM.\n";
 
 /// Bad command-line usage: exit status 2.
 struct UsageError : std::runtime_error {
@@ -242,8 +233,8 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
            "   the block's work they held; docs/solver.md)\n";
     for (const bags::LoadCurve& c : r.curves)
         if (!c.failure.empty())
-            out << "  " << io::formatQuantity(c.gasMass, "g", 2) << " stopped early: " << c.failure
-                << "\n";
+            out << "  " << io::formatQuantity(c.gasMass, "g", 2)
+                << (io::isCurveFailed(c) ? " FAILED: " : " stopped early: ") << c.failure << "\n";
 
     const std::vector<double> seed = bags::getSeedStiffnessPolynomial();
     out << "\nk(m) [N/mm], m [g]:\n";
@@ -311,6 +302,10 @@ int runRunCommand(int argc, char** argv) {
         return 0;
     }
 
+    // SIGINT and SIGTERM from here on only set a flag that the runs check where they can stop
+    // and keep their results.
+    const InterruptGuard interruptGuard;
+
     // Input: everything that can be wrong with the scenario is found before any output exists.
     io::ScenarioFile file;
     io::LoadTestScenario sc;
@@ -333,9 +328,7 @@ int runRunCommand(int argc, char** argv) {
     bags::LoadTestOptions& o = sc.options;
     // Ctrl-C is noticed within one Newton iteration, not only between load steps (inflating
     // and letting gas out take many iterations before the first step of a curve).
-    o.solver.monitor = [](int, double, double, double) {
-        if (g_interrupted) throw Interrupted();
-    };
+    o.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
     if (!args.quiet) {
         std::cerr << "bagsim " << bagsim::kVersion << ": " << args.scenario << " (" << sc.name
                   << ")\n"
@@ -367,18 +360,6 @@ int runRunCommand(int argc, char** argv) {
         return 1;
     }
 
-    g_interrupted = 0;
-    auto previousInt = std::signal(SIGINT, onInterrupt);
-    auto previousTerm = std::signal(SIGTERM, onInterrupt);
-    struct RestoreSignals {
-        void (*i)(int);
-        void (*t)(int);
-        ~RestoreSignals() {
-            std::signal(SIGINT, i);
-            std::signal(SIGTERM, t);
-        }
-    } restore{previousInt, previousTerm};
-
     Progress progress(o, args.quiet);
     int lastCurve = 0, lastStep = -1;
     auto observer = [&](const bags::LoadStep& s, const bags::Mesh& mesh,
@@ -387,10 +368,11 @@ int runRunCommand(int argc, char** argv) {
         progress.onStep(s, x);
         lastCurve = s.curve;
         lastStep = s.step;
-        if (g_interrupted) throw Interrupted();
+        throwIfInterrupted();
     };
 
     bags::LoadTestResult result;
+    std::string status;
     auto where = [&] {
         return lastStep < 0 ? std::string("before the first step")
                             : "after step " + std::to_string(lastStep) + " of curve " +
@@ -400,16 +382,14 @@ int runRunCommand(int argc, char** argv) {
     try {
         result = bags::runLoadTest(o, observer);
         progress.finish();
-        writer->finish(result);
-    } catch (const Interrupted&) {
+        status = writer->finish(result);
+    } catch (const Interrupted& e) {
         progress.finish();
-        const std::string msg = std::string("interrupted by ") +
-                                (g_interrupted == SIGTERM ? "SIGTERM" : "the user (SIGINT)") + " " +
-                                where();
+        const std::string msg = std::string(e.what()) + " " + where();
         writer->fail("interrupted", msg);
         std::cerr << "bagsim: " << msg << "; partial results kept in " << outPath.string()
                   << "/ (marked INCOMPLETE)\n";
-        return 130;
+        return getInterruptExitCode(e.signal);
     } catch (const bags::NumericalError& e) {
         progress.finish();
         std::string msg = std::string("numerical failure: ") + e.what();
@@ -440,7 +420,18 @@ int runRunCommand(int argc, char** argv) {
               << "  " << io::kResultsXdmf << "           open in ParaView: the deforming membrane\n"
               << "  " << io::kLoadDisplacementCsv << "  gas_mass_g,displacement_mm,force_N,"
               << "pressure_kPa,branch\n"
-              << "  " << io::kStiffnessCsv << "          gas_mass_g,stiffness_N_per_mm,r2,stage\n";
+              << "  " << io::kStiffnessCsv << "          gas_mass_g,stiffness_N_per_mm,r2,stage,end\n";
+    if (status == "partial") {
+        // Every gas mass was run, but a curve's branch ends where a step could not be solved:
+        // its stiffness and the k(m) fit may rest on part of a curve.
+        int failed = 0;
+        for (const bags::LoadCurve& c : result.curves) failed += io::isCurveFailed(c) ? 1 : 0;
+        std::cerr << "bagsim: run partial: " << failed << " of " << result.curves.size()
+                  << " curves stopped on a numerical failure (listed as FAILED above); results "
+                     "kept in "
+                  << dir << "/ (marked INCOMPLETE, status partial)\n";
+        return 3;
+    }
     return 0;
 }
 

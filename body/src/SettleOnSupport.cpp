@@ -44,12 +44,24 @@ SettleReport settleOnSupport(const PatientSpec& spec, const SettleOptions& optio
     SimTK::TimeStepper ts(model.getSystem(), integ);
     ts.initialize(state);
 
+    // With a monitor, the integration reports every 0.1 s; the integrator interpolates the
+    // reports, so its own steps (and the result) are those of one stepTo.
+    auto stepTo = [&](double t) {
+        if (!options.monitor) {
+            ts.stepTo(t);
+            return;
+        }
+        while (integ.getState().getTime() < t) {
+            ts.stepTo(std::min(t, integ.getState().getTime() + 0.1));
+            options.monitor(integ.getState().getTime());
+        }
+    };
     const auto t0 = std::chrono::steady_clock::now();
     const double tMid = std::max(0.0, options.settleTime - 0.5);
-    if (tMid > 0) ts.stepTo(tMid);
+    if (tMid > 0) stepTo(tMid);
     const SimTK::MobilizedBody& pelvis = model.getMobilizedBody(Segment::LowerTrunk);
     const SimTK::Vec3 p1 = pelvis.getBodyOriginLocation(integ.getState());
-    ts.stepTo(options.settleTime);
+    stepTo(options.settleTime);
 
     SettleReport r;
     r.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -33,6 +33,13 @@ std::string fmt(double v) {
     return buf;
 }
 
+// Three significant digits, without an exponent below 1e6 ("28600", "32.1").
+std::string fmt3(double v) {
+    if (!(v != 0.0) || !std::isfinite(v)) return fmt(v);
+    const double scale = std::pow(10.0, std::floor(std::log10(std::fabs(v))) - 2);
+    return fmt(std::round(v / scale) * scale);
+}
+
 // Checks lo < v (or lo <= v) and v < hi (or v <= hi); values are SI, shown in `unit`.
 void checkRange(const ScenarioNode& s, const std::string& key, double v, double lo, bool loIncl,
                 double hi, bool hiIncl, const std::string& unit, const std::string& why = "") {
@@ -340,9 +347,10 @@ std::vector<double> readGasMasses(const ScenarioNode& s) {
             n.fail("step", "\"" + getRaw(n, "step") + "\" does not divide the range from " +
                                getRaw(n, "from") + " to " + getRaw(n, "to") +
                                " into whole steps; pick a step that does (e.g. 0.25 g)");
-        if (steps > 1000)
-            n.fail("step",
-                   "gives " + std::to_string(steps + 1) + " gas masses; at most 1001 are allowed");
+        if (steps + 1 > kMaxGasMasses)
+            n.fail("step", "\"" + getRaw(n, "step") + "\" gives " + std::to_string(steps + 1) +
+                               " gas masses; at most " + std::to_string(kMaxGasMasses) +
+                               " are allowed (a curve takes minutes); use a larger step");
         for (long i = 0; i <= steps; ++i)
             masses.push_back(steps == 0 ? from : from + (to - from) * double(i) / double(steps));
     } else {
@@ -351,6 +359,9 @@ std::vector<double> readGasMasses(const ScenarioNode& s) {
             "{from: 3.5 g, to: 1.0 g, step: 0.25 g}");
     }
     if (masses.empty()) n.fail("lists no gas mass; give at least one, e.g. [3.5 g]");
+    if (static_cast<int>(masses.size()) > kMaxGasMasses)
+        n.fail("lists " + std::to_string(masses.size()) + " gas masses; at most " +
+               std::to_string(kMaxGasMasses) + " are allowed (a curve takes minutes)");
     return masses;
 }
 
@@ -457,7 +468,89 @@ void readOutput(const ScenarioNode& s, OutputOptions& o) {
     checkRange(s, "frame_every", o.frameEvery, 0, true, kInf, false, "", "0 saves no frames");
 }
 
+// The limits of LoadTestScenario.h, checked once the options are valid.
+void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
+    const ScenarioNode airbag = root.getSection("airbag");
+    const double nodes = estimateNumNodes(o.geometry);
+    if (nodes > kMaxMeshNodes) {
+        // Nodes go as 1 / h^2: the smallest mesh size within the limit.
+        const double hMin = o.geometry.meshSize * std::sqrt(nodes / kMaxMeshNodes);
+        const std::string given = airbag.has("mesh_size")
+                                      ? shown(airbag, "mesh_size")
+                                      : "the default " + fmt(toUnit(o.geometry.meshSize, "mm")) +
+                                            " mm";
+        airbag.fail("mesh_size",
+                    given + " gives a mesh of about " + fmt(std::round(nodes / 1000) * 1000) +
+                        " nodes for this airbag; at most " + std::to_string(kMaxMeshNodes) +
+                        " are allowed (about 2 GB and hours per curve); valid: mesh_size at "
+                        "least " +
+                        fmt(std::ceil(toUnit(hMin, "mm") * 10 - 1e-9) / 10) +
+                        " mm for this airbag, or a smaller airbag");
+    }
+
+    const ScenarioNode test = root.getSection("test");
+    const double steps = o.geometry.height / o.displacementStep;
+    if (steps > kMaxStepsPerBranch)
+        test.fail("displacement_step",
+                  (test.has("displacement_step") ? shown(test, "displacement_step")
+                                                 : std::string("the default")) +
+                      " needs about " + fmt(std::round(steps)) +
+                      " steps to cross the airbag's height; at most " +
+                      std::to_string(kMaxStepsPerBranch) + " per branch are allowed; valid: at least " +
+                      fmt(std::ceil(toUnit(o.geometry.height / kMaxStepsPerBranch, "mm") * 1000 -
+                                    1e-9) /
+                          1000) +
+                      " mm");
+
+    const double capacity = estimateForceCapacity(o);
+    const double area = o.geometry.longSide * o.geometry.width;
+    // A bag at ambient pressure may still carry something: never refuse below the force of
+    // one atmosphere over the base.
+    const double limit = std::max(kPeakForceFactor * capacity, o.gas.ambientPressure * area);
+    if (o.peakForce > limit) {
+        const double mMax = *std::max_element(o.gasMasses.begin(), o.gasMasses.end());
+        test.fail("peak_force",
+                  shown(test, "peak_force") + " is far beyond what this bag can carry: over the " +
+                      fmt(toUnit(o.geometry.longSide, "mm")) + " mm x " +
+                      fmt(toUnit(o.geometry.width, "mm")) + " mm base it needs a gauge pressure of " +
+                      fmt3(toUnit(o.peakForce / area, "kPa")) + " kPa, while " +
+                      fmt(toUnit(mMax, "g")) + " g of gas squeezed under the " +
+                      fmt(toUnit(o.blockSize, "mm")) + " mm block reaches about " +
+                      fmt3(toUnit(capacity / area, "kPa")) + " kPa (" + fmt3(capacity) +
+                      " N); valid: at most " + fmt(std::floor(limit)) + " N (" +
+                      fmt(kPeakForceFactor) + " times that, or one atmosphere over the base)");
+    }
+}
+
 }  // namespace
+
+double estimateNumNodes(const bags::DoubleWedgeParams& g) {
+    const double ax = g.calcApexX();
+    const double gentle = std::hypot(g.longSide - ax, g.height);
+    // Two side profiles, the base, both sloped sides and the internal wall.
+    double area = g.longSide * g.height + g.width * (g.longSide + g.shortSide + gentle);
+    if (g.diaphragm) area += g.width * g.height;
+    // An equilateral mesh of edge h has one node per sqrt(3)/2 h^2; the builder's triangles
+    // are a little larger (0.87 fits the seed bag from 25 mm to 2.5 mm).
+    return 0.87 * area / (0.5 * std::sqrt(3.0) * g.meshSize * g.meshSize);
+}
+
+double estimateForceCapacity(const bags::LoadTestOptions& o) {
+    const bags::DoubleWedgeParams& g = o.geometry;
+    const double v0 = g.calcFlatVolume();
+    const double footprint = std::min(o.blockSize * o.blockSize, g.longSide * g.width);
+    const double v1 = v0 - footprint * g.height;
+    if (!(v1 > 0.05 * v0)) return INFINITY;
+    double mMax = 0.0;
+    for (double m : o.gasMasses) mMax = std::max(mMax, m);
+    const double n = o.gas.process == bags::GasOptions::Process::Isothermal ? 1.0
+                     : o.gas.process == bags::GasOptions::Process::Adiabatic
+                         ? o.gas.gamma
+                         : o.gas.polytropicIndex;
+    const double p0 = mMax * o.gas.getSpecificGasConstant() * o.gas.temperature / v0;
+    const double p1 = p0 * std::pow(v0 / v1, n);
+    return std::max(0.0, p1 - o.gas.ambientPressure) * g.longSide * g.width;
+}
 
 std::vector<std::string> getScenarioKinds() { return {kKind, "patient-on-support"}; }
 
@@ -512,6 +605,7 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     } catch (const std::invalid_argument& e) {
         failFromLibrary(root, e.what());
     }
+    checkLimits(root, o);
     return sc;
 }
 

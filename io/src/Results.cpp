@@ -61,9 +61,15 @@ OutputDir::OutputDir(const fs::path& path, bool force) : m_path(path) {
 
 void OutputDir::setStatus(const std::string& status, const std::string& detail) const {
     std::ofstream out(getFile(kMarkerName), std::ios::trunc);
-    out << "This folder's results are incomplete: the run that writes them has not finished.\n"
-        << "status: " << status << "\n"
-        << detail << "\n";
+    if (status == "partial")
+        out << "This folder's results are incomplete: the run finished, but curves stopped on a "
+               "numerical failure.\n";
+    else if (status == "running")
+        out << "This folder's results are incomplete: the run that writes them has not finished "
+               "(or was killed).\n";
+    else
+        out << "This folder's results are incomplete: the run that wrote them stopped early.\n";
+    out << "status: " << status << "\n" << detail << "\n";
     if (!out)
         throw std::runtime_error("cannot write " + getFile(kMarkerName).string() + ": " +
                                  std::strerror(errno));
@@ -83,6 +89,19 @@ bool OutputDir::isIncomplete() const {
 }
 
 // ------------------------------------------------------------------------------ LoadTestWriter
+
+bool isCurveFailed(const bags::LoadCurve& c) {
+    // The load test's one physical early end is "bottomed out: ..."; every other reason is a
+    // step that could not be solved.
+    return !c.failure.empty() && c.failure.rfind("bottomed out", 0) != 0;
+}
+
+std::string getCurveEnd(const bags::LoadCurve& c) {
+    if (isCurveFailed(c)) return "failed";
+    if (c.reachedPeak) return "peak";
+    if (c.failure.rfind("bottomed out", 0) == 0) return "bottomed-out";
+    return "stopped";
+}
 
 namespace {
 
@@ -441,7 +460,7 @@ void LoadTestWriter::addStep(const bags::LoadStep& s, const bags::Mesh& mesh,
     if (sinceFlush > d.options.flushInterval) d.flush();
 }
 
-void LoadTestWriter::finish(const bags::LoadTestResult& r) {
+std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
     Impl& d = *m_impl;
     if (d.closed) throw std::logic_error("LoadTestWriter::finish after finish() or fail()");
     if (d.hasPending && !d.pendingSaved) d.saveFrame(d.pending, d.pendingX);
@@ -449,7 +468,9 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
 
     const size_t n = r.curves.size();
     std::vector<double> mass(n), stiffness(n), r2(n), height(n), pressure(n), volume(n);
-    std::vector<int> stage(n), peak(n), steps(n);
+    std::vector<int> stage(n), peak(n), steps(n), failed(n);
+    std::string failures;  // "3.5 g: no convergence ...; 3 g: ..."
+    int numFailed = 0;
     for (size_t i = 0; i < n; ++i) {
         const bags::LoadCurve& c = r.curves[i];
         mass[i] = c.gasMass;
@@ -461,6 +482,12 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
         stage[i] = c.stage;
         peak[i] = c.reachedPeak ? 1 : 0;
         steps[i] = static_cast<int>(c.steps.size());
+        failed[i] = isCurveFailed(c) ? 1 : 0;
+        if (failed[i]) {
+            ++numFailed;
+            failures += (failures.empty() ? "" : "; ") + fmtG(c.gasMass * 1e3, 6) + " g: " +
+                        c.failure;
+        }
         h5::Handle g;
         const std::string name = std::to_string(i);
         if (H5Lexists(d.curvesGroup.get(), name.c_str(), H5P_DEFAULT) > 0)
@@ -477,6 +504,7 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
         h5::setAttribute(g.get(), "stage", c.stage);
         h5::setAttribute(g.get(), "reached_peak", c.reachedPeak ? 1 : 0);
         h5::setAttribute(g.get(), "failure", c.failure);
+        h5::setAttribute(g.get(), "end", getCurveEnd(c));
         h5::setAttribute(g.get(), "stabilized_steps", c.stabilizedSteps);
         h5::setAttribute(g.get(), "stabilization_share", c.stabilizationShare);
     }
@@ -487,6 +515,7 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
     h5::writeDataset(sum.get(), "r2", {hn}, r2.data(), "");
     h5::writeDataset(sum.get(), "stage", {hn}, stage.data(), "");
     h5::writeDataset(sum.get(), "reached_peak", {hn}, peak.data(), "");
+    h5::writeDataset(sum.get(), "failed", {hn}, failed.data(), "");
     h5::writeDataset(sum.get(), "num_steps", {hn}, steps.data(), "");
     h5::writeDataset(sum.get(), "unloaded_height", {hn}, height.data(), "m");
     h5::writeDataset(sum.get(), "inflated_gauge_pressure", {hn}, pressure.data(), "Pa");
@@ -499,10 +528,10 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
 
     {
         std::ofstream out(d.dir.getFile(kStiffnessCsv), std::ios::trunc);
-        out << "gas_mass_g,stiffness_N_per_mm,r2,stage\n";
+        out << "gas_mass_g,stiffness_N_per_mm,r2,stage,end\n";
         for (size_t i = 0; i < n; ++i)
             out << fmtG(mass[i] * 1e3, 6) << ',' << fmtG(stiffness[i] * 1e-3) << ','
-                << fmtG(r2[i], 6) << ',' << stage[i] << '\n';
+                << fmtG(r2[i], 6) << ',' << stage[i] << ',' << getCurveEnd(r.curves[i]) << '\n';
         if (!out) throw std::runtime_error("cannot write " + d.dir.getFile(kStiffnessCsv).string());
     }
 
@@ -510,10 +539,20 @@ void LoadTestWriter::finish(const bags::LoadTestResult& r) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - d.started).count();
     h5::setAttribute(d.meta.get(), "wall_seconds", wall);
     h5::setAttribute(d.meta.get(), "finished", getUtcTimestamp());
-    h5::setAttribute(d.meta.get(), "status", std::string("complete"));
+    const std::string status = numFailed > 0 ? "partial" : "complete";
+    const std::string message =
+        numFailed > 0 ? std::to_string(numFailed) + " of " + std::to_string(n) +
+                            " curves stopped on a numerical failure (" + failures + ")"
+                      : std::string("");
+    h5::setAttribute(d.meta.get(), "status", status);
+    h5::setAttribute(d.meta.get(), "message", message);
     d.flush();
     d.close();
-    d.dir.markComplete();
+    if (numFailed > 0)
+        d.dir.setStatus(status, message);
+    else
+        d.dir.markComplete();
+    return status;
 }
 
 void LoadTestWriter::fail(const std::string& status, const std::string& message) noexcept {

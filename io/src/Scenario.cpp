@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -83,6 +84,50 @@ std::string findClosest(const std::string& word, const std::vector<std::string>&
     return best;
 }
 
+std::string readInputFile(const std::string& path, std::uintmax_t maxBytes,
+                          const std::string& what) {
+    namespace fs = std::filesystem;
+    auto formatSize = [](std::uintmax_t bytes) {
+        char buf[48];
+        if (bytes >= 1024 * 1024)
+            std::snprintf(buf, sizeof buf, "%.1f MiB", double(bytes) / (1024.0 * 1024.0));
+        else
+            std::snprintf(buf, sizeof buf, "%.0f kiB", std::ceil(double(bytes) / 1024.0));
+        return std::string(buf);
+    };
+    const std::string limit = "a " + what + " may be at most " + formatSize(maxBytes);
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    if (!fs::exists(status))
+        throw InputError(path, 0, "",
+                         "cannot read the " + what + " (" +
+                             (ec ? ec.message() : std::string("no such file")) + ")");
+    if (fs::is_directory(status))
+        throw InputError(path, 0, "", "is a folder; give a " + what);
+    // A pipe or a device would block the program or never end: only files on disk are read.
+    if (!fs::is_regular_file(status))
+        throw InputError(path, 0, "",
+                         "is not a regular file (a pipe, socket or device); give the " + what +
+                             " as a file on disk");
+    const std::uintmax_t size = fs::file_size(path, ec);
+    if (!ec && size > maxBytes)
+        throw InputError(path, 0, "",
+                         "is " + std::to_string(size) + " bytes; " + limit + " (" +
+                             std::to_string(maxBytes) + " bytes)");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        const std::string reason = std::strerror(errno);
+        throw InputError(path, 0, "", "cannot read the " + what + " (" + reason + ")");
+    }
+    // Read at most one byte past the limit, so a file that grows while read still ends.
+    std::string text(static_cast<size_t>(maxBytes) + 1, '\0');
+    in.read(&text[0], static_cast<std::streamsize>(text.size()));
+    text.resize(static_cast<size_t>(in.gcount()));
+    if (text.size() > maxBytes)
+        throw InputError(path, 0, "", "grew past the limit while read; " + limit);
+    return text;
+}
+
 // ---------------------------------------------------------------------------------------------
 // ScenarioFile
 
@@ -92,14 +137,7 @@ ScenarioFile ScenarioFile::load(const std::string& path) {
         throw InputError(path, 0, "",
                          "is a folder; give a scenario file (e.g. "
                          "scenarios/seed-load-test.yaml)");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        const std::string reason = std::strerror(errno);
-        throw InputError(path, 0, "", "cannot read the scenario file (" + reason + ")");
-    }
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse(text.str(), path);
+    return parse(readInputFile(path, kMaxScenarioBytes, "scenario file"), path);
 }
 
 ScenarioFile ScenarioFile::parse(const std::string& text, const std::string& name) {

@@ -3,11 +3,12 @@
 #
 #   cmake -DEXPECT_RC=N [-DEXPECT_REGEX=RE] [-DCLEAN_DIR=D] [-DNONEMPTY_DIR=D]
 #         [-DEXPECT_FILES="a;b"] [-DEXPECT_ABSENT="c;d"] [-DEXPECT_FIRST_LINES="f=line|g=line"]
-#         -P ExpectRun.cmake -- COMMAND ARGS...
+#         [-DEXPECT_FILE_REGEX="f=RE;g=RE"] -P ExpectRun.cmake -- COMMAND ARGS...
 #
 # EXPECT_REGEX is matched against stdout + stderr. CLEAN_DIR is removed before the run;
 # NONEMPTY_DIR is created with a file in it before the run. EXPECT_FILES must exist and
 # EXPECT_ABSENT must not after it. EXPECT_FIRST_LINES: file=exact first line, '|'-separated.
+# EXPECT_FILE_REGEX: file=regular expression its whole text must match, ';'-separated.
 
 set(cmd "")
 set(after FALSE)
@@ -64,3 +65,16 @@ if(DEFINED EXPECT_FIRST_LINES)
     endif()
   endforeach()
 endif()
+foreach(pair IN LISTS EXPECT_FILE_REGEX)
+  string(FIND "${pair}" "=" eq)
+  string(SUBSTRING "${pair}" 0 ${eq} f)
+  math(EXPR start "${eq} + 1")
+  string(SUBSTRING "${pair}" ${start} -1 re)
+  if(NOT EXISTS "${f}")
+    message(FATAL_ERROR "missing: ${f}")
+  endif()
+  file(READ "${f}" text)
+  if(NOT text MATCHES "${re}")
+    message(FATAL_ERROR "${f} does not match: ${re}\n${text}")
+  endif()
+endforeach()

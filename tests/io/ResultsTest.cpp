@@ -108,7 +108,8 @@ FakeRun makeRun() {
         curve.r2 = 0.99 - 0.1 * c;
         curve.stage = 1 + c;
         curve.reachedPeak = c == 0;
-        if (c == 1) curve.failure = "no convergence at 9 mm";
+        // A physical early end: the run is still complete.
+        if (c == 1) curve.failure = "bottomed out: the block is within 2 mm of the bed board";
         for (const bags::LoadStep& s : r.steps)
             if (s.curve == c) curve.steps.push_back(s);
         r.result.curves.push_back(curve);
@@ -294,7 +295,9 @@ TEST(ResultsWriter, WritesHdf5LayoutThatReadsBack) {
     EXPECT_EQ(readDoubleAttr(c1, "gas_mass"), 2.0e-3);
     EXPECT_EQ(readDoubleAttr(c1, "stiffness"), 4500.0);
     EXPECT_EQ(readDoubleAttr(c1, "inflated_gauge_pressure"), 4000.0);
-    EXPECT_EQ(readStringAttr(c1, "failure"), "no convergence at 9 mm");
+    EXPECT_EQ(readStringAttr(c1, "failure"),
+              "bottomed out: the block is within 2 mm of the bed board");
+    EXPECT_EQ(readStringAttr(c1, "end"), "bottomed-out");
     H5Gclose(c1);
     const hid_t forceDs = H5Dopen2(f, "/curves/0/force", H5P_DEFAULT);
     EXPECT_EQ(readStringAttr(forceDs, "unit"), "N");
@@ -345,9 +348,60 @@ TEST(ResultsWriter, WritesExactCsvHeadersAndRowsInBoundaryUnits) {
     EXPECT_EQ(ld[9], "2,9,50,5.3,loading");
     const auto st = readLines(dir / "stiffness.csv");
     ASSERT_EQ(st.size(), 3u);
-    EXPECT_EQ(st[0], "gas_mass_g,stiffness_N_per_mm,r2,stage");
-    EXPECT_EQ(st[1], "3.5,6,0.99,1");  // 6000 N/m = 6 N/mm
-    EXPECT_EQ(st[2], "2,4.5,0.89,2");
+    EXPECT_EQ(st[0], "gas_mass_g,stiffness_N_per_mm,r2,stage,end");
+    EXPECT_EQ(st[1], "3.5,6,0.99,1,peak");  // 6000 N/m = 6 N/mm
+    EXPECT_EQ(st[2], "2,4.5,0.89,2,bottomed-out");
+}
+
+TEST(ResultsWriter, CurveStoppedByNoConvergenceMarksTheRunPartial) {
+    const fs::path dir = makeTestDir("partial");
+    FakeRun run = makeRun();
+    run.result.curves[1].failure = "no convergence loading at block travel 9 mm";
+    const bags::Mesh mesh = makeTetMesh();
+    io::OutputDir out(dir, false);
+    io::LoadTestWriter w(out, {}, run.options, {});
+    for (const bags::LoadStep& s : run.steps) w.addStep(s, mesh, makePositions(mesh, s));
+    EXPECT_EQ(w.finish(run.result), "partial");
+
+    // Everything is written, and marked: the marker stays and names the failed curve.
+    EXPECT_TRUE(out.isIncomplete());
+    const std::string marker = readText(dir / "INCOMPLETE");
+    EXPECT_NE(marker.find("status: partial"), std::string::npos) << marker;
+    EXPECT_NE(marker.find("1 of 2 curves stopped on a numerical failure (2 g: no convergence "
+                          "loading at block travel 9 mm)"),
+              std::string::npos)
+        << marker;
+    const auto st = readLines(dir / "stiffness.csv");
+    ASSERT_EQ(st.size(), 3u);
+    EXPECT_EQ(st[1], "3.5,6,0.99,1,peak");
+    EXPECT_EQ(st[2], "2,4.5,0.89,2,failed");
+    const hid_t f = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    const hid_t meta = H5Gopen2(f, "/meta", H5P_DEFAULT);
+    EXPECT_EQ(readStringAttr(meta, "status"), "partial");
+    EXPECT_NE(readStringAttr(meta, "message").find("2 g: no convergence"), std::string::npos);
+    H5Gclose(meta);
+    EXPECT_EQ(readAll<int>(f, "/summary/failed", H5T_NATIVE_INT), (std::vector<int>{0, 1}));
+    EXPECT_EQ(readAll<double>(f, "/curves/1/force", H5T_NATIVE_DOUBLE).size(), 4u);
+    H5Fclose(f);
+}
+
+TEST(ResultsWriter, OnlyNoConvergenceCountsAsACurveFailure) {
+    bags::LoadCurve c;
+    c.reachedPeak = true;
+    EXPECT_FALSE(io::isCurveFailed(c));
+    EXPECT_EQ(io::getCurveEnd(c), "peak");
+    c.reachedPeak = false;
+    c.failure = "bottomed out: the block is within 2 mm of the bed board at block travel 140 mm";
+    EXPECT_FALSE(io::isCurveFailed(c));
+    EXPECT_EQ(io::getCurveEnd(c), "bottomed-out");
+    c.failure = "no convergence loading at block travel 12 mm";
+    EXPECT_TRUE(io::isCurveFailed(c));
+    EXPECT_EQ(io::getCurveEnd(c), "failed");
+    c.reachedPeak = true;  // the peak was reached, then unloading failed: still a failure
+    c.failure = "no convergence unloading at block travel 3 mm";
+    EXPECT_TRUE(io::isCurveFailed(c));
+    EXPECT_EQ(io::getCurveEnd(c), "failed");
 }
 
 TEST(ResultsWriter, XdmfIsWellFormedAndReferencesExistingDatasets) {

@@ -5,6 +5,7 @@
 /// weight, the share of the weight under each named region and how still the body is at the
 /// end. Used by the scenario kind patient-on-support (docs/scenario-reference.md).
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct SettleOptions {
     PlaneSupportOptions support;  ///< the flat support
     double settleTime = 2.0;      ///< simulated time [s], > 0 and at most 60
     double accuracy = 1e-4;       ///< integrator relative accuracy [-], in (0, 0.1]
+    /// If set, called with the simulated time [s] every 0.1 s of it; may throw to stop the
+    /// settle (the exception leaves settleOnSupport()). For a program's Ctrl-C.
+    std::function<void(double time)> monitor;
     /// @throws std::invalid_argument naming the option and what is valid.
     void validate() const;
 };

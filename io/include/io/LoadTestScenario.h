@@ -28,6 +28,35 @@ struct LoadTestScenario {
     OutputOptions output;
 };
 
+/// Limits that keep a run within memory and time (docs/scenario-reference.md#limits); a
+/// scenario beyond one is refused before anything runs, naming the key and the limit.
+///
+/// Largest mesh [nodes]. Measured on the seed bag (docs/performance.md): 1520 nodes (10 mm)
+/// take 36 MB and 2 s per curve, 5924 nodes (5 mm) 123 MB and 34 s per curve, time growing as
+/// about the square of the node count. 60 000 nodes would need about 1.5-2 GB and one to two
+/// hours per curve; beyond that a run exhausts a workstation's memory or a day.
+inline constexpr int kMaxMeshNodes = 60000;
+/// Most gas masses (curves) in one test: a curve takes 1-12 minutes at the 10 mm mesh, so 200
+/// curves are already one to two days. The seed's sweep has 11.
+inline constexpr int kMaxGasMasses = 200;
+/// Most block steps one branch (loading or unloading) may need at test.displacement_step over
+/// the bag's height: each step is one or more equilibrium solves.
+inline constexpr int kMaxStepsPerBranch = 5000;
+/// peak_force may be at most this factor above the force the bag can carry
+/// (estimateForceCapacity()).
+inline constexpr double kPeakForceFactor = 10.0;
+
+/// Estimated node count of makeDoubleWedgeBag(g), from the bag's surface area and the mesh
+/// size (about sqrt(3)/2 h^2 of membrane per node), without meshing; within about 10 % of
+/// the mesh for the seed bag from 25 mm to 2.5 mm.
+double estimateNumNodes(const bags::DoubleWedgeParams& g);
+
+/// Rough upper estimate of the block force the bag can carry [N]: the gauge pressure of the
+/// largest gas mass squeezed (by the test's gas process) from the flat volume into the flat
+/// volume less the block's footprint times the height, acting on the base. Infinite when the
+/// block is large enough to squeeze the bag flat.
+double estimateForceCapacity(const bags::LoadTestOptions& o);
+
 /// The scenario kinds `bagsim run` knows.
 std::vector<std::string> getScenarioKinds();
 
@@ -36,7 +65,8 @@ std::string readScenarioKind(const ScenarioFile& file);
 
 /// Reads a seed-load-test scenario and validates the options (LoadTestOptions::validate()
 /// and the material's own checks; their std::invalid_argument becomes an InputError at the
-/// key concerned). @throws InputError on any missing, misspelt or invalid key or value.
+/// key concerned) and the limits above. @throws InputError on any missing, misspelt or invalid
+/// key or value, or a value beyond a limit.
 LoadTestScenario readLoadTestScenario(const ScenarioFile& file);
 
 }  // namespace io

@@ -7,8 +7,16 @@
 ///
 /// Order: OutputDir (claims the folder, writes the INCOMPLETE marker), LoadTestWriter on it,
 /// addStep() from the load test's observer after every converged step, then either finish()
-/// with the result (status "complete", marker removed) or fail() (status "failed" or
-/// "interrupted", marker kept).
+/// with the result (status "complete", marker removed; or "partial", marker kept, when a curve
+/// stopped on a numerical failure) or fail() (status "failed" or "interrupted", marker kept).
+///
+/// Statuses (results.h5 /meta status, and the INCOMPLETE marker's "status:" line):
+///   running      the run is writing (or was killed without a word: the marker stays)
+///   complete     every curve ended at its peak force or bottomed out; no marker
+///   partial      every gas mass was run but at least one curve stopped on a numerical
+///                failure (isCurveFailed()); everything is written, the marker says which
+///   failed       the run stopped on an error before its end; what was computed is kept
+///   interrupted  stopped by SIGINT (Ctrl-C) or SIGTERM; what was computed is kept
 
 #include <bags/LoadTest.h>
 
@@ -35,7 +43,8 @@ class OutputDir {
     const std::filesystem::path& getPath() const { return m_path; }  ///< the folder
     /// Path of a file in the folder.
     std::filesystem::path getFile(const std::string& name) const { return m_path / name; }
-    /// Rewrites the marker with a status ("running", "failed", "interrupted") and a detail line.
+    /// Rewrites the marker with a status ("running", "partial", "failed", "interrupted") and a
+    /// detail line.
     void setStatus(const std::string& status, const std::string& detail) const;
     /// Removes the marker: the folder's contents are complete.
     void markComplete() const;
@@ -45,6 +54,16 @@ class OutputDir {
   private:
     std::filesystem::path m_path;
 };
+
+/// True if a curve stopped on a numerical failure (LoadCurve::failure says "no convergence
+/// ..."): its branch ends early and the run's status is "partial". A curve that bottomed out
+/// (the block reached its stop 2 mm above the bed board before the peak force) ended on a
+/// physical outcome and is not a failure.
+bool isCurveFailed(const bags::LoadCurve& curve);
+
+/// How a curve ended, as written in stiffness.csv's column "end": "failed" (isCurveFailed()),
+/// "peak" (reached the peak force), "bottomed-out" or "stopped" (any other early end).
+std::string getCurveEnd(const bags::LoadCurve& curve);
 
 /// Where a run came from, stored in results.h5 /meta.
 struct RunInfo {
@@ -76,9 +95,10 @@ class LoadTestWriter {
 
     /// Records one converged step (the load test's observer). The first call writes the mesh.
     void addStep(const bags::LoadStep& step, const bags::Mesh& mesh, const Eigen::Matrix3Xd& x);
-    /// Writes the per-curve results, the stiffness table and the k(m) fits, sets the status
-    /// "complete", closes the files and removes the INCOMPLETE marker.
-    void finish(const bags::LoadTestResult& result);
+    /// Writes the per-curve results, the stiffness table and the k(m) fits and closes the
+    /// files. Status "complete" (the INCOMPLETE marker removed) if no curve failed, else
+    /// "partial" (the marker kept, naming the failed curves). Returns the status.
+    std::string finish(const bags::LoadTestResult& result);
     /// Saves what was computed, sets the status (e.g. "failed", "interrupted") and the
     /// message, closes the files and keeps the INCOMPLETE marker. Never throws.
     void fail(const std::string& status, const std::string& message) noexcept;

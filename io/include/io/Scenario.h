@@ -13,6 +13,7 @@
 #include <io/Units.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <set>
@@ -27,13 +28,27 @@ int calcEditDistance(const std::string& a, const std::string& b);
 /// misspelling (at most 2 edits, or a third of the word's length), else "".
 std::string findClosest(const std::string& word, const std::vector<std::string>& candidates);
 
+/// Largest scenario file read [bytes], 1 MiB: a scenario is a page of keys (the seed's is
+/// 3 kB). A larger file is the wrong file, and yaml-cpp's tree of it would take on the order of
+/// a hundred times its size in memory.
+inline constexpr std::uintmax_t kMaxScenarioBytes = 1024 * 1024;
+
+/// Reads a whole input file as text. Refuses, before opening it, what is not a regular file (a
+/// folder; a pipe or a device, which would block or never end) and a file larger than
+/// `maxBytes`; a file that grows past the limit while read is refused too.
+/// @param what what the file is, for the messages ("scenario file", "tensile data file")
+/// @throws InputError naming the file, what is wrong and the limit.
+std::string readInputFile(const std::string& path, std::uintmax_t maxBytes,
+                          const std::string& what);
+
 class ScenarioNode;
 
 /// One scenario: its file name, its text verbatim and its YAML tree (with overrides applied).
 class ScenarioFile {
   public:
-    /// Reads and parses a file. @throws InputError if it cannot be read or is not valid YAML
-    /// (with the line of the syntax error), or if its top level is not a mapping.
+    /// Reads and parses a file. @throws InputError if it cannot be read, is not a regular file,
+    /// is larger than kMaxScenarioBytes or is not valid YAML (with the line of the syntax
+    /// error), or if its top level is not a mapping.
     static ScenarioFile load(const std::string& path);
     /// Parses text as if read from a file called `name` (for tests and generated scenarios).
     static ScenarioFile parse(const std::string& text, const std::string& name);
