@@ -2,10 +2,13 @@
 // mesh size. Prints wall time, Newton iterations and peak memory. Not a test: run by hand,
 // see docs/performance.md.
 //
-//   build/bin/bench_load_test [--step MM] [mesh_mm=5] [gas masses in g ... | seed]
+//   build/bin/bench_load_test [--step MM] [--bending N_M|plate] [--imperfection MM]
+//                             [--seed N] [--threads N] [--scale F] [mesh_mm=5]
+//                             [gas masses in g ... | seed]
 // "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps; --step sets
 // the target block increment (default 1 mm, as the scenario).
 #include <bags/LoadTest.h>
+#include <bags/Bending.h>
 #include <bags/MaterialFit.h>
 
 #include <sys/resource.h>
@@ -14,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 
@@ -32,13 +36,37 @@ double forceAt(const bags::LoadCurve& c, double d) {
 int main(int argc, char** argv) {
     bags::LoadTestOptions o;
     int first = 1;
-    if (argc > 2 && std::strcmp(argv[1], "--step") == 0) {
-        o.displacementStep = std::atof(argv[2]) * 1e-3;
-        first = 3;
+    o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    // Leading options: --step MM, --bending N_M|plate, --imperfection MM, --seed N,
+    // --threads N, --scale F (the x-z profile scaled by F).
+    while (first + 1 < argc && std::strncmp(argv[first], "--", 2) == 0) {
+        const char* key = argv[first];
+        const char* val = argv[first + 1];
+        if (std::strcmp(key, "--step") == 0) {
+            o.displacementStep = std::atof(val) * 1e-3;
+        } else if (std::strcmp(key, "--bending") == 0) {
+            o.bendingStiffness = std::strcmp(val, "plate") == 0
+                                     ? bags::calcPlateBendingStiffness(*o.material, o.thickness)
+                                     : std::atof(val);
+        } else if (std::strcmp(key, "--imperfection") == 0) {
+            o.imperfection.amplitude = std::atof(val) * 1e-3;
+        } else if (std::strcmp(key, "--seed") == 0) {
+            o.imperfection.seed = static_cast<std::uint64_t>(std::atoll(val));
+        } else if (std::strcmp(key, "--threads") == 0) {
+            o.threads = std::atoi(val);
+        } else if (std::strcmp(key, "--scale") == 0) {
+            const double f = std::atof(val);
+            o.geometry.longSide *= f;
+            o.geometry.shortSide *= f;
+            o.geometry.height *= f;
+        } else {
+            std::fprintf(stderr, "bench_load_test: unknown option %s\n", key);
+            return 2;
+        }
+        first += 2;
     }
     const double meshMm = argc > first ? std::atof(argv[first]) : 5.0;
     o.geometry.meshSize = meshMm * 1e-3;
-    o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     for (int i = first + 1; i < argc; ++i)
         if (std::strcmp(argv[i], "seed") != 0) o.gasMasses.push_back(std::atof(argv[i]) * 1e-3);
     if (o.gasMasses.empty())

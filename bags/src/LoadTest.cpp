@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
 
 namespace bags {
 
@@ -112,6 +113,12 @@ void LoadTestOptions::validate() const {
     require(bendingStiffness >= 0.0 && bendingStiffness < 1.0, "bendingStiffness",
             bendingStiffness, "use 0 (a pure membrane) to 1 N m");
     require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
+    require(ensemble >= 1 && ensemble <= 64, "ensemble", ensemble,
+            "use 1 (one bag) to 64 imperfection seeds");
+    if (ensemble > 1 && imperfection.amplitude == 0.0)
+        throw std::invalid_argument(
+            "load test option 'ensemble' = " + std::to_string(ensemble) +
+            " needs an imperfection (amplitude > 0): bags without one are all the same bag");
     require(stabilization >= 0.0, "stabilization", stabilization,
             "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
     blockContact.validate();
@@ -123,8 +130,9 @@ std::vector<double> getSeedStiffnessPolynomial() {
     return {-0.945, 8.394, -25.707, 32.714, -17.181, 6.196};
 }
 
-LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& observer) {
-    o.validate();
+namespace {
+
+LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& observer) {
     const auto wallStart = std::chrono::steady_clock::now();
     Airbag bag(makeAirbagSpec(o));
     const Mesh& mesh = bag.getMesh();
@@ -307,6 +315,53 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         if (std::isfinite(c.stiffness)) mg.push_back(c.gasMass * 1e3), kk.push_back(c.stiffness * 1e-3);
     if (static_cast<int>(mg.size()) > o.polynomialOrder)
         result.kFit = fitPolynomial(mg, kk, o.polynomialOrder);
+    result.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+    for (LoadCurve& c : result.curves) c.stiffnessMin = c.stiffnessMax = c.stiffness;
+    return result;
+}
+
+}  // namespace
+
+LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& observer) {
+    o.validate();
+    const auto wallStart = std::chrono::steady_clock::now();
+    LoadTestResult result = runOneLoadTest(o, observer);
+    if (o.ensemble > 1) {
+        // The other bags of the ensemble, one thread each; their curves only give the spread.
+        const int n = o.ensemble - 1;
+        std::vector<LoadTestResult> members(n);
+        std::vector<std::string> errors(n);
+#pragma omp parallel for schedule(dynamic, 1)
+        for (int i = 0; i < n; ++i) {
+            LoadTestOptions m = o;
+            m.ensemble = 1;
+            m.threads = 1;
+            m.imperfection.seed = o.imperfection.seed + 1 + static_cast<std::uint64_t>(i);
+            try {
+                members[i] = runOneLoadTest(m, {});
+            } catch (const std::exception& e) {
+                errors[i] = e.what();
+            }
+        }
+        for (int i = 0; i < n; ++i)
+            if (!errors[i].empty())
+                throw NumericalError("ensemble bag with imperfection seed " +
+                                     std::to_string(o.imperfection.seed + 1 + i) + ": " + errors[i]);
+        for (size_t c = 0; c < result.curves.size(); ++c) {
+            LoadCurve& curve = result.curves[c];
+            curve.ensembleSize = o.ensemble;
+            for (const LoadTestResult& m : members) {
+                const double k = m.curves[c].stiffness;
+                if (!std::isfinite(k) || !std::isfinite(curve.stiffnessMin)) {
+                    curve.stiffnessMin = curve.stiffnessMax = std::nan("");
+                    continue;
+                }
+                curve.stiffnessMin = std::min(curve.stiffnessMin, k);
+                curve.stiffnessMax = std::max(curve.stiffnessMax, k);
+            }
+        }
+    }
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
     return result;

@@ -262,3 +262,38 @@ TEST(LoadTest, RangeStiffnessNeedsTheWholeRange) {
     steps.resize(11);  // loading up to 20 N only
     EXPECT_TRUE(std::isnan(calcRangeStiffness(steps, 10.0, 35.0).slope));
 }
+
+TEST(LoadTest, EnsembleReportsTheStiffnessSpreadOverImperfectionSeeds) {
+    LoadTestOptions o = coarseOptions();
+    o.gasMasses = {4.5e-3};
+    o.imperfection.amplitude = 1.0e-3;
+    o.imperfection.seed = 3;
+    const LoadTestResult one = runLoadTest(o);
+    o.ensemble = 3;
+    const LoadTestResult r = runLoadTest(o);
+    ASSERT_EQ(r.curves.size(), 1u);
+    const LoadCurve& c = r.curves[0];
+    EXPECT_EQ(c.ensembleSize, 3);
+    // The first bag is the one-bag run, bit for bit; the others are other bags.
+    EXPECT_EQ(c.stiffness, one.curves[0].stiffness);
+    EXPECT_LE(c.stiffnessMin, c.stiffness);
+    EXPECT_GE(c.stiffnessMax, c.stiffness);
+    EXPECT_LT(c.stiffnessMin, c.stiffnessMax);
+    EXPECT_LT(c.stiffnessMax - c.stiffnessMin, 0.2 * c.stiffness);  // a taut bag: a small spread
+    // Without an imperfection an ensemble is refused.
+    o.imperfection.amplitude = 0.0;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+}
+
+TEST(LoadTest, ALargePeakForceDoesNotLoosenTheSolve) {
+    // The force tolerance is a fraction of the peak force counted at most 50 N: a 1e6 N peak
+    // once made it 1000 N, and an uninflated bag passed as converged.
+    LoadTestOptions o = coarseOptions();
+    const double usual = calcLoadTestForceTolerance(o);
+    o.peakForce = 1e6;
+    o.stiffnessTo = 35.0;
+    EXPECT_DOUBLE_EQ(calcLoadTestForceTolerance(o), usual);
+    o.peakForce = 5.0;
+    o.stiffnessTo = 4.0;
+    EXPECT_LT(calcLoadTestForceTolerance(o), usual);
+}

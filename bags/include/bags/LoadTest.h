@@ -31,6 +31,10 @@ struct LoadTestOptions {
     double bendingStiffness = 0.0;      ///< film bending stiffness [N m] (0: pure membrane)
     Imperfection imperfection;          ///< stated geometric imperfection of the bag
     int threads = 0;                    ///< element-loop threads (0: default; results identical)
+    /// Ensemble size: the test is also run for the imperfection seeds seed + 1 ... seed + N - 1
+    /// (in parallel, one thread each) and each curve reports the spread of its stiffness over
+    /// the N bags (LoadCurve::stiffnessMin/Max). 1: the one bag. Needs an imperfection.
+    int ensemble = 1;
     bool gravity = true;                ///< self-weight of the sheet
     GasOptions gas;
     /// How the chambers share their air: Open, one gas body filling all chambers (pressures
@@ -109,6 +113,11 @@ struct LoadCurve {
     /// how far the curve is from a true equilibrium path
     /// (Abaqus' rule of thumb for its automatic stabilisation: keep it below about 0.05).
     double stabilizationShare = 0.0;
+    /// Over the ensemble's bags (LoadTestOptions::ensemble; this curve's bag included): the
+    /// least and largest stiffness [N/m] (NaN if any bag has none) and the number of bags.
+    double stiffnessMin = 0.0;
+    double stiffnessMax = 0.0;
+    int ensembleSize = 1;
 };
 
 struct LoadTestResult {
