@@ -1,8 +1,6 @@
 // bagsim run, kind patient-on-support: the patient settled on a rigid flat support.
 #include "PatientRun.h"
 
-#include "Interrupt.h"
-
 #include <bagsim/Version.h>
 #include <body/SettleOnSupport.h>
 #include <io/InputError.h>
@@ -17,6 +15,8 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+
+#include "Interrupt.h"
 
 namespace bagsim::app {
 

@@ -475,10 +475,10 @@ void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
     if (nodes > kMaxMeshNodes) {
         // Nodes go as 1 / h^2: the smallest mesh size within the limit.
         const double hMin = o.geometry.meshSize * std::sqrt(nodes / kMaxMeshNodes);
-        const std::string given = airbag.has("mesh_size")
-                                      ? shown(airbag, "mesh_size")
-                                      : "the default " + fmt(toUnit(o.geometry.meshSize, "mm")) +
-                                            " mm";
+        const std::string given =
+            airbag.has("mesh_size")
+                ? shown(airbag, "mesh_size")
+                : "the default " + fmt(toUnit(o.geometry.meshSize, "mm")) + " mm";
         airbag.fail("mesh_size",
                     given + " gives a mesh of about " + fmt(std::round(nodes / 1000) * 1000) +
                         " nodes for this airbag; at most " + std::to_string(kMaxMeshNodes) +
@@ -491,16 +491,16 @@ void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
     const ScenarioNode test = root.getSection("test");
     const double steps = o.geometry.height / o.displacementStep;
     if (steps > kMaxStepsPerBranch)
-        test.fail("displacement_step",
-                  (test.has("displacement_step") ? shown(test, "displacement_step")
-                                                 : std::string("the default")) +
-                      " needs about " + fmt(std::round(steps)) +
-                      " steps to cross the airbag's height; at most " +
-                      std::to_string(kMaxStepsPerBranch) + " per branch are allowed; valid: at least " +
-                      fmt(std::ceil(toUnit(o.geometry.height / kMaxStepsPerBranch, "mm") * 1000 -
-                                    1e-9) /
-                          1000) +
-                      " mm");
+        test.fail(
+            "displacement_step",
+            (test.has("displacement_step") ? shown(test, "displacement_step")
+                                           : std::string("the default")) +
+                " needs about " + fmt(std::round(steps)) +
+                " steps to cross the airbag's height; at most " +
+                std::to_string(kMaxStepsPerBranch) + " per branch are allowed; valid: at least " +
+                fmt(std::ceil(toUnit(o.geometry.height / kMaxStepsPerBranch, "mm") * 1000 - 1e-9) /
+                    1000) +
+                " mm");
 
     const double capacity = estimateForceCapacity(o);
     const double area = o.geometry.longSide * o.geometry.width;
@@ -509,16 +509,16 @@ void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
     const double limit = std::max(kPeakForceFactor * capacity, o.gas.ambientPressure * area);
     if (o.peakForce > limit) {
         const double mMax = *std::max_element(o.gasMasses.begin(), o.gasMasses.end());
-        test.fail("peak_force",
-                  shown(test, "peak_force") + " is far beyond what this bag can carry: over the " +
-                      fmt(toUnit(o.geometry.longSide, "mm")) + " mm x " +
-                      fmt(toUnit(o.geometry.width, "mm")) + " mm base it needs a gauge pressure of " +
-                      fmt3(toUnit(o.peakForce / area, "kPa")) + " kPa, while " +
-                      fmt(toUnit(mMax, "g")) + " g of gas squeezed under the " +
-                      fmt(toUnit(o.blockSize, "mm")) + " mm block reaches about " +
-                      fmt3(toUnit(capacity / area, "kPa")) + " kPa (" + fmt3(capacity) +
-                      " N); valid: at most " + fmt(std::floor(limit)) + " N (" +
-                      fmt(kPeakForceFactor) + " times that, or one atmosphere over the base)");
+        test.fail(
+            "peak_force",
+            shown(test, "peak_force") + " is far beyond what this bag can carry: over the " +
+                fmt(toUnit(o.geometry.longSide, "mm")) + " mm x " +
+                fmt(toUnit(o.geometry.width, "mm")) + " mm base it needs a gauge pressure of " +
+                fmt3(toUnit(o.peakForce / area, "kPa")) + " kPa, while " + fmt(toUnit(mMax, "g")) +
+                " g of gas squeezed under the " + fmt(toUnit(o.blockSize, "mm")) +
+                " mm block reaches about " + fmt3(toUnit(capacity / area, "kPa")) + " kPa (" +
+                fmt3(capacity) + " N); valid: at most " + fmt(std::floor(limit)) + " N (" +
+                fmt(kPeakForceFactor) + " times that, or one atmosphere over the base)");
     }
 }
 

@@ -485,8 +485,8 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
         failed[i] = isCurveFailed(c) ? 1 : 0;
         if (failed[i]) {
             ++numFailed;
-            failures += (failures.empty() ? "" : "; ") + fmtG(c.gasMass * 1e3, 6) + " g: " +
-                        c.failure;
+            failures +=
+                (failures.empty() ? "" : "; ") + fmtG(c.gasMass * 1e3, 6) + " g: " + c.failure;
         }
         h5::Handle g;
         const std::string name = std::to_string(i);

@@ -102,8 +102,7 @@ std::string readInputFile(const std::string& path, std::uintmax_t maxBytes,
         throw InputError(path, 0, "",
                          "cannot read the " + what + " (" +
                              (ec ? ec.message() : std::string("no such file")) + ")");
-    if (fs::is_directory(status))
-        throw InputError(path, 0, "", "is a folder; give a " + what);
+    if (fs::is_directory(status)) throw InputError(path, 0, "", "is a folder; give a " + what);
     // A pipe or a device would block the program or never end: only files on disk are read.
     if (!fs::is_regular_file(status))
         throw InputError(path, 0, "",

@@ -2,10 +2,8 @@
 // line, key and the limit named: a mesh too fine for its airbag, too many gas masses or steps,
 // a peak force far beyond what the bag can carry, and input files that are too large or are
 // not regular files (a pipe would block the reader forever).
-#include <gtest/gtest.h>
-#include "InputErrorTestUtil.h"
-
 #include <bags/Geometry.h>
+#include <gtest/gtest.h>
 #include <io/LoadTestScenario.h>
 #include <io/Scenario.h>
 #include <sys/stat.h>
@@ -13,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+
+#include "InputErrorTestUtil.h"
 
 using io::InputError;
 using io::ScenarioFile;
@@ -24,13 +24,13 @@ namespace {
 
 // A valid scenario (the seed's bag, 10 mm mesh by default); tests append or replace keys.
 std::string makeScenario(const std::string& airbagExtra, const std::string& testExtra) {
-    return "kind: seed-load-test\n"                                              // 1
-           "airbag:\n"                                                           // 2
-           "  long_side: 350 mm\n"                                               // 3
-           "  short_side: 200 mm\n"                                              // 4
-           "  width: 100 mm\n"                                                   // 5
-           "  height: 150 mm\n" +                                                // 6
-           airbagExtra +                                                         // 7 (if any)
+    return "kind: seed-load-test\n"  // 1
+           "airbag:\n"               // 2
+           "  long_side: 350 mm\n"   // 3
+           "  short_side: 200 mm\n"  // 4
+           "  width: 100 mm\n"       // 5
+           "  height: 150 mm\n" +    // 6
+           airbagExtra +             // 7 (if any)
            "membrane: {model: neo-hookean, C10: 30 MPa, thickness: 0.2 mm}\n"
            "test:\n"
            "  polynomial_order: 1\n" +
@@ -62,7 +62,8 @@ TEST(InputLimits, NodeEstimateIsWithinTenPercentOfTheMesh) {
 
 TEST(InputLimits, MeshTooFineForTheAirbagNamesTheLimitAndTheSmallestValidSize) {
     // 1 mm on the seed bag: about 150 000 nodes.
-    const InputError e = errorFor(makeScenario("  mesh_size: 1 mm\n", "  gas_masses: [3 g, 2 g]\n"));
+    const InputError e =
+        errorFor(makeScenario("  mesh_size: 1 mm\n", "  gas_masses: [3 g, 2 g]\n"));
     EXPECT_EQ(e.getWhere(), "limits.yaml");
     EXPECT_EQ(e.getLine(), 7);
     EXPECT_EQ(e.getKey(), "airbag.mesh_size");
@@ -77,10 +78,11 @@ TEST(InputLimits, MeshTooFineForTheAirbagNamesTheLimitAndTheSmallestValidSize) {
 }
 
 TEST(InputLimits, HugeAirbagAtTheDefaultMeshIsRefused) {
-    const std::string text = "kind: seed-load-test\n"
-                             "airbag: {long_side: 5 m, short_side: 2 m, width: 3 m, height: 1.5 m}\n"
-                             "membrane: {model: neo-hookean, C10: 30 MPa, thickness: 0.2 mm}\n"
-                             "test: {gas_masses: [3 g, 2 g], polynomial_order: 1}\n";
+    const std::string text =
+        "kind: seed-load-test\n"
+        "airbag: {long_side: 5 m, short_side: 2 m, width: 3 m, height: 1.5 m}\n"
+        "membrane: {model: neo-hookean, C10: 30 MPa, thickness: 0.2 mm}\n"
+        "test: {gas_masses: [3 g, 2 g], polynomial_order: 1}\n";
     const InputError e = errorFor(text);
     EXPECT_EQ(e.getKey(), "airbag.mesh_size");
     EXPECT_EQ(e.getLine(), 2);
@@ -161,8 +163,7 @@ TEST(InputLimits, ScenarioFileMustBeARegularFileOfAtMostOneMebibyte) {
     e = expectInputError([&] { ScenarioFile::load("/dev/zero"); });
     EXPECT_NE(e.getMessage().find("is not a regular file"), std::string::npos) << e.what();
     e = expectInputError([&] { ScenarioFile::load((dir / "missing.yaml").string()); });
-    EXPECT_NE(e.getMessage().find("cannot read the scenario file (No such file"),
-              std::string::npos)
+    EXPECT_NE(e.getMessage().find("cannot read the scenario file (No such file"), std::string::npos)
         << e.what();
     // The limit itself is inclusive.
     const fs::path edge = dir / "edge.txt";
