@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bags/LoadTest.h>
 #include <bags/Polynomial.h>
+#include <bags/SeedReading.h>
 #include <bagsim/Version.h>
 #include <io/InputError.h>
 #include <io/LoadTestScenario.h>
@@ -380,6 +381,24 @@ int runRunCommand(int argc, char** argv) {
                                   io::formatQuantity(o.gasMasses[lastCurve], "g", 2) + ")";
     };
     try {
+        if (sc.fillMass > 0.0) {
+            // airbag.fill_mass: the sizes as written are scaled until that mass just fills the
+            // inflated bag (a few inflations; docs/geometry.md). The sizes used are printed.
+            if (!args.quiet)
+                std::cerr << "  sizing the airbag (" << bags::getFillScalingName(sc.fillScaling)
+                          << " scale) to a fill mass of " << io::formatQuantity(sc.fillMass, "g", 3)
+                          << "\n";
+            const bags::FillScaleResult fs = bags::findFillScale(o, sc.fillMass, sc.fillScaling);
+            o.geometry = fs.geometry;
+            std::cout << "airbag sized to a fill mass of " << io::formatQuantity(sc.fillMass, "g", 3)
+                      << " (" << bags::getFillScalingName(sc.fillScaling) << " scale "
+                      << fmt("%.4f", fs.scale) << ", measured "
+                      << io::formatQuantity(fs.measurement.fillMass, "g", 3) << "): long side "
+                      << fmt("%.1f mm", o.geometry.longSide * 1e3) << ", short side "
+                      << fmt("%.1f mm", o.geometry.shortSide * 1e3) << ", width "
+                      << fmt("%.1f mm", o.geometry.width * 1e3) << ", height "
+                      << fmt("%.1f mm", o.geometry.height * 1e3) << "\n";
+        }
         result = bags::runLoadTest(o, observer);
         progress.finish();
         status = writer->finish(result);

@@ -152,7 +152,7 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
     bags::DoubleWedgeParams& g = o.geometry;
     s.checkKeys({"long_side", "short_side", "width", "height"},
                 {"mesh_size", "diaphragm", "bond_base", "connection", "orifice_diameter",
-                 "discharge_coefficient"});
+                 "discharge_coefficient", "fill_mass", "fill_scaling"});
     g.longSide = s.getQuantity("long_side", D::Length);
     g.shortSide = s.getQuantity("short_side", D::Length);
     g.width = s.getQuantity("width", D::Length);
@@ -191,6 +191,53 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
                false, "mm", "greater than zero and smaller than the diaphragm");
     checkRange(s, "discharge_coefficient", o.orifice.dischargeCoefficient, 0, false, 1, true, "",
                "0 < Cd <= 1 (sharp-edged orifice: about 0.6)");
+}
+
+// The seed's bag read from its words (docs/geometry.md): airbag.fill_mass scales the sizes
+// as written so that this gas mass just fills the inflated bag; the scale itself is found
+// before the run (bags::findFillScale), here only the keys and a first guess are checked.
+void readFillMass(const ScenarioNode& s, LoadTestScenario& sc) {
+    const std::string scaling =
+        s.getChoice("fill_scaling", {"profile", "uniform", "height"}, "profile");
+    if (!s.has("fill_mass")) {
+        if (s.has("fill_scaling"))
+            s.fail("fill_scaling", "only applies with fill_mass (the gas mass that just fills "
+                                   "the inflated bag, e.g. fill_mass: 2.8 g)");
+        return;
+    }
+    sc.fillScaling = scaling == "uniform" ? bags::FillScaling::Uniform
+                     : scaling == "height" ? bags::FillScaling::Height
+                                           : bags::FillScaling::Profile;
+    sc.fillMass = s.getQuantity("fill_mass", D::Mass);
+    checkRange(s, "fill_mass", sc.fillMass, 0, false, kInf, false, "g",
+               "the gas mass that just fills the inflated bag at ambient pressure");
+    // The first guess (flat volume times the seed reading's bulge) must leave a bag of
+    // sensible proportions: the search moves the scale by a few per cent from it.
+    const double s0 = bags::estimateFillScale(sc.options, sc.fillMass, sc.fillScaling);
+    const double lo = 0.5, hi = 1.5;
+    if (!(s0 >= lo && s0 <= hi)) {
+        auto massAt = [&](double f) {
+            return fmt(std::round(toUnit(sc.fillMass * std::pow(f / s0,
+                                                         bags::getFillScalingExponent(
+                                                             sc.fillScaling)),
+                                         "g") *
+                                  100) /
+                       100) +
+                   " g";
+        };
+        s.fail("fill_mass", shown(s, "fill_mass") + " would scale the " + scaling +
+                                " by about " + fmt(std::round(s0 * 100) / 100) +
+                                "; valid: a scale from " + fmt(lo) + " to " + fmt(hi) +
+                                ", i.e. a fill mass from about " + massAt(lo) + " to " +
+                                massAt(hi) + " for these sizes");
+    }
+    const bags::DoubleWedgeParams g =
+        bags::scaleDoubleWedge(sc.options.geometry, sc.fillScaling, s0);
+    const double smallest = std::min({g.longSide, g.shortSide, g.width, g.height});
+    if (g.meshSize > 0.5 * smallest)
+        s.fail("mesh_size", shown(s, "mesh_size") + " must be at most half the smallest "
+                            "dimension of the scaled airbag (about " +
+                                fmt(std::round(toUnit(0.5 * smallest, "mm"))) + " mm)");
 }
 
 // --------------------------------------------------------------------------------- membrane
@@ -588,6 +635,7 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     readAirbag(root.getSection("airbag"), o);
     readMembrane(root.getSection("membrane"), o);
     readGas(root.getSection("gas", false), o.gas);
+    readFillMass(root.getSection("airbag"), sc);
     readTest(root.getSection("test"), o);
     readContact(root.getSection("contact", false), o);
     readSolver(root.getSection("solver", false), o.solver, o.stabilization,

@@ -305,3 +305,108 @@ TEST(LoadTestScenario, UnknownKindListsValidKinds) {
     EXPECT_EQ(e.getLine(), 1);
     EXPECT_NE(std::string(e.what()).find("did you mean 'seed-load-test'?"), std::string::npos);
 }
+
+// The seed's bag read from its words (docs/geometry.md): the default scenario sizes its bag to
+// a fill mass of 2.8 g; the literal reading keeps today's sizes unscaled; the band's ends
+// differ from the default in the fill mass only.
+TEST(LoadTestScenario, SeedReadingsDifferOnlyInTheFillMass) {
+    auto read = [](const std::string& file) {
+        return io::readLoadTestScenario(
+            ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/" + file));
+    };
+    const io::LoadTestScenario literal = read("seed-load-test-literal.yaml");
+    const io::LoadTestScenario words = read("seed-load-test.yaml");
+    EXPECT_EQ(literal.name, "seed-load-test-literal");
+    EXPECT_EQ(literal.fillMass, 0.0);  // no scaling: the sizes as written
+    EXPECT_NEAR(words.fillMass, 2.8e-3, 1e-15);
+    EXPECT_EQ(words.fillScaling, bags::FillScaling::Profile);
+    auto expectSameRig = [](const io::LoadTestScenario& a, const io::LoadTestScenario& b) {
+        const bags::LoadTestOptions &x = a.options, &y = b.options;
+        EXPECT_EQ(x.geometry.longSide, y.geometry.longSide);
+        EXPECT_EQ(x.geometry.shortSide, y.geometry.shortSide);
+        EXPECT_EQ(x.geometry.width, y.geometry.width);
+        EXPECT_EQ(x.geometry.height, y.geometry.height);
+        EXPECT_EQ(x.geometry.meshSize, y.geometry.meshSize);
+        EXPECT_EQ(x.geometry.diaphragm, y.geometry.diaphragm);
+        EXPECT_EQ(x.geometry.bondBase, y.geometry.bondBase);
+        EXPECT_EQ(x.material->getName(), y.material->getName());
+        EXPECT_EQ(x.material->getInitialShearModulus(), y.material->getInitialShearModulus());
+        EXPECT_EQ(x.thickness, y.thickness);
+        EXPECT_EQ(x.density, y.density);
+        EXPECT_EQ(x.wrinklingResidual, y.wrinklingResidual);
+        EXPECT_EQ(x.gas.molarMass, y.gas.molarMass);
+        EXPECT_EQ(x.gas.temperature, y.gas.temperature);
+        EXPECT_EQ(x.gas.ambientPressure, y.gas.ambientPressure);
+        EXPECT_EQ(x.gas.process, y.gas.process);
+        EXPECT_EQ(x.connection, y.connection);
+        EXPECT_EQ(x.gasMasses, y.gasMasses);
+        EXPECT_EQ(x.blockSize, y.blockSize);
+        EXPECT_EQ(x.loadingRate, y.loadingRate);
+        EXPECT_EQ(x.peakForce, y.peakForce);
+        EXPECT_EQ(x.unload, y.unload);
+        EXPECT_EQ(x.stiffnessFrom, y.stiffnessFrom);
+        EXPECT_EQ(x.stiffnessTo, y.stiffnessTo);
+        EXPECT_EQ(x.polynomialOrder, y.polynomialOrder);
+        EXPECT_EQ(x.blockContact.pressurePenalty, y.blockContact.pressurePenalty);
+        EXPECT_EQ(x.blockContact.friction, y.blockContact.friction);
+        EXPECT_EQ(x.selfContact, y.selfContact);
+        EXPECT_EQ(a.output.frameEvery, b.output.frameEvery);
+    };
+    expectSameRig(literal, words);
+    for (const char* end : {"2.7", "2.9"}) {
+        const io::LoadTestScenario band =
+            read(std::string("seed-load-test-fill-") + end + "g.yaml");
+        EXPECT_NEAR(band.fillMass, std::stod(end) * 1e-3, 1e-15) << end;
+        EXPECT_EQ(band.fillScaling, bags::FillScaling::Profile);
+        expectSameRig(band, words);
+    }
+    // The band's ends also as an override of the default scenario.
+    ScenarioFile f =
+        ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/seed-load-test.yaml");
+    f.applyOverride("airbag.fill_mass=2.9 g");
+    EXPECT_NEAR(io::readLoadTestScenario(f).fillMass, 2.9e-3, 1e-15);
+}
+
+TEST(LoadTestScenario, FillMassKeys) {
+    const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 2.8 g\n  fill_scaling: uniform"),
+        "f.yaml"));
+    EXPECT_NEAR(sc.fillMass, 2.8e-3, 1e-15);
+    EXPECT_EQ(sc.fillScaling, bags::FillScaling::Uniform);
+    EXPECT_NEAR(sc.options.geometry.longSide, 0.350, 1e-15);  // scaled only before the run
+    const io::LoadTestScenario sc2 = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 3 g"), "f.yaml"));
+    EXPECT_EQ(sc2.fillScaling, bags::FillScaling::Profile);  // the default
+
+    const InputError e =
+        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: -2.8 g"));
+    EXPECT_EQ(e.getLine(), 7);
+    EXPECT_EQ(e.getKey(), "airbag.fill_mass");
+    EXPECT_NE(std::string(e.what()).find("must be > 0 g"), std::string::npos) << e.what();
+    const InputError e2 = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 2.8 mm"));
+    EXPECT_EQ(e2.getKey(), "airbag.fill_mass");
+    // A fill mass that would shrink or blow up the bag beyond 0.5-1.5 times its sizes.
+    const InputError e3 = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 0.5 g"));
+    EXPECT_EQ(e3.getKey(), "airbag.fill_mass");
+    EXPECT_NE(std::string(e3.what()).find("would scale the profile by about 0.37"),
+              std::string::npos)
+        << e3.what();
+    const InputError e4 = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 20 g"));
+    EXPECT_EQ(e4.getKey(), "airbag.fill_mass");
+    const InputError e5 = errorFor(
+        replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 2.8 g\n  fill_scaling: sideways"));
+    EXPECT_EQ(e5.getLine(), 8);
+    EXPECT_EQ(e5.getKey(), "airbag.fill_scaling");
+    EXPECT_NE(std::string(e5.what()).find("profile"), std::string::npos) << e5.what();
+    const InputError e6 =
+        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  fill_scaling: profile"));
+    EXPECT_EQ(e6.getKey(), "airbag.fill_scaling");
+    EXPECT_NE(std::string(e6.what()).find("only applies with fill_mass"), std::string::npos)
+        << e6.what();
+    // The mesh must still fit the scaled bag: 45 mm is more than half the 82 mm height that
+    // 2.0 g gives with the height scaling.
+    const InputError e7 = errorFor(replaceLine(
+        kBase, 6,
+        "  height: 150 mm\n  mesh_size: 45 mm\n  fill_mass: 2.0 g\n  fill_scaling: height"));
+    EXPECT_EQ(e7.getKey(), "airbag.mesh_size");
+}

@@ -6,6 +6,7 @@
 /// docs/scenario-reference.md.
 
 #include <bags/LoadTest.h>
+#include <bags/SeedReading.h>
 #include <io/Scenario.h>
 
 #include <string>
@@ -26,6 +27,12 @@ struct LoadTestScenario {
     std::string description;  ///< 'description' key (free text), may be empty
     bags::LoadTestOptions options;
     OutputOptions output;
+    /// airbag.fill_mass: the gas mass that just fills the inflated bag at ambient pressure
+    /// [kg]; 0 when absent (the sizes as given). When set, options.geometry holds the sizes as
+    /// written, which bags::findFillScale scales before the run (docs/geometry.md).
+    double fillMass = 0.0;
+    /// airbag.fill_scaling: which sizes the fill mass scales.
+    bags::FillScaling fillScaling = bags::FillScaling::Profile;
 };
 
 /// Limits that keep a run within memory and time (docs/scenario-reference.md#limits); a
