@@ -380,6 +380,14 @@ int runRunCommand(int argc, char** argv) {
                                   std::to_string(lastCurve + 1) + " (" +
                                   io::formatQuantity(o.gasMasses[lastCurve], "g", 2) + ")";
     };
+    auto stopInterrupted = [&](int signal) {
+        progress.finish();
+        const std::string msg = Interrupted(signal).what() + std::string(" ") + where();
+        writer->fail("interrupted", msg);
+        std::cerr << "bagsim: " << msg << "; partial results kept in " << outPath.string()
+                  << "/ (marked INCOMPLETE)\n";
+        return getInterruptExitCode(signal);
+    };
     try {
         if (sc.fillMass > 0.0) {
             // airbag.fill_mass: the sizes as written are scaled until that mass just fills the
@@ -403,13 +411,11 @@ int runRunCommand(int argc, char** argv) {
         progress.finish();
         status = writer->finish(result);
     } catch (const Interrupted& e) {
-        progress.finish();
-        const std::string msg = std::string(e.what()) + " " + where();
-        writer->fail("interrupted", msg);
-        std::cerr << "bagsim: " << msg << "; partial results kept in " << outPath.string()
-                  << "/ (marked INCOMPLETE)\n";
-        return getInterruptExitCode(e.signal);
+        return stopInterrupted(e.signal);
     } catch (const bags::NumericalError& e) {
+        // A signal seen by a solve the library wraps (a bag of an ensemble run in a thread)
+        // arrives as its error: still an interrupt.
+        if (getInterruptSignal()) return stopInterrupted(getInterruptSignal());
         progress.finish();
         std::string msg = std::string("numerical failure: ") + e.what();
         if (e.getTime() >= 0) msg += fmt("; time %.4g s", e.getTime());
@@ -421,6 +427,7 @@ int runRunCommand(int argc, char** argv) {
                   << outPath.string() << "/ (marked INCOMPLETE)\n";
         return 1;
     } catch (const std::exception& e) {
+        if (getInterruptSignal()) return stopInterrupted(getInterruptSignal());
         progress.finish();
         const std::string msg = std::string(e.what()) + " (" + where() + ")";
         writer->fail("failed", msg);
