@@ -447,7 +447,7 @@ int runRunCommand(int argc, char** argv) {
               << "  " << io::kLoadDisplacementCsv << "  gas_mass_g,displacement_mm,force_N,"
               << "pressure_kPa,branch\n"
               << "  " << io::kStiffnessCsv
-              << "          gas_mass_g,stiffness_N_per_mm,r2,stage,end\n";
+              << "          gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end\n";
     if (status == "partial") {
         // Every gas mass was run, but a curve's branch ends where a step could not be solved:
         // its stiffness and the k(m) fit may rest on part of a curve.

@@ -3,7 +3,7 @@
 // see docs/performance.md.
 //
 //   build/bin/bench_load_test [--step MM] [--bending N_M|plate] [--imperfection MM]
-//                             [--seed N] [--threads N] [--scale F] [mesh_mm=5]
+//                             [--seed N] [--threads N] [--scale F] [--verbose 1] [mesh_mm=5]
 //                             [gas masses in g ... | seed]
 // "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps; --step sets
 // the target block increment (default 1 mm, as the scenario).
@@ -36,6 +36,7 @@ double forceAt(const bags::LoadCurve& c, double d) {
 int main(int argc, char** argv) {
     bags::LoadTestOptions o;
     int first = 1;
+    bool verbose = false;
     o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     // Leading options: --step MM, --bending N_M|plate, --imperfection MM, --seed N,
     // --threads N, --scale F (the x-z profile scaled by F).
@@ -52,6 +53,8 @@ int main(int argc, char** argv) {
             o.imperfection.amplitude = std::atof(val) * 1e-3;
         } else if (std::strcmp(key, "--seed") == 0) {
             o.imperfection.seed = static_cast<std::uint64_t>(std::atoll(val));
+        } else if (std::strcmp(key, "--verbose") == 0) {
+            verbose = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--threads") == 0) {
             o.threads = std::atoi(val);
         } else if (std::strcmp(key, "--scale") == 0) {
@@ -89,6 +92,13 @@ int main(int argc, char** argv) {
             ++steps;
             if (s.loading) ++loadingSteps;
             iterations += s.newtonIterations;
+            if (verbose)
+                std::printf("    curve %d step %3d %s d = %7.3f mm F = %8.3f N iterations %4d "
+                            "residual %.2e N springs %.2e J t = %.1f s\n",
+                            s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3,
+                            s.force, s.newtonIterations, s.residual, s.stabilizationEnergy,
+                            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                                .count());
             if (tInflated < 0.0)
                 tInflated = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             if (s.curve == 1 && tFirst < 0.0)

@@ -1,8 +1,10 @@
 #include <io/LoadTestScenario.h>
 
+#include <bags/Bending.h>
 #include <bags/MaterialFit.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -79,6 +81,10 @@ const std::vector<KeyAlias>& getAliases() {
         {"width", "airbag", "width"},
         {"wrinklingResidual", "membrane", "wrinkling_residual"},
         {"wrinkling_residual", "membrane", "wrinkling_residual"},
+        {"bendingStiffness", "membrane", "bending_stiffness"},
+        {"ensemble", "test", "ensemble"},
+        {"imperfection.amplitude", "airbag", "imperfection"},
+        {"bending_stiffness", "membrane", "bending_stiffness"},
         {"thickness", "membrane", "thickness"},
         {"density", "membrane", "density"},
         {"C10", "membrane", "C10"},
@@ -152,7 +158,7 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
     bags::DoubleWedgeParams& g = o.geometry;
     s.checkKeys({"long_side", "short_side", "width", "height"},
                 {"mesh_size", "diaphragm", "bond_base", "connection", "orifice_diameter",
-                 "discharge_coefficient", "fill_mass", "fill_scaling"});
+                 "discharge_coefficient", "fill_mass", "fill_scaling", "imperfection"});
     g.longSide = s.getQuantity("long_side", D::Length);
     g.shortSide = s.getQuantity("short_side", D::Length);
     g.width = s.getQuantity("width", D::Length);
@@ -191,6 +197,19 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
                false, "mm", "greater than zero and smaller than the diaphragm");
     checkRange(s, "discharge_coefficient", o.orifice.dischargeCoefficient, 0, false, 1, true, "",
                "0 < Cd <= 1 (sharp-edged orifice: about 0.6)");
+
+    // A stated imperfection: smooth random offsets of the panels along their normals.
+    if (s.has("imperfection")) {
+        const ScenarioNode imp = s.getSection("imperfection");
+        imp.checkKeys({"amplitude"}, {"seed"});
+        o.imperfection.amplitude = imp.getQuantity("amplitude", D::Length);
+        checkRange(imp, "amplitude", o.imperfection.amplitude, 0, true, 0.01, true, "mm",
+                   "0 (the perfect bag) to 10 mm, e.g. 0.5 mm");
+        const int seed = imp.getInteger("seed", 1);
+        if (seed < 0)
+            imp.fail("seed", std::to_string(seed) + " must be a whole number >= 0");
+        o.imperfection.seed = static_cast<std::uint64_t>(seed);
+    }
 }
 
 // The seed's bag read from its words (docs/geometry.md): airbag.fill_mass scales the sizes
@@ -267,7 +286,8 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
                 allConstants.push_back(c);
     }
     std::vector<std::string> optional = allConstants;
-    optional.insert(optional.end(), {"density", "wrinkling_residual", "extrapolation"});
+    optional.insert(optional.end(),
+                    {"density", "wrinkling_residual", "extrapolation", "bending_stiffness"});
     s.checkKeys({"model", "thickness"}, optional);
     const std::string model = s.getChoice("model", modelNames);
     // Beyond the stable range a Yeoh continues linearly in I1 (default) or as its polynomial.
@@ -336,6 +356,18 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
     checkRange(s, "thickness", o.thickness, 0, false, 0.01, true, "mm");
     checkRange(s, "density", o.density, 0, true, kInf, false, "kg/m^3");
     checkRange(s, "wrinkling_residual", o.wrinklingResidual, 0, false, 0.1, false, "");
+    // The film's bending stiffness: a moment, `plate` (the homogeneous film's plate value from
+    // the material and thickness, also when the key is absent) or 0 (off).
+    const std::string bending = getRaw(s, "bending_stiffness");
+    if (bending.empty() || bending == "plate") {
+        o.bendingStiffness = bags::calcPlateBendingStiffness(*o.material, o.thickness);
+    } else if (bending == "0") {
+        o.bendingStiffness = 0.0;
+    } else {
+        o.bendingStiffness = s.getQuantity("bending_stiffness", D::Moment);
+        checkRange(s, "bending_stiffness", o.bendingStiffness, 0, true, 1.0, false, "N m",
+                   "or plate: the film's plate value; 0 switches bending off");
+    }
 }
 
 // -------------------------------------------------------------------------------------- gas
@@ -414,7 +446,7 @@ std::vector<double> readGasMasses(const ScenarioNode& s) {
 
 void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
     s.checkKeys({"gas_masses"}, {"block", "rate", "peak_force", "unload", "displacement_step",
-                                 "stiffness_range", "polynomial_order", "gravity"});
+                                 "stiffness_range", "polynomial_order", "gravity", "ensemble"});
     o.gasMasses = readGasMasses(s);
     o.blockSize = s.getQuantity("block", D::Length, o.blockSize);
     o.loadingRate = s.getQuantity("rate", D::Velocity, o.loadingRate);
@@ -423,6 +455,10 @@ void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
     o.displacementStep = s.getQuantity("displacement_step", D::Length, o.displacementStep);
     o.polynomialOrder = s.getInteger("polynomial_order", o.polynomialOrder);
     o.gravity = s.getBool("gravity", o.gravity);
+    o.ensemble = s.getInteger("ensemble", o.ensemble);
+    if (o.ensemble < 1 || o.ensemble > 64)
+        s.fail("ensemble", std::to_string(o.ensemble) +
+                               " must be from 1 (one bag) to 64 imperfection seeds");
     checkRange(s, "block", o.blockSize, 0, false, kInf, false, "mm");
     checkRange(s, "rate", o.loadingRate, 0, false, kInf, false, "mm/min");
     checkRange(s, "peak_force", o.peakForce, 0, false, kInf, false, "N");

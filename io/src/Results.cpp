@@ -500,6 +500,9 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
         h5::setAttribute(g.get(), "inflated_volume", c.inflatedVolume);
         h5::setAttribute(g.get(), "inflated_gauge_pressure", c.inflatedGaugePressure);
         h5::setAttribute(g.get(), "stiffness", c.stiffness);
+        h5::setAttribute(g.get(), "stiffness_min", c.stiffnessMin);
+        h5::setAttribute(g.get(), "stiffness_max", c.stiffnessMax);
+        h5::setAttribute(g.get(), "ensemble_size", c.ensembleSize);
         h5::setAttribute(g.get(), "r2", c.r2);
         h5::setAttribute(g.get(), "stage", c.stage);
         h5::setAttribute(g.get(), "reached_peak", c.reachedPeak ? 1 : 0);
@@ -528,10 +531,11 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
 
     {
         std::ofstream out(d.dir.getFile(kStiffnessCsv), std::ios::trunc);
-        out << "gas_mass_g,stiffness_N_per_mm,r2,stage,end\n";
+        out << "gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end\n";
         for (size_t i = 0; i < n; ++i)
             out << fmtG(mass[i] * 1e3, 6) << ',' << fmtG(stiffness[i] * 1e-3) << ','
-                << fmtG(r2[i], 6) << ',' << stage[i] << ',' << getCurveEnd(r.curves[i]) << '\n';
+                << fmtG(r.curves[i].stiffnessMin * 1e-3) << ','
+                << fmtG(r.curves[i].stiffnessMax * 1e-3) << ',' << fmtG(r2[i], 6) << ',' << stage[i] << ',' << getCurveEnd(r.curves[i]) << '\n';
         if (!out) throw std::runtime_error("cannot write " + d.dir.getFile(kStiffnessCsv).string());
     }
 

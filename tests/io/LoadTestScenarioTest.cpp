@@ -410,3 +410,76 @@ TEST(LoadTestScenario, FillMassKeys) {
         "  height: 150 mm\n  mesh_size: 45 mm\n  fill_mass: 2.0 g\n  fill_scaling: height"));
     EXPECT_EQ(e7.getKey(), "airbag.mesh_size");
 }
+
+TEST(LoadTestScenario, BendingStiffnessKey) {
+    // Absent or `plate`: the film's plate value E t^3 / (12 (1 - nu^2)) with E = 6 C10 and
+    // nu = 0.5: 6 * 31.587917 MPa * (0.2 mm)^3 / 9 = 1.68469e-4 N m; a moment in N m or N mm;
+    // 0 switches bending off.
+    const double plate = 6 * 31.587917e6 * 8e-12 / 9;
+    const auto base = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
+    EXPECT_NEAR(base.options.bendingStiffness, plate, 1e-12 * plate);
+    auto read = [](const std::string& value) {
+        return io::readLoadTestScenario(
+                   ScenarioFile::parse(replaceLine(kBase, 12, "  thickness: 0.2 mm\n"
+                                                              "  bending_stiffness: " + value),
+                                       "k.yaml"))
+            .options.bendingStiffness;
+    };
+    EXPECT_NEAR(read("plate"), plate, 1e-12 * plate);
+    EXPECT_EQ(read("0"), 0.0);
+    EXPECT_NEAR(read("1.7e-4 N m"), 1.7e-4, 1e-18);
+    EXPECT_NEAR(read("0.05 N mm"), 5e-5, 1e-18);
+    // A wrong unit, a bare number and a negative value are errors at the key's line.
+    for (const char* bad : {"0.17 N/mm", "1.7e-4", "-1e-4 N m", "2 N m", "stiff"}) {
+        const InputError e = errorFor(
+            replaceLine(kBase, 12, std::string("  thickness: 0.2 mm\n  bending_stiffness: ") + bad));
+        EXPECT_EQ(e.getLine(), 13) << bad;
+        EXPECT_EQ(e.getKey(), "membrane.bending_stiffness") << bad;
+    }
+    const InputError e = errorFor(
+        replaceLine(kBase, 12, "  thickness: 0.2 mm\n  bending_stiffness: 0.17 N/mm"));
+    EXPECT_NE(std::string(e.what()).find("is not a moment"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("N m"), std::string::npos) << e.what();
+}
+
+TEST(LoadTestScenario, ImperfectionAndEnsembleKeys) {
+    const auto read = [](const std::string& text) {
+        return io::readLoadTestScenario(ScenarioFile::parse(text, "i.yaml")).options;
+    };
+    const std::string withImperfection = replaceLine(
+        kBase, 6, "  height: 150 mm\n  imperfection:\n    amplitude: 0.5 mm\n    seed: 4");
+    const bags::LoadTestOptions o = read(withImperfection);
+    EXPECT_DOUBLE_EQ(o.imperfection.amplitude, 0.5e-3);
+    EXPECT_EQ(o.imperfection.seed, 4u);
+    EXPECT_EQ(read(kBase).imperfection.amplitude, 0.0);  // absent: the perfect bag
+    EXPECT_EQ(read(kBase).ensemble, 1);
+    // The ensemble: test.ensemble bags, each with its own seed.
+    const bags::LoadTestOptions e =
+        read(withImperfection + "  ensemble: 5\n");
+    EXPECT_EQ(e.ensemble, 5);
+    // Errors at the key's line: a missing unit, too large, a negative seed, an unknown key,
+    // an ensemble out of range or without an imperfection.
+    struct Bad {
+        std::string text;
+        int line;
+        std::string key;
+    };
+    const std::vector<Bad> bad = {
+        {replaceLine(kBase, 6, "  height: 150 mm\n  imperfection:\n    amplitude: 0.5"), 8,
+         "airbag.imperfection.amplitude"},
+        {replaceLine(kBase, 6, "  height: 150 mm\n  imperfection:\n    amplitude: 20 mm"), 8,
+         "airbag.imperfection.amplitude"},
+        {replaceLine(kBase, 6,
+                     "  height: 150 mm\n  imperfection:\n    amplitude: 1 mm\n    seed: -2"),
+         9, "airbag.imperfection.seed"},
+        {replaceLine(kBase, 6, "  height: 150 mm\n  imperfection:\n    amplitud: 1 mm"), 8,
+         "airbag.imperfection.amplitud"},
+        {withImperfection + "  ensemble: 100\n", 19, "test.ensemble"},
+        {kBase + "  ensemble: 3\n", 16, "test.ensemble"},
+    };
+    for (const Bad& b : bad) {
+        const InputError err = errorFor(b.text);
+        EXPECT_EQ(err.getLine(), b.line) << b.text << "\n" << err.what();
+        EXPECT_EQ(err.getKey(), b.key) << err.what();
+    }
+}

@@ -105,6 +105,9 @@ FakeRun makeRun() {
         curve.inflatedVolume = 1e-3;
         curve.inflatedGaugePressure = 5000.0 - 1000.0 * c;
         curve.stiffness = 6000.0 - 1500.0 * c;
+        // An ensemble's spread on the first curve; one bag on the second.
+        curve.stiffnessMin = curve.stiffness - (c == 0 ? 200.0 : 0.0);
+        curve.stiffnessMax = curve.stiffness + (c == 0 ? 100.0 : 0.0);
         curve.r2 = 0.99 - 0.1 * c;
         curve.stage = 1 + c;
         curve.reachedPeak = c == 0;
@@ -348,9 +351,9 @@ TEST(ResultsWriter, WritesExactCsvHeadersAndRowsInBoundaryUnits) {
     EXPECT_EQ(ld[9], "2,9,50,5.3,loading");
     const auto st = readLines(dir / "stiffness.csv");
     ASSERT_EQ(st.size(), 3u);
-    EXPECT_EQ(st[0], "gas_mass_g,stiffness_N_per_mm,r2,stage,end");
-    EXPECT_EQ(st[1], "3.5,6,0.99,1,peak");  // 6000 N/m = 6 N/mm
-    EXPECT_EQ(st[2], "2,4.5,0.89,2,bottomed-out");
+    EXPECT_EQ(st[0], "gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end");
+    EXPECT_EQ(st[1], "3.5,6,5.8,6.1,0.99,1,peak");  // 6000 N/m = 6 N/mm
+    EXPECT_EQ(st[2], "2,4.5,4.5,4.5,0.89,2,bottomed-out");
 }
 
 TEST(ResultsWriter, CurveStoppedByNoConvergenceMarksTheRunPartial) {
@@ -373,8 +376,8 @@ TEST(ResultsWriter, CurveStoppedByNoConvergenceMarksTheRunPartial) {
         << marker;
     const auto st = readLines(dir / "stiffness.csv");
     ASSERT_EQ(st.size(), 3u);
-    EXPECT_EQ(st[1], "3.5,6,0.99,1,peak");
-    EXPECT_EQ(st[2], "2,4.5,0.89,2,failed");
+    EXPECT_EQ(st[1], "3.5,6,5.8,6.1,0.99,1,peak");
+    EXPECT_EQ(st[2], "2,4.5,4.5,4.5,0.89,2,failed");
     const hid_t f = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
     ASSERT_GE(f, 0);
     const hid_t meta = H5Gopen2(f, "/meta", H5P_DEFAULT);
