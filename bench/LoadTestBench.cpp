@@ -3,7 +3,7 @@
 // see docs/performance.md.
 //
 //   build/bin/bench_load_test [--step MM] [--bending N_M|plate] [--imperfection MM]
-//                             [--seed N] [--threads N] [--scale F] [--verbose 1] [mesh_mm=5]
+//                             [--seed N] [--threads N] [--scale F] [--verbose 1] [--sparsify 0|1] [mesh_mm=5]
 //                             [gas masses in g ... | seed]
 // "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps; --step sets
 // the target block increment (default 1 mm, as the scenario).
@@ -53,6 +53,8 @@ int main(int argc, char** argv) {
             o.imperfection.amplitude = std::atof(val) * 1e-3;
         } else if (std::strcmp(key, "--seed") == 0) {
             o.imperfection.seed = static_cast<std::uint64_t>(std::atoll(val));
+        } else if (std::strcmp(key, "--sparsify") == 0) {
+            o.solver.sparsifyWideCouplings = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--verbose") == 0) {
             verbose = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--threads") == 0) {
@@ -94,9 +96,9 @@ int main(int argc, char** argv) {
             iterations += s.newtonIterations;
             if (verbose)
                 std::printf("    curve %d step %3d %s d = %7.3f mm F = %8.3f N iterations %4d "
-                            "residual %.2e N springs %.2e J t = %.1f s\n",
+                            "factorisations %3d residual %.2e N springs %.2e J t = %.1f s\n",
                             s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3,
-                            s.force, s.newtonIterations, s.residual, s.stabilizationEnergy,
+                            s.force, s.newtonIterations, s.factorizations, s.residual, s.stabilizationEnergy,
                             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
                                 .count());
             if (tInflated < 0.0)

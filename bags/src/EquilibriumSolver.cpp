@@ -82,13 +82,14 @@ struct WoodburySolve {
 // negative curvature or when maxIt is reached.
 bool solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c,
               const WoodburySolve& M, const Eigen::VectorXd& b, double rtol, int maxIt,
-              Eigen::VectorXd& x, int* iterations) {
+              Eigen::VectorXd& x, int* iterations, double shift = 0.0) {
     x.setZero(b.size());
     Eigen::VectorXd res = b, z = M.apply(res), p = z, Ap(b.size());
     double rz = res.dot(z);
     const double stop = rtol * b.norm();
     for (int k = 1; k <= maxIt; ++k) {
         Ap.noalias() = K.selfadjointView<Eigen::Lower>() * p;
+        if (shift != 0.0) Ap += shift * p;
         if (U.cols() > 0) Ap += U * c.cwiseProduct(U.transpose() * p);
         const double pAp = p.dot(Ap);
         *iterations = k;
@@ -105,11 +106,53 @@ bool solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c
     return false;
 }
 
+// For each node, the sorted nodes it shares a triangle with (itself included).
+std::vector<std::vector<int>> makeNodeAdjacency(const Mesh& mesh) {
+    std::vector<std::vector<int>> adj(mesh.getNumNodes());
+    for (int e = 0; e < mesh.getNumTris(); ++e)
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) adj[mesh.tris(a, e)].push_back(mesh.tris(b, e));
+    for (int n = 0; n < mesh.getNumNodes(); ++n) {
+        adj[n].push_back(n);
+        std::sort(adj[n].begin(), adj[n].end());
+        adj[n].erase(std::unique(adj[n].begin(), adj[n].end()), adj[n].end());
+    }
+    return adj;
+}
+
+// The triplets with the wide couplings (acc.wideBegin..wideEnd between nodes that share no
+// triangle) left out, each one's magnitude added to the diagonal entry of its row: for the
+// symmetric pair a_ij, a_ji that adds |a_ij| to a_ii and a_jj, i.e. the positive
+// semi-definite [|a| -a; -a |a|] to the dropped pair, so the result is at least as definite
+// as the whole tangent.
+void sparsifyTriplets(const EnergyAccumulator& acc, const std::vector<std::vector<int>>& adj,
+                      std::vector<Triplet>& out) {
+    out.clear();
+    out.reserve(acc.hess.size());
+    out.insert(out.end(), acc.hess.begin(), acc.hess.begin() + acc.wideBegin);
+    for (size_t t = acc.wideBegin; t < acc.wideEnd; ++t) {
+        const Triplet& tr = acc.hess[t];
+        const int a = tr.row() / 3, b = tr.col() / 3;
+        const std::vector<int>& na = adj[a];
+        // Always one triplet per input triplet (zeros too): the sequence then repeats on every
+        // call and the assembler keeps its scatter map.
+        if (std::binary_search(na.begin(), na.end(), b))
+            out.push_back(tr);
+        else
+            out.emplace_back(tr.row(), tr.row(), std::abs(tr.value()));
+    }
+    out.insert(out.end(), acc.hess.begin() + acc.wideEnd, acc.hess.end());
+}
+
 }  // namespace
 
 struct SolverWorkspace::Impl {
     detail::SparseSpdSolver llt;
     detail::HessianAssembler assembler;
+    detail::HessianAssembler sparseAssembler;  // the sparsified tangent (wide couplings out)
+    std::vector<Triplet> sparseTrips;
+    std::vector<std::vector<int>> adjacency;   // node neighbours of the model's mesh
+    const Mesh* adjacencyMesh = nullptr;
     int nfree = -1;
     bool valid = false;
     int factorizations = 0;
@@ -173,6 +216,20 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
         if (it == options.maxIterations) break;
 
         const SpMat& K = ws.assembler.assemble(acc.hess, map, nfree);
+        // The matrix to factor: K, or K without its wide couplings (then CG on K).
+        const bool wide = options.sparsifyWideCouplings && acc.wideEnd > acc.wideBegin;
+        const SpMat* P = &K;
+        detail::HessianAssembler* pAssembler = &ws.assembler;
+        if (wide) {
+            if (ws.adjacencyMesh != &model.getMesh() ||
+                static_cast<int>(ws.adjacency.size()) != nn) {
+                ws.adjacency = makeNodeAdjacency(model.getMesh());
+                ws.adjacencyMesh = &model.getMesh();
+            }
+            sparsifyTriplets(acc, ws.adjacency, ws.sparseTrips);
+            P = &ws.sparseAssembler.assemble(ws.sparseTrips, map, nfree);
+            pAssembler = &ws.sparseAssembler;
+        }
         double diagMean = 0.0;
         for (int i = 0; i < nfree; ++i)
             diagMean += std::abs(K.valuePtr()[ws.assembler.diagonalSlot(i)]);
@@ -207,12 +264,22 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
                 ++ws.factorizations;
                 bool ok = false;
                 if (shift > 0.0) {
-                    shifted = K;  // same pattern: the diagonal slots hold
+                    shifted = *P;  // same pattern: the diagonal slots hold
                     for (int i = 0; i < nfree; ++i)
-                        shifted.valuePtr()[ws.assembler.diagonalSlot(i)] += shift;
+                        shifted.valuePtr()[pAssembler->diagonalSlot(i)] += shift;
                     ok = llt.factorize(shifted);
                 } else {
-                    ok = llt.factorize(K);
+                    ok = llt.factorize(*P);
+                }
+                if (ok && wide) {
+                    // CG on the whole tangent (+ shift), preconditioned by the sparsified
+                    // factor; negative curvature or no convergence: shift as when a
+                    // factorisation fails.
+                    int kit = 0;
+                    const WoodburySolve M(llt, U, cgas);
+                    ok = solvePcg(K, U, cgas, M, -r, options.krylovTolerance,
+                                  options.maxSparsifiedKrylovIterations, d, &kit, shift);
+                    sum.krylovIterations += kit;
                 }
                 if (ok) {
                     factored = true;
@@ -224,7 +291,7 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
             if (!factored) throw NumericalError("tangent could not be factored", -1, it);
             if (shift > 0.0) ++sum.shiftedIterations;
             // Sherman-Morrison-Woodbury: (K + shift I + U C U^T)^-1 (-r).
-            d = WoodburySolve(llt, U, cgas).apply(-r);
+            if (!wide) d = WoodburySolve(llt, U, cgas).apply(-r);
         }
 
         // Trust limit on the largest nodal move (slack membranes can propose huge steps).

@@ -201,6 +201,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 st.gasMass.push_back(cs.mass);
             }
             st.newtonIterations = sum.newtonIterations;
+            st.factorizations = sum.factorizations;
             st.residual = sum.residual;
             st.stabilizationEnergy = sum.stabilizationEnergy;
             curve.steps.push_back(st);

@@ -59,6 +59,8 @@ void SolverOptions::validate() const {
     if (!(pseudoTransientShift > 0.0)) fail("pseudoTransientShift", pseudoTransientShift, "use > 0");
     if (!(maxStep >= 0.0)) fail("maxStep", maxStep, "use >= 0 m (0: no limit)");
     if (maxKrylovIterations < 1) fail("maxKrylovIterations", maxKrylovIterations, "use >= 1");
+    if (maxSparsifiedKrylovIterations < 1)
+        fail("maxSparsifiedKrylovIterations", maxSparsifiedKrylovIterations, "use >= 1");
     if (!(krylovTolerance > 0.0 && krylovTolerance < 1.0))
         fail("krylovTolerance", krylovTolerance, "use 0 < tol < 1 (e.g. 1e-4)");
     if (!(acceptableResidual >= 0.0))
@@ -300,7 +302,11 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
         return;
     }
     acc.energy += energy;
-    if (m_bending) m_bending->addEnergy(x, acc);
+    if (m_bending) {
+        acc.wideBegin = acc.hess.size();
+        m_bending->addEnergy(x, acc);
+        acc.wideEnd = acc.hess.size();
+    }
 }
 
 void MembraneModel::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {

@@ -87,6 +87,7 @@ struct LoadStep {
     std::vector<double> volume;         ///< per chamber [m^3]
     std::vector<double> gasMass;        ///< per chamber [kg] (its share of a shared gas)
     int newtonIterations = 0;
+    int factorizations = 0;    ///< sparse factorisations of the step's solves
     /// [J] held by the stabilisation springs at the accepted state (0 if the step ended on a
     /// spring-free equilibrium)
     double stabilizationEnergy = 0.0;

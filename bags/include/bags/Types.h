@@ -29,6 +29,10 @@ struct EnergyAccumulator {
     std::vector<Triplet> hess;           ///< d2E/dx2 [N/m] as triplets (duplicates are summed)
     bool wantGradient = true;            ///< false: only energy is needed (line search)
     bool wantHessian = true;             ///< false: skip triplets
+    /// Triplets [wideBegin, wideEnd) of `hess` couple nodes beyond the element's own (the
+    /// bending stencil reaches the neighbouring triangles' far vertices); the solver may leave
+    /// those couplings out of the matrix it factors (docs/solver.md).
+    size_t wideBegin = 0, wideEnd = 0;
 
     explicit EnergyAccumulator(int numNodes = 0) : grad(Eigen::VectorXd::Zero(3 * numNodes)) {}
 
@@ -36,6 +40,7 @@ struct EnergyAccumulator {
         energy = 0.0;
         grad.setZero(3 * numNodes);
         hess.clear();
+        wideBegin = wideEnd = 0;
     }
     void addGrad(int node, const Vec3& g) { grad.segment<3>(3 * node) += g; }
     /// Adds the 3x3 block d2E/dx_a dx_b (and nothing for (b,a): callers add both blocks).
