@@ -171,6 +171,45 @@ struct Airbag::Impl {
     double targetMass = 0.0;
     std::shared_ptr<const Snapshot> committed;
     bool inflated = false;
+    // The last committed step: node increment and the shapes' translations (predictor).
+    Eigen::Matrix3Xd lastIncrement;
+    Eigen::VectorXd lastShapeDelta;
+
+    Eigen::VectorXd shapeTranslations(const std::vector<Eigen::Isometry3d>& poses) const {
+        Eigen::VectorXd t(3 * poses.size());
+        for (size_t i = 0; i < poses.size(); ++i) t.segment<3>(3 * i) = poses[i].translation();
+        return t;
+    }
+    std::vector<Eigen::Isometry3d> currentPoses() const {
+        std::vector<Eigen::Isometry3d> p;
+        for (const Shape& sh : shapes) p.push_back(sh.shape->getPose());
+        return p;
+    }
+    void forgetIncrement() {
+        lastIncrement.resize(3, 0);
+        lastShapeDelta.resize(0);
+    }
+    // A start for Newton: the last committed step's node increment, scaled by how far the
+    // shapes move now along the way they moved then (a secant predictor on a smooth path).
+    // Taken only if its force residual is below that of the unmoved state.
+    void predict(const std::vector<Eigen::Isometry3d>& start) {
+        if (!spec.predictor || lastIncrement.cols() != x.cols() || lastShapeDelta.size() == 0)
+            return;
+        const Eigen::VectorXd d = shapeTranslations(currentPoses()) - shapeTranslations(start);
+        const double last2 = lastShapeDelta.squaredNorm();
+        if (!(last2 > 0.0) || d.norm() == 0.0) return;
+        const double cosine = d.dot(lastShapeDelta) / (d.norm() * std::sqrt(last2));
+        const double ratio = d.dot(lastShapeDelta) / last2;
+        if (!(cosine > 0.99 && ratio > 0.0 && ratio <= 4.0)) return;
+        const Eigen::Matrix3Xd xPred = x + ratio * lastIncrement;
+        double rPred = std::numeric_limits<double>::infinity();
+        try {
+            rPred = calcFreeResidual(xPred);
+        } catch (const NumericalError&) {
+            return;
+        }
+        if (std::isfinite(rPred) && rPred < calcFreeResidual(x)) x = xPred;
+    }
 
     // --- state
     std::vector<GasChamber> copyGases() const {
@@ -392,6 +431,7 @@ struct Airbag::Impl {
         const std::shared_ptr<Snapshot> before = snapshot();
         for (size_t i = 0; i < shapes.size(); ++i)
             shapes[i].shape->setPose(interpolatePose(from[i], shapes[i].target, s1));
+        bool predicted = false;
         SolveSummary sum;
         double stab = 0.0;
         bool ok = false;
@@ -403,6 +443,8 @@ struct Airbag::Impl {
                 dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
             }
             addGasMass(dm);
+            if (!predicted) predict(before->poses);
+            predicted = true;
             if (self) self->updateCandidates(x);
             ok = solveWithFlow(copyGases(), dt, &sum, &stab);
         } catch (const NumericalError&) {
@@ -560,6 +602,7 @@ void Airbag::changeGasMass(double mass) {
     m.solveRamp(m.totalMass(), mass, [&](double mm) { m.setTotalGasMass(mm); },
                 "changing the gas mass");
     m.committed = m.snapshot();
+    m.forgetIncrement();
 }
 
 void Airbag::setMassFlow(double massFlow) {
@@ -617,11 +660,20 @@ AdvanceSummary Airbag::advance(double dt, int maxCuts) {
     return out;
 }
 
-void Airbag::commit() { m_impl->committed = m_impl->snapshot(); }
+void Airbag::commit() {
+    Impl& m = *m_impl;
+    if (m.committed && m.committed->x.cols() == m.x.cols()) {
+        m.lastIncrement = m.x - m.committed->x;
+        m.lastShapeDelta =
+            m.shapeTranslations(m.currentPoses()) - m.shapeTranslations(m.committed->poses);
+    }
+    m.committed = m.snapshot();
+}
 
 void Airbag::rollback() {
     m_impl->restore(*m_impl->committed);
     m_impl->workspace.reset();
+    m_impl->forgetIncrement();
 }
 
 std::shared_ptr<const Airbag::Snapshot> Airbag::getSnapshot() const { return m_impl->snapshot(); }
@@ -631,6 +683,7 @@ void Airbag::setSnapshot(const std::shared_ptr<const Snapshot>& snapshot) {
     m_impl->committed = snapshot;
     m_impl->restore(*snapshot);
     m_impl->workspace.reset();
+    m_impl->forgetIncrement();
 }
 
 double Airbag::getTime() const { return m_impl->time; }

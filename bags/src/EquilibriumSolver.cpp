@@ -120,37 +120,84 @@ std::vector<std::vector<int>> makeNodeAdjacency(const Mesh& mesh) {
     return adj;
 }
 
-// The triplets with the wide couplings (acc.wideBegin..wideEnd between nodes that share no
-// triangle) left out, each one's magnitude added to the diagonal entry of its row: for the
-// symmetric pair a_ij, a_ji that adds |a_ij| to a_ii and a_jj, i.e. the positive
-// semi-definite [|a| -a; -a |a|] to the dropped pair, so the result is at least as definite
-// as the whole tangent.
-void sparsifyTriplets(const EnergyAccumulator& acc, const std::vector<std::vector<int>>& adj,
-                      std::vector<Triplet>& out) {
-    out.clear();
-    out.reserve(acc.hess.size());
-    out.insert(out.end(), acc.hess.begin(), acc.hess.begin() + acc.wideBegin);
-    for (size_t t = acc.wideBegin; t < acc.wideEnd; ++t) {
-        const Triplet& tr = acc.hess[t];
-        const int a = tr.row() / 3, b = tr.col() / 3;
-        const std::vector<int>& na = adj[a];
-        // Always one triplet per input triplet (zeros too): the sequence then repeats on every
-        // call and the assembler keeps its scatter map.
-        if (std::binary_search(na.begin(), na.end(), b))
-            out.push_back(tr);
-        else
-            out.emplace_back(tr.row(), tr.row(), std::abs(tr.value()));
+// The tangent K without its couplings between nodes that share no triangle (the bending
+// stencil's wide couplings, and self-contact pairs), each dropped entry's magnitude added to
+// the two diagonal entries of its row and column: for the symmetric pair a_ij, a_ji that adds
+// the positive semi-definite [|a| -a; -a |a|], so P is at least as definite as K. P's pattern
+// and the map from K's value slots to P's are made once per pattern of K; each call then
+// only gathers the values.
+class Sparsifier {
+public:
+    bool isFor(int patternId, int nfree) const { return m_pattern == patternId && m_nfree == nfree; }
+    void build(const SpMat& K, const std::vector<int>& freeToNode,
+               const std::vector<std::vector<int>>& adj, int patternId) {
+        const int n = static_cast<int>(K.rows());
+        std::vector<Eigen::Triplet<double>> keep;
+        keep.reserve(K.nonZeros());
+        for (int j = 0; j < n; ++j) keep.emplace_back(j, j, 0.0);
+        m_target.assign(K.nonZeros(), -1);
+        for (int j = 0; j < K.outerSize(); ++j)
+            for (int k = K.outerIndexPtr()[j]; k < K.outerIndexPtr()[j + 1]; ++k) {
+                const int i = K.innerIndexPtr()[k];
+                const std::vector<int>& na = adj[freeToNode[i]];
+                if (std::binary_search(na.begin(), na.end(), freeToNode[j]))
+                    keep.emplace_back(i, j, 0.0);
+            }
+        m_P.resize(n, n);
+        m_P.setFromTriplets(keep.begin(), keep.end());
+        m_P.makeCompressed();
+        m_diag.resize(n);
+        for (int i = 0; i < n; ++i) m_diag[i] = find(i, i);
+        m_rowDiag.assign(K.nonZeros(), -1);
+        m_colDiag.assign(K.nonZeros(), -1);
+        for (int j = 0; j < K.outerSize(); ++j)
+            for (int k = K.outerIndexPtr()[j]; k < K.outerIndexPtr()[j + 1]; ++k) {
+                const int i = K.innerIndexPtr()[k];
+                m_target[k] = find(i, j);
+                if (m_target[k] < 0) {
+                    m_rowDiag[k] = m_diag[i];
+                    m_colDiag[k] = m_diag[j];
+                }
+            }
+        m_pattern = patternId;
+        m_nfree = n;
     }
-    out.insert(out.end(), acc.hess.begin() + acc.wideEnd, acc.hess.end());
-}
+    const SpMat& update(const SpMat& K) {
+        double* p = m_P.valuePtr();
+        std::fill(p, p + m_P.nonZeros(), 0.0);
+        const double* v = K.valuePtr();
+        for (int k = 0; k < static_cast<int>(K.nonZeros()); ++k) {
+            if (m_target[k] >= 0) {
+                p[m_target[k]] += v[k];
+            } else {
+                p[m_rowDiag[k]] += std::abs(v[k]);
+                p[m_colDiag[k]] += std::abs(v[k]);
+            }
+        }
+        return m_P;
+    }
+    int diagonalSlot(int i) const { return m_diag[i]; }
+
+private:
+    int find(int i, int j) const {
+        const int* inner = m_P.innerIndexPtr();
+        const int* b = inner + m_P.outerIndexPtr()[j];
+        const int* e = inner + m_P.outerIndexPtr()[j + 1];
+        const int* it = std::lower_bound(b, e, i);
+        return (it != e && *it == i) ? static_cast<int>(it - inner) : -1;
+    }
+    SpMat m_P;
+    std::vector<int> m_target, m_rowDiag, m_colDiag, m_diag;
+    int m_pattern = -1;
+    int m_nfree = -1;
+};
 
 }  // namespace
 
 struct SolverWorkspace::Impl {
     detail::SparseSpdSolver llt;
     detail::HessianAssembler assembler;
-    detail::HessianAssembler sparseAssembler;  // the sparsified tangent (wide couplings out)
-    std::vector<Triplet> sparseTrips;
+    Sparsifier sparsifier;                      // the tangent without its wide couplings
     std::vector<std::vector<int>> adjacency;   // node neighbours of the model's mesh
     const Mesh* adjacencyMesh = nullptr;
     int nfree = -1;
@@ -219,16 +266,19 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
         // The matrix to factor: K, or K without its wide couplings (then CG on K).
         const bool wide = options.sparsifyWideCouplings && acc.wideEnd > acc.wideBegin;
         const SpMat* P = &K;
-        detail::HessianAssembler* pAssembler = &ws.assembler;
         if (wide) {
             if (ws.adjacencyMesh != &model.getMesh() ||
                 static_cast<int>(ws.adjacency.size()) != nn) {
                 ws.adjacency = makeNodeAdjacency(model.getMesh());
                 ws.adjacencyMesh = &model.getMesh();
             }
-            sparsifyTriplets(acc, ws.adjacency, ws.sparseTrips);
-            P = &ws.sparseAssembler.assemble(ws.sparseTrips, map, nfree);
-            pAssembler = &ws.sparseAssembler;
+            if (!ws.sparsifier.isFor(ws.assembler.getNumPatterns(), nfree)) {
+                std::vector<int> freeToNode(nfree);
+                for (int d = 0; d < ndof; ++d)
+                    if (map[d] >= 0) freeToNode[map[d]] = d / 3;
+                ws.sparsifier.build(K, freeToNode, ws.adjacency, ws.assembler.getNumPatterns());
+            }
+            P = &ws.sparsifier.update(K);
         }
         double diagMean = 0.0;
         for (int i = 0; i < nfree; ++i)
@@ -266,7 +316,8 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
                 if (shift > 0.0) {
                     shifted = *P;  // same pattern: the diagonal slots hold
                     for (int i = 0; i < nfree; ++i)
-                        shifted.valuePtr()[pAssembler->diagonalSlot(i)] += shift;
+                        shifted.valuePtr()[wide ? ws.sparsifier.diagonalSlot(i)
+                                                : ws.assembler.diagonalSlot(i)] += shift;
                     ok = llt.factorize(shifted);
                 } else {
                     ok = llt.factorize(*P);

@@ -64,6 +64,7 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     spec.stabilization = o.stabilization;
     spec.forceTolerance = calcLoadTestForceTolerance(o);
     spec.threads = o.threads;
+    spec.predictor = o.predictor;
     return spec;
 }
 

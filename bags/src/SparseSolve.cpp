@@ -104,7 +104,15 @@ bool HessianAssembler::remap(const std::vector<Eigen::Triplet<double>>& trips,
 void HessianAssembler::rebuild(const std::vector<Eigen::Triplet<double>>& trips,
                                const std::vector<int>& map, int nfree) {
     m_red.clear();
-    m_red.reserve(trips.size() / 2 + nfree);
+    // The pattern only grows while the dofs stay the same: entries of the last pattern are
+    // kept (as zeros), so contact pairs that come and go (self contact under a moving block)
+    // stop forcing new patterns, new symbolic analyses and a full remap once seen.
+    const bool grow = m_patterns > 0 && m_K.rows() == nfree && map == m_map;
+    m_red.reserve(trips.size() / 2 + nfree + (grow ? m_K.nonZeros() : 0));
+    if (grow)
+        for (int j = 0; j < m_K.outerSize(); ++j)
+            for (Matrix::InnerIterator it(m_K, j); it; ++it)
+                m_red.emplace_back(it.row(), it.col(), 0.0);
     for (const Eigen::Triplet<double>& t : trips) {
         const int i = map[t.row()], j = map[t.col()];
         if (!dropped(i, j)) m_red.emplace_back(i, j, t.value());

@@ -36,7 +36,9 @@ private:
 // call, so the sequence repeats but for a short tail (contact terms that come and go): the
 // common prefix keeps its slots, each tail triplet is looked up in the pattern, and only an
 // entry the pattern lacks (e.g. a new self-contact pair) makes a new pattern (one
-// setFromTriplets, i.e. a sort, and a search per triplet). The diagonal is always stored.
+// setFromTriplets, i.e. a sort, and a search per triplet), the union of the old pattern and
+// the new entries: while the dofs stay the same the pattern only grows, so pairs that come
+// and go stop making new patterns. The diagonal is always stored.
 class HessianAssembler {
 public:
     using Matrix = SparseSpdSolver::Matrix;

@@ -88,6 +88,10 @@ struct AirbagSpec {
     /// [N] a step is converged when the out-of-balance nodal force norm is below this (or
     /// the solver's own tolerances). A property of the bag, never scaled by a load.
     double forceTolerance = 0.05;
+    /// Start each step's Newton solve from the last committed step's increment, scaled by how
+    /// far the shapes move now along the way they moved then, when that start has the smaller
+    /// force residual (a secant predictor; smooth paths then take fewer iterations).
+    bool predictor = true;
     /// Threads for the bag's element loops: 0 the OpenMP default, 1 single-threaded (for many
     /// bags in parallel). The result is bit-identical for any value.
     int threads = 0;

@@ -31,6 +31,7 @@ struct LoadTestOptions {
     double bendingStiffness = 0.0;      ///< film bending stiffness [N m] (0: pure membrane)
     Imperfection imperfection;          ///< stated geometric imperfection of the bag
     int threads = 0;                    ///< element-loop threads (0: default; results identical)
+    bool predictor = true;              ///< secant predictor for block steps (AirbagSpec)
     /// Ensemble size: the test is also run for the imperfection seeds seed + 1 ... seed + N - 1
     /// (in parallel, one thread each) and each curve reports the spread of its stiffness over
     /// the N bags (LoadCurve::stiffnessMin/Max). 1: the one bag. Needs an imperfection.
