@@ -4,7 +4,7 @@
 //
 //   build/bin/bench_load_test [--step MM] [--bending N_M|plate] [--imperfection MM]
 //                             [--seed N] [--threads N] [--scale F] [--verbose 1] [--sparsify 0|1]
-//                             [--predictor 0|1] [mesh_mm=5]
+//                             [--predictor 0|1] [--low-force-steps F] [mesh_mm=5]
 //                             [gas masses in g ... | seed]
 // "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps; --step sets
 // the target block increment (default 1 mm, as the scenario).
@@ -54,6 +54,8 @@ int main(int argc, char** argv) {
             o.imperfection.amplitude = std::atof(val) * 1e-3;
         } else if (std::strcmp(key, "--seed") == 0) {
             o.imperfection.seed = static_cast<std::uint64_t>(std::atoll(val));
+        } else if (std::strcmp(key, "--low-force-steps") == 0) {
+            o.lowForceStepFactor = std::atof(val);
         } else if (std::strcmp(key, "--predictor") == 0) {
             o.predictor = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--sparsify") == 0) {

@@ -114,6 +114,8 @@ void LoadTestOptions::validate() const {
     require(bendingStiffness >= 0.0 && bendingStiffness < 1.0, "bendingStiffness",
             bendingStiffness, "use 0 (a pure membrane) to 1 N m");
     require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
+    require(lowForceStepFactor >= 1.0 && lowForceStepFactor <= 20.0, "lowForceStepFactor",
+            lowForceStepFactor, "use 1 (no larger steps) to 20");
     require(ensemble >= 1 && ensemble <= 64, "ensemble", ensemble,
             "use 1 (one bag) to 64 imperfection seeds");
     if (ensemble > 1 && imperfection.amplitude == 0.0)
@@ -230,7 +232,15 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         const double minStep = 5e-5;  // [m] smaller steps rarely rescue a slack curve
         const double maxDisp = top - 0.002;  // the block stops 2 mm above the bed board
         while (force < o.peakForce * (1.0 - 1e-3)) {
-            double step = std::min(ds, o.displacementStep);
+            // Far below the stiffness range (a slack bag folding in under almost no force) the
+            // step may grow to lowForceStepFactor times the target, as long as the force it
+            // predicts stays below half the range's start.
+            const bool low = force < 0.25 * o.stiffnessFrom;
+            double step = std::min(ds, low ? o.lowForceStepFactor * o.displacementStep
+                                           : o.displacementStep);
+            if (low && stiffnessEstimate > 0.0)
+                step = std::min(step, std::max(o.displacementStep,
+                                               (0.5 * o.stiffnessFrom - force) / stiffnessEstimate));
             if (stiffnessEstimate > 0.0)
                 step = std::min(step, 1.05 * (o.peakForce - force) / stiffnessEstimate);
             step = std::max(step, minStep);
@@ -258,13 +268,18 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             force = record(disp, true, sum);
             const double kk = (force - prevForce) / step;
             if (kk > 0.0) stiffnessEstimate = kk;
-            if (sum.newtonIterations < 6) ds = std::min(2.0 * step, o.displacementStep);
+            if (sum.newtonIterations < 6)
+                ds = std::min(2.0 * step, (force < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
+                                              o.displacementStep);
         }
         curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
         // Unloading: back up the same way until the block leaves the bag.
         ds = o.displacementStep;
+        double unloadForce = force;
         while (o.unload && disp > 0.0) {
-            const double step = std::min(ds, disp);
+            const double cap = (unloadForce < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
+                               o.displacementStep;
+            const double step = std::min({ds, cap, disp});
             AdvanceSummary sum;
             if (!advance(disp - step, &sum)) {
                 ds = 0.5 * step;
@@ -275,8 +290,9 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 continue;
             }
             disp = std::max(disp - step, 0.0);
-            if (record(disp, false, sum) <= 0.0) break;  // block has left
-            if (sum.newtonIterations < 6) ds = std::min(2.0 * step, o.displacementStep);
+            unloadForce = record(disp, false, sum);
+            if (unloadForce <= 0.0) break;  // block has left
+            if (sum.newtonIterations < 6) ds = 2.0 * step;
         }
         if (disp > 0.0) {
             // Lift the block clear so the next gas mass starts from a free bag, in steps the

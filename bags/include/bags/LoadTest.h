@@ -56,6 +56,10 @@ struct LoadTestOptions {
     double peakForce = 50.0;            ///< [N]
     bool unload = true;                 ///< record the unloading branch too
     double displacementStep = 1.0e-3;   ///< target block increment [m] (adapted)
+    /// While the block force is below a quarter of stiffnessFrom (a slack bag folding in
+    /// under almost no force), block steps may grow to this many times displacementStep
+    /// (the loading step also stays short of half stiffnessFrom by the stiffness so far).
+    double lowForceStepFactor = 4.0;
     double stiffnessFrom = 10.0;        ///< [N] force range of the stiffness fit
     double stiffnessTo = 35.0;          ///< [N]
     int polynomialOrder = 5;            ///< k(m) fit order (seed: 5)
