@@ -42,6 +42,22 @@ void expandAdd(const Eigen::VectorXd& red, const std::vector<int>& map, double a
         if (map[i] >= 0) xp[i] += alpha * red(map[i]);
 }
 
+// The gas bodies' dense rank-one tangent terms c g g^T over the free dofs: the columns of U
+// are the bodies' dV/dx [m^2], c their -dp/dV [Pa/m^3] (> 0).
+void calcGasTerms(const MembraneModel& model, const Eigen::Matrix3Xd& x,
+                  const std::vector<int>& map, int nfree, Eigen::MatrixXd& U,
+                  Eigen::VectorXd& c) {
+    const int ng = model.getNumGases();
+    U.resize(nfree, ng);
+    c.resize(ng);
+    for (int g = 0; g < ng; ++g) {
+        Eigen::VectorXd grad;
+        const double V = model.calcGasVolume(g, x, &grad);
+        U.col(g) = reduce(grad, map, nfree);
+        c(g) = -model.getGas(g).calcPressureDerivative(V);
+    }
+}
+
 double energyAt(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
     EnergyAccumulator acc(0);
     acc.grad.resize(0);
@@ -286,15 +302,9 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
         diagMean = std::max(diagMean / std::max(nfree, 1), 1e-12);
 
         // Dense rank-one gas terms: c g g^T, c = -dp/dV > 0.
-        const int ng = model.getNumGases();
-        Eigen::MatrixXd U(nfree, ng);
-        Eigen::VectorXd cgas(ng);
-        for (int g = 0; g < ng; ++g) {
-            Eigen::VectorXd grad;
-            const double V = model.calcGasVolume(g, x, &grad);
-            U.col(g) = reduce(grad, map, nfree);
-            cgas(g) = -model.getGas(g).calcPressureDerivative(V);
-        }
+        Eigen::MatrixXd U;
+        Eigen::VectorXd cgas;
+        calcGasTerms(model, x, map, nfree, U, cgas);
 
         // Newton direction: CG preconditioned by the stored factorisation if that converges
         // fast, otherwise factor K + shift I (shift raised until positive definite).
@@ -414,15 +424,9 @@ Eigen::MatrixXd solveTangent(const MembraneModel& model, const Eigen::Matrix3Xd&
     const SpMat& K = assembler.assemble(acc.hess, map, nfree);
     detail::SparseSpdSolver llt;
     if (!llt.factorize(K)) throw NumericalError("solveTangent: the tangent is not positive definite");
-    const int ng = model.getNumGases();
-    Eigen::MatrixXd U(nfree, ng);
-    Eigen::VectorXd cgas(ng);
-    for (int g = 0; g < ng; ++g) {
-        Eigen::VectorXd grad;
-        const double V = model.calcGasVolume(g, x, &grad);
-        U.col(g) = reduce(grad, map, nfree);
-        cgas(g) = -model.getGas(g).calcPressureDerivative(V);
-    }
+    Eigen::MatrixXd U;
+    Eigen::VectorXd cgas;
+    calcGasTerms(model, x, map, nfree, U, cgas);
     const WoodburySolve solve(llt, U, cgas);
     Eigen::MatrixXd Y = Eigen::MatrixXd::Zero(ndof, B.cols());
     for (int j = 0; j < B.cols(); ++j) {

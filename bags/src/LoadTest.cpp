@@ -156,14 +156,24 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
     bag.inflate(o.gasMasses.front());
 
     LoadTestResult result;
+    std::shared_ptr<const Airbag::Snapshot> lastUnloaded;  // the last curve's state before loading
     for (size_t k = 0; k < o.gasMasses.size(); ++k) {
         LoadCurve curve;
         curve.gasMass = o.gasMasses[k];
-        // Let the gas out (or in) to this curve's mass, block clear.
+        // Park the block well clear. A slack bag released from a deep press may be left in a
+        // stabilised, folded state whose relaxation cannot be solved: it then goes back to
+        // its state before that curve's loading (an equilibrium, block clear).
         bag.setShapePose(block, makeBlockPose(blockCentreXY, calcTop(bag.getPositions()) + 0.05));
-        if (!bag.advance(0.0).converged)
-            throw NumericalError("no convergence while parking the block");
+        if (!bag.advance(0.0, 12).converged) {
+            if (!lastUnloaded) throw NumericalError("no convergence while parking the block");
+            bag.setSnapshot(lastUnloaded);
+            bag.setShapePose(block,
+                             makeBlockPose(blockCentreXY, calcTop(bag.getPositions()) + 0.05));
+            if (!bag.advance(0.0, 12).converged)
+                throw NumericalError("no convergence while parking the block");
+        }
         bag.commit();
+        // Let the gas out (or in) to this curve's mass, block clear.
         bag.changeGasMass(curve.gasMass);
         if (o.connection == LoadTestOptions::Connection::Orifice && o.settleTime > 0.0) {
             // Before loading, the chambers settle towards one pressure (a long wait, 1000 s
@@ -186,6 +196,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         for (int c = 0; c < nc; ++c) curve.inflatedVolume += bag.getChamberState(c).volume;
         curve.inflatedGaugePressure = bag.getChamberState(0).gaugePressure;
         const auto unloaded = bag.getSnapshot();
+        lastUnloaded = unloaded;
 
         auto record = [&](double disp, bool loading, const AdvanceSummary& sum) {
             LoadStep st;
@@ -222,10 +233,13 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             if (sum->converged) bag.commit();
             return sum->converged;
         };
+        // A loading failure is kept when the unloading from there fails too.
         auto fail = [&](const char* branch, double disp) {
             std::ostringstream s;
+            if (!curve.failure.empty()) s << curve.failure << "; then ";
             s << "no convergence " << branch << " at block travel " << disp * 1e3 << " mm";
             curve.failure = s.str();
+            curve.failed = true;
         };
         // Loading: displacement control, adaptive, aiming the last step at the peak force.
         double disp = 0.0, ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;

@@ -92,8 +92,9 @@ bool OutputDir::isIncomplete() const {
 
 bool isCurveFailed(const bags::LoadCurve& c) {
     // The load test's one physical early end is "bottomed out: ..."; every other reason is a
-    // step that could not be solved.
-    return !c.failure.empty() && c.failure.rfind("bottomed out", 0) != 0;
+    // step that could not be solved (a bottomed-out curve whose unloading then fails is
+    // flagged by `failed`).
+    return c.failed || (!c.failure.empty() && c.failure.rfind("bottomed out", 0) != 0);
 }
 
 std::string getCurveEnd(const bags::LoadCurve& c) {

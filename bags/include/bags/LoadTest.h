@@ -112,6 +112,7 @@ struct LoadCurve {
     int stage = 0;                   ///< 1, 2 or 3 (rule in docs/seed-load-test.md)
     bool reachedPeak = false;
     std::string failure;             ///< empty, or why the curve stopped early
+    bool failed = false;             ///< a step could not be solved (not a bottoming out)
     int stabilizedSteps = 0;         ///< steps accepted with the stabilisation springs
     /// Largest ratio, over the loading steps, of the energy the stabilisation springs held at
     /// the accepted states so far (LoadStep::stabilizationEnergy summed) to the work the block
