@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 using namespace bags;
@@ -124,9 +125,9 @@ TEST(Airbag, GasFlowsInAndOutOverTheStepAndStopsAtTheTarget) {
 
 TEST(Airbag, WrenchTangentMatchesFiniteDifferencesOfReSolvedEquilibria) {
     // Reference: central differences of the wrench over equilibria re-solved at perturbed
-    // poses (tight tolerances). Tolerance: 2 % of the largest entry of each block (rows
-    // torque / force, columns rotation / translation): the finite differences carry the
-    // solve tolerance and the contact's active-set changes.
+    // poses (tight tolerances). Tolerance: 1e-4 of the largest entry of each block (rows
+    // torque / force, columns rotation / translation; measured 9e-7): the finite differences
+    // carry the solve tolerance and the contact's active-set changes.
     AirbagSpec spec = coarseSpec();
     spec.forceTolerance = 1e-7;
     spec.solver.absoluteTolerance = 1e-9;
@@ -160,14 +161,19 @@ TEST(Airbag, WrenchTangentMatchesFiniteDifferencesOfReSolvedEquilibria) {
         }
         fd.col(j) = (w[0] - w[1]) / (2.0 * h);
     }
+    double worst = 0.0;
     for (int bi = 0; bi < 2; ++bi)
         for (int bj = 0; bj < 2; ++bj) {
             const Eigen::Matrix3d a = T.block<3, 3>(3 * bi, 3 * bj);
             const Eigen::Matrix3d b = fd.block<3, 3>(3 * bi, 3 * bj);
             const double scale = b.cwiseAbs().maxCoeff();
-            EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 0.02 * scale)
+            worst = std::max(worst, (a - b).cwiseAbs().maxCoeff() / scale);
+            EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-4 * scale)
                 << "block " << bi << "," << bj << "\ntangent\n" << a << "\nfinite differences\n" << b;
         }
+    RecordProperty("worst_block_error", std::to_string(worst));
+    std::printf("wrench tangent against finite differences: worst block error %.2e of the "
+                "block's largest entry; d(force z)/d(z) = %.1f N/m\n", worst, T(5, 5));
     // The vertical stiffness the shape feels is positive and well below the contact penalty
     // over the contact patch (the bag, not the penalty, governs it).
     EXPECT_LT(T(5, 5), 0.0);  // pushing down (+z translation raises it; force falls)

@@ -84,8 +84,8 @@ TEST(LoadTestScenario, SeedScenarioMapsToOptionsInSi) {
     EXPECT_NEAR(o.stiffnessFrom, 10.0, tol);
     EXPECT_NEAR(o.stiffnessTo, 35.0, tol);
     EXPECT_EQ(o.polynomialOrder, 5);
-    EXPECT_NEAR(o.blockContact.pressurePenalty, 1e7, 1e-3);
-    EXPECT_NEAR(o.floorContact.pressurePenalty, 1e7, 1e-3);
+    EXPECT_NEAR(o.blockContact.pressurePenalty, 1e8, 1e-2);
+    EXPECT_NEAR(o.floorContact.pressurePenalty, 1e8, 1e-2);
     EXPECT_TRUE(o.selfContact);
     EXPECT_EQ(sc.output.frameEvery, 5);
     EXPECT_NO_THROW(o.validate());
