@@ -429,8 +429,27 @@ struct Airbag::Impl {
     bool solveSubstep(const std::vector<Eigen::Isometry3d>& from, double s1, double dt,
                       AdvanceSummary* out) {
         const std::shared_ptr<Snapshot> before = snapshot();
+        // Nothing to solve when no gas moves and every shape that moves touches the bag
+        // neither before nor after: the energy of the state is unchanged, so is the state.
+        // A bag nothing touches costs next to nothing, and a released bag that was accepted
+        // with stabilisation springs is not re-solved just because a shape moved away.
+        const bool gasStill = (massFlow == 0.0 || (hasTarget && targetMass == totalMass())) &&
+                              (spec.connection != AirbagSpec::Connection::Orifice ||
+                               model->getNumGases() < 2 || dt <= 0.0);
+        bool untouched = gasStill;
+        for (size_t i = 0; i < shapes.size() && untouched; ++i)
+            untouched = shapes[i].contact->getNumActive(x) == 0;
         for (size_t i = 0; i < shapes.size(); ++i)
             shapes[i].shape->setPose(interpolatePose(from[i], shapes[i].target, s1));
+        for (size_t i = 0; i < shapes.size() && untouched; ++i)
+            untouched = shapes[i].contact->getNumActive(x) == 0;
+        if (untouched) {
+            ++out->substeps;
+            out->residual = 0.0;
+            out->stabilizationEnergy = 0.0;
+            time += dt;
+            return true;
+        }
         bool predicted = false;
         SolveSummary sum;
         double stab = 0.0;

@@ -121,6 +121,14 @@ TEST(Airbag, GasFlowsInAndOutOverTheStepAndStopsAtTheTarget) {
     EXPECT_NEAR(bag.getTotalGasMass(), 4.4e-3, 1e-12);
     bag.changeGasMass(4.0e-3);  // a quasi-static let-down, committed
     EXPECT_NEAR(bag.getTotalGasMass(), 4.0e-3, 1e-12);
+    // A shape that moves without touching, no gas moving: nothing is solved, the state stands.
+    const Eigen::Matrix3Xd x = bag.getPositions();
+    bag.setMassFlow(0.0);
+    bag.setShapePose(p.shape, translation(p.centre + Vec3(0.02, 0.0, 0.1)));
+    const AdvanceSummary idle = bag.advance(10.0);
+    EXPECT_TRUE(idle.converged);
+    EXPECT_EQ(idle.newtonIterations, 0);
+    EXPECT_EQ((bag.getPositions() - x).cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(Airbag, WrenchTangentMatchesFiniteDifferencesOfReSolvedEquilibria) {
