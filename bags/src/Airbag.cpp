@@ -443,12 +443,19 @@ struct Airbag::Impl {
             shapes[i].shape->setPose(interpolatePose(from[i], shapes[i].target, s1));
         for (size_t i = 0; i < shapes.size() && untouched; ++i)
             untouched = shapes[i].contact->getNumActive(x) == 0;
+        // Untouched: a true equilibrium stands as it is. A state that was accepted with the
+        // stabilisation springs (not an equilibrium) is relaxed by a solve, as any step; if
+        // that fails it stands too: nothing acting on the bag has changed.
+        double untouchedResidual = 0.0;
         if (untouched) {
-            ++out->substeps;
-            out->residual = 0.0;
-            out->stabilizationEnergy = 0.0;
-            time += dt;
-            return true;
+            untouchedResidual = calcFreeResidual(x);
+            if (untouchedResidual <= spec.forceTolerance) {
+                ++out->substeps;
+                out->residual = untouchedResidual;
+                out->stabilizationEnergy = 0.0;
+                time += dt;
+                return true;
+            }
         }
         bool predicted = false;
         SolveSummary sum;
@@ -471,6 +478,16 @@ struct Airbag::Impl {
         }
         out->newtonIterations += sum.iterations;
         out->factorizations += sum.factorizations;
+        if (!ok && untouched) {
+            restore(*before);
+            for (size_t i = 0; i < shapes.size(); ++i)
+                shapes[i].shape->setPose(interpolatePose(from[i], shapes[i].target, s1));
+            ++out->substeps;
+            out->residual = untouchedResidual;
+            out->stabilizationEnergy = 0.0;
+            time += dt;
+            return true;
+        }
         if (!ok) {
             restore(*before);
             return false;

@@ -15,8 +15,9 @@
 ///     setMassFlow() / setTargetMass() (gas in or out over the step) or changeGasMass() (a
 ///     quasi-static let-down, solved at once); then advance(dt). advance() goes from the
 ///     committed state to the new poses and gas, cutting the step into sub-steps when a solve
-///     fails (a step in which no gas moves and no moving shape touches the bag before or after
-///     is not solved at all: the state stands); if even its smallest sub-step fails it
+///     fails (in a step in which no gas moves and no moving shape touches the bag before or
+///     after, an equilibrium stands unsolved, and a state that cannot be relaxed stands as it
+///     is: nothing acting on it changed); if even its smallest sub-step fails it
 ///     restores the committed state and returns
 ///     converged = false (the caller cuts its own step). After a converged advance the new
 ///     state is current but not yet committed: commit() makes it the state to go back to,
