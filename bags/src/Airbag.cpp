@@ -245,20 +245,26 @@ struct Airbag::Impl {
     // Sets the total gas mass, shared among the gas bodies at equal pressure (a body's share
     // is its volume's share at a fixed temperature), each resealed at its current volume.
     void setTotalGasMass(double m) {
-        const int ng = model->getNumGases();
-        std::vector<double> V(ng);
         double Vsum = 0.0;
-        for (int g = 0; g < ng; ++g) Vsum += V[g] = model->calcGasVolume(g, x, nullptr);
-        for (int g = 0; g < ng; ++g) model->updGas(g).setMass(m * V[g] / Vsum, V[g]);
+        const std::vector<double> V = calcGasVolumes(&Vsum);
+        for (int g = 0; g < model->getNumGases(); ++g)
+            model->updGas(g).setMass(m * V[g] / Vsum, V[g]);
     }
     // Adds dm [kg] to the gas bodies in proportion to their volumes at x.
     void addGasMass(double dm) {
         if (dm == 0.0) return;
-        const int ng = model->getNumGases();
-        std::vector<double> V(ng);
         double Vsum = 0.0;
-        for (int g = 0; g < ng; ++g) Vsum += V[g] = model->calcGasVolume(g, x, nullptr);
-        for (int g = 0; g < ng; ++g) model->updGas(g).transferMass(dm * V[g] / Vsum, V[g]);
+        const std::vector<double> V = calcGasVolumes(&Vsum);
+        for (int g = 0; g < model->getNumGases(); ++g)
+            model->updGas(g).transferMass(dm * V[g] / Vsum, V[g]);
+    }
+    // Each gas body's volume [m^3] at x, and their sum.
+    std::vector<double> calcGasVolumes(double* sum) const {
+        std::vector<double> V(model->getNumGases());
+        *sum = 0.0;
+        for (size_t g = 0; g < V.size(); ++g)
+            *sum += V[g] = model->calcGasVolume(static_cast<int>(g), x, nullptr);
+        return V;
     }
 
     // --- solving

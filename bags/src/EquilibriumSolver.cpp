@@ -122,17 +122,11 @@ bool solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c
     return false;
 }
 
-// For each node, the sorted nodes it shares a triangle with (itself included).
+// For each node, the sorted nodes it shares a triangle with, itself included.
 std::vector<std::vector<int>> makeNodeAdjacency(const Mesh& mesh) {
-    std::vector<std::vector<int>> adj(mesh.getNumNodes());
-    for (int e = 0; e < mesh.getNumTris(); ++e)
-        for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) adj[mesh.tris(a, e)].push_back(mesh.tris(b, e));
-    for (int n = 0; n < mesh.getNumNodes(); ++n) {
-        adj[n].push_back(n);
-        std::sort(adj[n].begin(), adj[n].end());
-        adj[n].erase(std::unique(adj[n].begin(), adj[n].end()), adj[n].end());
-    }
+    std::vector<std::vector<int>> adj = mesh.calcNodeNeighbours();
+    for (int n = 0; n < static_cast<int>(adj.size()); ++n)
+        adj[n].insert(std::lower_bound(adj[n].begin(), adj[n].end(), n), n);
     return adj;
 }
 
@@ -195,13 +189,7 @@ public:
     int diagonalSlot(int i) const { return m_diag[i]; }
 
 private:
-    int find(int i, int j) const {
-        const int* inner = m_P.innerIndexPtr();
-        const int* b = inner + m_P.outerIndexPtr()[j];
-        const int* e = inner + m_P.outerIndexPtr()[j + 1];
-        const int* it = std::lower_bound(b, e, i);
-        return (it != e && *it == i) ? static_cast<int>(it - inner) : -1;
-    }
+    int find(int i, int j) const { return detail::findSlot(m_P, i, j); }
     SpMat m_P;
     std::vector<int> m_target, m_rowDiag, m_colDiag, m_diag;
     int m_pattern = -1;

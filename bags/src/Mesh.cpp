@@ -50,6 +50,20 @@ void checkChamberIndex(const Mesh& mesh, int c) {
 
 }  // namespace
 
+std::vector<std::vector<int>> Mesh::calcNodeNeighbours() const {
+    std::vector<std::vector<int>> nb(getNumNodes());
+    for (int t = 0; t < getNumTris(); ++t)
+        for (int a = 0; a < 3; ++a) {
+            nb[tris(a, t)].push_back(tris((a + 1) % 3, t));
+            nb[tris(a, t)].push_back(tris((a + 2) % 3, t));
+        }
+    for (std::vector<int>& n : nb) {
+        std::sort(n.begin(), n.end());
+        n.erase(std::unique(n.begin(), n.end()), n.end());
+    }
+    return nb;
+}
+
 Eigen::VectorXd Mesh::calcTriangleAreas() const {
     Eigen::VectorXd a(getNumTris());
     for (int t = 0; t < getNumTris(); ++t) a[t] = triArea(X, tris(0, t), tris(1, t), tris(2, t));

@@ -340,18 +340,9 @@ SelfContact::SelfContact(const Mesh& mesh, const Options& options)
     const Eigen::VectorXd area = mesh.calcNodalAreas();
     m.k.resize(m.numNodes);
     for (int v = 0; v < m.numNodes; ++v) m.k[v] = 0.5 * options.pressurePenalty * area[v];
-    std::vector<std::vector<int>> nb(m.numNodes);
-    for (int t = 0; t < nt; ++t) {
-        const int v[3] = {m.tris(0, t), m.tris(1, t), m.tris(2, t)};
-        for (int a = 0; a < 3; ++a) {
-            nb[v[a]].push_back(v[(a + 1) % 3]);
-            nb[v[a]].push_back(v[(a + 2) % 3]);
-        }
-    }
+    const std::vector<std::vector<int>> nb = mesh.calcNodeNeighbours();
     m.nbrStart.assign(1, 0);
     for (int v = 0; v < m.numNodes; ++v) {
-        std::sort(nb[v].begin(), nb[v].end());
-        nb[v].erase(std::unique(nb[v].begin(), nb[v].end()), nb[v].end());
         m.nbr.insert(m.nbr.end(), nb[v].begin(), nb[v].end());
         m.nbrStart.push_back(static_cast<int>(m.nbr.size()));
     }

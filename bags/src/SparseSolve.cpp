@@ -61,13 +61,15 @@ const HessianAssembler::Matrix& HessianAssembler::assemble(
 }
 
 // Slot of (i, j), i >= j, in the compressed pattern; -1 if the pattern lacks it.
-int HessianAssembler::find(int i, int j) const {
-    const int* inner = m_K.innerIndexPtr();
-    const int* begin = inner + m_K.outerIndexPtr()[j];
-    const int* end = inner + m_K.outerIndexPtr()[j + 1];
+int findSlot(const SparseSpdSolver::Matrix& K, int i, int j) {
+    const int* inner = K.innerIndexPtr();
+    const int* begin = inner + K.outerIndexPtr()[j];
+    const int* end = inner + K.outerIndexPtr()[j + 1];
     const int* it = std::lower_bound(begin, end, i);
     return (it != end && *it == i) ? static_cast<int>(it - inner) : -1;
 }
+
+int HessianAssembler::find(int i, int j) const { return findSlot(m_K, i, j); }
 
 // Records the rows and columns of trips[from, end) and their slots in the current pattern;
 // false (and the rest left unset) at the first entry the pattern lacks.

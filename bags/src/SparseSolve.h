@@ -30,6 +30,10 @@ private:
     int m_numAnalyses = 0;
 };
 
+// Index in K's value array of entry (i, j) of a compressed column-major matrix with sorted
+// rows; -1 if the pattern lacks it.
+int findSlot(const SparseSpdSolver::Matrix& K, int i, int j);
+
 // Lower triangle of the reduced Hessian K(map[r], map[c]) (fixed dofs map to -1 and are
 // dropped; duplicates summed), assembled through a scatter map (triplet -> slot in the value
 // array) kept between calls. The membrane's triplets come first and in element order on every

@@ -94,25 +94,7 @@ Eigen::Matrix3Xd perturbed(const Mesh& mesh, double amplitude, unsigned seed) {
 // regular three-direction grid: the two triangles at every edge form a parallelogram) or, if
 // `alternate`, along alternating diagonals (the test patch's and the double wedge's pattern).
 Mesh makeStrip(int nx, int ny, double lx, double ly, bool alternate = false) {
-    Mesh m = test::makePatch(1, 1.0);
-    m.X.resize(3, (nx + 1) * (ny + 1));
-    for (int j = 0; j <= ny; ++j)
-        for (int i = 0; i <= nx; ++i) m.X.col(j * (nx + 1) + i) = Vec3(lx * i / nx, ly * j / ny, 0);
-    m.tris.resize(3, 2 * nx * ny);
-    int t = 0;
-    for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) {
-            const int a = j * (nx + 1) + i, b = a + 1, c = a + nx + 1, d = c + 1;
-            if (!alternate || (i + j) % 2 == 0) {
-                m.tris.col(t++) = Eigen::Vector3i(a, b, d);
-                m.tris.col(t++) = Eigen::Vector3i(a, d, c);
-            } else {
-                m.tris.col(t++) = Eigen::Vector3i(a, b, c);
-                m.tris.col(t++) = Eigen::Vector3i(b, d, c);
-            }
-        }
-    m.triPanel.assign(m.getNumTris(), 0);
-    return m;
+    return test::makeGrid(nx, ny, lx, ly, alternate);
 }
 
 // The flat mesh rolled onto a cylinder of radius R whose axis lies in the plane at angle beta

@@ -4,19 +4,21 @@
 
 namespace bags::test {
 
-/// Flat n x n-cell square patch of edge `edge` in the x-y plane, normals +z, no chambers.
-inline Mesh makePatch(int n, double edge) {
+/// Flat nx x ny-cell grid of lx x ly in the x-y plane, normals +z, no chambers; each cell
+/// split along alternating diagonals (`alternate`, the union-jack-like pattern) or all along
+/// the same one.
+inline Mesh makeGrid(int nx, int ny, double lx, double ly, bool alternate) {
     Mesh m;
-    m.X.resize(3, (n + 1) * (n + 1));
-    for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i)
-            m.X.col(j * (n + 1) + i) = Vec3(edge * i / n, edge * j / n, 0.0);
-    m.tris.resize(3, 2 * n * n);
+    m.X.resize(3, (nx + 1) * (ny + 1));
+    for (int j = 0; j <= ny; ++j)
+        for (int i = 0; i <= nx; ++i)
+            m.X.col(j * (nx + 1) + i) = Vec3(lx * i / nx, ly * j / ny, 0.0);
+    m.tris.resize(3, 2 * nx * ny);
     int t = 0;
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
-            if ((i + j) % 2 == 0) {
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const int a = j * (nx + 1) + i, b = a + 1, c = a + nx + 1, d = c + 1;
+            if (!alternate || (i + j) % 2 == 0) {
                 m.tris.col(t++) = Eigen::Vector3i(a, b, d);
                 m.tris.col(t++) = Eigen::Vector3i(a, d, c);
             } else {
@@ -28,6 +30,9 @@ inline Mesh makePatch(int n, double edge) {
     m.panelNames = {"patch"};
     return m;
 }
+
+/// Flat n x n-cell square patch of edge `edge`, alternating diagonals.
+inline Mesh makePatch(int n, double edge) { return makeGrid(n, n, edge, edge, true); }
 
 /// Removes the rigid-body modes of a sphere centred at the origin with nodes on the axes
 /// (icosphere, refinement >= 1): the poles move along z only, the +x equator node stays in

@@ -38,6 +38,8 @@ struct Mesh {
 
     /// Lumped reference area per node [m^2] (one third of each adjacent triangle).
     Eigen::VectorXd calcNodalAreas() const;
+    /// For each node, the nodes it shares a triangle with, sorted (itself excluded).
+    std::vector<std::vector<int>> calcNodeNeighbours() const;
     /// Reference area of each triangle [m^2].
     Eigen::VectorXd calcTriangleAreas() const;
     /// Checks indices, panels, non-degenerate triangles, orientation signs and that each
