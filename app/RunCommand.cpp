@@ -9,6 +9,7 @@
 #include <bagsim/Version.h>
 #include <io/InputError.h>
 #include <io/LoadTestScenario.h>
+#include <io/MeasuredData.h>
 #include <io/Results.h>
 #include <io/Scenario.h>
 #include <io/Units.h>
@@ -19,6 +20,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -409,6 +411,13 @@ int runRunCommand(int argc, char** argv) {
         }
         result = bags::runLoadTest(o, observer);
         progress.finish();
+        if (!sc.rig.isNone()) {
+            // The rig section: what the instruments read of the curves (docs/scenario-reference.md#rig).
+            std::ofstream rig(outDir->getFile(io::kRigReadingsCsv));
+            rig << io::formatRigReadingsCsv(result, sc.rig, o.loadingRate);
+            if (!rig.flush())
+                throw std::runtime_error("cannot write " + outDir->getFile(io::kRigReadingsCsv).string());
+        }
         status = writer->finish(result);
     } catch (const Interrupted& e) {
         return stopInterrupted(e.signal);
@@ -448,6 +457,9 @@ int runRunCommand(int argc, char** argv) {
               << "pressure_kPa,branch\n"
               << "  " << io::kStiffnessCsv
               << "          gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end\n";
+    if (!sc.rig.isNone())
+        std::cout << "  " << io::kRigReadingsCsv
+                  << "       the instruments' readings with the scenario's rig effects\n";
     if (status == "partial") {
         // Every gas mass was run, but a curve's branch ends where a step could not be solved:
         // its stiffness and the k(m) fit may rest on part of a curve.

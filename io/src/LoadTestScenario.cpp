@@ -545,6 +545,33 @@ void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabiliza
     }
 }
 
+// The rig's effects the airbag model leaves out (docs/scenario-reference.md#rig).
+void readRig(const ScenarioNode& s, diagnose::RigEffects& r) {
+    s.checkKeys({}, {"pressure_sensor", "flowmeter", "machine_stiffness"});
+    const ScenarioNode ps = s.getSection("pressure_sensor", false);
+    ps.checkKeys({}, {"lag", "offset"});
+    r.pressureLag = ps.getQuantity("lag", D::Time, 0.0);
+    r.pressureOffset = ps.getQuantity("offset", D::Pressure, 0.0);
+    checkRange(ps, "lag", r.pressureLag, 0, true, diagnose::RigEffects::kMaxPressureLag, true, "s",
+               "the sensor's first-order time constant; 0: no lag");
+    checkRange(ps, "offset", r.pressureOffset, -diagnose::RigEffects::kMaxPressureOffset, true,
+               diagnose::RigEffects::kMaxPressureOffset, true, "kPa",
+               "what the sensor reads at zero gauge pressure");
+    const ScenarioNode fm = s.getSection("flowmeter", false);
+    fm.checkKeys({}, {"offset"});
+    r.flowmeterOffset = fm.getQuantity("offset", D::Mass, 0.0);
+    checkRange(fm, "offset", r.flowmeterOffset, -diagnose::RigEffects::kMaxFlowmeterOffset, true,
+               diagnose::RigEffects::kMaxFlowmeterOffset, true, "g",
+               "the flowmeter reads the bag's gas mass plus this");
+    if (s.has("machine_stiffness")) {
+        const double k = s.getQuantity("machine_stiffness", D::Stiffness);
+        checkRange(s, "machine_stiffness", k, 1.0 / diagnose::RigEffects::kMaxMachineCompliance,
+                   true, kInf, false, "N/mm",
+                   "the testing machine and bed board in series with the bag");
+        r.machineCompliance = 1.0 / k;
+    }
+}
+
 void readOutput(const ScenarioNode& s, OutputOptions& o) {
     s.checkKeys({}, {"frame_every"});
     o.frameEvery = s.getInteger("frame_every", o.frameEvery);
@@ -654,7 +681,7 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
                   "beside the thickness: membrane: {model: yeoh, C10: 31.6 MPa, "
                   "C20: ..., C30: ..., thickness: 0.2 mm}");
     root.checkKeys({"kind", "airbag", "membrane", "test"},
-                   {"name", "description", "gas", "contact", "solver", "output"});
+                   {"name", "description", "gas", "contact", "solver", "output", "rig"});
     root.getChoice("kind", {kKind});
 
     LoadTestScenario sc;
@@ -677,6 +704,15 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     readSolver(root.getSection("solver", false), o.solver, o.stabilization,
                o.residualTolerance);
     readOutput(root.getSection("output", false), sc.output);
+    readRig(root.getSection("rig", false), sc.rig);
+    if (sc.rig.flowmeterOffset != 0.0) {
+        // test.gas_masses are the flowmeter's readings: the bag holds them less its offset.
+        try {
+            o.gasMasses = diagnose::calcBagGasMasses(o.gasMasses, sc.rig);
+        } catch (const std::invalid_argument& e) {
+            root.getSection("rig").getSection("flowmeter").fail("offset", e.what());
+        }
+    }
 
     // The libraries' own checks (impossible geometry and the like) as located errors.
     try {

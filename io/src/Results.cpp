@@ -34,7 +34,7 @@ namespace {
 
 // Files a run writes; --force removes them first so no stale result survives a failed rerun.
 const char* const kOwnedFiles[] = {kResultsH5, kResultsXdmf, kLoadDisplacementCsv, kStiffnessCsv,
-                                   "results.xdmf.tmp"};
+                                   kRigReadingsCsv, "results.xdmf.tmp"};
 
 }  // namespace
 

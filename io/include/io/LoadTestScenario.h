@@ -7,6 +7,7 @@
 
 #include <bags/LoadTest.h>
 #include <bags/SeedReading.h>
+#include <diagnose/RigEffects.h>
 #include <io/Scenario.h>
 
 #include <string>
@@ -33,6 +34,10 @@ struct LoadTestScenario {
     double fillMass = 0.0;
     /// airbag.fill_scaling: which sizes the fill mass scales.
     bags::FillScaling fillScaling = bags::FillScaling::Profile;
+    /// Section `rig`: the test rig's effects the airbag model leaves out (instruments, rig
+    /// compliance). The flowmeter's offset is already applied: options.gasMasses are the
+    /// masses the bag holds, test.gas_masses minus rig.flowmeter.offset.
+    diagnose::RigEffects rig;
 };
 
 /// Limits that keep a run within memory and time (docs/scenario-reference.md#limits); a

@@ -116,6 +116,8 @@ inline constexpr const char* kResultsH5 = "results.h5";
 inline constexpr const char* kResultsXdmf = "results.xdmf";
 inline constexpr const char* kLoadDisplacementCsv = "load_displacement.csv";
 inline constexpr const char* kStiffnessCsv = "stiffness.csv";
+/// The instruments' readings of the curves, written when the scenario has a `rig` section.
+inline constexpr const char* kRigReadingsCsv = "rig_readings.csv";
 
 /// Current UTC time as ISO 8601 ("2026-11-22T05:43:49Z").
 std::string getUtcTimestamp();

@@ -1,0 +1,47 @@
+#pragma once
+/// @file Measured data of the seed's rig (one airbag, a block pressed into it, several gas
+/// masses) as the lab records it, in SI: per test (one gas mass) the testing machine's
+/// time/displacement/force, the pressure sensor's time/gauge pressure and the flowmeter's
+/// time/gas mass. The folder format and its reader are io::readMeasuredData
+/// (docs/measured-data.md); this is the plain data the diagnosis works on.
+
+#include <string>
+#include <vector>
+
+namespace diagnose {
+
+/// One instrument's samples: time [s] strictly increasing, value in SI.
+struct Channel {
+    std::vector<double> time;   ///< [s] from the start of the test
+    std::vector<double> value;  ///< SI ([m], [N], [Pa], [kg])
+    bool empty() const { return time.empty(); }
+};
+
+/// One loading-unloading test at one gas mass.
+struct MeasuredTest {
+    double gasMass = 0.0;   ///< [kg] as the flowmeter read it (the protocol's value)
+    /// Testing machine: displacement [m] (crosshead travel from first contact) and force [N]
+    /// on one time base.
+    std::vector<double> time, displacement, force;
+    Channel pressure;   ///< gauge pressure of the bag [Pa]
+    Channel flowmeter;  ///< gas mass in the bag as the flowmeter reads it [kg]
+};
+
+/// The protocol the tests followed (what the simulation must repeat).
+struct Protocol {
+    double blockSize = 0.0;        ///< square block edge [m]
+    double rate = 0.0;             ///< crosshead speed [m/s]
+    double peakForce = 0.0;        ///< loading stops at this force [N]
+    double roomTemperature = 0.0;  ///< [K] (the gas temperature of the test)
+};
+
+/// A measured data set: the tests and what they correspond to.
+struct MeasuredData {
+    std::string folder;        ///< where it was read from
+    std::string scenarioFile;  ///< path of the scenario it corresponds to
+    std::string description;
+    Protocol protocol;
+    std::vector<MeasuredTest> tests;
+};
+
+}  // namespace diagnose

@@ -1,0 +1,91 @@
+// The rig's effects (diagnose/RigEffects.h) against their analytic answers: a first-order
+// sensor on a ramp and a step, the offset, the compliance in series, the flowmeter's bias.
+#include <gtest/gtest.h>
+
+#include <diagnose/RigEffects.h>
+
+#include <cmath>
+#include <vector>
+
+using diagnose::RigEffects;
+
+TEST(PressureSensor, LagsARampByItsTimeConstant) {
+    // p = a t from rest: y = a (t - tau (1 - exp(-t / tau))), exact at any sampling.
+    RigEffects rig;
+    rig.pressureLag = 2.0;
+    const double a = 50.0;  // [Pa/s]
+    std::vector<double> t, p;
+    for (double ti = 0.0; ti <= 30.0; ti += 1.7) t.push_back(ti), p.push_back(a * ti);
+    const std::vector<double> y = diagnose::applyPressureSensor(t, p, rig);
+    for (size_t i = 0; i < t.size(); ++i)
+        EXPECT_NEAR(y[i], a * (t[i] - 2.0 * (1.0 - std::exp(-t[i] / 2.0))), 1e-9) << t[i];
+}
+
+TEST(PressureSensor, FollowsAFastRiseExponentiallyAndAddsItsOffset) {
+    // A rise over 1 ms, then constant: after it the reading approaches p1 as exp(-t / tau).
+    RigEffects rig;
+    rig.pressureLag = 3.0;
+    rig.pressureOffset = 150.0;
+    const std::vector<double> t = {0.0, 1e-3, 3.0, 6.0};
+    const std::vector<double> p = {0.0, 1000.0, 1000.0, 1000.0};
+    const std::vector<double> y = diagnose::applyPressureSensor(t, p, rig);
+    EXPECT_NEAR(y[0], 150.0, 1e-12);
+    EXPECT_NEAR(y[2], 150.0 + 1000.0 * (1.0 - std::exp(-1.0)), 0.5);
+    EXPECT_NEAR(y[3], 150.0 + 1000.0 * (1.0 - std::exp(-2.0)), 0.5);
+}
+
+TEST(PressureSensor, WithoutLagReadsThePressurePlusOffset) {
+    RigEffects rig;
+    rig.pressureOffset = -80.0;
+    const std::vector<double> y = diagnose::applyPressureSensor({0, 1, 2}, {10, 300, 20}, rig);
+    EXPECT_DOUBLE_EQ(y[1], 220.0);
+    EXPECT_DOUBLE_EQ(y[2], -60.0);
+}
+
+TEST(MachineCurve, ComplianceAddsForceOverStiffnessAndTheCrossheadSetsTheTime) {
+    bags::LoadCurve c;
+    const double d[] = {0.0, 1e-3, 2e-3, 1e-3}, f[] = {0.0, 1.0, 3.0, 0.5};
+    for (int i = 0; i < 4; ++i) {
+        bags::LoadStep s;
+        s.displacement = d[i];
+        s.force = f[i];
+        s.loading = i < 3;
+        s.gaugePressure = {100.0 * i, 100.0 * i};
+        s.volume = {1e-3, 3e-3};
+        c.steps.push_back(s);
+    }
+    RigEffects rig;
+    rig.machineCompliance = 0.5e-3;  // 2 N/mm
+    const double rate = 1e-3 / 6.0;  // 10 mm/min
+    const diagnose::MachineCurve m = diagnose::calcMachineCurve(c, rig, rate);
+    EXPECT_NEAR(m.displacement[2], 2e-3 + 1.5e-3, 1e-15);
+    EXPECT_NEAR(m.displacement[3], 1e-3 + 0.25e-3, 1e-15);
+    // Crosshead path 0 -> 1.5 -> 3.5 -> 1.25 mm at 10 mm/min: 9, 12 and 13.5 s.
+    EXPECT_NEAR(m.time[1], 9.0, 1e-9);
+    EXPECT_NEAR(m.time[3], 9.0 + 12.0 + 13.5, 1e-9);
+    EXPECT_NEAR(m.pressure[2], 200.0, 1e-12);
+    EXPECT_EQ(m.loading[3], 0);
+}
+
+TEST(Flowmeter, OffsetIsTakenFromTheReadings) {
+    RigEffects rig;
+    rig.flowmeterOffset = 0.1e-3;
+    const std::vector<double> m = diagnose::calcBagGasMasses({3.5e-3, 1.0e-3}, rig);
+    EXPECT_NEAR(m[0], 3.4e-3, 1e-15);
+    EXPECT_NEAR(m[1], 0.9e-3, 1e-15);
+    rig.flowmeterOffset = 0.2e-3;
+    EXPECT_THROW(diagnose::calcBagGasMasses({0.15e-3}, rig), std::invalid_argument);
+}
+
+TEST(RigEffects, ValidateNamesTheParameterAndRange) {
+    RigEffects rig;
+    rig.pressureLag = 40.0;
+    try {
+        rig.validate();
+        FAIL() << "no error";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("'pressureLag' = 40 is invalid; use 0 to 30 s"),
+                  std::string::npos)
+            << e.what();
+    }
+}

@@ -1,0 +1,261 @@
+// The measured-data folder (docs/measured-data.md): a valid folder reads into SI, and each kind
+// of bad input (missing channel, unsorted time, missing or wrong unit, NaN, inconsistent
+// flowmeter or peak force, a protocol the scenario cannot run) is one InputError naming the
+// file, the line and the column or key.
+#include <gtest/gtest.h>
+#include "InputErrorTestUtil.h"
+
+#include <io/MeasuredData.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using io::test::expectInputError;
+
+namespace {
+
+const std::string kManifest =
+    "format: bagsim-measured-data 1\n"                                        // 1
+    "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/tiny-load-test.yaml\n"   // 2
+    "protocol:\n"                                                             // 3
+    "  block: 50 mm\n"                                                        // 4
+    "  rate: 10 mm/min\n"                                                     // 5
+    "  peak_force: 4 N\n"                                                     // 6
+    "  room_temperature: 23 degC\n"                                           // 7
+    "tests:\n"                                                                // 8
+    "  - gas_mass: 3.5 g\n"                                                   // 9
+    "    machine: m.csv\n"                                                    // 10
+    "    pressure: p.csv\n"                                                   // 11
+    "    flowmeter: f.csv\n";                                                 // 12
+
+const std::string kMachine =
+    "# testing machine export\n"    // 1
+    "time_s,displacement_mm,force_N\n"  // 2
+    "0,0,0\n"                       // 3
+    "6,1,1.5\n"                     // 4
+    "12,2,4.0\n"                    // 5
+    "18,1,1.4\n";                   // 6
+const std::string kPressure = "time [s],pressure [kPa]\n0,0.5\n9,0.9\n18,0.6\n";
+const std::string kFlow = "time (s),mass (g)\n0,3.501\n18,3.499\n";
+
+class MeasuredDataTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        m_dir = fs::path(BAGSIM_BINARY_DIR) / "tests" / "io" / "measured" /
+                ::testing::UnitTest::GetInstance()->current_test_info()->name();
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+        write("measured.yaml", kManifest);
+        write("m.csv", kMachine);
+        write("p.csv", kPressure);
+        write("f.csv", kFlow);
+    }
+    void write(const std::string& name, const std::string& text) {
+        std::ofstream(m_dir / name) << text;
+    }
+    std::string file(const std::string& name) const { return (m_dir / name).string(); }
+    io::InputError readError() {
+        return expectInputError([&] { io::readMeasuredData(m_dir.string()); });
+    }
+    fs::path m_dir;
+};
+
+std::string replaceAll(std::string s, const std::string& a, const std::string& b) {
+    s.replace(s.find(a), a.size(), b);
+    return s;
+}
+
+}  // namespace
+
+TEST_F(MeasuredDataTest, ValidFolderReadsInSi) {
+    const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
+    ASSERT_EQ(d.tests.size(), 1u);
+    const diagnose::MeasuredTest& t = d.tests[0];
+    EXPECT_DOUBLE_EQ(t.gasMass, 3.5e-3);
+    ASSERT_EQ(t.time.size(), 4u);
+    EXPECT_DOUBLE_EQ(t.displacement[2], 2e-3);
+    EXPECT_DOUBLE_EQ(t.force[2], 4.0);
+    EXPECT_DOUBLE_EQ(t.pressure.value[1], 900.0);
+    EXPECT_DOUBLE_EQ(t.flowmeter.value[0], 3.501e-3);
+    EXPECT_NEAR(d.protocol.rate, 10e-3 / 60, 1e-15);
+    EXPECT_NEAR(d.protocol.roomTemperature, 296.15, 1e-12);
+}
+
+TEST_F(MeasuredDataTest, MissingChannelFileNamesManifestLineAndKey) {
+    fs::remove(m_dir / "p.csv");
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getLine(), 11);
+    EXPECT_EQ(e.getKey(), "tests[0].pressure");
+    EXPECT_NE(e.getMessage().find("channel file \"p.csv\" is missing"), std::string::npos);
+}
+
+TEST_F(MeasuredDataTest, MissingChannelKeyIsNamed) {
+    write("measured.yaml", replaceAll(kManifest, "    flowmeter: f.csv\n", ""));
+    const io::InputError e = readError();
+    EXPECT_NE(std::string(e.what()).find("flowmeter"), std::string::npos) << e.what();
+}
+
+TEST_F(MeasuredDataTest, MissingColumnListsTheValidHeader) {
+    write("m.csv", replaceAll(kMachine, "force_N", "load_N"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getWhere(), file("m.csv"));
+    EXPECT_EQ(e.getLine(), 2);
+    EXPECT_NE(e.getMessage().find("no 'force' column"), std::string::npos) << e.what();
+    EXPECT_NE(e.getMessage().find("time_s,displacement_mm,force_N"), std::string::npos);
+}
+
+TEST_F(MeasuredDataTest, UnsortedTimeNamesRowAndColumn) {
+    write("m.csv", replaceAll(kMachine, "12,2,4.0", "5,2,4.0"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getWhere(), file("m.csv"));
+    EXPECT_EQ(e.getLine(), 5);
+    EXPECT_NE(e.getMessage().find("column 1 'time_s': 5 is not after the previous row's (line 4) 6"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(e.getMessage().find("strictly increasing"), std::string::npos);
+}
+
+TEST_F(MeasuredDataTest, MissingUnitSaysHowToWriteIt) {
+    write("p.csv", replaceAll(kPressure, "pressure [kPa]", "pressure"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getWhere(), file("p.csv"));
+    EXPECT_EQ(e.getLine(), 1);
+    EXPECT_NE(e.getMessage().find("column 2 'pressure': no unit"), std::string::npos) << e.what();
+    EXPECT_NE(e.getMessage().find("kPa, Pa, MPa"), std::string::npos);
+}
+
+TEST_F(MeasuredDataTest, WrongUnitListsTheValidOnes) {
+    write("f.csv", replaceAll(kFlow, "mass (g)", "mass (kPa)"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getWhere(), file("f.csv"));
+    EXPECT_NE(e.getMessage().find("column 2 'mass (kPa)': 'kPa' is not a unit of a mass; valid: g, kg, mg"),
+              std::string::npos)
+        << e.what();
+}
+
+TEST_F(MeasuredDataTest, NanCellNamesRowAndColumn) {
+    write("m.csv", replaceAll(kMachine, "6,1,1.5", "6,1,nan"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getLine(), 4);
+    EXPECT_NE(e.getMessage().find("column 3 'force_N': 'nan' is not a finite number (NaN)"),
+              std::string::npos)
+        << e.what();
+}
+
+TEST_F(MeasuredDataTest, RaggedRowIsNamed) {
+    write("m.csv", replaceAll(kMachine, "6,1,1.5", "6,1"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getLine(), 4);
+    EXPECT_NE(e.getMessage().find("has 2 cells; the header (line 2) has 3"), std::string::npos);
+}
+
+TEST_F(MeasuredDataTest, FlowmeterDisagreeingWithTheManifestIsNamed) {
+    write("measured.yaml", replaceAll(kManifest, "gas_mass: 3.5 g", "gas_mass: 3.0 g"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getLine(), 9);
+    EXPECT_EQ(e.getKey(), "tests[0].gas_mass");
+    EXPECT_NE(e.getMessage().find("reads 3.5 g on average"), std::string::npos) << e.what();
+}
+
+TEST_F(MeasuredDataTest, PeakForceDisagreeingWithTheMachineIsNamed) {
+    write("measured.yaml", replaceAll(kManifest, "peak_force: 4 N", "peak_force: 8 N"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getLine(), 6);
+    EXPECT_NE(e.getMessage().find("force peaks at 4 N"), std::string::npos) << e.what();
+}
+
+TEST_F(MeasuredDataTest, UnknownFormatIsRefused) {
+    write("measured.yaml", replaceAll(kManifest, "bagsim-measured-data 1", "instron 2"));
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getLine(), 1);
+    EXPECT_NE(e.getMessage().find("valid: \"bagsim-measured-data 1\""), std::string::npos);
+}
+
+TEST_F(MeasuredDataTest, ProtocolTheScenarioCannotRunIsNamedAtTheManifest) {
+    // A 400 mm block is longer than the tiny scenario's 350 mm airbag.
+    write("measured.yaml", replaceAll(kManifest, "block: 50 mm", "block: 400 mm"));
+    const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
+    const io::InputError e = expectInputError([&] { io::readMeasuredScenario(d); });
+    EXPECT_EQ(e.getWhere(), file("measured.yaml"));
+    EXPECT_EQ(e.getLine(), 4);
+    EXPECT_EQ(e.getKey(), "protocol.block");
+    EXPECT_NE(e.getMessage().find("cannot run this protocol"), std::string::npos) << e.what();
+}
+
+TEST_F(MeasuredDataTest, ProtocolIsAppliedToTheScenario) {
+    const io::LoadTestScenario sc = io::readMeasuredScenario(io::readMeasuredData(m_dir.string()));
+    ASSERT_EQ(sc.options.gasMasses.size(), 1u);
+    EXPECT_NEAR(sc.options.gasMasses[0], 3.5e-3, 1e-15);
+    EXPECT_NEAR(sc.options.peakForce, 4.0, 1e-12);
+    EXPECT_NEAR(sc.options.gas.temperature, 296.15, 1e-9);
+}
+
+TEST_F(MeasuredDataTest, WrittenFolderReadsBack) {
+    const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
+    const fs::path out = m_dir / "copy";
+    fs::create_directories(out);
+    io::writeMeasuredData(out.string(), d, "kind: seed-load-test\n", "# copy\n");
+    // The scenario written is the text given; point the copy at the real one to read it.
+    std::ifstream in(out / "measured.yaml");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text = replaceAll(text, "scenario: scenario.yaml",
+                      "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/tiny-load-test.yaml");
+    std::ofstream(out / "measured.yaml") << text;
+    const diagnose::MeasuredData r = io::readMeasuredData(out.string());
+    ASSERT_EQ(r.tests.size(), 1u);
+    EXPECT_NEAR(r.tests[0].force[2], 4.0, 1e-9);
+    EXPECT_NEAR(r.tests[0].pressure.value[1], 900.0, 1e-6);
+    EXPECT_NEAR(r.protocol.roomTemperature, d.protocol.roomTemperature, 1e-9);
+}
+
+// The scenario's rig section (docs/scenario-reference.md#rig): the effects the diagnosis can
+// blame, as keys a scenario can switch on.
+TEST(RigSection, KeysReadInSiAndTheFlowmeterOffsetShiftsTheBagsMasses) {
+    const io::ScenarioFile f = io::ScenarioFile::parse(
+        "kind: seed-load-test\n"
+        "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
+        "membrane: {model: neo-hookean, C10: 1 MPa, thickness: 0.2 mm}\n"
+        "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
+        "rig:\n"
+        "  pressure_sensor: {lag: 2 s, offset: 0.3 kPa}\n"
+        "  flowmeter: {offset: 0.1 g}\n"
+        "  machine_stiffness: 20 N/mm\n",
+        "rig.yaml");
+    const io::LoadTestScenario sc = io::readLoadTestScenario(f);
+    EXPECT_DOUBLE_EQ(sc.rig.pressureLag, 2.0);
+    EXPECT_DOUBLE_EQ(sc.rig.pressureOffset, 300.0);
+    EXPECT_DOUBLE_EQ(sc.rig.flowmeterOffset, 0.1e-3);
+    EXPECT_NEAR(sc.rig.machineCompliance, 1.0 / 20e3, 1e-15);
+    // The flowmeter reads 3.5 g and 3.0 g; the bag holds 0.1 g less.
+    EXPECT_NEAR(sc.options.gasMasses[0], 3.4e-3, 1e-15);
+    EXPECT_NEAR(sc.options.gasMasses[1], 2.9e-3, 1e-15);
+}
+
+TEST(RigSection, BadValuesAreLocated) {
+    const std::string head =
+        "kind: seed-load-test\n"
+        "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
+        "membrane: {model: neo-hookean, C10: 1 MPa, thickness: 0.2 mm}\n"
+        "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
+        "rig:\n";
+    auto error = [&](const std::string& rig) {
+        return expectInputError([&] {
+            io::readLoadTestScenario(io::ScenarioFile::parse(head + rig, "rig.yaml"));
+        });
+    };
+    io::InputError e = error("  pressure_sensor: {lag: 2}\n");
+    EXPECT_EQ(e.getLine(), 6);
+    EXPECT_EQ(e.getKey(), "rig.pressure_sensor.lag");
+    EXPECT_NE(e.getMessage().find("has no unit"), std::string::npos) << e.what();
+    e = error("  pressure_sensor: {lag: 60 s}\n");
+    EXPECT_NE(e.getMessage().find("must be in [0 s, 30 s]"), std::string::npos) << e.what();
+    e = error("  flowmeter: {offset: 0.6 g}\n  machine_stiffness: 20 N/mm\n");
+    EXPECT_EQ(e.getKey(), "rig.flowmeter.offset");
+    EXPECT_EQ(e.getLine(), 6);
+    e = error("  flowmeter: {offest: 0.1 g}\n");
+    EXPECT_NE(e.getMessage().find("did you mean 'offset'"), std::string::npos) << e.what();
+    e = error("  machine_stiffness: 0.1 N/mm\n");
+    EXPECT_EQ(e.getKey(), "rig.machine_stiffness");
+}
