@@ -18,6 +18,8 @@ const char* kUsage =
     "  run SCENARIO.yaml [--out DIR]   run a scenario (e.g. scenarios/seed-load-test.yaml)\n"
     "  body --sex S --height H --mass M  print the patient's segment table\n"
     "  fit-material TENSILE.csv --model M  fit a membrane material to a uniaxial tensile test\n"
+    "  synth-measurement --scenario S --effect E --out DIR --label-out FILE\n"
+    "                                  measured data from a truth run with an effect on\n"
     "\n"
     "  bagsim <command> --help   says what a command does and its options\n"
     "  bagsim --version          prints the version\n";
@@ -38,7 +40,9 @@ int main(int argc, char** argv) {
     if (cmd == "run") return bagsim::app::runRunCommand(argc - 2, argv + 2);
     if (cmd == "body") return bagsim::app::runBodyCommand(argc - 2, argv + 2);
     if (cmd == "fit-material") return bagsim::app::runFitMaterialCommand(argc - 2, argv + 2);
+    if (cmd == "synth-measurement")
+        return bagsim::app::runSynthMeasurementCommand(argc - 2, argv + 2);
     std::cerr << "bagsim: unknown command '" << cmd
-              << "'; valid commands: run, body, fit-material (see bagsim --help)\n";
+              << "'; valid commands: run, body, fit-material, synth-measurement (see bagsim --help)\n";
     return 2;
 }

@@ -1,0 +1,352 @@
+// bagsim synth-measurement: measured data made from a truth simulation of the seed's rig with
+// one unmodelled effect switched on, sensor noise and a model-form difference from what the
+// diagnosis simulates (docs/diagnosis.md#synthetic-measured-data). The effect's name and
+// parameters go only to the label file.
+#include <bags/LoadTest.h>
+#include <diagnose/Effects.h>
+#include <diagnose/Synthesis.h>
+#include <io/InputError.h>
+#include <io/LoadTestScenario.h>
+#include <io/MeasuredData.h>
+#include <io/Scenario.h>
+#include <io/Units.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "Commands.h"
+#include "DiagnoseShared.h"
+#include "Interrupt.h"
+
+namespace bagsim::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kHelp =
+    "usage: bagsim synth-measurement --scenario S.yaml --effect E [--param NAME=VALUE]...\n"
+    "           [--noise CHANNEL=VALUE]... [--seed N] [--sample-interval T]\n"
+    "           --out DIR --label-out FILE [--force] [--quiet]\n"
+    "\n"
+    "Makes measured data (docs/measured-data.md) of the seed's rig from a truth simulation of\n"
+    "the scenario with one unmodelled effect switched on, sensor noise, and a model-form\n"
+    "difference from what bagsim diagnose simulates: the truth run takes half the scenario's\n"
+    "displacement step and, if the scenario has an imperfection, the next imperfection seed.\n"
+    "The folder names neither the effect nor its parameters; they go to the label file only.\n"
+    "\n"
+    "effects (--effect) and their parameters (--param, with units; default in brackets):\n"
+    "  none                 no effect: noise and the model-form difference only\n"
+    "  pressure-sensor      lag [3 s], offset [0.1 kPa]\n"
+    "  flowmeter-bias       offset [0.1 g] (the flowmeter reads the bag's mass plus this)\n"
+    "  machine-compliance   compliance [0.5 mm/N] (testing machine and bed board in series)\n"
+    "  block-friction       friction [0.5] (Coulomb, film on block)\n"
+    "\n"
+    "options:\n"
+    "  --noise CH=VALUE     sensor noise (standard deviation) per channel: displacement\n"
+    "                       [0.002 mm], force [0.01 N], pressure [0.005 kPa], mass [0.002 g];\n"
+    "                       --noise none for none\n"
+    "  --seed N             seed of the noise (default 1)\n"
+    "  --sample-interval T  instruments' sampling interval (default 0.5 s)\n"
+    "  --out DIR            the measured-data folder to write (refused if not empty, unless\n"
+    "                       --force: then this command's files in it are replaced)\n"
+    "  --label-out FILE     the label: effect, parameters, noise, seed, model-form difference\n"
+    "  --force              replace earlier output of this command\n"
+    "  --quiet              print only the summary\n"
+    "\n"
+    "exit status: 0 written, 1 the truth run failed, 2 bad input, 130/143 interrupted.\n";
+
+struct UsageError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+struct Args {
+    std::string scenario, effect, out, labelOut;
+    std::vector<std::string> params, noise;
+    std::uint64_t seed = 1;
+    std::string sampleInterval = "0.5 s";
+    bool force = false, quiet = false;
+};
+
+std::string fmt(const char* f, double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return b;
+}
+
+Args parseArgs(int argc, char** argv) {
+    Args a;
+    for (int i = 0; i < argc; ++i) {
+        const std::string arg = argv[i];
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw UsageError(arg + " needs a value (see --help)");
+            return argv[++i];
+        };
+        if (arg == "--scenario") a.scenario = value();
+        else if (arg == "--effect") a.effect = value();
+        else if (arg == "--param") a.params.push_back(value());
+        else if (arg == "--noise") a.noise.push_back(value());
+        else if (arg == "--seed") {
+            const std::string v = value();
+            char* end = nullptr;
+            const unsigned long long s = std::strtoull(v.c_str(), &end, 10);
+            if (v.empty() || *end || v[0] == '-')
+                throw UsageError("--seed '" + v + "' is not valid; valid: a whole number >= 0");
+            a.seed = s;
+        } else if (arg == "--sample-interval") a.sampleInterval = value();
+        else if (arg == "--out") a.out = value();
+        else if (arg == "--label-out") a.labelOut = value();
+        else if (arg == "--force") a.force = true;
+        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
+        else
+            throw UsageError("unknown option '" + arg +
+                             "'; valid: --scenario, --effect, --param, --noise, --seed, "
+                             "--sample-interval, --out, --label-out, --force, --quiet, --help");
+    }
+    if (a.scenario.empty()) throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
+    if (a.effect.empty())
+        throw UsageError("--effect is required; valid: none, " + diagnose::listEffectNames());
+    if (a.out.empty()) throw UsageError("--out DIR is required");
+    if (a.labelOut.empty()) throw UsageError("--label-out FILE is required");
+    if (fs::exists(a.labelOut) && !a.force)
+        throw UsageError(a.labelOut + " exists; pass --force to replace it or choose another name");
+    const fs::path lab = fs::absolute(a.labelOut).lexically_normal();
+    if (lab.parent_path() == fs::absolute(a.out).lexically_normal())
+        throw UsageError("--label-out must not be inside --out: the measured data must not name "
+                         "the effect");
+    return a;
+}
+
+io::Dimension getDimension(const std::string& unit) {
+    if (unit.empty()) return io::Dimension::Dimensionless;
+    return io::findUnit(unit == "mm/N" ? "mm" : unit)->dimension;
+}
+
+// Parses "name=VALUE" into the effect's parameter values [SI].
+std::vector<double> parseParams(const diagnose::Effect& e, const std::vector<std::string>& given,
+                                std::vector<std::string>& shown) {
+    std::vector<double> v;
+    for (const auto& p : e.parameters) v.push_back(p.typical);
+    std::vector<bool> seen(v.size(), false);
+    for (const std::string& g : given) {
+        const size_t eq = g.find('=');
+        const std::string name = eq == std::string::npos ? g : g.substr(0, eq);
+        std::string list;
+        for (const auto& p : e.parameters) list += (list.empty() ? "" : ", ") + p.name;
+        size_t k = 0;
+        while (k < e.parameters.size() && e.parameters[k].name != name) ++k;
+        if (k == e.parameters.size())
+            throw UsageError("--param '" + g + "': effect " + e.name + " has no parameter '" +
+                             name + "'; valid: " + (list.empty() ? "none" : list));
+        if (eq == std::string::npos) throw UsageError("--param '" + g + "' needs NAME=VALUE");
+        const auto& p = e.parameters[k];
+        std::string text = g.substr(eq + 1);
+        double si = 0.0;
+        try {
+            if (p.unit == "mm/N") {
+                // A compliance: "0.5 mm/N".
+                const size_t u = text.find("mm/N");
+                if (u == std::string::npos)
+                    throw io::UnitError("a compliance needs the unit mm/N (e.g. \"0.5 mm/N\")");
+                si = io::parseQuantity(text.substr(0, u), io::Dimension::Dimensionless) * 1e-3;
+            } else {
+                si = io::parseQuantity(text, getDimension(p.unit));
+            }
+        } catch (const io::UnitError& ex) {
+            throw UsageError("--param '" + g + "': " + ex.what());
+        }
+        v[k] = si;
+        seen[k] = true;
+    }
+    for (size_t k = 0; k < v.size(); ++k) {
+        const auto& p = e.parameters[k];
+        shown.push_back(p.name + ": " + fmt("%.6g", v[k] / p.siPerUnit) +
+                        (p.unit.empty() ? "" : " " + p.unit) + (seen[k] ? "" : "  # default"));
+    }
+    return v;
+}
+
+void parseNoise(const std::vector<std::string>& given, diagnose::SynthesisOptions& o) {
+    for (const std::string& g : given) {
+        if (g == "none") {
+            o.displacementNoise = o.forceNoise = o.pressureNoise = o.massNoise = 0.0;
+            continue;
+        }
+        const size_t eq = g.find('=');
+        const std::string ch = g.substr(0, eq);
+        const std::string text = eq == std::string::npos ? "" : g.substr(eq + 1);
+        struct Ch {
+            const char* name;
+            io::Dimension d;
+            double* value;
+        };
+        const Ch chans[] = {{"displacement", io::Dimension::Length, &o.displacementNoise},
+                            {"force", io::Dimension::Force, &o.forceNoise},
+                            {"pressure", io::Dimension::Pressure, &o.pressureNoise},
+                            {"mass", io::Dimension::Mass, &o.massNoise}};
+        bool found = false;
+        for (const Ch& c : chans)
+            if (ch == c.name) {
+                found = true;
+                try {
+                    *c.value = io::parseQuantity(text, c.d);
+                } catch (const io::UnitError& ex) {
+                    throw UsageError("--noise '" + g + "': " + ex.what());
+                }
+                if (*c.value < 0.0) throw UsageError("--noise '" + g + "': must be >= 0");
+            }
+        if (!found || eq == std::string::npos)
+            throw UsageError("--noise '" + g +
+                             "' is not valid; valid: none, or CHANNEL=VALUE with CHANNEL one of "
+                             "displacement, force, pressure, mass (e.g. force=0.01N)");
+    }
+}
+
+int run(const Args& a) {
+    // The effect and its parameters.
+    const diagnose::Effect* effect = a.effect == "none" ? nullptr : diagnose::findEffect(a.effect);
+    if (a.effect != "none" && !effect)
+        throw UsageError("--effect '" + a.effect + "' is not known; valid: none, " +
+                         diagnose::listEffectNames());
+    if (!effect && !a.params.empty()) throw UsageError("--effect none takes no --param");
+    std::vector<std::string> shownParams;
+    const std::vector<double> values =
+        effect ? parseParams(*effect, a.params, shownParams) : std::vector<double>{};
+    diagnose::SynthesisOptions so;
+    parseNoise(a.noise, so);
+    so.seed = a.seed;
+    try {
+        so.sampleInterval = io::parseQuantity(a.sampleInterval, io::Dimension::Time);
+        so.validate();
+    } catch (const std::exception& e) {
+        throw UsageError("--sample-interval '" + a.sampleInterval + "': " + e.what());
+    }
+
+    // The scenario as the diagnosis will read it, then the truth's model-form difference.
+    const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
+    io::LoadTestScenario sc = io::readLoadTestScenario(file);
+    if (!sc.rig.isNone())
+        throw io::InputError(a.scenario, file.getRoot().getLine("rig"), "rig",
+                             "the scenario switches rig effects on; give synth-measurement a "
+                             "scenario without a rig section (the effect is chosen by --effect)");
+    const std::vector<double> readings = sc.options.gasMasses;  // what the flowmeter reads
+    bags::LoadTestOptions truth = sc.options;
+    diagnose::RigEffects rig;
+    if (effect) {
+        try {
+            diagnose::applyEffect(*effect, values, readings, rig, truth);
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(std::string("--param: ") + e.what());
+        }
+    }
+    std::string modelForm = "displacement step " + io::formatSignificant(0.5 * truth.displacementStep, "mm") +
+                            " (the scenario's " + io::formatSignificant(truth.displacementStep, "mm") + ")";
+    truth.displacementStep *= 0.5;
+    if (truth.imperfection.amplitude > 0.0) {
+        truth.imperfection.seed += 1;
+        modelForm += ", imperfection seed " + std::to_string(truth.imperfection.seed) +
+                     " (the scenario's " + std::to_string(truth.imperfection.seed - 1) + ")";
+    }
+    const fs::path out(a.out);
+    claimOutputFolder(out, a.force,
+                      {io::kMeasuredManifest, "scenario.yaml", "test*-machine.csv",
+                       "test*-pressure.csv", "test*-flowmeter.csv"});
+
+    if (!a.quiet)
+        std::cerr << "bagsim synth-measurement: truth run of " << a.scenario << " ("
+                  << truth.gasMasses.size() << " gas masses, " << modelForm << ")\n";
+    truth.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
+    sc.options = truth;
+    prepareGeometry(sc);
+    const bags::LoadTestResult result = bags::runLoadTest(sc.options);
+    for (const bags::LoadCurve& c : result.curves)
+        if (c.failed)
+            throw std::runtime_error("the truth run's curve at " + io::formatQuantity(c.gasMass, "g", 3) +
+                                     " stopped: " + c.failure);
+
+    diagnose::Protocol protocol;
+    protocol.blockSize = truth.blockSize;
+    protocol.rate = truth.loadingRate;
+    protocol.peakForce = truth.peakForce;
+    protocol.roomTemperature = truth.gas.temperature;
+    diagnose::MeasuredData data =
+        diagnose::synthesizeMeasurement(result.curves, readings, rig, protocol, so);
+    data.description = "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
+    io::writeMeasuredData(out.string(), data, file.getText(),
+                          "# Measured data of the seed's rig (docs/measured-data.md), synthesised by\n"
+                          "# bagsim synth-measurement from a truth simulation of scenario.yaml.\n");
+
+    std::ostringstream label;
+    label << "# Label of the synthetic measured data in " << a.out
+          << " (bagsim synth-measurement): what the truth run had that the data do not say.\n"
+          << "effect: " << a.effect << "\n";
+    if (effect) {
+        label << "parameters:\n";
+        for (const std::string& s : shownParams) label << "  " << s << "\n";
+        label << "scenario_keys: [";
+        for (size_t i = 0; i < effect->parameters.size(); ++i)
+            label << (i ? ", " : "") << effect->parameters[i].scenarioKey;
+        label << "]\n";
+    }
+    label << "noise: {displacement: " << fmt("%g", so.displacementNoise * 1e3) << " mm, force: "
+          << fmt("%g", so.forceNoise) << " N, pressure: " << fmt("%g", so.pressureNoise * 1e-3)
+          << " kPa, mass: " << fmt("%g", so.massNoise * 1e3) << " g}\n"
+          << "seed: " << a.seed << "\n"
+          << "sample_interval: " << fmt("%g", so.sampleInterval) << " s\n"
+          << "model_form: \"" << modelForm << "\"\n"
+          << "scenario: " << a.scenario << "\n";
+    {
+        const std::string tmp = a.labelOut + ".tmp";
+        std::ofstream f(tmp);
+        f << label.str();
+        if (!f.flush()) throw std::runtime_error(a.labelOut + ": cannot write");
+        f.close();
+        fs::rename(tmp, a.labelOut);
+    }
+    size_t samples = 0;
+    for (const auto& t : data.tests) samples += t.time.size();
+    std::cout << "measured data in " << a.out << "/: " << data.tests.size() << " tests, "
+              << samples << " machine samples (truth run " << fmt("%.1f", result.seconds)
+              << " s); label in " << a.labelOut << "\n";
+    return 0;
+}
+
+}  // namespace
+
+int runSynthMeasurementCommand(int argc, char** argv) {
+    for (int i = 0; i < argc; ++i)
+        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+            std::cout << kHelp;
+            return 0;
+        }
+    const InterruptGuard guard;
+    try {
+        return run(parseArgs(argc, argv));
+    } catch (const UsageError& e) {
+        std::cerr << "bagsim synth-measurement: " << e.what() << " (see --help)\n";
+        return 2;
+    } catch (const io::InputError& e) {
+        std::cerr << "bagsim synth-measurement: error: " << e.what() << "\n";
+        return 2;
+    } catch (const Interrupted& e) {
+        std::cerr << "bagsim synth-measurement: " << e.what() << "; nothing written\n";
+        return getInterruptExitCode(e.signal);
+    } catch (const std::exception& e) {
+        if (getInterruptSignal()) {
+            std::cerr << "bagsim synth-measurement: interrupted; nothing written\n";
+            return getInterruptExitCode(getInterruptSignal());
+        }
+        std::cerr << "bagsim synth-measurement: failed: " << e.what() << "\n";
+        return 1;
+    }
+}
+
+}  // namespace bagsim::app

@@ -1,0 +1,51 @@
+#pragma once
+/// @file The library of candidate unmodelled effects of the seed's rig (docs/diagnosis.md):
+/// each a real extension of the model that a scenario can also switch on (the key named per
+/// parameter), with physical bounds. `bagsim synth-measurement` switches one on in its truth
+/// run; `bagsim diagnose` calibrates each against measured data.
+
+#include <diagnose/RigEffects.h>
+
+#include <bags/LoadTest.h>
+
+#include <string>
+#include <vector>
+
+namespace diagnose {
+
+struct EffectParameter {
+    std::string name;         ///< as given to --param ("lag")
+    std::string unit;         ///< the unit it is shown and given in ("s")
+    double siPerUnit = 1.0;   ///< SI value of one unit
+    double lower = 0.0;       ///< physical bounds [SI]
+    double upper = 0.0;
+    double typical = 0.0;     ///< default magnitude for a synthetic check [SI]
+    std::string scenarioKey;  ///< the scenario key that switches it on
+};
+
+struct Effect {
+    std::string name;         ///< "pressure-sensor"
+    std::string description;  ///< one line
+    std::vector<EffectParameter> parameters;
+    /// True when the effect changes the bag's response (a new simulation per trial value);
+    /// false when it changes only what the instruments read.
+    bool changesTheBag = false;
+};
+
+/// The library, in a fixed order: pressure-sensor, flowmeter-bias, machine-compliance,
+/// block-friction.
+const std::vector<Effect>& getEffects();
+/// The effect of that name, or nullptr.
+const Effect* findEffect(const std::string& name);
+/// "pressure-sensor, flowmeter-bias, ..." (for messages).
+std::string listEffectNames();
+
+/// Switches the effect on with these parameter values [SI] (one per parameter, in order):
+/// rig effects go into `rig`; effects on the bag into `options` (for the flowmeter's bias,
+/// options.gasMasses become `readings` less the offset).
+/// @throws std::invalid_argument for a value outside the bounds, naming it.
+void applyEffect(const Effect& effect, const std::vector<double>& values,
+                 const std::vector<double>& readings, RigEffects& rig,
+                 bags::LoadTestOptions& options);
+
+}  // namespace diagnose

@@ -1,0 +1,78 @@
+#include <diagnose/Effects.h>
+
+#include <sstream>
+#include <stdexcept>
+
+namespace diagnose {
+
+const std::vector<Effect>& getEffects() {
+    static const std::vector<Effect> effects = {
+        {"pressure-sensor",
+         "the pressure sensor lags (first order: tubing, filter) and reads with a zero offset",
+         {{"lag", "s", 1.0, 0.0, RigEffects::kMaxPressureLag, 3.0, "rig.pressure_sensor.lag"},
+          {"offset", "kPa", 1e3, -RigEffects::kMaxPressureOffset, RigEffects::kMaxPressureOffset,
+           100.0, "rig.pressure_sensor.offset"}},
+         false},
+        {"flowmeter-bias",
+         "the flowmeter reads the bag's gas mass plus an offset (the bag holds another mass)",
+         {{"offset", "g", 1e-3, -RigEffects::kMaxFlowmeterOffset, RigEffects::kMaxFlowmeterOffset,
+           0.1e-3, "rig.flowmeter.offset"}},
+         true},
+        {"machine-compliance",
+         "the testing machine and bed board yield in series with the bag",
+         {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxMachineCompliance, 0.5e-3,
+           "rig.machine_stiffness (its inverse)"}},
+         false},
+        {"block-friction",
+         "Coulomb friction between the film and the block",
+         {{"friction", "", 1.0, 0.0, 1.0, 0.5, "contact.block.friction"}},
+         true},
+    };
+    return effects;
+}
+
+const Effect* findEffect(const std::string& name) {
+    for (const Effect& e : getEffects())
+        if (e.name == name) return &e;
+    return nullptr;
+}
+
+std::string listEffectNames() {
+    std::string s;
+    for (const Effect& e : getEffects()) s += (s.empty() ? "" : ", ") + e.name;
+    return s;
+}
+
+void applyEffect(const Effect& effect, const std::vector<double>& values,
+                 const std::vector<double>& readings, RigEffects& rig,
+                 bags::LoadTestOptions& options) {
+    if (values.size() != effect.parameters.size())
+        throw std::invalid_argument("effect '" + effect.name + "' takes " +
+                                    std::to_string(effect.parameters.size()) + " parameter(s)");
+    for (size_t i = 0; i < values.size(); ++i) {
+        const EffectParameter& p = effect.parameters[i];
+        if (!(values[i] >= p.lower && values[i] <= p.upper)) {
+            std::ostringstream s;
+            s << "effect '" << effect.name << "' parameter '" << p.name
+              << "' = " << values[i] / p.siPerUnit << (p.unit.empty() ? "" : " ") << p.unit
+              << " is outside its physical bounds; valid: " << p.lower / p.siPerUnit << " to "
+              << p.upper / p.siPerUnit << (p.unit.empty() ? "" : " ") << p.unit;
+            throw std::invalid_argument(s.str());
+        }
+    }
+    if (effect.name == "pressure-sensor") {
+        rig.pressureLag = values[0];
+        rig.pressureOffset = values[1];
+    } else if (effect.name == "flowmeter-bias") {
+        rig.flowmeterOffset = values[0];
+        options.gasMasses = calcBagGasMasses(readings, rig);
+    } else if (effect.name == "machine-compliance") {
+        rig.machineCompliance = values[0];
+    } else if (effect.name == "block-friction") {
+        options.blockContact.friction = values[0];
+    } else {
+        throw std::invalid_argument("effect '" + effect.name + "' has no model");
+    }
+}
+
+}  // namespace diagnose
