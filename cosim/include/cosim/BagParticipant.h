@@ -1,0 +1,42 @@
+#pragma once
+/// @file A bags::Airbag as a co-simulation participant.
+///
+/// The participant's shapes are the airbag's shapes (index for index): add them to the airbag
+/// with bags::Airbag::addShape() and inflate it before the coupling starts. The bag is
+/// quasi-static: the shapes' velocities are accepted and not used (the body carries the
+/// inertia and any damping). advance(dt) maps to bags::Airbag::advance(dt), commit() and
+/// rollback() to the airbag's own; the wrench, its tangent and the pressures are the airbag's.
+
+#include <bags/Airbag.h>
+
+#include <memory>
+
+#include "cosim/Participant.h"
+
+namespace cosim {
+
+class BagParticipant : public Participant {
+  public:
+    /// Takes the airbag (its shapes added, inflated). @throws std::invalid_argument if null.
+    explicit BagParticipant(std::unique_ptr<bags::Airbag> bag, int maxCuts = 6);
+    int getNumShapes() const override;
+    void setShapeState(int shape, const ShapeState& state) override;
+    ParticipantStep advance(double dt) override;
+    void commit() override;
+    void rollback() override;
+    ShapeWrench calcWrench(int shape) const override;
+    Mat6 calcWrenchTangent(int shape) const override;
+    Eigen::VectorXd calcContactPressure(int shape) const override;
+
+    const bags::Airbag& getAirbag() const { return *m_bag; }  ///< the wrapped airbag
+    bags::Airbag& updAirbag() { return *m_bag; }              ///< the wrapped airbag
+    /// The last advance()'s summary.
+    const bags::AdvanceSummary& getLastAdvance() const { return m_last; }
+
+  private:
+    std::unique_ptr<bags::Airbag> m_bag;
+    int m_maxCuts;
+    bags::AdvanceSummary m_last;
+};
+
+}  // namespace cosim

@@ -1,0 +1,111 @@
+#pragma once
+/// @file The staggered co-simulation of one body and N participants (bags): the coupling
+/// schemes, their convergence measure, and the macro-step loop.
+///
+/// Order of calls: construct with the body (initialized), the participants (their shapes
+/// added, bags inflated) and the links (which body shape meets which participant shape);
+/// initialize() evaluates the participants at the body's initial poses (dt = 0, committed);
+/// then step() per macro step. step() either commits the body and every participant at
+/// t + dt, or throws bags::NumericalError (a participant could not reach the poses, or the
+/// implicit iterations did not converge) with every side rolled back to t, so the caller may
+/// cut the step (setMacroStep()) and call step() again.
+///
+/// Schemes (docs/cosim.md), every one body first, then the bags (Gauss-Seidel):
+///  - Explicit: the body integrates over [t, t + dt] under the wrenches the bags returned at
+///    t, held constant (zero-order hold); the bags then advance to the body's poses at
+///    t + dt. One pass.
+///  - Implicit: the same pass repeated from the checkpoint, the wrench the body is held at
+///    being the unknown x (torques divided by torqueLength, so all entries are forces): H(x)
+///    is what the bags return at the body's end poses. Iterations stop when
+///    |H(x) - x| <= relativeTolerance |H(x)| + absoluteTolerance (2-norms over every link),
+///    the next x from an Accelerator (constant relaxation, Aitken or IQN-ILS).
+///  - Tangent: the body integrates under W(t) + T(t) d(X(t), X) (the bags' wrench linearised
+///    in the shape's pose by its tangent, inside the body's own step through a
+///    Force::Custom); the bags then advance to the end poses and return W and T there. One
+///    pass.
+/// For the one-pass schemes the step's mismatch |H(x) - x| (x the load the body saw at the
+/// end pose) is reported in the same measure.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cosim/Acceleration.h"
+#include "cosim/BodyParticipant.h"
+#include "cosim/Participant.h"
+
+namespace cosim {
+
+enum class Scheme { Explicit, Implicit, Tangent };
+enum class AccelerationKind { Constant, Aitken, IQNILS };
+
+/// Parses "explicit", "implicit", "tangent" (throws std::invalid_argument listing them).
+Scheme parseScheme(const std::string& name);
+std::string toString(Scheme scheme);
+/// Parses "constant", "aitken", "iqn-ils".
+AccelerationKind parseAcceleration(const std::string& name);
+std::string toString(AccelerationKind kind);
+
+struct CouplingOptions {
+    Scheme scheme = Scheme::Implicit;
+    AccelerationKind acceleration = AccelerationKind::IQNILS;
+    double macroStep = 1e-3;          ///< [s]
+    double relativeTolerance = 1e-5;  ///< [-] of |H(x)|
+    /// [N] must lie above the bags' own solve tolerance (bags::AirbagSpec::forceTolerance):
+    /// the wrench a bag returns is no more exact than that.
+    double absoluteTolerance = 1e-3;
+    double torqueLength = 0.1;       ///< [m] torques count as torque / torqueLength [N]
+    int maxIterations = 50;          ///< implicit iterations per macro step
+    double initialRelaxation = 0.5;  ///< [-] first iteration of a step (and Constant)
+    int reuseSteps = 0;              ///< IQN-ILS: earlier steps whose secants are kept
+    double filter = 1e-10;           ///< IQN-ILS QR filter
+    bool parallel = true;            ///< participants on OpenMP threads (one each)
+    void validate() const;           ///< throws std::invalid_argument naming the option
+};
+
+/// Body shape `bodyShape` meets shape `shape` of participant `participant`.
+struct Link {
+    int bodyShape = 0;
+    int participant = 0;
+    int shape = 0;
+};
+
+/// What one macro step did.
+struct StepSummary {
+    int step = 0;             ///< index of the macro step (0 the first)
+    double time = 0.0;        ///< [s] at its end
+    int iterations = 0;       ///< passes (1 for the one-pass schemes)
+    bool converged = true;    ///< implicit: within tolerance; one-pass schemes: true
+    double residual = 0.0;    ///< [N] |H(x) - x| of the last pass (scaled as above)
+    double wrenchNorm = 0.0;  ///< [N] |H(x)| of the last pass
+    int bagIterations = 0;    ///< Newton iterations over every participant and pass
+};
+
+class Coupling {
+  public:
+    /// The participants are not owned and must outlive the coupling.
+    /// @throws std::invalid_argument if options or links are invalid.
+    Coupling(BodyParticipant& body, std::vector<Participant*> participants, std::vector<Link> links,
+             const CouplingOptions& options);
+    ~Coupling();
+    /// Evaluates the participants at the body's current poses (advance(0), commit); the
+    /// wrenches (and tangents) found start the first step.
+    void initialize();
+    /// One macro step (see the file comment). @throws bags::NumericalError, sides rolled back.
+    StepSummary step();
+    /// Changes the macro step from the next step on (time keeps counting from the last one).
+    void setMacroStep(double dt);
+    double getTime() const;   ///< [s] at the last committed step
+    int getNumSteps() const;  ///< macro steps committed
+    /// Wrench the participant returned on a link at the last committed step.
+    ShapeWrench getLinkWrench(int link) const;
+    /// Its tangent (Tangent scheme only; zero otherwise).
+    const Mat6& getLinkTangent(int link) const;
+    const CouplingOptions& getOptions() const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace cosim

@@ -1,0 +1,49 @@
+#include "cosim/BagParticipant.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace cosim {
+
+BagParticipant::BagParticipant(std::unique_ptr<bags::Airbag> bag, int maxCuts)
+    : m_bag(std::move(bag)), m_maxCuts(maxCuts) {
+    if (!m_bag) throw std::invalid_argument("BagParticipant: the airbag is null");
+    if (maxCuts < 0)
+        throw std::invalid_argument("BagParticipant: maxCuts = " + std::to_string(maxCuts) +
+                                    "; valid: 0 or more");
+}
+
+int BagParticipant::getNumShapes() const { return m_bag->getNumShapes(); }
+
+void BagParticipant::setShapeState(int shape, const ShapeState& state) {
+    m_bag->setShapePose(shape, state.X_GS);
+}
+
+ParticipantStep BagParticipant::advance(double dt) {
+    m_last = m_bag->advance(dt, m_maxCuts);
+    ParticipantStep s;
+    s.converged = m_last.converged;
+    s.solverIterations = m_last.newtonIterations;
+    return s;
+}
+
+void BagParticipant::commit() { m_bag->commit(); }
+void BagParticipant::rollback() { m_bag->rollback(); }
+
+ShapeWrench BagParticipant::calcWrench(int shape) const {
+    const bags::Wrench w = m_bag->calcShapeWrench(shape);
+    ShapeWrench out;
+    out.torque = w.torque;
+    out.force = w.force;
+    return out;
+}
+
+Mat6 BagParticipant::calcWrenchTangent(int shape) const {
+    return m_bag->calcShapeWrenchTangent(shape);
+}
+
+Eigen::VectorXd BagParticipant::calcContactPressure(int shape) const {
+    return m_bag->calcShapeContactPressure(shape);
+}
+
+}  // namespace cosim

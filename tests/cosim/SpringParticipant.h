@@ -1,0 +1,54 @@
+#pragma once
+// A test double for a bag: each shape is held by a linear spring-like law,
+// W(X) = W_ref + K d(X_ref, X) (d: rotation vector and translation from X_ref, Ground), with
+// the exact tangent K. It counts its advances and can be told to fail one.
+#include <cosim/Participant.h>
+
+#include <vector>
+
+namespace cosim::test {
+
+class SpringParticipant : public Participant {
+  public:
+    struct Spring {
+        Eigen::Isometry3d X_ref = Eigen::Isometry3d::Identity();
+        Vec6 W_ref = Vec6::Zero();
+        Mat6 K = Mat6::Zero();  // d(torque, force)/d(rotation, translation)
+    };
+    explicit SpringParticipant(std::vector<Spring> springs)
+        : m_springs(std::move(springs)), m_pose(m_springs.size()), m_committed(m_springs.size()) {
+        for (size_t i = 0; i < m_springs.size(); ++i)
+            m_pose[i] = m_committed[i] = m_springs[i].X_ref;
+        m_next = m_pose;
+    }
+    int getNumShapes() const override { return int(m_springs.size()); }
+    void setShapeState(int shape, const ShapeState& s) override { m_next.at(shape) = s.X_GS; }
+    ParticipantStep advance(double) override {
+        ++advances;
+        ParticipantStep s;
+        s.converged = advances != failAt;
+        m_pose = s.converged ? m_next : m_committed;
+        return s;
+    }
+    void commit() override { m_committed = m_pose; }
+    void rollback() override { m_pose = m_committed; }
+    ShapeWrench calcWrench(int shape) const override {
+        const Spring& s = m_springs.at(shape);
+        const Eigen::Isometry3d& X = m_pose.at(shape);
+        const Eigen::AngleAxisd aa(Eigen::Matrix3d(X.linear() * s.X_ref.linear().transpose()));
+        Vec6 d;
+        d << aa.angle() * aa.axis(), X.translation() - s.X_ref.translation();
+        return ShapeWrench::fromVector(s.W_ref + s.K * d);
+    }
+    Mat6 calcWrenchTangent(int shape) const override { return m_springs.at(shape).K; }
+    Eigen::VectorXd calcContactPressure(int) const override { return Eigen::VectorXd(); }
+
+    int advances = 0;
+    int failAt = -1;  // the advance (1-based count) that fails
+
+  private:
+    std::vector<Spring> m_springs;
+    std::vector<Eigen::Isometry3d> m_pose, m_committed, m_next;
+};
+
+}  // namespace cosim::test
