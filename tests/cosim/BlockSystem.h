@@ -16,6 +16,7 @@ struct BlockSystem {
     SimTK::MobilizedBody mobod;
     std::unique_ptr<BodyParticipant> body;
     int shape = -1;
+    int extraShape = -1;  // a second shape at the same frame (a second bag under the block)
     double mass = 0.0;
 
     // Slider along Ground z through (x, y) = (x0, y0); body frame aligned with Ground; its origin
@@ -43,6 +44,7 @@ struct BlockSystem {
         }
         body = std::make_unique<BodyParticipant>(system, forces, integ);
         shape = body->addShape(mobod.getMobilizedBodyIndex(), SimTK::Transform());
+        extraShape = body->addShape(mobod.getMobilizedBodyIndex(), SimTK::Transform());
         system.realizeTopology();
     }
     // Starts the slider at height z [m] with velocity v [m/s].
