@@ -47,7 +47,7 @@ const char* kHelp =
     "  none                 no effect: noise and the model-form difference only\n"
     "  pressure-sensor      lag [3 s], offset [0.1 kPa]\n"
     "  flowmeter-bias       offset [0.1 g] (the flowmeter reads the bag's mass plus this)\n"
-    "  machine-compliance   compliance [0.5 mm/N] (testing machine and bed board in series)\n"
+    "  machine-compliance   compliance [0.1 mm/N] (testing machine and bed board in series)\n"
     "  block-friction       friction [0.5] (Coulomb, film on block)\n"
     "\n"
     "options:\n"

@@ -20,6 +20,7 @@ const char* kUsage =
     "  fit-material TENSILE.csv --model M  fit a membrane material to a uniaxial tensile test\n"
     "  synth-measurement --scenario S --effect E --out DIR --label-out FILE\n"
     "                                  measured data from a truth run with an effect on\n"
+    "  diagnose --measured DIR         where simulation and measured data disagree, and why\n"
     "\n"
     "  bagsim <command> --help   says what a command does and its options\n"
     "  bagsim --version          prints the version\n";
@@ -42,7 +43,8 @@ int main(int argc, char** argv) {
     if (cmd == "fit-material") return bagsim::app::runFitMaterialCommand(argc - 2, argv + 2);
     if (cmd == "synth-measurement")
         return bagsim::app::runSynthMeasurementCommand(argc - 2, argv + 2);
+    if (cmd == "diagnose") return bagsim::app::runDiagnoseCommand(argc - 2, argv + 2);
     std::cerr << "bagsim: unknown command '" << cmd
-              << "'; valid commands: run, body, fit-material, synth-measurement (see bagsim --help)\n";
+              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose (see bagsim --help)\n";
     return 2;
 }

@@ -20,7 +20,7 @@ const std::vector<Effect>& getEffects() {
          true},
         {"machine-compliance",
          "the testing machine and bed board yield in series with the bag",
-         {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxMachineCompliance, 0.5e-3,
+         {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxMachineCompliance, 0.1e-3,
            "rig.machine_stiffness (its inverse)"}},
          false},
         {"block-friction",

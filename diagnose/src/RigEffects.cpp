@@ -40,7 +40,7 @@ void RigEffects::validate() const {
     require(std::fabs(pressureOffset) <= kMaxPressureOffset, "pressureOffset", pressureOffset,
             "use -5 to 5 kPa");
     require(std::fabs(flowmeterOffset) <= kMaxFlowmeterOffset, "flowmeterOffset",
-            flowmeterOffset, "use -0.5 to 0.5 g");
+            flowmeterOffset, "use -0.25 to 0.25 g");
     require(machineCompliance >= 0.0 && machineCompliance <= kMaxMachineCompliance,
             "machineCompliance", machineCompliance,
             "use 0 (a rigid rig) to 2 mm/N (a rig stiffness of at least 0.5 N/mm)");

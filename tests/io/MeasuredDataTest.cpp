@@ -251,7 +251,7 @@ TEST(RigSection, BadValuesAreLocated) {
     EXPECT_NE(e.getMessage().find("has no unit"), std::string::npos) << e.what();
     e = error("  pressure_sensor: {lag: 60 s}\n");
     EXPECT_NE(e.getMessage().find("must be in [0 s, 30 s]"), std::string::npos) << e.what();
-    e = error("  flowmeter: {offset: 0.6 g}\n  machine_stiffness: 20 N/mm\n");
+    e = error("  flowmeter: {offset: 0.3 g}\n  machine_stiffness: 20 N/mm\n");
     EXPECT_EQ(e.getKey(), "rig.flowmeter.offset");
     EXPECT_EQ(e.getLine(), 6);
     e = error("  flowmeter: {offest: 0.1 g}\n");

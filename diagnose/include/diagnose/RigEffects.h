@@ -28,7 +28,9 @@ struct RigEffects {
     /// Physical bounds of each parameter (also the calibration's bounds).
     static constexpr double kMaxPressureLag = 30.0;          ///< [s]
     static constexpr double kMaxPressureOffset = 5000.0;     ///< [Pa] either sign
-    static constexpr double kMaxFlowmeterOffset = 0.5e-3;    ///< [kg] either sign
+    /// [kg] either sign: about 6 % of the taut rig's 4 g, several times a thermal mass
+    /// flowmeter's stated accuracy (1-2 % of reading)
+    static constexpr double kMaxFlowmeterOffset = 0.25e-3;
     static constexpr double kMaxMachineCompliance = 2.0e-3;  ///< [m/N] (0.5 N/mm rig)
 
     /// True when every effect is off (the model as it was).

@@ -1,0 +1,306 @@
+// bagsim diagnose: where the simulation of the seed's rig and measured data disagree, and
+// which unmodelled effect of the library explains it (docs/diagnosis.md).
+#include <bags/LoadTest.h>
+#include <bagsim/Version.h>
+#include <diagnose/Diagnosis.h>
+#include <io/DiagnosisJson.h>
+#include <io/InputError.h>
+#include <io/LoadTestScenario.h>
+#include <io/MeasuredData.h>
+#include <io/Units.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "Commands.h"
+#include "DiagnoseShared.h"
+#include "Interrupt.h"
+
+namespace bagsim::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kHelp =
+    "usage: bagsim diagnose --measured DIR [--out DIR] [--force] [--where-only]\n"
+    "           [--candidates E1,E2,...] [--threads N] [--quiet]\n"
+    "\n"
+    "Compares measured data of the seed's rig (docs/measured-data.md) with a simulation of the\n"
+    "same protocol and says where they disagree: residuals per channel (force at the measured\n"
+    "displacement, pressure as the sensor reads it, the flowmeter's mass) split by gas mass,\n"
+    "loading or unloading and load range, each regime's share of the squared error, and the\n"
+    "signatures bias, scale, lag (cross-correlation peak), hysteresis loop area and drift.\n"
+    "Then, with two tests or more, which effect of the library explains the gap: each is\n"
+    "calibrated (Ceres) on all tests but one and judged on the one left out, in turn; the\n"
+    "verdict names the effect, 'none' (the gap is within the validation uncertainty) or\n"
+    "'unexplained'. See docs/diagnosis.md.\n"
+    "\n"
+    "options:\n"
+    "  --measured DIR      the measured-data folder (holds measured.yaml)\n"
+    "  --out DIR           where to write diagnosis.json and residuals.csv\n"
+    "                      (default: DIR/../<folder name>-diagnosis)\n"
+    "  --force             replace this command's files in a folder that is not empty\n"
+    "  --where-only        only where the gap lies (no calibration)\n"
+    "  --candidates LIST   effects to calibrate (default: all): pressure-sensor,\n"
+    "                      flowmeter-bias, machine-compliance, block-friction\n"
+    "  --threads N         simulations run at once (default 1)\n"
+    "  --quiet             print only the verdict\n"
+    "\n"
+    "exit status: 0 diagnosed, 1 a simulation failed, 2 bad input, 130/143 interrupted.\n";
+
+struct UsageError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+struct Args {
+    std::string measured, out, commandLine;
+    bool force = false, whereOnly = false, quiet = false;
+    std::vector<std::string> candidates;
+    int threads = 1;
+};
+
+std::string fmt(const char* f, double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return b;
+}
+
+Args parseArgs(int argc, char** argv) {
+    Args a;
+    a.commandLine = "bagsim diagnose";
+    for (int i = 0; i < argc; ++i) a.commandLine += std::string(" ") + argv[i];
+    for (int i = 0; i < argc; ++i) {
+        const std::string arg = argv[i];
+        auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw UsageError(arg + " needs a value (see --help)");
+            return argv[++i];
+        };
+        if (arg == "--measured") a.measured = value();
+        else if (arg == "--out") a.out = value();
+        else if (arg == "--force") a.force = true;
+        else if (arg == "--where-only") a.whereOnly = true;
+        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
+        else if (arg == "--threads") {
+            const std::string v = value();
+            if (v.empty() || v.find_first_not_of("0123456789") != std::string::npos ||
+                std::stoi(v) < 1 || std::stoi(v) > 64)
+                throw UsageError("--threads '" + v + "' is not valid; valid: 1 to 64");
+            a.threads = std::stoi(v);
+        } else if (arg == "--candidates") {
+            std::istringstream is(value());
+            std::string e;
+            while (std::getline(is, e, ',')) {
+                if (!diagnose::findEffect(e))
+                    throw UsageError("--candidates: '" + e + "' is not an effect of the library; "
+                                     "valid: " + diagnose::listEffectNames());
+                a.candidates.push_back(e);
+            }
+        } else
+            throw UsageError("unknown option '" + arg +
+                             "'; valid: --measured, --out, --force, --where-only, --candidates, "
+                             "--threads, --quiet, --help");
+    }
+    if (a.measured.empty()) throw UsageError("--measured DIR is required");
+    if (a.out.empty()) {
+        const fs::path m = fs::absolute(a.measured).lexically_normal();
+        const fs::path dir = m.filename().empty() ? m.parent_path() : m;
+        a.out = (dir.parent_path() / (dir.filename().string() + "-diagnosis")).string();
+    }
+    return a;
+}
+
+void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
+    out << "where: gap " << fmt("%.4f", w.gap)
+        << " (RMS over force and pressure of RMSE / measured range)"
+        << (w.withinValidation ? ", within the validation uncertainty" : "") << "\n";
+    out << "  channel   RMSE        range       noise       numerical   share of gap\n";
+    for (const auto& c : w.channels) {
+        const auto kind = c.channel == "force"      ? diagnose::ChannelKind::Force
+                          : c.channel == "pressure" ? diagnose::ChannelKind::Pressure
+                                                    : diagnose::ChannelKind::Mass;
+        const double u = diagnose::getChannelUnitScale(kind);
+        const std::string un = " " + diagnose::getChannelUnit(kind);
+        char line[200];
+        std::snprintf(line, sizeof line, "  %-8s  %-10s  %-10s  %-10s  %-10s  %s\n",
+                      c.channel.c_str(), (fmt("%.4g", c.rmse / u) + un).c_str(),
+                      (fmt("%.4g", c.range / u) + un).c_str(),
+                      (fmt("%.3g", c.noise / u) + un).c_str(),
+                      (fmt("%.3g", c.numerical / u) + un).c_str(),
+                      c.channel == "mass" ? "(consistency only)"
+                                          : (fmt("%.0f", 100 * c.shareOfGap) + " %").c_str());
+        out << line;
+    }
+    out << "  largest shares of squared error (per channel and split):\n";
+    for (const auto& r : w.regimes)
+        if (r.regime != "all" && r.channel != "mass" && r.share >= 0.5)
+            out << "    " << r.channel << ", " << r.regime << ": " << fmt("%.0f", 100 * r.share)
+                << " %\n";
+    out << "  signatures per test (bias, scale, lag, loop area measured / simulated):\n";
+    for (const auto& s : w.signatures) {
+        if (s.channel == "mass") continue;
+        const auto kind =
+            s.channel == "force" ? diagnose::ChannelKind::Force : diagnose::ChannelKind::Pressure;
+        const double u = diagnose::getChannelUnitScale(kind);
+        const std::string un = diagnose::getChannelUnit(kind);
+        out << "    " << s.channel << " " << fmt("%.2f g", s.gasMass * 1e3) << ": bias "
+            << fmt("%+.3g ", s.bias / u) << un << ", scale " << fmt("%+.3f", s.scale) << ", lag "
+            << fmt("%.2f s", s.lag) << ", loop " << fmt("%.3g", s.loopAreaMeasured / u * 1e3)
+            << " / " << fmt("%.3g", s.loopAreaSimulated / u * 1e3) << " " << un << " mm\n";
+    }
+}
+
+int run(const Args& a) {
+    const auto start = std::chrono::steady_clock::now();
+    const diagnose::MeasuredData data = io::readMeasuredData(a.measured);
+    io::LoadTestScenario sc = io::readMeasuredScenario(data);
+    const fs::path out(a.out);
+    claimOutputFolder(out, a.force, {"diagnosis.json", "residuals.csv"});
+    if (!a.quiet)
+        std::cerr << "bagsim diagnose: " << data.tests.size() << " tests in " << a.measured
+                  << " against " << data.scenarioFile << "\n";
+
+    sc.options.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
+    prepareGeometry(sc);
+    int simulations = 0;
+    auto simulate = [&](const bags::LoadTestOptions& o) {
+        bags::LoadTestResult r = bags::runLoadTest(o);
+        for (const bags::LoadCurve& c : r.curves)
+            if (c.failed)
+                throw bags::NumericalError("the curve at " + io::formatQuantity(c.gasMass, "g", 3) +
+                                           " stopped: " + c.failure);
+        return r;
+    };
+    const bags::LoadTestResult base = simulate(sc.options);
+    // The numerical uncertainty: the same protocol at half the displacement step.
+    bags::LoadTestOptions half = sc.options;
+    half.displacementStep *= 0.5;
+    const bags::LoadTestResult fine = simulate(half);
+    simulations += 2;
+
+    std::vector<diagnose::TestComparison> tests;
+    for (size_t i = 0; i < data.tests.size(); ++i) {
+        diagnose::TestComparison t = diagnose::compareTest(data.tests[i], int(i), base.curves[i],
+                                                           sc.rig, sc.options.loadingRate);
+        const diagnose::TestComparison f = diagnose::compareTest(
+            data.tests[i], int(i), fine.curves[i], sc.rig, sc.options.loadingRate);
+        for (size_t c = 0; c < t.channels.size(); ++c) {
+            double s = 0.0;
+            const auto& a1 = t.channels[c].simulated;
+            const auto& a2 = f.channels[c].simulated;
+            for (size_t k = 0; k < a1.size(); ++k) s += (a1[k] - a2[k]) * (a1[k] - a2[k]);
+            t.numericalUncertainty[c] = a1.empty() ? 0.0 : std::sqrt(s / double(a1.size()));
+        }
+        tests.push_back(std::move(t));
+    }
+    diagnose::WhereOptions wo;
+    wo.loadFrom = sc.options.stiffnessFrom;
+    wo.loadTo = sc.options.stiffnessTo;
+    const diagnose::WhereReport where = diagnose::calcWhere(tests, wo);
+    if (!a.quiet) printWhere(where, std::cout);
+
+    std::unique_ptr<diagnose::WhichReport> which;
+    if (!a.whereOnly && data.tests.size() >= 2) {
+        diagnose::CalibrationOptions co;
+        co.candidates = a.candidates;
+        co.threads = a.threads;
+        auto counted = [&](const bags::LoadTestOptions& o) {
+            bags::LoadTestOptions m = o;
+            m.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
+            return simulate(m);
+        };
+        which = std::make_unique<diagnose::WhichReport>(diagnose::calibrateCandidates(
+            data, sc.options, sc.rig, base, tests, where, counted, co));
+        for (const auto& c : which->candidates) simulations += c.simulations;
+        if (!a.quiet) {
+            std::cout << "which: candidates ranked by held-out gap shrink (leave one gas mass "
+                         "out), less "
+                      << fmt("%g", co.parameterPenalty) << " per parameter:\n";
+            for (const auto& c : which->candidates) {
+                const diagnose::Effect* e = diagnose::findEffect(c.effect);
+                std::cout << "  " << c.effect << ": shrink " << fmt("%.1f %%", 100 * c.shrink)
+                          << " (held-out gap " << fmt("%.4f", c.heldoutBefore) << " -> "
+                          << fmt("%.4f", c.heldoutAfter) << "), score " << fmt("%.3f", c.score);
+                for (size_t k = 0; k < c.parameters.size(); ++k)
+                    std::cout << "; " << e->parameters[k].name << " "
+                              << fmt("%.4g", c.parameters[k] / e->parameters[k].siPerUnit)
+                              << (std::isfinite(c.parameterStdDev[k])
+                                      ? " +- " + fmt("%.2g", c.parameterStdDev[k] /
+                                                                 e->parameters[k].siPerUnit)
+                                      : std::string())
+                              << (e->parameters[k].unit.empty() ? "" : " " + e->parameters[k].unit);
+                std::cout << "\n";
+            }
+            for (const auto& p : which->confusable)
+                std::cout << "  confusable on these data: " << p.first << " and " << p.second << "\n";
+        }
+    }
+
+    io::DiagnosisInfo info;
+    info.measuredFolder = a.measured;
+    info.scenarioFile = data.scenarioFile;
+    info.program = std::string("bagsim ") + bagsim::kVersion;
+    info.commandLine = a.commandLine;
+    info.simulations = simulations;
+    info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    auto write = [&](const std::string& name, const std::string& text) {
+        const fs::path f = out / name, tmp = out / (name + ".tmp");
+        {
+            std::ofstream o(tmp);
+            o << text;
+            if (!o.flush()) throw std::runtime_error("cannot write " + f.string());
+        }
+        fs::rename(tmp, f);
+    };
+    write("residuals.csv", io::formatResidualsCsv(tests));
+    write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get()));
+    if (which)
+        std::cout << "verdict: " << which->verdict << " (" << which->reason << ")\n";
+    else
+        std::cout << "verdict: not run (" << (a.whereOnly ? "--where-only" : "one test: no test to hold out")
+                  << ")\n";
+    std::cout << "diagnosis in " << out.string() << "/: diagnosis.json, residuals.csv ("
+              << simulations << " simulations, " << fmt("%.1f", info.seconds) << " s)\n";
+    return 0;
+}
+
+}  // namespace
+
+int runDiagnoseCommand(int argc, char** argv) {
+    for (int i = 0; i < argc; ++i)
+        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+            std::cout << kHelp;
+            return 0;
+        }
+    const InterruptGuard guard;
+    try {
+        return run(parseArgs(argc, argv));
+    } catch (const UsageError& e) {
+        std::cerr << "bagsim diagnose: " << e.what() << " (see --help)\n";
+        return 2;
+    } catch (const io::InputError& e) {
+        std::cerr << "bagsim diagnose: error: " << e.what() << "\n";
+        return 2;
+    } catch (const Interrupted& e) {
+        std::cerr << "bagsim diagnose: " << e.what() << "; nothing written\n";
+        return getInterruptExitCode(e.signal);
+    } catch (const std::exception& e) {
+        if (getInterruptSignal()) {
+            std::cerr << "bagsim diagnose: interrupted; nothing written\n";
+            return getInterruptExitCode(getInterruptSignal());
+        }
+        std::cerr << "bagsim diagnose: failed: " << e.what() << "\n";
+        return 1;
+    }
+}
+
+}  // namespace bagsim::app

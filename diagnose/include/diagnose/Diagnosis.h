@@ -1,0 +1,172 @@
+#pragma once
+/// @file The diagnosis of the sim-to-real gap on the seed's rig (docs/diagnosis.md).
+///
+/// Where: compareTest() puts a simulated curve beside a measured test, channel by channel, at
+/// the measured samples (the machine's force at the measured displacement on the same branch;
+/// the pressure sensor's reading at its sample times, the bag's pressure taken at the machine's
+/// displacement then); calcWhere() splits the residuals by regime (gas mass, loading or
+/// unloading, load range), gives each regime's share of the squared error and the signatures
+/// (bias, scale, lag by cross-correlation, hysteresis loop area, drift).
+///
+/// Which: calibrateCandidates() fits each effect of the library (Effects.h) on the training
+/// tests, leaving one gas mass out in turn, and ranks the effects by how much they shrink the
+/// gap on the held-out test, with a penalty per parameter; decideVerdict() names the effect,
+/// `none` or `unexplained`.
+
+#include <diagnose/Effects.h>
+#include <diagnose/MeasuredData.h>
+#include <diagnose/RigEffects.h>
+
+#include <bags/LoadTest.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace diagnose {
+
+/// The channels compared (the flowmeter's is a consistency check, not part of the gap).
+enum class ChannelKind { Force, Pressure, Mass };
+std::string getChannelName(ChannelKind c);  ///< "force", "pressure", "mass"
+std::string getChannelUnit(ChannelKind c);  ///< "N", "kPa", "g" (how it is reported)
+double getChannelUnitScale(ChannelKind c);  ///< SI per reported unit
+
+/// One channel of one test at the measured samples, measured beside simulated.
+struct ChannelComparison {
+    ChannelKind kind = ChannelKind::Force;
+    std::vector<double> time;          ///< [s] the channel's sample times
+    std::vector<double> displacement;  ///< [m] the machine's displacement at those times
+    std::vector<double> force;         ///< [N] the measured force at those times (load range)
+    std::vector<char> loading;         ///< 1 before the largest displacement
+    std::vector<double> measured, simulated;  ///< SI
+};
+
+struct TestComparison {
+    int test = 0;          ///< index in MeasuredData::tests
+    double gasMass = 0.0;  ///< [kg] as the flowmeter read it
+    std::vector<ChannelComparison> channels;  ///< force, pressure, mass
+    /// RMS of (simulated - simulated at half the step) per channel [SI], when given: the
+    /// numerical uncertainty (0 if not estimated).
+    std::vector<double> numericalUncertainty;
+};
+
+/// Puts the simulated curve `sim` (run at the test's gas mass) beside the measured test, the
+/// instruments reading it with `rig`; `rate` is the crosshead speed [m/s].
+TestComparison compareTest(const MeasuredTest& test, int index, const bags::LoadCurve& sim,
+                           const RigEffects& rig, double rate);
+
+/// Statistics of a channel's residuals (measured - simulated) over one regime.
+struct RegimeStats {
+    std::string channel;  ///< "force"
+    std::string regime;   ///< "all", "gas mass 3.50 g", "loading", "load 10-35 N", ...
+    int samples = 0;
+    double rmse = 0.0;    ///< [SI]
+    double bias = 0.0;    ///< mean residual [SI]
+    double maxError = 0.0;   ///< largest |residual| [SI]
+    double share = 0.0;   ///< of the channel's squared error (0-1)
+};
+
+/// Signatures of a channel's residuals over one test (or all, test = -1).
+struct Signature {
+    std::string channel;
+    int test = -1;
+    double gasMass = 0.0;     ///< [kg] (0 for all)
+    double bias = 0.0;        ///< mean residual [SI]
+    double scale = 0.0;       ///< measured = a + (1 + scale) simulated, least squares [-]
+    double lag = 0.0;         ///< [s] cross-correlation peak: measured behind simulated > 0
+    double lagCorrelation = 0.0;  ///< the correlation at that peak (-1 to 1)
+    double loopAreaMeasured = 0.0;   ///< hysteresis loop area, channel x displacement [SI m]
+    double loopAreaSimulated = 0.0;
+    double drift = 0.0;       ///< slope of the residual over time [SI/s]
+};
+
+struct ChannelSummary {
+    std::string channel;
+    double rmse = 0.0;         ///< [SI]
+    double range = 0.0;        ///< measured max - min [SI] (normalises the gap)
+    double noise = 0.0;        ///< sensor noise from the data (median second difference) [SI]
+    double numerical = 0.0;    ///< numerical uncertainty [SI] (0 if not estimated)
+    /// ASME V&V 20 validation uncertainty sqrt(noise^2 + numerical^2) [SI] (input
+    /// uncertainty not included)
+    double validation = 0.0;
+    double shareOfGap = 0.0;   ///< of the normalised squared error over force and pressure
+};
+
+struct WhereReport {
+    std::vector<ChannelSummary> channels;
+    std::vector<RegimeStats> regimes;
+    std::vector<Signature> signatures;
+    /// The gap: RMS over force and pressure of rmse / range [-].
+    double gap = 0.0;
+    /// True when every channel's RMSE is within twice its validation uncertainty.
+    bool withinValidation = false;
+};
+
+struct WhereOptions {
+    double loadFrom = 10.0;  ///< [N] load range split (the scenario's stiffness range)
+    double loadTo = 35.0;
+    double maxLag = 30.0;    ///< [s] cross-correlation search window
+};
+
+WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptions& options);
+
+/// The gap (as WhereReport::gap) over some tests only, with the given channel ranges [SI]
+/// (force, pressure) so that gaps of different subsets are comparable.
+double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
+               double forceRange, double pressureRange);
+
+// ------------------------------------------------------------------------------------ which
+
+/// Runs the load test (the app supplies it: bags::runLoadTest with its interrupt checks).
+using Simulator = std::function<bags::LoadTestResult(const bags::LoadTestOptions&)>;
+
+struct CalibrationOptions {
+    int gridPoints = 7;          ///< coarse scan per parameter before Ceres refines
+    int maxIterations = 10;      ///< Ceres iterations per fold
+    double parameterPenalty = 0.05;  ///< subtracted from the shrink per parameter [-]
+    /// An effect is named when its held-out shrink (less the penalty) is at least this.
+    double explainThreshold = 0.5;
+    std::vector<std::string> candidates;  ///< effect names; empty: the whole library
+    int threads = 1;             ///< simulations run at once
+};
+
+struct FoldResult {
+    int heldOut = 0;             ///< test index
+    std::vector<double> parameters;   ///< calibrated on the others [SI]
+    double before = 0.0, after = 0.0;  ///< held-out gap without and with the effect [-]
+};
+
+struct CandidateResult {
+    std::string effect;
+    std::vector<double> parameters;        ///< calibrated on all tests [SI]
+    std::vector<double> parameterStdDev;   ///< from Ceres' covariance (NaN if unavailable)
+    std::vector<FoldResult> folds;
+    double heldoutBefore = 0.0;  ///< mean over folds [-]
+    double heldoutAfter = 0.0;
+    double shrink = 0.0;         ///< 1 - after / before [-]
+    double score = 0.0;          ///< shrink - penalty x parameters
+    int simulations = 0;         ///< load tests run for this candidate
+};
+
+struct WhichReport {
+    std::vector<CandidateResult> candidates;  ///< ranked, best first
+    std::string verdict;   ///< an effect name, "none" or "unexplained"
+    std::string reason;    ///< one sentence
+    /// Pairs of effects whose held-out shrinks are both above the threshold and within 0.1 of
+    /// each other: these data do not tell them apart.
+    std::vector<std::pair<std::string, std::string>> confusable;
+};
+
+/// Calibrates each candidate with leave-one-test-out folds (needs two tests or more).
+/// `base` are the options the diagnosis simulates (the protocol applied; the flowmeter's
+/// readings are the tests' gas masses), `baseRig` the scenario's rig effects, `baseResult` the load test
+/// simulated with them (reused by effects that change only the instruments), `baseline` its
+/// comparisons (for the gap before), `where` their report (verdict `none` when within the
+/// validation uncertainty).
+WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOptions& base,
+                                const RigEffects& baseRig, const bags::LoadTestResult& baseResult,
+                                const std::vector<TestComparison>& baseline,
+                                const WhereReport& where, const Simulator& simulate,
+                                const CalibrationOptions& options);
+
+}  // namespace diagnose

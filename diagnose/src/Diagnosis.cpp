@@ -1,0 +1,322 @@
+#include <diagnose/Diagnosis.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <numeric>
+
+namespace diagnose {
+
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string fmt(const char* f, double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return b;
+}
+
+// One branch of a simulated curve with increasing crosshead displacement.
+struct Branch {
+    std::vector<double> d, f, p;
+    void add(double di, double fi, double pi) {
+        if (!d.empty() && !(di > d.back())) {
+            // Keep the abscissa increasing: a step that did not advance replaces the last.
+            if (di >= d.back() - 1e-12) {
+                f.back() = fi, p.back() = pi;
+                return;
+            }
+            return;
+        }
+        d.push_back(di), f.push_back(fi), p.push_back(pi);
+    }
+};
+
+// y(x) clamped to the end values beyond the range (for a record's own time base).
+double interpolateClamped(const std::vector<double>& x, const std::vector<double>& y, double xq) {
+    if (xq <= x.front()) return y.front();
+    if (xq >= x.back()) return y.back();
+    return interpolate(x, y, xq);
+}
+
+double mean(const std::vector<double>& v) {
+    return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+}
+
+// Sensor noise from second differences: for white noise of sd s, y[i+1] - 2 y[i] + y[i-1] has
+// sd sqrt(6) s; a smooth signal sampled finely adds little, and the median of their sizes
+// ignores the few samples at a kink (the turning point). Appends the second differences.
+void addSecondDifferences(const std::vector<double>& y, std::vector<double>& dd) {
+    for (size_t i = 1; i + 1 < y.size(); ++i) dd.push_back(std::fabs(y[i + 1] - 2.0 * y[i] + y[i - 1]));
+}
+
+double calcNoise(std::vector<double> dd) {
+    if (dd.empty()) return 0.0;
+    std::nth_element(dd.begin(), dd.begin() + dd.size() / 2, dd.end());
+    // median |N(0, 1)| = 0.6745
+    return dd[dd.size() / 2] / (0.6745 * std::sqrt(6.0));
+}
+
+// Cross-correlation lag [s]: the shift of the simulated series that best matches the
+// measured one (measured behind simulated > 0), on a uniform resampling, with a parabolic
+// refinement of the peak. Also returns the correlation there.
+std::pair<double, double> calcLag(const std::vector<double>& t, const std::vector<double>& m,
+                                  const std::vector<double>& s, double maxLag) {
+    if (t.size() < 8) return {kNaN, kNaN};
+    std::vector<double> dts;
+    for (size_t i = 1; i < t.size(); ++i) dts.push_back(t[i] - t[i - 1]);
+    std::nth_element(dts.begin(), dts.begin() + dts.size() / 2, dts.end());
+    const double dt = dts[dts.size() / 2];
+    if (!(dt > 0.0)) return {kNaN, kNaN};
+    const long n = static_cast<long>((t.back() - t.front()) / dt) + 1;
+    std::vector<double> a(n), b(n);
+    for (long i = 0; i < n; ++i) {
+        const double ti = t.front() + i * dt;
+        a[i] = interpolateClamped(t, m, ti);
+        b[i] = interpolateClamped(t, s, ti);
+    }
+    const double ma = mean(a), mb = mean(b);
+    for (double& v : a) v -= ma;
+    for (double& v : b) v -= mb;
+    const long K = std::min<long>(static_cast<long>(maxLag / dt), n / 4);
+    std::vector<double> c(2 * K + 1, -2.0);
+    for (long k = -K; k <= K; ++k) {
+        double sab = 0.0, saa = 0.0, sbb = 0.0;
+        for (long i = std::max(0L, k); i < std::min(n, n + k); ++i) {
+            sab += a[i] * b[i - k];
+            saa += a[i] * a[i];
+            sbb += b[i - k] * b[i - k];
+        }
+        c[k + K] = saa > 0.0 && sbb > 0.0 ? sab / std::sqrt(saa * sbb) : -2.0;
+    }
+    const long best = std::max_element(c.begin(), c.end()) - c.begin();
+    double shift = double(best - K);
+    if (best > 0 && best < 2 * K) {
+        const double y0 = c[best - 1], y1 = c[best], y2 = c[best + 1];
+        const double den = y0 - 2.0 * y1 + y2;
+        if (den < 0.0) shift += 0.5 * (y0 - y2) / den;
+    }
+    return {shift * dt, c[best]};
+}
+
+}  // namespace
+
+std::string getChannelName(ChannelKind c) {
+    return c == ChannelKind::Force ? "force" : c == ChannelKind::Pressure ? "pressure" : "mass";
+}
+std::string getChannelUnit(ChannelKind c) {
+    return c == ChannelKind::Force ? "N" : c == ChannelKind::Pressure ? "kPa" : "g";
+}
+double getChannelUnitScale(ChannelKind c) {
+    return c == ChannelKind::Force ? 1.0 : c == ChannelKind::Pressure ? 1e3 : 1e-3;
+}
+
+TestComparison compareTest(const MeasuredTest& test, int index, const bags::LoadCurve& sim,
+                           const RigEffects& rig, double rate) {
+    const MachineCurve mc = calcMachineCurve(sim, rig, rate);
+    Branch load, unload;
+    size_t last = 0;
+    for (size_t i = 0; i < mc.time.size(); ++i)
+        if (mc.loading[i]) load.add(mc.displacement[i], mc.force[i], mc.pressure[i]), last = i;
+    // Unloading from the peak (the last loading state) back towards the rest state.
+    std::vector<size_t> un = {last};
+    for (size_t i = 0; i < mc.time.size(); ++i)
+        if (!mc.loading[i]) un.push_back(i);
+    if (!mc.time.empty() && mc.displacement[un.back()] > 0.0) {
+        // The block has left the bag: no force, the bag at rest as before loading.
+        unload.add(0.0, 0.0, mc.pressure.front());
+    }
+    for (auto it = un.rbegin(); it != un.rend(); ++it)
+        unload.add(mc.displacement[*it], mc.force[*it], mc.pressure[*it]);
+    if (unload.d.size() < 2) unload = load;  // no unloading simulated: the loading branch
+
+    TestComparison tc;
+    tc.test = index;
+    tc.gasMass = test.gasMass;
+    const size_t turn = std::max_element(test.displacement.begin(), test.displacement.end()) -
+                        test.displacement.begin();
+    const double tTurn = test.time[turn];
+    auto simAt = [&](double d, bool loading, bool pressure) {
+        const Branch& b = loading ? load : unload;
+        if (b.d.empty()) return 0.0;
+        return pressure ? interpolate(b.d, b.p, d) : std::max(0.0, interpolate(b.d, b.f, d));
+    };
+
+    ChannelComparison f;
+    f.kind = ChannelKind::Force;
+    f.time = test.time;
+    f.displacement = test.displacement;
+    f.force = test.force;
+    f.measured = test.force;
+    for (size_t i = 0; i < test.time.size(); ++i) {
+        const bool l = test.time[i] <= tTurn;
+        f.loading.push_back(l ? 1 : 0);
+        f.simulated.push_back(simAt(test.displacement[i], l, false));
+    }
+
+    ChannelComparison p;
+    p.kind = ChannelKind::Pressure;
+    p.time = test.pressure.time;
+    p.measured = test.pressure.value;
+    std::vector<double> truePressure;
+    for (double t : p.time) {
+        const double d = interpolateClamped(test.time, test.displacement, t);
+        const bool l = t <= tTurn;
+        p.displacement.push_back(d);
+        p.force.push_back(interpolateClamped(test.time, test.force, t));
+        p.loading.push_back(l ? 1 : 0);
+        truePressure.push_back(simAt(d, l, true));
+    }
+    p.simulated = applyPressureSensor(p.time, truePressure, rig);
+
+    ChannelComparison m;
+    m.kind = ChannelKind::Mass;
+    m.time = test.flowmeter.time;
+    m.measured = test.flowmeter.value;
+    for (double t : m.time) {
+        m.displacement.push_back(interpolateClamped(test.time, test.displacement, t));
+        m.force.push_back(interpolateClamped(test.time, test.force, t));
+        m.loading.push_back(t <= tTurn ? 1 : 0);
+        m.simulated.push_back(sim.gasMass + rig.flowmeterOffset);
+    }
+    tc.channels = {std::move(f), std::move(p), std::move(m)};
+    tc.numericalUncertainty.assign(3, 0.0);
+    return tc;
+}
+
+WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptions& o) {
+    WhereReport r;
+    if (tests.empty()) return r;
+    const size_t nch = tests[0].channels.size();
+    std::vector<double> nrmse2;
+    for (size_t c = 0; c < nch; ++c) {
+        const ChannelKind kind = tests[0].channels[c].kind;
+        const std::string name = getChannelName(kind);
+        const double u = getChannelUnitScale(kind);
+        // Regimes, each a family whose shares add up to 1.
+        std::map<std::string, std::pair<double, std::vector<double>>> regimes;
+        std::vector<std::string> order;
+        auto add = [&](const std::string& regime, double res) {
+            auto it = regimes.find(regime);
+            if (it == regimes.end()) {
+                order.push_back(regime);
+                it = regimes.emplace(regime, std::make_pair(0.0, std::vector<double>())).first;
+            }
+            it->second.second.push_back(res);
+        };
+        double lo = INFINITY, hi = -INFINITY, numSum = 0.0, sumSq = 0.0;
+        long numN = 0, total = 0;
+        std::vector<double> secondDifferences;
+        for (const TestComparison& t : tests) {
+            const ChannelComparison& ch = t.channels[c];
+            const std::string mass = "gas mass " + fmt("%.2f g", t.gasMass * 1e3);
+            for (size_t i = 0; i < ch.measured.size(); ++i) {
+                const double res = ch.measured[i] - ch.simulated[i];
+                lo = std::min(lo, ch.measured[i]);
+                hi = std::max(hi, ch.measured[i]);
+                sumSq += res * res;
+                ++total;
+                add("all", res);
+                add(mass, res);
+                add(ch.loading[i] ? "loading" : "unloading", res);
+                const double fi = ch.force[i];
+                add(fi < o.loadFrom   ? "load below " + fmt("%g N", o.loadFrom)
+                    : fi <= o.loadTo ? "load " + fmt("%g", o.loadFrom) + "-" + fmt("%g N", o.loadTo)
+                                     : "load above " + fmt("%g N", o.loadTo),
+                    res);
+            }
+            addSecondDifferences(ch.measured, secondDifferences);
+            if (c < t.numericalUncertainty.size()) {
+                numSum += t.numericalUncertainty[c] * t.numericalUncertainty[c];
+                ++numN;
+            }
+
+            // Signatures of this test.
+            Signature s;
+            s.channel = name;
+            s.test = t.test;
+            s.gasMass = t.gasMass;
+            std::vector<double> res(ch.measured.size());
+            for (size_t i = 0; i < res.size(); ++i) res[i] = ch.measured[i] - ch.simulated[i];
+            s.bias = mean(res);
+            const double ms = mean(ch.simulated), mm = mean(ch.measured), mt = mean(ch.time);
+            double sss = 0.0, ssm = 0.0, stt = 0.0, str = 0.0;
+            for (size_t i = 0; i < res.size(); ++i) {
+                sss += (ch.simulated[i] - ms) * (ch.simulated[i] - ms);
+                ssm += (ch.simulated[i] - ms) * (ch.measured[i] - mm);
+                stt += (ch.time[i] - mt) * (ch.time[i] - mt);
+                str += (ch.time[i] - mt) * (res[i] - s.bias);
+            }
+            s.scale = sss > 0.0 ? ssm / sss - 1.0 : kNaN;
+            s.drift = stt > 0.0 ? str / stt : kNaN;
+            const auto [lag, corr] = calcLag(ch.time, ch.measured, ch.simulated, o.maxLag);
+            s.lag = lag;
+            s.lagCorrelation = corr;
+            for (size_t i = 1; i < res.size(); ++i) {
+                const double dd = ch.displacement[i] - ch.displacement[i - 1];
+                s.loopAreaMeasured += 0.5 * (ch.measured[i] + ch.measured[i - 1]) * dd;
+                s.loopAreaSimulated += 0.5 * (ch.simulated[i] + ch.simulated[i - 1]) * dd;
+            }
+            r.signatures.push_back(s);
+        }
+        ChannelSummary cs;
+        cs.channel = name;
+        cs.rmse = total ? std::sqrt(sumSq / double(total)) : 0.0;
+        cs.range = hi - lo;
+        cs.noise = calcNoise(secondDifferences);
+        cs.numerical = numN ? std::sqrt(numSum / double(numN)) : 0.0;
+        cs.validation = std::hypot(cs.noise, cs.numerical);
+        r.channels.push_back(cs);
+        if (kind != ChannelKind::Mass && cs.range > 0.0)
+            nrmse2.push_back(std::pow(cs.rmse / cs.range, 2));
+        for (const std::string& g : order) {
+            const std::vector<double>& v = regimes[g].second;
+            RegimeStats st;
+            st.channel = name;
+            st.regime = g;
+            st.samples = static_cast<int>(v.size());
+            double ss = 0.0, sum = 0.0, mx = 0.0;
+            for (double x : v) ss += x * x, sum += x, mx = std::max(mx, std::fabs(x));
+            st.rmse = std::sqrt(ss / double(v.size()));
+            st.bias = sum / double(v.size());
+            st.maxError = mx;
+            st.share = sumSq > 0.0 ? ss / sumSq : 0.0;
+            r.regimes.push_back(st);
+        }
+        (void)u;
+    }
+    const double sum2 = std::accumulate(nrmse2.begin(), nrmse2.end(), 0.0);
+    r.gap = nrmse2.empty() ? 0.0 : std::sqrt(sum2 / double(nrmse2.size()));
+    size_t k = 0;
+    for (ChannelSummary& cs : r.channels) {
+        if (cs.channel == "mass") continue;
+        cs.shareOfGap = sum2 > 0.0 ? nrmse2[k] / sum2 : 0.0;
+        ++k;
+    }
+    r.withinValidation = true;
+    for (const ChannelSummary& cs : r.channels)
+        if (cs.channel != "mass" && cs.rmse > 2.0 * cs.validation) r.withinValidation = false;
+    return r;
+}
+
+double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
+               double forceRange, double pressureRange) {
+    double sf = 0.0, sp = 0.0;
+    long nf = 0, np = 0;
+    for (int w : which)
+        for (const ChannelComparison& ch : tests[w].channels) {
+            if (ch.kind == ChannelKind::Mass) continue;
+            double& s = ch.kind == ChannelKind::Force ? sf : sp;
+            long& n = ch.kind == ChannelKind::Force ? nf : np;
+            for (size_t i = 0; i < ch.measured.size(); ++i)
+                s += std::pow(ch.measured[i] - ch.simulated[i], 2), ++n;
+        }
+    const double f = nf ? sf / double(nf) / (forceRange * forceRange) : 0.0;
+    const double p = np ? sp / double(np) / (pressureRange * pressureRange) : 0.0;
+    return std::sqrt(0.5 * (f + p));
+}
+
+}  // namespace diagnose

@@ -1,0 +1,161 @@
+#include <io/DiagnosisJson.h>
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace io {
+
+namespace {
+
+std::string num(double v, const char* f = "%.6g") {
+    if (!std::isfinite(v)) return "null";
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return b;
+}
+
+std::string str(const std::string& s) {
+    std::string o = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') o += '\\', o += c;
+        else if (c == '\n') o += "\\n";
+        else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
+        else o += c;
+    }
+    return o + "\"";
+}
+
+diagnose::ChannelKind kindOf(const std::string& name) {
+    return name == "force" ? diagnose::ChannelKind::Force
+           : name == "pressure" ? diagnose::ChannelKind::Pressure
+                                : diagnose::ChannelKind::Mass;
+}
+
+// A channel value [SI] in the channel's unit.
+double inUnit(const std::string& channel, double v) {
+    return v / diagnose::getChannelUnitScale(kindOf(channel));
+}
+
+std::string formatParameters(const diagnose::Effect* e, const std::vector<double>& v,
+                             const std::vector<double>* sd) {
+    std::ostringstream os;
+    os << "{";
+    for (size_t i = 0; i < v.size(); ++i) {
+        const std::string name = e ? e->parameters[i].name : "p" + std::to_string(i);
+        const double s = e ? e->parameters[i].siPerUnit : 1.0;
+        os << (i ? ", " : "") << str(name) << ": {\"value\": " << num(v[i] / s);
+        if (sd && i < sd->size()) os << ", \"std_dev\": " << num((*sd)[i] / s);
+        os << ", \"unit\": " << str(e ? e->parameters[i].unit : "") << "}";
+    }
+    return os.str() + "}";
+}
+
+}  // namespace
+
+std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::WhereReport& w,
+                                const diagnose::WhichReport* which) {
+    std::ostringstream os;
+    os << "{\n  \"format\": \"bagsim diagnosis 1\",\n"
+       << "  \"measured\": " << str(info.measuredFolder) << ",\n"
+       << "  \"scenario\": " << str(info.scenarioFile) << ",\n"
+       << "  \"program\": " << str(info.program) << ",\n"
+       << "  \"command\": " << str(info.commandLine) << ",\n"
+       << "  \"simulations\": " << info.simulations << ",\n"
+       << "  \"seconds\": " << num(info.seconds, "%.1f") << ",\n";
+    os << "  \"where\": {\n    \"gap\": " << num(w.gap)
+       << ",\n    \"gap_definition\": \"RMS over force and pressure of RMSE / measured range\",\n"
+       << "    \"within_validation_uncertainty\": " << (w.withinValidation ? "true" : "false")
+       << ",\n    \"channels\": [\n";
+    for (size_t i = 0; i < w.channels.size(); ++i) {
+        const auto& c = w.channels[i];
+        os << "      {\"channel\": " << str(c.channel) << ", \"unit\": "
+           << str(diagnose::getChannelUnit(kindOf(c.channel))) << ", \"rmse\": "
+           << num(inUnit(c.channel, c.rmse)) << ", \"range\": " << num(inUnit(c.channel, c.range))
+           << ", \"noise\": " << num(inUnit(c.channel, c.noise))
+           << ", \"numerical_uncertainty\": " << num(inUnit(c.channel, c.numerical))
+           << ", \"validation_uncertainty\": " << num(inUnit(c.channel, c.validation))
+           << ", \"share_of_gap\": " << num(c.shareOfGap, "%.4f") << "}"
+           << (i + 1 < w.channels.size() ? "," : "") << "\n";
+    }
+    os << "    ],\n    \"regimes\": [\n";
+    for (size_t i = 0; i < w.regimes.size(); ++i) {
+        const auto& r = w.regimes[i];
+        os << "      {\"channel\": " << str(r.channel) << ", \"regime\": " << str(r.regime)
+           << ", \"samples\": " << r.samples << ", \"rmse\": " << num(inUnit(r.channel, r.rmse))
+           << ", \"bias\": " << num(inUnit(r.channel, r.bias))
+           << ", \"max_error\": " << num(inUnit(r.channel, r.maxError))
+           << ", \"share\": " << num(r.share, "%.4f") << "}"
+           << (i + 1 < w.regimes.size() ? "," : "") << "\n";
+    }
+    os << "    ],\n    \"signatures\": [\n";
+    for (size_t i = 0; i < w.signatures.size(); ++i) {
+        const auto& s = w.signatures[i];
+        os << "      {\"channel\": " << str(s.channel) << ", \"test\": " << s.test + 1
+           << ", \"gas_mass_g\": " << num(s.gasMass * 1e3) << ", \"bias\": "
+           << num(inUnit(s.channel, s.bias)) << ", \"scale\": " << num(s.scale, "%.4f")
+           << ", \"lag_s\": " << num(s.lag, "%.3f") << ", \"lag_correlation\": "
+           << num(s.lagCorrelation, "%.4f") << ", \"loop_area_measured\": "
+           << num(inUnit(s.channel, s.loopAreaMeasured) * 1e3) << ", \"loop_area_simulated\": "
+           << num(inUnit(s.channel, s.loopAreaSimulated) * 1e3)
+           << ", \"loop_area_unit\": " << str(diagnose::getChannelUnit(kindOf(s.channel)) + " mm")
+           << ", \"drift_per_s\": " << num(inUnit(s.channel, s.drift)) << "}"
+           << (i + 1 < w.signatures.size() ? "," : "") << "\n";
+    }
+    os << "    ]\n  }";
+    if (which) {
+        os << ",\n  \"candidates\": [\n";
+        for (size_t i = 0; i < which->candidates.size(); ++i) {
+            const auto& c = which->candidates[i];
+            const diagnose::Effect* e = diagnose::findEffect(c.effect);
+            os << "    {\"rank\": " << i + 1 << ", \"effect\": " << str(c.effect)
+               << ", \"parameters\": " << formatParameters(e, c.parameters, &c.parameterStdDev)
+               << ", \"heldout_before\": " << num(c.heldoutBefore) << ", \"heldout_after\": "
+               << num(c.heldoutAfter) << ", \"shrink\": " << num(c.shrink, "%.4f")
+               << ", \"score\": " << num(c.score, "%.4f") << ", \"simulations\": " << c.simulations
+               << ",\n     \"folds\": [";
+            for (size_t k = 0; k < c.folds.size(); ++k) {
+                const auto& f = c.folds[k];
+                os << (k ? ", " : "") << "{\"held_out_test\": " << f.heldOut + 1
+                   << ", \"parameters\": " << formatParameters(e, f.parameters, nullptr)
+                   << ", \"before\": " << num(f.before) << ", \"after\": " << num(f.after) << "}";
+            }
+            os << "]}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
+        }
+        os << "  ],\n";
+        const diagnose::CandidateResult* best =
+            which->candidates.empty() ? nullptr : &which->candidates.front();
+        os << "  \"heldout_before\": " << num(best ? best->heldoutBefore : NAN) << ",\n"
+           << "  \"heldout_after\": " << num(best ? best->heldoutAfter : NAN) << ",\n"
+           << "  \"shrink\": " << num(best ? best->shrink : NAN, "%.4f") << ",\n"
+           << "  \"confusable\": [";
+        for (size_t i = 0; i < which->confusable.size(); ++i)
+            os << (i ? ", " : "") << "[" << str(which->confusable[i].first) << ", "
+               << str(which->confusable[i].second) << "]";
+        os << "],\n  \"verdict\": " << str(which->verdict) << ",\n"
+           << "  \"reason\": " << str(which->reason) << "\n";
+    } else {
+        os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run (--where-only or one test)\"\n";
+    }
+    os << "}\n";
+    return os.str();
+}
+
+std::string formatResidualsCsv(const std::vector<diagnose::TestComparison>& tests) {
+    std::ostringstream os;
+    os << "test,gas_mass_g,channel,unit,time_s,displacement_mm,branch,measured,simulated,residual\n";
+    for (const auto& t : tests)
+        for (const auto& ch : t.channels) {
+            const std::string name = diagnose::getChannelName(ch.kind);
+            const double u = diagnose::getChannelUnitScale(ch.kind);
+            for (size_t i = 0; i < ch.measured.size(); ++i)
+                os << t.test + 1 << "," << num(t.gasMass * 1e3) << "," << name << ","
+                   << diagnose::getChannelUnit(ch.kind) << "," << num(ch.time[i]) << ","
+                   << num(ch.displacement[i] * 1e3) << "," << (ch.loading[i] ? "loading" : "unloading")
+                   << "," << num(ch.measured[i] / u) << "," << num(ch.simulated[i] / u) << ","
+                   << num((ch.measured[i] - ch.simulated[i]) / u) << "\n";
+        }
+    return os.str();
+}
+
+}  // namespace io
