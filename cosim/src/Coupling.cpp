@@ -2,6 +2,7 @@
 
 #include <bags/Types.h>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <sstream>
@@ -75,6 +76,11 @@ void CouplingOptions::validate() const {
         invalid("initialRelaxation", initialRelaxation, "0 < relaxation <= 1");
     if (reuseSteps < 0) invalid("reuseSteps", reuseSteps, "0 or more");
     if (!(filter >= 0.0 && filter < 1.0)) invalid("filter", filter, "0 <= filter < 1");
+    if (!(maxShapeTravel >= 0.0) || !std::isfinite(maxShapeTravel))
+        invalid("maxShapeTravel", maxShapeTravel, "0 (no limit) or a positive length [m]");
+    if (!(minMacroStep > 0.0 && minMacroStep <= macroStep))
+        invalid("minMacroStep", minMacroStep, "a positive step no larger than macroStep");
+    if (growAfter < 1) invalid("growAfter", growAfter, "1 or more");
 }
 
 struct Coupling::Impl {
@@ -89,6 +95,8 @@ struct Coupling::Impl {
     std::vector<Eigen::Isometry3d> X0;
     double baseTime = 0.0;  // time when the macro step was last set
     int stepsSinceBase = 0;
+    double largestStep = 0.0;  // the macroStep the coupling was built with
+    int goodInARow = 0;        // stepAdaptive(): successes at the current step
     int steps = 0;
     bool initialized = false;
 
@@ -170,6 +178,7 @@ Coupling::Coupling(BodyParticipant& body, std::vector<Participant*> participants
     : m_impl(std::make_unique<Impl>(body, std::move(participants), std::move(links), options)) {
     options.validate();
     Impl& m = *m_impl;
+    m.largestStep = options.macroStep;
     m.linksOf.resize(m.participants.size());
     for (size_t i = 0; i < m.links.size(); ++i) {
         const Link& l = m.links[i];
@@ -250,6 +259,20 @@ StepSummary Coupling::step() {
                 m.body.setShapeLoad(m.links[i].bodyShape, m.unpack(x, int(i)));
         }
         m.body.advanceTo(tEnd);
+        sum.shapeTravel = 0.0;
+        for (size_t i = 0; i < m.links.size(); ++i)
+            sum.shapeTravel = std::max(
+                sum.shapeTravel, (m.body.getShapeState(m.links[i].bodyShape).X_GS.translation() -
+                                  m.X0[i].translation())
+                                     .norm());
+        if (o.maxShapeTravel > 0.0 && sum.shapeTravel > o.maxShapeTravel) {
+            m.rollbackAll();
+            std::ostringstream s;
+            s << "Coupling: a shape would travel " << sum.shapeTravel
+              << " m in the macro step to t = " << tEnd << " s (step " << m.steps
+              << "), more than maxShapeTravel = " << o.maxShapeTravel << " m; cut the macro step";
+            throw bags::NumericalError(s.str(), tEnd - dt, m.steps);
+        }
         // What the body saw at its end poses (x itself unless linearised).
         std::vector<ShapeWrench> seen(m.links.size());
         for (size_t i = 0; i < m.links.size(); ++i)
@@ -283,12 +306,36 @@ StepSummary Coupling::step() {
         m.X0[i] = m.body.getShapeState(m.links[i].bodyShape).X_GS;
     ++m.steps;
     ++m.stepsSinceBase;
+    sum.macroStep = dt;
     return sum;
+}
+
+StepSummary Coupling::stepAdaptive() {
+    Impl& m = *m_impl;
+    int cuts = 0;
+    for (;;) {
+        try {
+            StepSummary s = step();
+            s.cuts = cuts;
+            if (++m.goodInARow >= m.options.growAfter && m.options.macroStep < m.largestStep) {
+                setMacroStep(std::min(2.0 * m.options.macroStep, m.largestStep));
+                m.goodInARow = 0;
+            }
+            return s;
+        } catch (const bags::NumericalError&) {
+            m.goodInARow = 0;
+            const double half = 0.5 * m.options.macroStep;
+            if (half < m.options.minMacroStep) throw;
+            setMacroStep(half);
+            ++cuts;
+        }
+    }
 }
 
 void Coupling::setMacroStep(double dt) {
     CouplingOptions o = m_impl->options;
     o.macroStep = dt;
+    o.minMacroStep = std::min(o.minMacroStep, dt);
     o.validate();
     m_impl->baseTime = getTime();
     m_impl->stepsSinceBase = 0;

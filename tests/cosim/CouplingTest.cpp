@@ -306,3 +306,59 @@ TEST(Coupling, ParticipantsOnThreadsGiveTheSameBitsAsInTurn) {
     EXPECT_EQ(zParallel, zSerial);
     EXPECT_NEAR(zParallel, -a0, 1e-6 * a0);
 }
+
+TEST(Coupling, AdaptiveStepsAreCutWhereTheyFailAndGrowBackAfterSuccesses) {
+    // Implicit IQN-ILS at 4 ms; one bag solve fails in the 4th step. The step is halved once
+    // (2 ms succeeds), doubled after growAfter = 4 good steps, and the time is the exact sum.
+    BlockSystem block(kMass, 10.0, kGravity);
+    SpringParticipant spring = makeSpring();
+    block.start(0.0);
+    CouplingOptions o = options(Scheme::Implicit, AccelerationKind::IQNILS, 4e-3);
+    o.growAfter = 4;
+    Coupling c(*block.body, {&spring}, {Link{block.shape, 0, 0}}, o);
+    c.initialize();
+    std::vector<StepSummary> steps;
+    for (int i = 0; i < 3; ++i) steps.push_back(c.stepAdaptive());
+    spring.failAt = spring.advances + 2;
+    for (int i = 0; i < 6; ++i) steps.push_back(c.stepAdaptive());
+    double t = 0.0;
+    for (size_t i = 0; i < steps.size(); ++i) {
+        t += steps[i].macroStep;
+        EXPECT_DOUBLE_EQ(steps[i].time, t) << i;
+    }
+    EXPECT_EQ(steps[3].cuts, 1);
+    EXPECT_EQ(steps[3].macroStep, 2e-3);
+    for (int i = 4; i < 7; ++i) EXPECT_EQ(steps[i].macroStep, 2e-3) << i;
+    EXPECT_EQ(steps[7].macroStep, 4e-3);  // grown back after 4 good steps at 2 ms
+    EXPECT_DOUBLE_EQ(c.getTime(), t);
+}
+
+TEST(Coupling, AShapeIsNeverMovedFurtherThanTheTravelLimitInOneStep) {
+    // The block falls onto the spring with explicit steps of up to omega dt = 3 (unstable
+    // unlimited, see above) and a travel limit of 0.2 m g / k per step. No step moves the
+    // shape further than the limit; the limit cuts the steps where the block moves fast.
+    const double a0 = kMass * kGravity / kStiffness, limit = 0.2 * a0;
+    BlockSystem block(kMass, 2.0 * kZeta * std::sqrt(kStiffness * kMass), kGravity);
+    SpringParticipant spring = makeSpring();
+    block.start(0.0);
+    CouplingOptions o = options(Scheme::Explicit, AccelerationKind::IQNILS, 3.0 / omega());
+    o.maxShapeTravel = limit;
+    o.growAfter = 2;
+    Coupling c(*block.body, {&spring}, {Link{block.shape, 0, 0}}, o);
+    c.initialize();
+    int cuts = 0, steps = 0;
+    double smallest = 1.0, swing = 0.0;
+    while (c.getTime() < 1.0 && steps < 5000) {
+        const StepSummary s = c.stepAdaptive();
+        EXPECT_LE(s.shapeTravel, limit);
+        cuts += s.cuts;
+        smallest = std::min(smallest, s.macroStep);
+        if (c.getTime() > 0.5) swing = std::max(swing, std::abs(block.getZ() + a0));
+        ++steps;
+    }
+    std::printf(
+        "travel limit %.2f mm: %d steps, %d cuts, smallest step %.2e s, swing over the "
+        "last 0.5 s %.2f m g / k\n",
+        1e3 * limit, steps, cuts, smallest, swing / a0);
+    EXPECT_GT(cuts, 0);
+}

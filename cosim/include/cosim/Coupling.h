@@ -60,7 +60,17 @@ struct CouplingOptions {
     int reuseSteps = 0;              ///< IQN-ILS: earlier steps whose secants are kept
     double filter = 1e-10;           ///< IQN-ILS QR filter
     bool parallel = true;            ///< participants on OpenMP threads (one each)
-    void validate() const;           ///< throws std::invalid_argument naming the option
+    /// [m] largest travel of a linked shape's origin in one step (0: no limit). A bag moves a
+    /// shape along a straight line in sub-steps of up to a mesh size; a shape that travels
+    /// more than its half-thickness in one step can come out on the wrong side of the
+    /// membrane (docs/cosim.md), so a step that moves a shape further is refused.
+    double maxShapeTravel = 0.0;
+    /// stepAdaptive(): the smallest step a failing step is halved to [s].
+    double minMacroStep = 1e-6;
+    /// stepAdaptive(): steps in a row that must succeed before the step is doubled again
+    /// (never beyond the largest step, the macroStep the coupling was built with).
+    int growAfter = 4;
+    void validate() const;  ///< throws std::invalid_argument naming the option
 };
 
 /// Body shape `bodyShape` meets shape `shape` of participant `participant`.
@@ -72,13 +82,16 @@ struct Link {
 
 /// What one macro step did.
 struct StepSummary {
-    int step = 0;             ///< index of the macro step (0 the first)
-    double time = 0.0;        ///< [s] at its end
-    int iterations = 0;       ///< passes (1 for the one-pass schemes)
-    bool converged = true;    ///< implicit: within tolerance; one-pass schemes: true
-    double residual = 0.0;    ///< [N] |H(x) - x| of the last pass (scaled as above)
-    double wrenchNorm = 0.0;  ///< [N] |H(x)| of the last pass
-    int bagIterations = 0;    ///< Newton iterations over every participant and pass
+    int step = 0;              ///< index of the macro step (0 the first)
+    double time = 0.0;         ///< [s] at its end
+    int iterations = 0;        ///< passes (1 for the one-pass schemes)
+    bool converged = true;     ///< implicit: within tolerance; one-pass schemes: true
+    double residual = 0.0;     ///< [N] |H(x) - x| of the last pass (scaled as above)
+    double wrenchNorm = 0.0;   ///< [N] |H(x)| of the last pass
+    int bagIterations = 0;     ///< Newton iterations over every participant and pass
+    double macroStep = 0.0;    ///< [s] the step taken
+    int cuts = 0;              ///< stepAdaptive(): halvings before this step succeeded
+    double shapeTravel = 0.0;  ///< [m] the largest travel of a linked shape's origin
 };
 
 class Coupling {
@@ -93,6 +106,12 @@ class Coupling {
     void initialize();
     /// One macro step (see the file comment). @throws bags::NumericalError, sides rolled back.
     StepSummary step();
+    /// One macro step that is halved, down to minMacroStep, while it fails (a participant
+    /// that cannot follow, implicit iterations that do not converge, a shape that would
+    /// travel more than maxShapeTravel), and doubled again after growAfter steps in a row
+    /// succeed, up to the macroStep the coupling was built with.
+    /// @throws bags::NumericalError once even minMacroStep fails (sides rolled back).
+    StepSummary stepAdaptive();
     /// Changes the macro step from the next step on (time keeps counting from the last one).
     void setMacroStep(double dt);
     double getTime() const;   ///< [s] at the last committed step
