@@ -3,7 +3,9 @@
 // the implicit ones stay stable.
 #include <bags/Airbag.h>
 #include <bags/MaterialFit.h>
+#include <body/ContactShape.h>
 #include <cosim/BagParticipant.h>
+#include <cosim/BodyShapes.h>
 #include <cosim/Coupling.h>
 #include <gtest/gtest.h>
 
@@ -365,4 +367,74 @@ TEST(BlockOnBag, TheBagParticipantsTangentMatchesFiniteDifferencesOfItsWrench) {
         "bag participant's tangent against finite differences: worst block error %.2e; "
         "dFz/dz = %.1f N/mm\n",
         worst, 1e-3 * T(5, 5));
+}
+
+TEST(BlockOnBag, ASegmentsRoundConeRestsWhereTheBagsOwnLoadCurvePutsItsWeight) {
+    // A shank-like segment: a body::ContactShape round cone (radii 50 and 38 mm, 200 mm long)
+    // lying along the bag's apex ridge, made a bag shape by makeBagShape() and carried on a
+    // damped slider through BodyParticipant at its X_BS. Reference: the bag alone pressed by
+    // the same shape to the depth where it carries 20 N (secant to 1e-6 of it), from the
+    // touching height (the lowest at which no node of the inflated bag lies inside the shape,
+    // bisected to 1e-9 m). Tolerance: 1 % of that depth after 0.3 s (implicit IQN-ILS, 5 ms).
+    const body::ContactShape cone = body::ContactShape::makeRoundCone(
+        SimTK::Vec3(0, -0.1, 0), 0.050, SimTK::Vec3(0, 0.1, 0), 0.038);
+    auto makeBag = [&](BagShapeOfBody& b, double& x0) {
+        b = makeBagShape(cone);
+        auto bag = std::make_unique<bags::Airbag>(makeSpec());
+        int apex = 0;
+        bag->getMesh().X.row(2).maxCoeff(&apex);
+        x0 = bag->getMesh().X(0, apex);
+        b.shape->setPose(at(Vec3(x0, 0.0, 0.5)));
+        bag->addShape(b.shape, blockContact());
+        bag->inflate(kGasMass);
+        return bag;
+    };
+    BagShapeOfBody ref;
+    double x0 = 0.0;
+    auto bag = makeBag(ref, x0);
+    // The body frame's height at first touch (no node inside the shape above it).
+    auto inside = [&](double z) {
+        const Eigen::Matrix3Xd& x = bag->getPositions();
+        const Eigen::Isometry3d X = at(Vec3(x0, 0.0, z));
+        ref.shape->setPose(X);
+        for (int i = 0; i < x.cols(); ++i)
+            if (ref.shape->calcSignedDistance(x.col(i), nullptr, nullptr) < 0.0) return true;
+        return false;
+    };
+    double lo = 0.0, hi = 0.5;
+    while (hi - lo > 1e-9) (inside(0.5 * (lo + hi)) ? lo : hi) = 0.5 * (lo + hi);
+    const double zTouch = hi;
+    auto force = [&](double d) {
+        bag->setShapePose(0, at(Vec3(x0, 0.0, zTouch - d)));
+        EXPECT_TRUE(bag->advance(0.0).converged);
+        return bag->calcShapeWrench(0).force.z();
+    };
+    double d0 = 0.002, d1 = 0.004, f0 = force(d0) - kWeight, f1 = force(d1) - kWeight;
+    for (int k = 0; k < 30 && std::abs(f1) > 1e-6 * kWeight; ++k) {
+        const double d2 = d1 - f1 * (d1 - d0) / (f1 - f0);
+        d0 = d1;
+        f0 = f1;
+        d1 = d2;
+        f1 = force(d1) - kWeight;
+    }
+    ASSERT_LT(std::abs(f1), 1e-6 * kWeight);
+    const double depth = d1, k = -bag->calcShapeWrenchTangent(0)(5, 5);
+
+    BagShapeOfBody b;
+    double x1 = 0.0;
+    BagParticipant part(makeBag(b, x1));
+    const double m = kWeight / kGravity;
+    // The slider's body frame is the segment's; the shape sits on it at X_BS.
+    BlockSystem segment(m, 2 * 0.7 * std::sqrt(k * m), kGravity, x1, 0.0, false, {}, b.X_BS);
+    segment.start(zTouch);
+    Coupling c(*segment.body, {&part}, {Link{segment.shape, 0, 0}},
+               coupling(Scheme::Implicit, AccelerationKind::IQNILS, 5e-3));
+    c.initialize();
+    for (int i = 0; i < 60; ++i) c.step();
+    const double rest = zTouch - segment.getZ();
+    std::printf(
+        "round cone: load curve %.4f mm at %.0f N (%.2f N/mm), co-simulation %.4f mm "
+        "(%+.3f %%)\n",
+        1e3 * depth, kWeight, 1e-3 * k, 1e3 * rest, 100 * (rest - depth) / depth);
+    EXPECT_NEAR(rest, depth, 0.01 * depth);
 }

@@ -19,10 +19,11 @@ struct BlockSystem {
     int extraShape = -1;  // a second shape at the same frame (a second bag under the block)
     double mass = 0.0;
 
-    // Slider along Ground z through (x, y) = (x0, y0); body frame aligned with Ground; its origin
-    // (the shape's origin) at z = q. free: a free joint instead (no damper).
+    // Slider along Ground z through (x, y) = (x0, y0); body frame aligned with Ground, its origin
+    // at z = q; the shapes' frame at X_BS on it. free: a free joint instead (no damper).
     BlockSystem(double m, double damping, double gravity, double x0 = 0.0, double y0 = 0.0,
-                bool free = false, const BodyIntegratorOptions& integ = {})
+                bool free = false, const BodyIntegratorOptions& integ = {},
+                const SimTK::Transform& X_BS = SimTK::Transform())
         : mass(m) {
         if (gravity != 0.0)
             SimTK::Force::Gravity(forces, matter, SimTK::UnitVec3(0, 0, -1), gravity);
@@ -43,8 +44,8 @@ struct BlockSystem {
                                                    damping);
         }
         body = std::make_unique<BodyParticipant>(system, forces, integ);
-        shape = body->addShape(mobod.getMobilizedBodyIndex(), SimTK::Transform());
-        extraShape = body->addShape(mobod.getMobilizedBodyIndex(), SimTK::Transform());
+        shape = body->addShape(mobod.getMobilizedBodyIndex(), X_BS);
+        extraShape = body->addShape(mobod.getMobilizedBodyIndex(), X_BS);
         system.realizeTopology();
     }
     // Starts the slider at height z [m] with velocity v [m/s].

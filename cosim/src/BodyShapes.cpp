@@ -1,0 +1,117 @@
+#include "cosim/BodyShapes.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace cosim {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+class RoundCone : public bags::RigidShape {
+  public:
+    RoundCone(const Vec3& pA, double rA, const Vec3& pB, double rB)
+        : m_pA(pA), m_pB(pB), m_rA(rA), m_rB(rB) {
+        const double h = (pB - pA).norm();
+        if (!(rA > 0.0 && rB > 0.0 && h > std::abs(rA - rB))) {
+            std::ostringstream s;
+            s << "makeRoundCone: radii " << rA << " m, " << rB << " m and centres " << h
+              << " m apart; valid: positive radii and centres further apart than the radii "
+                 "differ";
+            throw std::invalid_argument(s.str());
+        }
+        m_h = h;
+        m_e = (pB - pA) / h;
+        m_sin = (rA - rB) / h;
+        m_cos = std::sqrt(1.0 - m_sin * m_sin);
+    }
+    double calcSignedDistance(const Vec3& p_G, Vec3* closest_G, Vec3* normal_G) const override {
+        double d;
+        calcContactGeometry(p_G, &d, closest_G, normal_G, nullptr);
+        return d;
+    }
+    Mat3 calcNormalDerivative(const Vec3& p_G) const override {
+        Mat3 dn;
+        calcContactGeometry(p_G, nullptr, nullptr, nullptr, &dn);
+        return dn;
+    }
+    void calcContactGeometry(const Vec3& p_G, double* distance, Vec3* closest_G, Vec3* normal_G,
+                             Mat3* dndp_G) const override {
+        const Mat3& R = m_X_GS.linear();
+        const Vec3 p = R.transpose() * (p_G - m_X_GS.translation());
+        const Vec3 v = p - m_pA;
+        const double y = v.dot(m_e);
+        const Vec3 w = v - y * m_e;
+        const double x = w.norm();
+        // Off the axis er is the radial direction; on it any perpendicular will do (the
+        // distance is the same; the normal's derivative is undefined there and left zero).
+        Vec3 er;
+        if (x > 1e-14 * m_h) {
+            er = w / x;
+        } else {
+            er = m_e.unitOrthogonal();
+        }
+        const double s = -x * m_sin + y * m_cos;  // along the tangent line
+        double d;
+        Vec3 n, c;
+        Mat3 dn = Mat3::Zero();
+        auto sphere = [&](const Vec3& centre, double r) {
+            const Vec3 q = p - centre;
+            const double len = q.norm();
+            n = len > 0.0 ? Vec3(q / len) : Vec3(m_cos * er + m_sin * m_e);
+            d = len - r;
+            c = centre + r * n;
+            if (len > 0.0) dn = (Mat3::Identity() - n * n.transpose()) / len;
+        };
+        if (s < 0.0) {
+            sphere(m_pA, m_rA);
+        } else if (s > m_h * m_cos) {
+            sphere(m_pB, m_rB);
+        } else {
+            n = m_cos * er + m_sin * m_e;
+            d = x * m_cos + y * m_sin - m_rA;
+            c = p - d * n;
+            if (x > 1e-14 * m_h)
+                dn = m_cos * (Mat3::Identity() - m_e * m_e.transpose() - er * er.transpose()) / x;
+        }
+        if (distance) *distance = d;
+        if (closest_G) *closest_G = R * c + m_X_GS.translation();
+        if (normal_G) *normal_G = R * n;
+        if (dndp_G) *dndp_G = R * dn * R.transpose();
+    }
+    double getBoundingRadius() const override {
+        return std::max(m_pA.norm() + m_rA, m_pB.norm() + m_rB);
+    }
+    std::string getName() const override { return "round-cone"; }
+
+  private:
+    Vec3 m_pA, m_pB, m_e;
+    double m_rA, m_rB, m_h = 0.0, m_sin = 0.0, m_cos = 1.0;
+};
+
+Vec3 toEigen(const SimTK::Vec3& v) { return Vec3(v[0], v[1], v[2]); }
+
+}  // namespace
+
+std::unique_ptr<bags::RigidShape> makeRoundCone(const Vec3& pA, double rA, const Vec3& pB,
+                                                double rB) {
+    return std::make_unique<RoundCone>(pA, rA, pB, rB);
+}
+
+BagShapeOfBody makeBagShape(const body::ContactShape& s) {
+    BagShapeOfBody out;
+    if (s.getKind() == body::ContactShape::Kind::Ellipsoid) {
+        out.shape = bags::makeEllipsoid(toEigen(s.getSemiAxes()));
+        out.X_BS = s.getEllipsoidPose();
+    } else {
+        out.shape = makeRoundCone(toEigen(s.getPointA()), s.getRadiusA(), toEigen(s.getPointB()),
+                                  s.getRadiusB());
+        out.X_BS = SimTK::Transform();
+    }
+    return out;
+}
+
+}  // namespace cosim
