@@ -3,10 +3,12 @@
 #include <bags/Types.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <exception>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 namespace cosim {
 
@@ -81,6 +83,7 @@ void CouplingOptions::validate() const {
     if (!(minMacroStep > 0.0 && minMacroStep <= macroStep))
         invalid("minMacroStep", minMacroStep, "a positive step no larger than macroStep");
     if (growAfter < 1) invalid("growAfter", growAfter, "1 or more");
+    if (threads < 0) invalid("threads", threads, "0 (one per core) or more");
 }
 
 struct Coupling::Impl {
@@ -132,8 +135,7 @@ struct Coupling::Impl {
         std::vector<int> failed(np, 0), iterations(np, 0);
         w.assign(links.size(), ShapeWrench());
         t.assign(links.size(), Mat6::Zero());
-#pragma omp parallel for schedule(dynamic, 1) if (options.parallel && np > 1)
-        for (int p = 0; p < np; ++p) {
+        auto work = [&](int p) {
             try {
                 Participant& part = *participants[p];
                 for (int i : linksOf[p]) part.setShapeState(links[i].shape, states[i]);
@@ -141,7 +143,7 @@ struct Coupling::Impl {
                 iterations[p] = s.solverIterations;
                 if (!s.converged) {
                     failed[p] = 1;
-                    continue;
+                    return;
                 }
                 for (int i : linksOf[p]) {
                     w[i] = part.calcWrench(links[i].shape);
@@ -150,6 +152,23 @@ struct Coupling::Impl {
             } catch (...) {
                 errors[p] = std::current_exception();
             }
+        };
+        const int nt = std::min(np, options.parallel ? calcThreads() : 1);
+        if (nt <= 1) {
+            for (int p = 0; p < np; ++p) work(p);
+        } else if (options.threading == Threading::OpenMP) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+            for (int p = 0; p < np; ++p) work(p);
+        } else {
+            // Threads made for this call: nothing spins between calls, while the body steps.
+            std::atomic<int> next{0};
+            auto loop = [&] {
+                for (int p = next++; p < np; p = next++) work(p);
+            };
+            std::vector<std::thread> team;
+            for (int k = 1; k < nt; ++k) team.emplace_back(loop);
+            loop();
+            for (std::thread& th : team) th.join();
         }
         int total = 0;
         for (int p = 0; p < np; ++p) total += iterations[p];
@@ -165,6 +184,11 @@ struct Coupling::Impl {
                                            steps);
             }
         return total;
+    }
+
+    int calcThreads() const {
+        if (options.threads > 0) return options.threads;
+        return std::max(1, int(std::thread::hardware_concurrency()));
     }
 
     void rollbackAll() {

@@ -38,6 +38,7 @@ namespace cosim {
 
 enum class Scheme { Explicit, Implicit, Tangent };
 enum class AccelerationKind { Constant, Aitken, IQNILS };
+enum class Threading { PerCall, OpenMP };
 
 /// Parses "explicit", "implicit", "tangent" (throws std::invalid_argument listing them).
 Scheme parseScheme(const std::string& name);
@@ -59,7 +60,12 @@ struct CouplingOptions {
     double initialRelaxation = 0.5;  ///< [-] first iteration of a step (and Constant)
     int reuseSteps = 0;              ///< IQN-ILS: earlier steps whose secants are kept
     double filter = 1e-10;           ///< IQN-ILS QR filter
-    bool parallel = true;            ///< participants on OpenMP threads (one each)
+    bool parallel = true;            ///< participants on threads (one at a time each)
+    /// Threads for the participants: 0 one per core (std::thread::hardware_concurrency).
+    int threads = 0;
+    /// Threads made per call (nothing waits between calls), or an OpenMP team (its idle
+    /// threads may spin while the body steps, which costs on a loaded machine; docs/cosim.md).
+    Threading threading = Threading::PerCall;
     /// [m] largest travel of a linked shape's origin in one step (0: no limit). A bag moves a
     /// shape along a straight line in sub-steps of up to a mesh size; a shape that travels
     /// more than its half-thickness in one step can come out on the wrong side of the
