@@ -51,8 +51,9 @@ const char* kHelp =
     "                      (default: DIR/../<folder name>-diagnosis)\n"
     "  --force             replace this command's files in a folder that is not empty\n"
     "  --where-only        only where the gap lies (no calibration)\n"
-    "  --candidates LIST   effects to calibrate (default: all): pressure-sensor,\n"
-    "                      flowmeter-bias, machine-compliance, block-friction\n"
+    "  --candidates LIST   effects to calibrate (default: the library, pressure-sensor,\n"
+    "                      flowmeter-bias, gas-temperature, machine-compliance,\n"
+    "                      block-friction; load-cell-gain is kept out of it on purpose)\n"
     "  --threads N         simulations run at once (default 1)\n"
     "  --quiet             print only the verdict\n"
     "\n"
@@ -239,6 +240,32 @@ int run(const Args& a) {
                                       : std::string())
                               << (e->parameters[k].unit.empty() ? "" : " " + e->parameters[k].unit);
                 std::cout << "\n";
+            }
+            if (!which->candidates.empty()) {
+                // How far: the best candidate over every test when held out.
+                const diagnose::CandidateResult& b = which->candidates.front();
+                std::cout << "how far (" << b.effect
+                          << ", every test when held out; before -> after):\n";
+                for (size_t k = 0; k < b.heldoutMetricsBefore.size() &&
+                                   k < b.heldoutMetricsAfter.size();
+                     ++k) {
+                    const auto& m0 = b.heldoutMetricsBefore[k];
+                    const auto& m1 = b.heldoutMetricsAfter[k];
+                    const auto kind = m0.channel == "force" ? diagnose::ChannelKind::Force
+                                                            : diagnose::ChannelKind::Pressure;
+                    const double u = diagnose::getChannelUnitScale(kind);
+                    const std::string un = " " + diagnose::getChannelUnit(kind);
+                    double uval = 0.0;
+                    for (const auto& ch : where.channels)
+                        if (ch.channel == m0.channel) uval = ch.validation;
+                    std::cout << "  " << m0.channel << ": RMSE " << fmt("%.4g", m0.rmse / u)
+                              << " -> " << fmt("%.4g", m1.rmse / u) << un << ", largest "
+                              << fmt("%.4g", m0.maxError / u) << " -> "
+                              << fmt("%.4g", m1.maxError / u) << un << ", area metric "
+                              << fmt("%.4g", m0.areaMetric / u) << " -> "
+                              << fmt("%.4g", m1.areaMetric / u) << un
+                              << "; validation uncertainty " << fmt("%.3g", uval / u) << un << "\n";
+                }
             }
             for (const auto& p : which->confusable)
                 std::cout << "  confusable on these data: " << p.first << " and " << p.second << "\n";

@@ -43,12 +43,16 @@ const char* kHelp =
     "displacement step and, if the scenario has an imperfection, the next imperfection seed.\n"
     "The folder names neither the effect nor its parameters; they go to the label file only.\n"
     "\n"
-    "effects (--effect) and their parameters (--param, with units; default in brackets):\n"
+    "effects (--effect E, or several: --effect E1,E2) and their parameters (--param NAME=VALUE\n"
+    "with units, or EFFECT.NAME=VALUE where two effects share a name; default in brackets):\n"
     "  none                 no effect: noise and the model-form difference only\n"
     "  pressure-sensor      lag [3 s], offset [0.1 kPa]\n"
     "  flowmeter-bias       offset [0.1 g] (the flowmeter reads the bag's mass plus this)\n"
+    "  gas-temperature      offset [5 K] (the gas is warmer than the room the manifest states)\n"
     "  machine-compliance   compliance [0.1 mm/N] (testing machine and bed board in series)\n"
     "  block-friction       friction [0.5] (Coulomb, film on block)\n"
+    "  load-cell-gain       gain [0.05] (reads the force times 1 + gain; not among the\n"
+    "                       diagnosis's candidates: an effect outside its library)\n"
     "\n"
     "options:\n"
     "  --noise CH=VALUE     sensor noise (standard deviation) per channel: displacement\n"
@@ -130,47 +134,79 @@ io::Dimension getDimension(const std::string& unit) {
     return io::findUnit(unit == "mm/N" ? "mm" : unit)->dimension;
 }
 
-// Parses "name=VALUE" into the effect's parameter values [SI].
-std::vector<double> parseParams(const diagnose::Effect& e, const std::vector<std::string>& given,
-                                std::vector<std::string>& shown) {
-    std::vector<double> v;
-    for (const auto& p : e.parameters) v.push_back(p.typical);
-    std::vector<bool> seen(v.size(), false);
+// Parses one parameter's text into SI.
+double parseParamValue(const diagnose::EffectParameter& p, const std::string& g,
+                       const std::string& text) {
+    try {
+        if (p.unit == "mm/N") {
+            // A compliance: "0.5 mm/N".
+            const size_t u = text.find("mm/N");
+            if (u == std::string::npos)
+                throw io::UnitError("a compliance needs the unit mm/N (e.g. \"0.1 mm/N\")");
+            return io::parseQuantity(text.substr(0, u), io::Dimension::Dimensionless) * 1e-3;
+        }
+        if (p.unit == "K") {
+            // A temperature difference: K only (degC would shift it by 273.15).
+            const size_t u = text.find('K');
+            if (u == std::string::npos || u + 1 != text.size())
+                throw io::UnitError("a temperature difference needs the unit K (e.g. \"5 K\")");
+            return io::parseQuantity(text.substr(0, u), io::Dimension::Dimensionless);
+        }
+        return io::parseQuantity(text, getDimension(p.unit));
+    } catch (const io::UnitError& ex) {
+        throw UsageError("--param '" + g + "': " + ex.what());
+    }
+}
+
+// Parses "NAME=VALUE" or "EFFECT.NAME=VALUE" into each effect's parameter values [SI]
+// (defaults where not given); `shown` gets one label line per parameter.
+std::vector<std::vector<double>> parseParams(const std::vector<const diagnose::Effect*>& effects,
+                                             const std::vector<std::string>& given,
+                                             std::vector<std::string>& shown) {
+    std::vector<std::vector<double>> v;
+    std::vector<std::vector<bool>> seen;
+    for (const diagnose::Effect* e : effects) {
+        v.emplace_back();
+        for (const auto& p : e->parameters) v.back().push_back(p.typical);
+        seen.emplace_back(v.back().size(), false);
+    }
     for (const std::string& g : given) {
         const size_t eq = g.find('=');
-        const std::string name = eq == std::string::npos ? g : g.substr(0, eq);
-        std::string list;
-        for (const auto& p : e.parameters) list += (list.empty() ? "" : ", ") + p.name;
-        size_t k = 0;
-        while (k < e.parameters.size() && e.parameters[k].name != name) ++k;
-        if (k == e.parameters.size())
-            throw UsageError("--param '" + g + "': effect " + e.name + " has no parameter '" +
-                             name + "'; valid: " + (list.empty() ? "none" : list));
         if (eq == std::string::npos) throw UsageError("--param '" + g + "' needs NAME=VALUE");
-        const auto& p = e.parameters[k];
-        std::string text = g.substr(eq + 1);
-        double si = 0.0;
-        try {
-            if (p.unit == "mm/N") {
-                // A compliance: "0.5 mm/N".
-                const size_t u = text.find("mm/N");
-                if (u == std::string::npos)
-                    throw io::UnitError("a compliance needs the unit mm/N (e.g. \"0.5 mm/N\")");
-                si = io::parseQuantity(text.substr(0, u), io::Dimension::Dimensionless) * 1e-3;
-            } else {
-                si = io::parseQuantity(text, getDimension(p.unit));
-            }
-        } catch (const io::UnitError& ex) {
-            throw UsageError("--param '" + g + "': " + ex.what());
+        std::string name = g.substr(0, eq), only;
+        if (name.find('.') != std::string::npos) {
+            only = name.substr(0, name.find('.'));
+            name = name.substr(name.find('.') + 1);
         }
-        v[k] = si;
-        seen[k] = true;
+        std::vector<std::pair<size_t, size_t>> hits;
+        std::string list;
+        for (size_t i = 0; i < effects.size(); ++i)
+            for (size_t k = 0; k < effects[i]->parameters.size(); ++k) {
+                list += (list.empty() ? "" : ", ") + effects[i]->name + "." +
+                        effects[i]->parameters[k].name;
+                if (effects[i]->parameters[k].name == name &&
+                    (only.empty() || only == effects[i]->name))
+                    hits.push_back({i, k});
+            }
+        if (hits.empty())
+            throw UsageError("--param '" + g + "': no effect given has a parameter '" +
+                             (only.empty() ? "" : only + ".") + name +
+                             "'; valid: " + (list.empty() ? "none" : list));
+        if (hits.size() > 1)
+            throw UsageError("--param '" + g + "': '" + name +
+                             "' is a parameter of several effects; write EFFECT." + name +
+                             "=VALUE (valid: " + list + ")");
+        const auto [i, k] = hits[0];
+        v[i][k] = parseParamValue(effects[i]->parameters[k], g, g.substr(eq + 1));
+        seen[i][k] = true;
     }
-    for (size_t k = 0; k < v.size(); ++k) {
-        const auto& p = e.parameters[k];
-        shown.push_back(p.name + ": " + fmt("%.6g", v[k] / p.siPerUnit) +
-                        (p.unit.empty() ? "" : " " + p.unit) + (seen[k] ? "" : "  # default"));
-    }
+    for (size_t i = 0; i < effects.size(); ++i)
+        for (size_t k = 0; k < v[i].size(); ++k) {
+            const auto& p = effects[i]->parameters[k];
+            shown.push_back((effects.size() > 1 ? effects[i]->name + "." : std::string()) +
+                            p.name + ": " + fmt("%.6g", v[i][k] / p.siPerUnit) +
+                            (p.unit.empty() ? "" : " " + p.unit) + (seen[i][k] ? "" : "  # default"));
+        }
     return v;
 }
 
@@ -211,15 +247,24 @@ void parseNoise(const std::vector<std::string>& given, diagnose::SynthesisOption
 }
 
 int run(const Args& a) {
-    // The effect and its parameters.
-    const diagnose::Effect* effect = a.effect == "none" ? nullptr : diagnose::findEffect(a.effect);
-    if (a.effect != "none" && !effect)
-        throw UsageError("--effect '" + a.effect + "' is not known; valid: none, " +
-                         diagnose::listEffectNames());
-    if (!effect && !a.params.empty()) throw UsageError("--effect none takes no --param");
+    // The effects and their parameters.
+    std::vector<const diagnose::Effect*> effects;
+    if (a.effect != "none") {
+        std::istringstream is(a.effect);
+        std::string name;
+        while (std::getline(is, name, ',')) {
+            const diagnose::Effect* e = diagnose::findEffect(name);
+            if (!e)
+                throw UsageError("--effect '" + name + "' is not known; valid: none, " +
+                                 diagnose::listEffectNames());
+            for (const diagnose::Effect* f : effects)
+                if (f == e) throw UsageError("--effect names '" + name + "' twice");
+            effects.push_back(e);
+        }
+    }
+    if (effects.empty() && !a.params.empty()) throw UsageError("--effect none takes no --param");
     std::vector<std::string> shownParams;
-    const std::vector<double> values =
-        effect ? parseParams(*effect, a.params, shownParams) : std::vector<double>{};
+    const std::vector<std::vector<double>> values = parseParams(effects, a.params, shownParams);
     diagnose::SynthesisOptions so;
     parseNoise(a.noise, so);
     so.seed = a.seed;
@@ -240,9 +285,9 @@ int run(const Args& a) {
     const std::vector<double> readings = sc.options.gasMasses;  // what the flowmeter reads
     bags::LoadTestOptions truth = sc.options;
     diagnose::RigEffects rig;
-    if (effect) {
+    for (size_t i = 0; i < effects.size(); ++i) {
         try {
-            diagnose::applyEffect(*effect, values, readings, rig, truth);
+            diagnose::applyEffect(*effects[i], values[i], readings, rig, truth);
         } catch (const std::invalid_argument& e) {
             throw UsageError(std::string("--param: ") + e.what());
         }
@@ -288,12 +333,16 @@ int run(const Args& a) {
     label << "# Label of the synthetic measured data in " << a.out
           << " (bagsim synth-measurement): what the truth run had that the data do not say.\n"
           << "effect: " << a.effect << "\n";
-    if (effect) {
+    if (!effects.empty()) {
         label << "parameters:\n";
         for (const std::string& s : shownParams) label << "  " << s << "\n";
         label << "scenario_keys: [";
-        for (size_t i = 0; i < effect->parameters.size(); ++i)
-            label << (i ? ", " : "") << effect->parameters[i].scenarioKey;
+        bool first = true;
+        for (const diagnose::Effect* e : effects)
+            for (const auto& p : e->parameters) {
+                label << (first ? "" : ", ") << p.scenarioKey;
+                first = false;
+            }
         label << "]\n";
     }
     label << "noise: {displacement: " << fmt("%g", so.displacementNoise * 1e3) << " mm, force: "

@@ -285,13 +285,15 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
 
     WhichReport report;
     for (const Effect& effect : getEffects()) {
-        if (!o.candidates.empty() &&
-            std::find(o.candidates.begin(), o.candidates.end(), effect.name) == o.candidates.end())
+        if (o.candidates.empty() ? !effect.inLibrary
+                                 : std::find(o.candidates.begin(), o.candidates.end(),
+                                             effect.name) == o.candidates.end())
             continue;
         Evaluator e(data, base, baseRig, baseResult, effect, simulate);
         CandidateResult cr;
         cr.effect = effect.name;
         double sumBefore = 0.0, sumAfter = 0.0;
+        std::vector<TestComparison> heldAfter;  // each test as held out, with its fold's fit
         for (int h = 0; h < n; ++h) {
             std::vector<int> train;
             for (int i = 0; i < n; ++i)
@@ -302,7 +304,12 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
             f.parameters = e.toValues(fit.x.data());
             f.before = calcGap(baseline, {h}, fr, pr);
             std::vector<TestComparison> c;
-            f.after = e.compare(fit.x.data(), c) ? calcGap(c, {h}, fr, pr) : INFINITY;
+            if (e.compare(fit.x.data(), c)) {
+                f.after = calcGap(c, {h}, fr, pr);
+                heldAfter.push_back(c[h]);
+            } else {
+                f.after = INFINITY;
+            }
             sumBefore += f.before;
             sumAfter += f.after;
             cr.folds.push_back(f);
@@ -319,6 +326,8 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
         cr.shrink = cr.heldoutBefore > 0.0 ? 1.0 - cr.heldoutAfter / cr.heldoutBefore : 0.0;
         cr.score = cr.shrink - o.parameterPenalty * double(effect.parameters.size());
         cr.simulations = e.getSimulations();
+        cr.heldoutMetricsBefore = calcGapMetrics(baseline);
+        if (static_cast<int>(heldAfter.size()) == n) cr.heldoutMetricsAfter = calcGapMetrics(heldAfter);
         report.candidates.push_back(cr);
     }
     std::stable_sort(report.candidates.begin(), report.candidates.end(),

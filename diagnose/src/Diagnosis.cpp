@@ -319,4 +319,39 @@ double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>&
     return std::sqrt(0.5 * (f + p));
 }
 
+std::vector<GapMetrics> calcGapMetrics(const std::vector<TestComparison>& tests) {
+    std::vector<GapMetrics> out;
+    for (ChannelKind kind : {ChannelKind::Force, ChannelKind::Pressure}) {
+        GapMetrics g;
+        g.channel = getChannelName(kind);
+        std::vector<double> d, sim;
+        double sum = 0.0, sum2 = 0.0;
+        for (const TestComparison& t : tests)
+            for (const ChannelComparison& ch : t.channels) {
+                if (ch.kind != kind) continue;
+                for (size_t i = 0; i < ch.measured.size(); ++i) {
+                    const double e = ch.simulated[i] - ch.measured[i];
+                    sum += e, sum2 += e * e;
+                    g.maxError = std::max(g.maxError, std::fabs(e));
+                    d.push_back(ch.measured[i]);
+                    sim.push_back(ch.simulated[i]);
+                }
+            }
+        g.samples = static_cast<int>(d.size());
+        if (!d.empty()) {
+            g.rmse = std::sqrt(sum2 / double(d.size()));
+            g.meanError = sum / double(d.size());
+            // Equal sample counts: the area between the two empirical CDFs is the mean
+            // distance between the sorted samples.
+            std::sort(d.begin(), d.end());
+            std::sort(sim.begin(), sim.end());
+            double area = 0.0;
+            for (size_t i = 0; i < d.size(); ++i) area += std::fabs(d[i] - sim[i]);
+            g.areaMetric = area / double(d.size());
+        }
+        out.push_back(g);
+    }
+    return out;
+}
+
 }  // namespace diagnose

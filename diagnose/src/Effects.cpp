@@ -18,6 +18,10 @@ const std::vector<Effect>& getEffects() {
          {{"offset", "g", 1e-3, -RigEffects::kMaxFlowmeterOffset, RigEffects::kMaxFlowmeterOffset,
            0.1e-3, "rig.flowmeter.offset"}},
          true},
+        {"gas-temperature",
+         "the gas is warmer or colder than the room the protocol states (pump, lights, sun)",
+         {{"offset", "K", 1.0, -15.0, 15.0, 5.0, "gas.temperature (the room temperature plus this)"}},
+         true},
         {"machine-compliance",
          "the testing machine and bed board yield in series with the bag",
          {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxMachineCompliance, 0.1e-3,
@@ -27,6 +31,12 @@ const std::vector<Effect>& getEffects() {
          "Coulomb friction between the film and the block",
          {{"friction", "", 1.0, 0.0, 1.0, 0.5, "contact.block.friction"}},
          true},
+        {"load-cell-gain",
+         "the load cell reads the force times 1 + gain (a calibration error)",
+         {{"gain", "", 1.0, -RigEffects::kMaxLoadCellGain, RigEffects::kMaxLoadCellGain, 0.05,
+           "rig.load_cell_gain"}},
+         false,
+         false},
     };
     return effects;
 }
@@ -66,6 +76,10 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
     } else if (effect.name == "flowmeter-bias") {
         rig.flowmeterOffset = values[0];
         options.gasMasses = calcBagGasMasses(readings, rig);
+    } else if (effect.name == "gas-temperature") {
+        options.gas.temperature += values[0];
+    } else if (effect.name == "load-cell-gain") {
+        rig.loadCellGain = values[0];
     } else if (effect.name == "machine-compliance") {
         rig.machineCompliance = values[0];
     } else if (effect.name == "block-friction") {

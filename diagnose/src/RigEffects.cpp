@@ -31,7 +31,7 @@ double calcMeanPressure(const bags::LoadStep& s) {
 
 bool RigEffects::isNone() const {
     return pressureLag == 0.0 && pressureOffset == 0.0 && flowmeterOffset == 0.0 &&
-           machineCompliance == 0.0;
+           machineCompliance == 0.0 && loadCellGain == 0.0;
 }
 
 void RigEffects::validate() const {
@@ -44,6 +44,8 @@ void RigEffects::validate() const {
     require(machineCompliance >= 0.0 && machineCompliance <= kMaxMachineCompliance,
             "machineCompliance", machineCompliance,
             "use 0 (a rigid rig) to 2 mm/N (a rig stiffness of at least 0.5 N/mm)");
+    require(std::fabs(loadCellGain) <= kMaxLoadCellGain, "loadCellGain", loadCellGain,
+            "use -0.2 to 0.2 (the load cell reads the force times 1 + gain)");
 }
 
 std::vector<double> calcBagGasMasses(const std::vector<double>& readings, const RigEffects& rig) {
@@ -71,7 +73,7 @@ MachineCurve calcMachineCurve(const bags::LoadCurve& curve, const RigEffects& ri
         if (i > 0) t += std::fabs(d - mc.displacement.back()) / rate;
         mc.time.push_back(t);
         mc.displacement.push_back(d);
-        mc.force.push_back(s.force);
+        mc.force.push_back(s.force * (1.0 + rig.loadCellGain));
         mc.pressure.push_back(calcMeanPressure(s));
         mc.loading.push_back(s.loading ? 1 : 0);
     }

@@ -51,6 +51,34 @@ std::string formatParameters(const diagnose::Effect* e, const std::vector<double
     return os.str() + "}";
 }
 
+std::string formatMetric(const diagnose::GapMetrics& g) {
+    return "{\"rmse\": " + num(inUnit(g.channel, g.rmse)) + ", \"mean_error\": " +
+           num(inUnit(g.channel, g.meanError)) + ", \"max_error\": " +
+           num(inUnit(g.channel, g.maxError)) + ", \"area_validation_metric\": " +
+           num(inUnit(g.channel, g.areaMetric)) + "}";
+}
+
+// Per channel, before and after, over every test when held out; with the channel's
+// validation uncertainty from the where report.
+std::string formatMetrics(const diagnose::CandidateResult& c, const diagnose::WhereReport& w) {
+    std::ostringstream os;
+    os << "{";
+    for (size_t i = 0; i < c.heldoutMetricsBefore.size(); ++i) {
+        const diagnose::GapMetrics& b = c.heldoutMetricsBefore[i];
+        double uval = NAN;
+        for (const auto& ch : w.channels)
+            if (ch.channel == b.channel) uval = ch.validation;
+        os << (i ? ", " : "") << str(b.channel) << ": {\"unit\": "
+           << str(diagnose::getChannelUnit(kindOf(b.channel))) << ", \"samples\": " << b.samples
+           << ", \"validation_uncertainty\": " << num(inUnit(b.channel, uval))
+           << ", \"before\": " << formatMetric(b) << ", \"after\": "
+           << (i < c.heldoutMetricsAfter.size() ? formatMetric(c.heldoutMetricsAfter[i])
+                                                : std::string("null"))
+           << "}";
+    }
+    return os.str() + "}";
+}
+
 }  // namespace
 
 std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::WhereReport& w,
@@ -113,7 +141,7 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
                << ", \"heldout_before\": " << num(c.heldoutBefore) << ", \"heldout_after\": "
                << num(c.heldoutAfter) << ", \"shrink\": " << num(c.shrink, "%.4f")
                << ", \"score\": " << num(c.score, "%.4f") << ", \"simulations\": " << c.simulations
-               << ",\n     \"folds\": [";
+               << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": [";
             for (size_t k = 0; k < c.folds.size(); ++k) {
                 const auto& f = c.folds[k];
                 os << (k ? ", " : "") << "{\"held_out_test\": " << f.heldOut + 1

@@ -547,7 +547,7 @@ void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabiliza
 
 // The rig's effects the airbag model leaves out (docs/scenario-reference.md#rig).
 void readRig(const ScenarioNode& s, diagnose::RigEffects& r) {
-    s.checkKeys({}, {"pressure_sensor", "flowmeter", "machine_stiffness"});
+    s.checkKeys({}, {"pressure_sensor", "flowmeter", "machine_stiffness", "load_cell_gain"});
     const ScenarioNode ps = s.getSection("pressure_sensor", false);
     ps.checkKeys({}, {"lag", "offset"});
     r.pressureLag = ps.getQuantity("lag", D::Time, 0.0);
@@ -570,6 +570,10 @@ void readRig(const ScenarioNode& s, diagnose::RigEffects& r) {
                    "the testing machine and bed board in series with the bag");
         r.machineCompliance = 1.0 / k;
     }
+    r.loadCellGain = s.getNumber("load_cell_gain", 0.0);
+    checkRange(s, "load_cell_gain", r.loadCellGain, -diagnose::RigEffects::kMaxLoadCellGain, true,
+               diagnose::RigEffects::kMaxLoadCellGain, true, "",
+               "the load cell reads the force times 1 + gain");
 }
 
 void readOutput(const ScenarioNode& s, OutputOptions& o) {

@@ -89,3 +89,21 @@ TEST(RigEffects, ValidateNamesTheParameterAndRange) {
             << e.what();
     }
 }
+
+TEST(MachineCurve, TheLoadCellGainScalesTheForceReadOnly) {
+    bags::LoadCurve c;
+    for (int i = 0; i < 3; ++i) {
+        bags::LoadStep s;
+        s.displacement = 1e-3 * i;
+        s.force = 2.0 * i;
+        s.gaugePressure = {100.0};
+        c.steps.push_back(s);
+    }
+    RigEffects rig;
+    rig.loadCellGain = 0.1;
+    rig.machineCompliance = 1e-3;
+    const diagnose::MachineCurve m = diagnose::calcMachineCurve(c, rig, 1e-3);
+    EXPECT_NEAR(m.force[2], 4.4, 1e-12);
+    // The crosshead follows the true force through the compliance, not the reading.
+    EXPECT_NEAR(m.displacement[2], 2e-3 + 4.0 * 1e-3, 1e-15);
+}

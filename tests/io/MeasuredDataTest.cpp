@@ -221,13 +221,15 @@ TEST(RigSection, KeysReadInSiAndTheFlowmeterOffsetShiftsTheBagsMasses) {
         "rig:\n"
         "  pressure_sensor: {lag: 2 s, offset: 0.3 kPa}\n"
         "  flowmeter: {offset: 0.1 g}\n"
-        "  machine_stiffness: 20 N/mm\n",
+        "  machine_stiffness: 20 N/mm\n"
+        "  load_cell_gain: -0.02\n",
         "rig.yaml");
     const io::LoadTestScenario sc = io::readLoadTestScenario(f);
     EXPECT_DOUBLE_EQ(sc.rig.pressureLag, 2.0);
     EXPECT_DOUBLE_EQ(sc.rig.pressureOffset, 300.0);
     EXPECT_DOUBLE_EQ(sc.rig.flowmeterOffset, 0.1e-3);
     EXPECT_NEAR(sc.rig.machineCompliance, 1.0 / 20e3, 1e-15);
+    EXPECT_DOUBLE_EQ(sc.rig.loadCellGain, -0.02);
     // The flowmeter reads 3.5 g and 3.0 g; the bag holds 0.1 g less.
     EXPECT_NEAR(sc.options.gasMasses[0], 3.4e-3, 1e-15);
     EXPECT_NEAR(sc.options.gasMasses[1], 2.9e-3, 1e-15);

@@ -126,7 +126,7 @@ struct CalibrationOptions {
     double parameterPenalty = 0.05;  ///< subtracted from the shrink per parameter [-]
     /// An effect is named when its held-out shrink (less the penalty) is at least this.
     double explainThreshold = 0.5;
-    std::vector<std::string> candidates;  ///< effect names; empty: the whole library
+    std::vector<std::string> candidates;  ///< effect names; empty: the library (Effect::inLibrary)
     int threads = 1;             ///< simulations run at once
 };
 
@@ -135,6 +135,22 @@ struct FoldResult {
     std::vector<double> parameters;   ///< calibrated on the others [SI]
     double before = 0.0, after = 0.0;  ///< held-out gap without and with the effect [-]
 };
+
+/// How far a channel's simulation is from the measurement over some samples: ASME V&V 20's
+/// comparison error E = S - D summarised, and the area validation metric.
+struct GapMetrics {
+    std::string channel;
+    int samples = 0;
+    double rmse = 0.0;             ///< RMS of E [SI]
+    double meanError = 0.0;        ///< mean of E = S - D [SI]
+    double maxError = 0.0;         ///< largest |E| [SI]
+    /// Area between the empirical CDFs of the measured and the simulated values (Ferson,
+    /// Oberkampf and Ginzburg 2008): the Wasserstein-1 distance of the two samples [SI].
+    double areaMetric = 0.0;
+};
+
+/// The metrics of the force and pressure channels of `tests` (all samples).
+std::vector<GapMetrics> calcGapMetrics(const std::vector<TestComparison>& tests);
 
 struct CandidateResult {
     std::string effect;
@@ -146,6 +162,9 @@ struct CandidateResult {
     double shrink = 0.0;         ///< 1 - after / before [-]
     double score = 0.0;          ///< shrink - penalty x parameters
     int simulations = 0;         ///< load tests run for this candidate
+    /// Over every test when held out (each with its fold's parameters), per channel: without
+    /// and with the effect.
+    std::vector<GapMetrics> heldoutMetricsBefore, heldoutMetricsAfter;
 };
 
 struct WhichReport {

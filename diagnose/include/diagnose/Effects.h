@@ -30,19 +30,23 @@ struct Effect {
     /// True when the effect changes the bag's response (a new simulation per trial value);
     /// false when it changes only what the instruments read.
     bool changesTheBag = false;
+    /// False for effects kept out of the candidate library on purpose (an effect the
+    /// diagnosis does not know, for the withheld-effect checks); --candidates may name them.
+    bool inLibrary = true;
 };
 
-/// The library, in a fixed order: pressure-sensor, flowmeter-bias, machine-compliance,
-/// block-friction.
+/// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
+/// machine-compliance, block-friction (the library), load-cell-gain (kept out of it).
 const std::vector<Effect>& getEffects();
 /// The effect of that name, or nullptr.
 const Effect* findEffect(const std::string& name);
-/// "pressure-sensor, flowmeter-bias, ..." (for messages).
+/// "pressure-sensor, flowmeter-bias, ..." (for messages): all effects.
 std::string listEffectNames();
 
 /// Switches the effect on with these parameter values [SI] (one per parameter, in order):
 /// rig effects go into `rig`; effects on the bag into `options` (for the flowmeter's bias,
-/// options.gasMasses become `readings` less the offset).
+/// options.gasMasses become `readings` less the offset; for the gas temperature,
+/// options.gas.temperature is raised by its offset).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,

@@ -5,7 +5,8 @@
 ///   - the pressure sensor's lag (first order: tubing and filter) and zero offset;
 ///   - the flowmeter's gas-mass bias (it reads the bag's gas mass plus an offset);
 ///   - the compliance of the testing machine and bed board, in series with the bag (the
-///     crosshead travels the block's travel plus force times compliance).
+///     crosshead travels the block's travel plus force times compliance);
+///   - the load cell's gain error (it reads the force times 1 + gain).
 ///
 /// Order of use: RigEffects::validate(); calcBagGasMasses() turns the masses a protocol lists
 /// (flowmeter readings) into the masses the bag holds, for bags::runLoadTest; then, per
@@ -24,6 +25,7 @@ struct RigEffects {
     double pressureOffset = 0.0;     ///< pressure sensor reads gauge pressure + this [Pa]
     double flowmeterOffset = 0.0;    ///< flowmeter reads the bag's gas mass + this [kg]
     double machineCompliance = 0.0;  ///< testing machine and bed board in series [m/N]
+    double loadCellGain = 0.0;       ///< the load cell reads the force times 1 + this [-]
 
     /// Physical bounds of each parameter (also the calibration's bounds).
     static constexpr double kMaxPressureLag = 30.0;          ///< [s]
@@ -32,6 +34,7 @@ struct RigEffects {
     /// flowmeter's stated accuracy (1-2 % of reading)
     static constexpr double kMaxFlowmeterOffset = 0.25e-3;
     static constexpr double kMaxMachineCompliance = 2.0e-3;  ///< [m/N] (0.5 N/mm rig)
+    static constexpr double kMaxLoadCellGain = 0.2;          ///< [-] either sign
 
     /// True when every effect is off (the model as it was).
     bool isNone() const;
@@ -47,13 +50,13 @@ std::vector<double> calcBagGasMasses(const std::vector<double>& readings, const 
 struct MachineCurve {
     std::vector<double> time;          ///< [s] crosshead path / rate, from first contact
     std::vector<double> displacement;  ///< crosshead travel [m] (block travel + F c)
-    std::vector<double> force;         ///< [N]
+    std::vector<double> force;         ///< as the load cell reads it [N]
     std::vector<double> pressure;      ///< true gauge pressure of the bag [Pa] (chamber mean)
     std::vector<char> loading;         ///< 1 on the loading branch
 };
 
-/// What the testing machine records of a simulated curve (with the rig's compliance);
-/// `rate` is the crosshead speed [m/s].
+/// What the testing machine records of a simulated curve (with the rig's compliance and the
+/// load cell's gain); `rate` is the crosshead speed [m/s].
 MachineCurve calcMachineCurve(const bags::LoadCurve& curve, const RigEffects& rig, double rate);
 
 /// Pressure sensor readings [Pa] of a gauge pressure p [Pa] given at increasing times t [s]:
