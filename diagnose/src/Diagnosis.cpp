@@ -24,11 +24,9 @@ struct Branch {
     std::vector<double> d, f, p;
     void add(double di, double fi, double pi) {
         if (!d.empty() && !(di > d.back())) {
-            // Keep the abscissa increasing: a step that did not advance replaces the last.
-            if (di >= d.back() - 1e-12) {
-                f.back() = fi, p.back() = pi;
-                return;
-            }
+            // Keep the abscissa increasing: a step that did not advance replaces the last; one
+            // that went back (a snap on the branch) is left out.
+            if (di >= d.back() - 1e-12) f.back() = fi, p.back() = pi;
             return;
         }
         d.push_back(di), f.push_back(fi), p.push_back(pi);
@@ -195,17 +193,16 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
     for (size_t c = 0; c < nch; ++c) {
         const ChannelKind kind = tests[0].channels[c].kind;
         const std::string name = getChannelName(kind);
-        const double u = getChannelUnitScale(kind);
         // Regimes, each a family whose shares add up to 1.
-        std::map<std::string, std::pair<double, std::vector<double>>> regimes;
+        std::map<std::string, std::vector<double>> regimes;
         std::vector<std::string> order;
         auto add = [&](const std::string& regime, double res) {
             auto it = regimes.find(regime);
             if (it == regimes.end()) {
                 order.push_back(regime);
-                it = regimes.emplace(regime, std::make_pair(0.0, std::vector<double>())).first;
+                it = regimes.emplace(regime, std::vector<double>()).first;
             }
-            it->second.second.push_back(res);
+            it->second.push_back(res);
         };
         double lo = INFINITY, hi = -INFINITY, numSum = 0.0, sumSq = 0.0;
         long numN = 0, total = 0;
@@ -273,7 +270,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         if (kind != ChannelKind::Mass && cs.range > 0.0)
             nrmse2.push_back(std::pow(cs.rmse / cs.range, 2));
         for (const std::string& g : order) {
-            const std::vector<double>& v = regimes[g].second;
+            const std::vector<double>& v = regimes[g];
             RegimeStats st;
             st.channel = name;
             st.regime = g;
@@ -286,7 +283,6 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             st.share = sumSq > 0.0 ? ss / sumSq : 0.0;
             r.regimes.push_back(st);
         }
-        (void)u;
     }
     const double sum2 = std::accumulate(nrmse2.begin(), nrmse2.end(), 0.0);
     r.gap = nrmse2.empty() ? 0.0 : std::sqrt(sum2 / double(nrmse2.size()));
