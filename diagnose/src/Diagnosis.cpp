@@ -210,6 +210,8 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         for (const TestComparison& t : tests) {
             const ChannelComparison& ch = t.channels[c];
             const std::string mass = "gas mass " + fmt("%.2f g", t.gasMass * 1e3);
+            const double t0 = ch.time.empty() ? 0.0 : ch.time.front();
+            const double span = ch.time.empty() ? 0.0 : ch.time.back() - t0;
             for (size_t i = 0; i < ch.measured.size(); ++i) {
                 const double res = ch.measured[i] - ch.simulated[i];
                 lo = std::min(lo, ch.measured[i]);
@@ -223,6 +225,11 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
                 add(fi < o.loadFrom   ? "load below " + fmt("%g N", o.loadFrom)
                     : fi <= o.loadTo ? "load " + fmt("%g", o.loadFrom) + "-" + fmt("%g N", o.loadTo)
                                      : "load above " + fmt("%g N", o.loadTo),
+                    res);
+                // Time windows: thirds of each test's record (drift, warming, settling).
+                const int third = span > 0.0 ? std::min(2, int(3.0 * (ch.time[i] - t0) / span)) : 0;
+                add("time " + std::string(third == 0 ? "first" : third == 1 ? "middle" : "last") +
+                        " third",
                     res);
             }
             addSecondDifferences(ch.measured, secondDifferences);

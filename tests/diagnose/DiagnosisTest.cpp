@@ -184,9 +184,10 @@ TEST(Diagnosis, ALoadCellGainOutsideTheLibraryIsUnexplained) {
 TEST(Diagnosis, RegimeSharesAddUpPerSplit) {
     const Diagnosed d = diagnoseStandIn("pressure-sensor", {3.0, 200.0});
     for (const std::string ch : {"force", "pressure"}) {
-        double branches = 0.0, masses = 0.0, loads = 0.0;
+        double branches = 0.0, masses = 0.0, loads = 0.0, thirds = 0.0;
         for (const auto& r : d.where.regimes) {
             if (r.channel != ch) continue;
+            if (r.regime.rfind("time ", 0) == 0) thirds += r.share;
             if (r.regime == "loading" || r.regime == "unloading") branches += r.share;
             if (r.regime.rfind("gas mass", 0) == 0) masses += r.share;
             if (r.regime.rfind("load ", 0) == 0) loads += r.share;
@@ -194,6 +195,7 @@ TEST(Diagnosis, RegimeSharesAddUpPerSplit) {
         EXPECT_NEAR(branches, 1.0, 1e-12) << ch;
         EXPECT_NEAR(masses, 1.0, 1e-12) << ch;
         EXPECT_NEAR(loads, 1.0, 1e-12) << ch;
+        EXPECT_NEAR(thirds, 1.0, 1e-12) << ch;
     }
 }
 

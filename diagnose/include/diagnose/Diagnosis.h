@@ -5,7 +5,8 @@
 /// the measured samples (the machine's force at the measured displacement on the same branch;
 /// the pressure sensor's reading at its sample times, the bag's pressure taken at the machine's
 /// displacement then); calcWhere() splits the residuals by regime (gas mass, loading or
-/// unloading, load range), gives each regime's share of the squared error and the signatures
+/// unloading, load range, third of the test's time), gives each regime's share of the squared
+/// error and the signatures
 /// (bias, scale, lag by cross-correlation, hysteresis loop area, drift).
 ///
 /// Which: calibrateCandidates() fits each effect of the library (Effects.h) on the training
@@ -58,7 +59,8 @@ TestComparison compareTest(const MeasuredTest& test, int index, const bags::Load
 /// Statistics of a channel's residuals (measured - simulated) over one regime.
 struct RegimeStats {
     std::string channel;  ///< "force"
-    std::string regime;   ///< "all", "gas mass 3.50 g", "loading", "load 10-35 N", ...
+    std::string regime;   ///< "all", "gas mass 3.50 g", "loading", "load 10-35 N",
+                          ///< "time first third", ...
     int samples = 0;
     double rmse = 0.0;    ///< [SI]
     double bias = 0.0;    ///< mean residual [SI]
