@@ -223,13 +223,15 @@ int run(const Args& a) {
             data, sc.options, sc.rig, base, tests, where, counted, co));
         for (const auto& c : which->candidates) simulations += c.simulations;
         if (!a.quiet) {
-            std::cout << "which: candidates ranked by held-out gap shrink (leave one gas mass "
-                         "out), less "
+            std::cout << "which: candidates ranked by the shrink of the held-out gap beyond the "
+                         "validation uncertainty (leave one gas mass out), less "
                       << fmt("%g", co.parameterPenalty) << " per parameter:\n";
             for (const auto& c : which->candidates) {
                 const diagnose::Effect* e = diagnose::findEffect(c.effect);
-                std::cout << "  " << c.effect << ": shrink " << fmt("%.1f %%", 100 * c.shrink)
-                          << " (held-out gap " << fmt("%.4f", c.heldoutBefore) << " -> "
+                std::cout << "  " << c.effect << ": shrink " << fmt("%.1f %%", 100 * c.excessShrink)
+                          << " beyond the uncertainty (" << fmt("%.4f", c.excessBefore) << " -> "
+                          << fmt("%.4f", c.excessAfter) << "), " << fmt("%.1f %%", 100 * c.shrink)
+                          << " of the whole gap (" << fmt("%.4f", c.heldoutBefore) << " -> "
                           << fmt("%.4f", c.heldoutAfter) << "), score " << fmt("%.3f", c.score);
                 for (size_t k = 0; k < c.parameters.size(); ++k)
                     std::cout << "; " << e->parameters[k].name << " "

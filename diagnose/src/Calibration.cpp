@@ -275,10 +275,10 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                                 const CalibrationOptions& o) {
     const int n = static_cast<int>(data.tests.size());
     if (n < 2) throw std::invalid_argument("the calibration needs two tests or more (one held out)");
-    double fr = 0.0, pr = 0.0;
+    double fr = 0.0, pr = 0.0, fu = 0.0, pu = 0.0;
     for (const ChannelSummary& c : where.channels) {
-        if (c.channel == "force") fr = c.range;
-        if (c.channel == "pressure") pr = c.range;
+        if (c.channel == "force") fr = c.range, fu = c.validation;
+        if (c.channel == "pressure") pr = c.range, pu = c.validation;
     }
     if (!(fr > 0.0) || !(pr > 0.0))
         throw std::invalid_argument("the measured force and pressure must vary to be compared");
@@ -292,7 +292,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
         Evaluator e(data, base, baseRig, baseResult, effect, simulate);
         CandidateResult cr;
         cr.effect = effect.name;
-        double sumBefore = 0.0, sumAfter = 0.0;
+        double sumBefore = 0.0, sumAfter = 0.0, sumExcessBefore = 0.0, sumExcessAfter = 0.0;
         std::vector<TestComparison> heldAfter;  // each test as held out, with its fold's fit
         for (int h = 0; h < n; ++h) {
             std::vector<int> train;
@@ -303,15 +303,19 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
             f.heldOut = h;
             f.parameters = e.toValues(fit.x.data());
             f.before = calcGap(baseline, {h}, fr, pr);
+            f.excessBefore = calcGap(baseline, {h}, fr, pr, fu, pu);
             std::vector<TestComparison> c;
             if (e.compare(fit.x.data(), c)) {
                 f.after = calcGap(c, {h}, fr, pr);
+                f.excessAfter = calcGap(c, {h}, fr, pr, fu, pu);
                 heldAfter.push_back(c[h]);
             } else {
-                f.after = INFINITY;
+                f.after = f.excessAfter = INFINITY;
             }
             sumBefore += f.before;
             sumAfter += f.after;
+            sumExcessBefore += f.excessBefore;
+            sumExcessAfter += f.excessAfter;
             cr.folds.push_back(f);
         }
         std::vector<int> all(n);
@@ -324,7 +328,10 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
         cr.heldoutBefore = sumBefore / n;
         cr.heldoutAfter = sumAfter / n;
         cr.shrink = cr.heldoutBefore > 0.0 ? 1.0 - cr.heldoutAfter / cr.heldoutBefore : 0.0;
-        cr.score = cr.shrink - o.parameterPenalty * double(effect.parameters.size());
+        cr.excessBefore = sumExcessBefore / n;
+        cr.excessAfter = sumExcessAfter / n;
+        cr.excessShrink = cr.excessBefore > 0.0 ? 1.0 - cr.excessAfter / cr.excessBefore : 0.0;
+        cr.score = cr.excessShrink - o.parameterPenalty * double(effect.parameters.size());
         cr.simulations = e.getSimulations();
         cr.heldoutMetricsBefore = calcGapMetrics(baseline);
         if (static_cast<int>(heldAfter.size()) == n) cr.heldoutMetricsAfter = calcGapMetrics(heldAfter);
@@ -338,7 +345,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
         for (size_t j = i + 1; j < report.candidates.size(); ++j) {
             const CandidateResult &a = report.candidates[i], &b = report.candidates[j];
             if (a.score >= o.explainThreshold && b.score >= o.explainThreshold &&
-                std::fabs(a.shrink - b.shrink) < 0.1)
+                std::fabs(a.excessShrink - b.excessShrink) < 0.1)
                 report.confusable.push_back({a.effect, b.effect});
         }
 
@@ -349,9 +356,11 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                         "(sensor noise and numerical uncertainty)";
     } else if (best && best->score >= o.explainThreshold) {
         report.verdict = best->effect;
-        report.reason = "it shrinks the held-out gap by " + fmt("%.0f", 100 * best->shrink) +
-                        " % (from " + fmt("%.4f", best->heldoutBefore) + " to " +
-                        fmt("%.4f", best->heldoutAfter) + ")";
+        report.reason = "it shrinks the held-out gap beyond the validation uncertainty by " +
+                        fmt("%.0f", 100 * best->excessShrink) + " % (from " +
+                        fmt("%.4f", best->excessBefore) + " to " + fmt("%.4f", best->excessAfter) +
+                        "; the whole gap by " + fmt("%.0f", 100 * best->shrink) + " %, from " +
+                        fmt("%.4f", best->heldoutBefore) + " to " + fmt("%.4f", best->heldoutAfter) + ")";
         if (!report.confusable.empty())
             report.reason += "; confusable with " +
                              (report.confusable[0].first == best->effect
@@ -360,10 +369,11 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                              " on these data";
     } else {
         report.verdict = "unexplained";
-        report.reason = "no candidate shrinks the held-out gap by " +
+        report.reason = "no candidate shrinks the held-out gap beyond the validation "
+                        "uncertainty by " +
                         fmt("%.0f", 100 * o.explainThreshold) + " % after its parameter penalty" +
-                        (best ? " (best: " + best->effect + ", " + fmt("%.0f", 100 * best->shrink) +
-                                    " %)"
+                        (best ? " (best: " + best->effect + ", " +
+                                    fmt("%.0f", 100 * best->excessShrink) + " %)"
                               : std::string());
     }
     return report;

@@ -306,7 +306,8 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
 }
 
 double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
-               double forceRange, double pressureRange) {
+               double forceRange, double pressureRange, double forceUncertainty,
+               double pressureUncertainty) {
     double sf = 0.0, sp = 0.0;
     long nf = 0, np = 0;
     for (int w : which)
@@ -317,8 +318,12 @@ double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>&
             for (size_t i = 0; i < ch.measured.size(); ++i)
                 s += std::pow(ch.measured[i] - ch.simulated[i], 2), ++n;
         }
-    const double f = nf ? sf / double(nf) / (forceRange * forceRange) : 0.0;
-    const double p = np ? sp / double(np) / (pressureRange * pressureRange) : 0.0;
+    const double f = nf ? std::max(0.0, sf / double(nf) - forceUncertainty * forceUncertainty) /
+                              (forceRange * forceRange)
+                        : 0.0;
+    const double p = np ? std::max(0.0, sp / double(np) - pressureUncertainty * pressureUncertainty) /
+                              (pressureRange * pressureRange)
+                        : 0.0;
     return std::sqrt(0.5 * (f + p));
 }
 

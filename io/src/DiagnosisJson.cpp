@@ -140,13 +140,17 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
                << ", \"parameters\": " << formatParameters(e, c.parameters, &c.parameterStdDev)
                << ", \"heldout_before\": " << num(c.heldoutBefore) << ", \"heldout_after\": "
                << num(c.heldoutAfter) << ", \"shrink\": " << num(c.shrink, "%.4f")
+               << ", \"excess_before\": " << num(c.excessBefore) << ", \"excess_after\": "
+               << num(c.excessAfter) << ", \"excess_shrink\": " << num(c.excessShrink, "%.4f")
                << ", \"score\": " << num(c.score, "%.4f") << ", \"simulations\": " << c.simulations
                << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": [";
             for (size_t k = 0; k < c.folds.size(); ++k) {
                 const auto& f = c.folds[k];
                 os << (k ? ", " : "") << "{\"held_out_test\": " << f.heldOut + 1
                    << ", \"parameters\": " << formatParameters(e, f.parameters, nullptr)
-                   << ", \"before\": " << num(f.before) << ", \"after\": " << num(f.after) << "}";
+                   << ", \"before\": " << num(f.before) << ", \"after\": " << num(f.after)
+                   << ", \"excess_before\": " << num(f.excessBefore)
+                   << ", \"excess_after\": " << num(f.excessAfter) << "}";
             }
             os << "]}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
         }
@@ -156,6 +160,7 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
         os << "  \"heldout_before\": " << num(best ? best->heldoutBefore : NAN) << ",\n"
            << "  \"heldout_after\": " << num(best ? best->heldoutAfter : NAN) << ",\n"
            << "  \"shrink\": " << num(best ? best->shrink : NAN, "%.4f") << ",\n"
+           << "  \"excess_shrink\": " << num(best ? best->excessShrink : NAN, "%.4f") << ",\n"
            << "  \"confusable\": [";
         for (size_t i = 0; i < which->confusable.size(); ++i)
             os << (i ? ", " : "") << "[" << str(which->confusable[i].first) << ", "

@@ -216,3 +216,15 @@ TEST(Diagnosis, TheLoadCellGainIsNotACandidateUnlessNamed) {
     for (const auto& c : diagnoseStandIn("load-cell-gain", {0.1}).which.candidates)
         EXPECT_NE(c.effect, "load-cell-gain");
 }
+
+TEST(Diagnosis, ASmallLagIsJudgedOnTheGapBeyondTheUncertainty) {
+    // Lag 1 s, offset 30 Pa: the pressure's error is a few times its noise. The whole gap also
+    // holds the force's noise, which no effect explains; the shrink that decides is the one
+    // beyond the validation uncertainty.
+    const Diagnosed d = diagnoseStandIn("pressure-sensor", {1.0, 30.0});
+    EXPECT_EQ(d.which.verdict, "pressure-sensor") << d.which.reason;
+    const diagnose::CandidateResult& c = findCandidate(d.which, "pressure-sensor");
+    EXPECT_GT(c.excessShrink, 0.9);
+    EXPECT_LT(c.shrink, c.excessShrink);
+    EXPECT_NEAR(c.parameters[0], 1.0, 0.2);
+}

@@ -11,7 +11,7 @@
 ///
 /// Which: calibrateCandidates() fits each effect of the library (Effects.h) on the training
 /// tests, leaving one gas mass out in turn, and ranks the effects by how much they shrink the
-/// gap on the held-out test, with a penalty per parameter; decideVerdict() names the effect,
+/// gap beyond the validation uncertainty on the held-out test, with a penalty per parameter; decideVerdict() names the effect,
 /// `none` or `unexplained`.
 
 #include <diagnose/Effects.h>
@@ -113,9 +113,12 @@ struct WhereOptions {
 WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptions& options);
 
 /// The gap (as WhereReport::gap) over some tests only, with the given channel ranges [SI]
-/// (force, pressure) so that gaps of different subsets are comparable.
+/// (force, pressure) so that gaps of different subsets are comparable. With validation
+/// uncertainties [SI] (force, pressure), the gap beyond them: each channel's squared RMSE less
+/// its squared uncertainty (at least 0), what noise and numerics cannot explain.
 double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
-               double forceRange, double pressureRange);
+               double forceRange, double pressureRange, double forceUncertainty = 0.0,
+               double pressureUncertainty = 0.0);
 
 // ------------------------------------------------------------------------------------ which
 
@@ -136,6 +139,7 @@ struct FoldResult {
     int heldOut = 0;             ///< test index
     std::vector<double> parameters;   ///< calibrated on the others [SI]
     double before = 0.0, after = 0.0;  ///< held-out gap without and with the effect [-]
+    double excessBefore = 0.0, excessAfter = 0.0;  ///< the same beyond the uncertainty [-]
 };
 
 /// How far a channel's simulation is from the measurement over some samples: ASME V&V 20's
@@ -162,7 +166,11 @@ struct CandidateResult {
     double heldoutBefore = 0.0;  ///< mean over folds [-]
     double heldoutAfter = 0.0;
     double shrink = 0.0;         ///< 1 - after / before [-]
-    double score = 0.0;          ///< shrink - penalty x parameters
+    /// The held-out gap beyond the validation uncertainty (calcGap), mean over folds, and its
+    /// shrink: the part of the gap an effect must explain.
+    double excessBefore = 0.0, excessAfter = 0.0;
+    double excessShrink = 0.0;
+    double score = 0.0;          ///< excessShrink - penalty x parameters
     int simulations = 0;         ///< load tests run for this candidate
     /// Over every test when held out (each with its fold's parameters), per channel: without
     /// and with the effect.
@@ -173,8 +181,8 @@ struct WhichReport {
     std::vector<CandidateResult> candidates;  ///< ranked, best first
     std::string verdict;   ///< an effect name, "none" or "unexplained"
     std::string reason;    ///< one sentence
-    /// Pairs of effects whose held-out shrinks are both above the threshold and within 0.1 of
-    /// each other: these data do not tell them apart.
+    /// Pairs of effects whose scores are both above the threshold and whose shrinks beyond the
+    /// uncertainty are within 0.1 of each other: these data do not tell them apart.
     std::vector<std::pair<std::string, std::string>> confusable;
 };
 
