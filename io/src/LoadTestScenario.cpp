@@ -121,6 +121,7 @@ const std::vector<KeyAlias>& getAliases() {
         {"maxIterations", "solver", "max_iterations"},
         {"pseudoTransientShift", "solver", "pseudo_transient_shift"},
         {"stabilization", "solver", "stabilization"},
+        {"damping", "solver", "damping"},
         {"residualTolerance", "solver", "residual_tolerance"},
     };
     return aliases;
@@ -459,7 +460,8 @@ void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
     if (o.ensemble < 1 || o.ensemble > 64)
         s.fail("ensemble", std::to_string(o.ensemble) +
                                " must be from 1 (one bag) to 64 imperfection seeds");
-    checkRange(s, "block", o.blockSize, 0, false, kInf, false, "mm");
+    checkRange(s, "block", o.blockSize, 0, false, o.geometry.longSide, true, "mm",
+               "at most the airbag's long side");
     checkRange(s, "rate", o.loadingRate, 0, false, kInf, false, "mm/min");
     checkRange(s, "peak_force", o.peakForce, 0, false, kInf, false, "N");
     checkRange(s, "displacement_step", o.displacementStep, 0, false, kInf, false, "mm");
@@ -522,9 +524,10 @@ void readContact(const ScenarioNode& s, bags::LoadTestOptions& o) {
 // ----------------------------------------------------------------------------------- solver
 
 void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabilization,
-                double& residualTolerance) {
+                double& damping, double& residualTolerance) {
     s.checkKeys({}, {"relative_tolerance", "absolute_tolerance", "max_iterations",
-                     "pseudo_transient_shift", "stabilization", "residual_tolerance"});
+                     "pseudo_transient_shift", "stabilization", "damping",
+                     "residual_tolerance"});
     o.relativeTolerance = s.getNumber("relative_tolerance", o.relativeTolerance);
     o.absoluteTolerance = s.getQuantity("absolute_tolerance", D::Force, o.absoluteTolerance);
     o.maxIterations = s.getInteger("max_iterations", o.maxIterations);
@@ -535,6 +538,8 @@ void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabiliza
     checkRange(s, "pseudo_transient_shift", o.pseudoTransientShift, 0, true, kInf, false, "");
     stabilization = s.getQuantity("stabilization", D::StiffnessPerArea, stabilization);
     checkRange(s, "stabilization", stabilization, 0, true, kInf, false, "Pa/m", "0 disables it");
+    damping = s.getQuantity("damping", D::StiffnessPerArea, damping);
+    checkRange(s, "damping", damping, 0, true, kInf, false, "Pa/m", "0: no damper");
     residualTolerance = s.getNumber("residual_tolerance", residualTolerance);
     checkRange(s, "residual_tolerance", residualTolerance, 0, true, 0.05, true, "",
                "a fraction of the peak force; 0 leaves the absolute and relative tolerances");
@@ -705,7 +710,7 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     readFillMass(root.getSection("airbag"), sc);
     readTest(root.getSection("test"), o);
     readContact(root.getSection("contact", false), o);
-    readSolver(root.getSection("solver", false), o.solver, o.stabilization,
+    readSolver(root.getSection("solver", false), o.solver, o.stabilization, o.damping,
                o.residualTolerance);
     readOutput(root.getSection("output", false), sc.output);
     readRig(root.getSection("rig", false), sc.rig);

@@ -181,7 +181,10 @@ TEST_F(MeasuredDataTest, ProtocolTheScenarioCannotRunIsNamedAtTheManifest) {
     EXPECT_EQ(e.getWhere(), file("measured.yaml"));
     EXPECT_EQ(e.getLine(), 4);
     EXPECT_EQ(e.getKey(), "protocol.block");
-    EXPECT_NE(e.getMessage().find("cannot run this protocol"), std::string::npos) << e.what();
+    EXPECT_NE(e.getMessage().find("cannot run this protocol: \"400 mm\" must be in (0 mm, 350 mm] "
+                                  "(at most the airbag's long side)"),
+              std::string::npos)
+        << e.what();
 }
 
 TEST_F(MeasuredDataTest, ProtocolIsAppliedToTheScenario) {
