@@ -10,6 +10,7 @@
 #include <io/Units.h>
 
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -124,7 +125,7 @@ void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
     out << "where: gap " << fmt("%.4f", w.gap)
         << " (RMS over force and pressure of RMSE / measured range)"
         << (w.withinValidation ? ", within the validation uncertainty" : "") << "\n";
-    out << "  channel   RMSE        range       noise       numerical   share of gap\n";
+    out << "  channel   RMSE        range       noise       numerical   input       share of gap\n";
     for (const auto& c : w.channels) {
         const auto kind = c.channel == "force"      ? diagnose::ChannelKind::Force
                           : c.channel == "pressure" ? diagnose::ChannelKind::Pressure
@@ -132,11 +133,12 @@ void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
         const double u = diagnose::getChannelUnitScale(kind);
         const std::string un = " " + diagnose::getChannelUnit(kind);
         char line[200];
-        std::snprintf(line, sizeof line, "  %-8s  %-10s  %-10s  %-10s  %-10s  %s\n",
+        std::snprintf(line, sizeof line, "  %-8s  %-10s  %-10s  %-10s  %-10s  %-10s  %s\n",
                       c.channel.c_str(), (fmt("%.4g", c.rmse / u) + un).c_str(),
                       (fmt("%.4g", c.range / u) + un).c_str(),
                       (fmt("%.3g", c.noise / u) + un).c_str(),
                       (fmt("%.3g", c.numerical / u) + un).c_str(),
+                      (fmt("%.3g", c.input / u) + un).c_str(),
                       c.channel == "mass" ? "(consistency only)"
                                           : (fmt("%.0f", 100 * c.shareOfGap) + " %").c_str());
         out << line;
@@ -187,6 +189,17 @@ int run(const Args& a) {
     half.displacementStep *= 0.5;
     const bags::LoadTestResult fine = simulate(half);
     simulations += 2;
+    // The input uncertainty of a stated imperfection: other bags of its population (the next
+    // kPopulation imperfection seeds), as the ensemble of a run would make them.
+    constexpr int kPopulation = 3;
+    std::vector<bags::LoadTestResult> population;
+    if (sc.options.imperfection.amplitude > 0.0)
+        for (int k = 1; k <= kPopulation; ++k) {
+            bags::LoadTestOptions other = sc.options;
+            other.imperfection.seed += static_cast<std::uint64_t>(k);
+            population.push_back(simulate(other));
+            ++simulations;
+        }
 
     std::vector<diagnose::TestComparison> tests;
     for (size_t i = 0; i < data.tests.size(); ++i) {
@@ -194,13 +207,16 @@ int run(const Args& a) {
                                                            sc.rig, sc.options.loadingRate);
         const diagnose::TestComparison f = diagnose::compareTest(
             data.tests[i], int(i), fine.curves[i], sc.rig, sc.options.loadingRate);
-        for (size_t c = 0; c < t.channels.size(); ++c) {
-            double s = 0.0;
-            const auto& a1 = t.channels[c].simulated;
-            const auto& a2 = f.channels[c].simulated;
-            for (size_t k = 0; k < a1.size(); ++k) s += (a1[k] - a2[k]) * (a1[k] - a2[k]);
-            t.numericalUncertainty[c] = a1.empty() ? 0.0 : std::sqrt(s / double(a1.size()));
+        t.numericalUncertainty = diagnose::calcSimulatedRmsDifference(t, f);
+        std::vector<double> sum2(t.channels.size(), 0.0);
+        for (const bags::LoadTestResult& p : population) {
+            const std::vector<double> d = diagnose::calcSimulatedRmsDifference(
+                t, diagnose::compareTest(data.tests[i], int(i), p.curves[i], sc.rig,
+                                         sc.options.loadingRate));
+            for (size_t c = 0; c < d.size(); ++c) sum2[c] += d[c] * d[c];
         }
+        for (size_t c = 0; c < sum2.size(); ++c)
+            t.inputUncertainty[c] = population.empty() ? 0.0 : std::sqrt(sum2[c] / double(population.size()));
         tests.push_back(std::move(t));
     }
     diagnose::WhereOptions wo;

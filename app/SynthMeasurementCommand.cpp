@@ -12,6 +12,7 @@
 #include <io/Units.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -40,7 +41,8 @@ const char* kHelp =
     "Makes measured data (docs/measured-data.md) of the seed's rig from a truth simulation of\n"
     "the scenario with one unmodelled effect switched on, sensor noise, and a model-form\n"
     "difference from what bagsim diagnose simulates: the truth run takes half the scenario's\n"
-    "displacement step and, if the scenario has an imperfection, the next imperfection seed.\n"
+    "displacement step and, if the scenario has an imperfection, another imperfection seed\n"
+    "(the scenario's + 100).\n"
     "The folder names neither the effect nor its parameters; they go to the label file only.\n"
     "\n"
     "effects (--effect E, or several: --effect E1,E2) and their parameters (--param NAME=VALUE\n"
@@ -67,6 +69,9 @@ const char* kHelp =
     "  --quiet              print only the summary\n"
     "\n"
     "exit status: 0 written, 1 the truth run failed, 2 bad input, 130/143 interrupted.\n";
+
+/// The truth's imperfection seed is the scenario's plus this.
+constexpr std::uint64_t kTruthSeedOffset = 100;
 
 struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;
@@ -296,9 +301,12 @@ int run(const Args& a) {
                             " (the scenario's " + io::formatSignificant(truth.displacementStep, "mm") + ")";
     truth.displacementStep *= 0.5;
     if (truth.imperfection.amplitude > 0.0) {
-        truth.imperfection.seed += 1;
+        // Another bag of the scenario's population; not one of the next few seeds, which the
+        // diagnosis takes for the imperfection's spread.
+        truth.imperfection.seed += kTruthSeedOffset;
         modelForm += ", imperfection seed " + std::to_string(truth.imperfection.seed) +
-                     " (the scenario's " + std::to_string(truth.imperfection.seed - 1) + ")";
+                     " (the scenario's " +
+                     std::to_string(truth.imperfection.seed - kTruthSeedOffset) + ")";
     }
     const fs::path out(a.out);
     claimOutputFolder(out, a.force,

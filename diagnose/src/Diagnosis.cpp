@@ -182,6 +182,7 @@ TestComparison compareTest(const MeasuredTest& test, int index, const bags::Load
     }
     tc.channels = {std::move(f), std::move(p), std::move(m)};
     tc.numericalUncertainty.assign(3, 0.0);
+    tc.inputUncertainty.assign(3, 0.0);
     return tc;
 }
 
@@ -204,8 +205,8 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             }
             it->second.push_back(res);
         };
-        double lo = INFINITY, hi = -INFINITY, numSum = 0.0, sumSq = 0.0;
-        long numN = 0, total = 0;
+        double lo = INFINITY, hi = -INFINITY, numSum = 0.0, inSum = 0.0, sumSq = 0.0;
+        long numN = 0, inN = 0, total = 0;
         std::vector<double> secondDifferences;
         for (const TestComparison& t : tests) {
             const ChannelComparison& ch = t.channels[c];
@@ -236,6 +237,10 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             if (c < t.numericalUncertainty.size()) {
                 numSum += t.numericalUncertainty[c] * t.numericalUncertainty[c];
                 ++numN;
+            }
+            if (c < t.inputUncertainty.size()) {
+                inSum += t.inputUncertainty[c] * t.inputUncertainty[c];
+                ++inN;
             }
 
             // Signatures of this test.
@@ -272,7 +277,9 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         cs.range = hi - lo;
         cs.noise = calcNoise(secondDifferences);
         cs.numerical = numN ? std::sqrt(numSum / double(numN)) : 0.0;
-        cs.validation = std::hypot(cs.noise, cs.numerical);
+        cs.input = inN ? std::sqrt(inSum / double(inN)) : 0.0;
+        cs.validation = std::sqrt(cs.noise * cs.noise + cs.numerical * cs.numerical +
+                                  cs.input * cs.input);
         r.channels.push_back(cs);
         if (kind != ChannelKind::Mass && cs.range > 0.0)
             nrmse2.push_back(std::pow(cs.rmse / cs.range, 2));
@@ -325,6 +332,19 @@ double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>&
                               (pressureRange * pressureRange)
                         : 0.0;
     return std::sqrt(0.5 * (f + p));
+}
+
+std::vector<double> calcSimulatedRmsDifference(const TestComparison& a, const TestComparison& b) {
+    std::vector<double> out;
+    for (size_t c = 0; c < a.channels.size() && c < b.channels.size(); ++c) {
+        const auto& x = a.channels[c].simulated;
+        const auto& y = b.channels[c].simulated;
+        double s = 0.0;
+        const size_t n = std::min(x.size(), y.size());
+        for (size_t k = 0; k < n; ++k) s += (x[k] - y[k]) * (x[k] - y[k]);
+        out.push_back(n ? std::sqrt(s / double(n)) : 0.0);
+    }
+    return out;
 }
 
 std::vector<GapMetrics> calcGapMetrics(const std::vector<TestComparison>& tests) {

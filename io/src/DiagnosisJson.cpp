@@ -102,6 +102,7 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
            << num(inUnit(c.channel, c.rmse)) << ", \"range\": " << num(inUnit(c.channel, c.range))
            << ", \"noise\": " << num(inUnit(c.channel, c.noise))
            << ", \"numerical_uncertainty\": " << num(inUnit(c.channel, c.numerical))
+           << ", \"input_uncertainty\": " << num(inUnit(c.channel, c.input))
            << ", \"validation_uncertainty\": " << num(inUnit(c.channel, c.validation))
            << ", \"share_of_gap\": " << num(c.shareOfGap, "%.4f") << "}"
            << (i + 1 < w.channels.size() ? "," : "") << "\n";

@@ -49,7 +49,14 @@ struct TestComparison {
     /// RMS of (simulated - simulated at half the step) per channel [SI], when given: the
     /// numerical uncertainty (0 if not estimated).
     std::vector<double> numericalUncertainty;
+    /// RMS over other bags of the population (imperfection seeds) of (simulated - theirs) per
+    /// channel [SI]: the input uncertainty of a stated imperfection (0 if not estimated).
+    std::vector<double> inputUncertainty;
 };
+
+/// RMS per channel of the difference between two comparisons' simulated values at the same
+/// measured samples [SI].
+std::vector<double> calcSimulatedRmsDifference(const TestComparison& a, const TestComparison& b);
 
 /// Puts the simulated curve `sim` (run at the test's gas mass) beside the measured test, the
 /// instruments reading it with `rig`; `rate` is the crosshead speed [m/s].
@@ -88,8 +95,8 @@ struct ChannelSummary {
     double range = 0.0;        ///< measured max - min [SI] (normalises the gap)
     double noise = 0.0;        ///< sensor noise from the data (median second difference) [SI]
     double numerical = 0.0;    ///< numerical uncertainty [SI] (0 if not estimated)
-    /// ASME V&V 20 validation uncertainty sqrt(noise^2 + numerical^2) [SI] (input
-    /// uncertainty not included)
+    double input = 0.0;        ///< input uncertainty (the imperfection's spread) [SI]
+    /// ASME V&V 20 validation uncertainty sqrt(noise^2 + numerical^2 + input^2) [SI]
     double validation = 0.0;
     double shareOfGap = 0.0;   ///< of the normalised squared error over force and pressure
 };
