@@ -233,7 +233,14 @@ int run(const Args& a) {
         auto counted = [&](const bags::LoadTestOptions& o) {
             bags::LoadTestOptions m = o;
             m.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
-            return simulate(m);
+            try {
+                return simulate(m);
+            } catch (const bags::NumericalError&) {
+                // A signal seen inside a solve may arrive wrapped as its numerical error: the
+                // calibration must stop, not take it for a trial value that cannot be solved.
+                if (getInterruptSignal()) throw Interrupted(getInterruptSignal());
+                throw;
+            }
         };
         which = std::make_unique<diagnose::WhichReport>(diagnose::calibrateCandidates(
             data, sc.options, sc.rig, base, tests, where, counted, co));
