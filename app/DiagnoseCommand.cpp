@@ -4,6 +4,7 @@
 #include <bagsim/Version.h>
 #include <diagnose/Diagnosis.h>
 #include <io/DiagnosisJson.h>
+#include <io/DiagnosisReport.h>
 #include <io/InputError.h>
 #include <io/LoadTestScenario.h>
 #include <io/MeasuredData.h>
@@ -48,7 +49,7 @@ const char* kHelp =
     "\n"
     "options:\n"
     "  --measured DIR      the measured-data folder (holds measured.yaml)\n"
-    "  --out DIR           where to write diagnosis.json and residuals.csv\n"
+    "  --out DIR           where to write diagnosis.json, residuals.csv and report.html\n"
     "                      (default: DIR/../<folder name>-diagnosis)\n"
     "  --force             replace this command's files in a folder that is not empty\n"
     "  --where-only        only where the gap lies (no calibration)\n"
@@ -167,7 +168,7 @@ int run(const Args& a) {
     const diagnose::MeasuredData data = io::readMeasuredData(a.measured);
     io::LoadTestScenario sc = io::readMeasuredScenario(data);
     const fs::path out(a.out);
-    claimOutputFolder(out, a.force, {"diagnosis.json", "residuals.csv"});
+    claimOutputFolder(out, a.force, {"diagnosis.json", "residuals.csv", "report.html"});
     if (!a.quiet)
         std::cerr << "bagsim diagnose: " << data.tests.size() << " tests in " << a.measured
                   << " against " << data.scenarioFile << "\n";
@@ -314,13 +315,14 @@ int run(const Args& a) {
         fs::rename(tmp, f);
     };
     write("residuals.csv", io::formatResidualsCsv(tests));
+    write("report.html", io::formatDiagnosisReportHtml(info, tests, where, which.get()));
     write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get()));
     if (which)
         std::cout << "verdict: " << which->verdict << " (" << which->reason << ")\n";
     else
         std::cout << "verdict: not run (" << (a.whereOnly ? "--where-only" : "one test: no test to hold out")
                   << ")\n";
-    std::cout << "diagnosis in " << out.string() << "/: diagnosis.json, residuals.csv ("
+    std::cout << "diagnosis in " << out.string() << "/: diagnosis.json, residuals.csv, report.html ("
               << simulations << " simulations, " << fmt("%.1f", info.seconds) << " s)\n";
     return 0;
 }

@@ -322,6 +322,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
         for (int i = 0; i < n; ++i) all[i] = i;
         const Fit full = calibrate(e, baseline, all, fr, pr, o, true);
         cr.parameters = e.toValues(full.x.data());
+        if (!e.compare(full.x.data(), cr.fitted)) cr.fitted.clear();
         for (size_t i = 0; i < effect.parameters.size(); ++i)
             cr.parameterStdDev.push_back(full.sdX[i] *
                                          (effect.parameters[i].upper - effect.parameters[i].lower));

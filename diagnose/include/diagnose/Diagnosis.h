@@ -182,6 +182,9 @@ struct CandidateResult {
     /// Over every test when held out (each with its fold's parameters), per channel: without
     /// and with the effect.
     std::vector<GapMetrics> heldoutMetricsBefore, heldoutMetricsAfter;
+    /// Every test compared with the effect at the parameters fitted on all tests (for the
+    /// report's before/after curves); empty if that simulation failed.
+    std::vector<TestComparison> fitted;
 };
 
 struct WhichReport {

@@ -1,0 +1,219 @@
+#include <io/DiagnosisReport.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace io {
+
+namespace {
+
+std::string num(double v, const char* f = "%.4g") {
+    if (!std::isfinite(v)) return "-";
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return b;
+}
+
+std::string esc(const std::string& s) {
+    std::string o;
+    for (char c : s) {
+        if (c == '<') o += "&lt;";
+        else if (c == '>') o += "&gt;";
+        else if (c == '&') o += "&amp;";
+        else o += c;
+    }
+    return o;
+}
+
+struct Series {
+    std::string name, colour;
+    std::vector<double> x, y;
+    bool points = false;  ///< markers (measured) instead of a line
+};
+
+// One SVG chart with axes, ticks and a legend.
+std::string plot(const std::string& title, const std::string& xLabel, const std::string& yLabel,
+                 const std::vector<Series>& series) {
+    const double W = 460, H = 300, L = 60, R = 10, T = 28, B = 42;
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    for (const Series& s : series)
+        for (size_t i = 0; i < s.x.size(); ++i) {
+            x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
+            y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
+        }
+    if (!(x1 > x0)) x1 = x0 + 1;
+    if (!(y1 > y0)) y1 = y0 + 1;
+    const double py = 0.05 * (y1 - y0);
+    y0 -= py, y1 += py;
+    auto X = [&](double v) { return L + (v - x0) / (x1 - x0) * (W - L - R); };
+    auto Y = [&](double v) { return H - B - (v - y0) / (y1 - y0) * (H - T - B); };
+    std::ostringstream os;
+    os << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H
+       << "' font-family='sans-serif' font-size='11'>"
+       << "<text x='" << L << "' y='16' font-size='13'>" << esc(title) << "</text>"
+       << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='"
+       << H - T - B << "' fill='none' stroke='#888'/>";
+    for (int k = 0; k <= 4; ++k) {
+        const double xv = x0 + (x1 - x0) * k / 4, yv = y0 + (y1 - y0) * k / 4;
+        os << "<text x='" << X(xv) << "' y='" << H - B + 14 << "' text-anchor='middle'>"
+           << num(xv, "%.3g") << "</text>"
+           << "<text x='" << L - 4 << "' y='" << Y(yv) + 4 << "' text-anchor='end'>"
+           << num(yv, "%.3g") << "</text>";
+    }
+    os << "<text x='" << (L + W - R) / 2 << "' y='" << H - 8 << "' text-anchor='middle'>"
+       << esc(xLabel) << "</text>"
+       << "<text x='14' y='" << (T + H - B) / 2 << "' transform='rotate(-90 14 "
+       << (T + H - B) / 2 << ")' text-anchor='middle'>" << esc(yLabel) << "</text>";
+    int legend = 0;
+    for (const Series& s : series) {
+        if (s.points) {
+            const size_t step = std::max<size_t>(1, s.x.size() / 400);
+            for (size_t i = 0; i < s.x.size(); i += step)
+                os << "<circle cx='" << num(X(s.x[i]), "%.1f") << "' cy='" << num(Y(s.y[i]), "%.1f")
+                   << "' r='1.5' fill='" << s.colour << "'/>";
+        } else {
+            os << "<polyline fill='none' stroke-width='1.5' stroke='" << s.colour << "' points='";
+            for (size_t i = 0; i < s.x.size(); ++i)
+                os << num(X(s.x[i]), "%.1f") << "," << num(Y(s.y[i]), "%.1f") << " ";
+            os << "'/>";
+        }
+        os << "<text x='" << L + 8 << "' y='" << T + 14 + 13 * legend << "' fill='" << s.colour
+           << "'>" << esc(s.name) << "</text>";
+        ++legend;
+    }
+    return os.str() + "</svg>";
+}
+
+// A channel's series in its reporting unit; `x` the displacement [mm] or the time [s].
+Series makeSeries(const diagnose::ChannelComparison& ch, bool measured, bool byTime,
+                  const std::string& name, const std::string& colour) {
+    Series s;
+    s.name = name;
+    s.colour = colour;
+    s.points = measured;
+    const double u = diagnose::getChannelUnitScale(ch.kind);
+    for (size_t i = 0; i < ch.measured.size(); ++i) {
+        s.x.push_back(byTime ? ch.time[i] : ch.displacement[i] * 1e3);
+        s.y.push_back((measured ? ch.measured[i] : ch.simulated[i]) / u);
+    }
+    return s;
+}
+
+}  // namespace
+
+std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
+                                      const std::vector<diagnose::TestComparison>& tests,
+                                      const diagnose::WhereReport& w,
+                                      const diagnose::WhichReport* which) {
+    const diagnose::CandidateResult* best =
+        which && !which->candidates.empty() ? &which->candidates.front() : nullptr;
+    std::ostringstream os;
+    os << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>bagsim diagnosis: "
+       << esc(info.measuredFolder) << "</title><style>body{font-family:sans-serif;margin:2em;}"
+       << "table{border-collapse:collapse;margin:0.5em 0;}td,th{border:1px solid #ccc;"
+       << "padding:2px 8px;text-align:right;}th{background:#eee;}td:first-child{text-align:left;}"
+       << "</style></head><body>";
+    os << "<h1>Diagnosis of " << esc(info.measuredFolder) << "</h1><p>Scenario "
+       << esc(info.scenarioFile) << "; " << esc(info.program) << "; " << info.simulations
+       << " simulations, " << num(info.seconds, "%.1f") << " s. See docs/diagnosis.md.</p>";
+    if (which)
+        os << "<h2>Verdict: " << esc(which->verdict) << "</h2><p>" << esc(which->reason) << "</p>";
+    os << "<h2>Where</h2><p>Gap " << num(w.gap) << " (RMS over force and pressure of RMSE / "
+       << "measured range)" << (w.withinValidation ? ", within the validation uncertainty" : "")
+       << ".</p><table><tr><th>channel</th><th>RMSE</th><th>range</th><th>noise</th>"
+       << "<th>numerical</th><th>input</th><th>validation</th><th>share of gap</th></tr>";
+    for (const auto& c : w.channels) {
+        const auto kind = c.channel == "force"      ? diagnose::ChannelKind::Force
+                          : c.channel == "pressure" ? diagnose::ChannelKind::Pressure
+                                                    : diagnose::ChannelKind::Mass;
+        const double u = diagnose::getChannelUnitScale(kind);
+        const std::string un = " " + diagnose::getChannelUnit(kind);
+        os << "<tr><td>" << c.channel << "</td><td>" << num(c.rmse / u) << un << "</td><td>"
+           << num(c.range / u) << un << "</td><td>" << num(c.noise / u) << un << "</td><td>"
+           << num(c.numerical / u) << un << "</td><td>" << num(c.input / u) << un << "</td><td>"
+           << num(c.validation / u) << un << "</td><td>"
+           << (c.channel == "mass" ? std::string("(consistency)")
+                                   : num(100 * c.shareOfGap, "%.0f") + " %")
+           << "</td></tr>";
+    }
+    os << "</table><table><tr><th>channel, regime</th><th>samples</th><th>RMSE</th><th>bias</th>"
+       << "<th>share of the channel's squared error</th></tr>";
+    for (const auto& r : w.regimes) {
+        if (r.regime == "all") continue;
+        const auto kind = r.channel == "force"      ? diagnose::ChannelKind::Force
+                          : r.channel == "pressure" ? diagnose::ChannelKind::Pressure
+                                                    : diagnose::ChannelKind::Mass;
+        const double u = diagnose::getChannelUnitScale(kind);
+        const std::string un = " " + diagnose::getChannelUnit(kind);
+        os << "<tr><td>" << r.channel << ", " << esc(r.regime) << "</td><td>" << r.samples
+           << "</td><td>" << num(r.rmse / u) << un << "</td><td>" << num(r.bias / u) << un
+           << "</td><td>" << num(100 * r.share, "%.0f") << " %</td></tr>";
+    }
+    os << "</table>";
+    if (which) {
+        os << "<h2>Which</h2><table><tr><th>effect</th><th>shrink beyond the uncertainty</th>"
+           << "<th>shrink of the gap</th><th>score</th><th>parameters (all tests)</th></tr>";
+        for (const auto& c : which->candidates) {
+            const diagnose::Effect* e = diagnose::findEffect(c.effect);
+            std::string params;
+            for (size_t k = 0; e && k < c.parameters.size(); ++k)
+                params += (k ? ", " : "") + e->parameters[k].name + " " +
+                          num(c.parameters[k] / e->parameters[k].siPerUnit) +
+                          (e->parameters[k].unit.empty() ? "" : " " + e->parameters[k].unit);
+            os << "<tr><td>" << c.effect << "</td><td>" << num(100 * c.excessShrink, "%.1f")
+               << " %</td><td>" << num(100 * c.shrink, "%.1f") << " %</td><td>"
+               << num(c.score, "%.3f") << "</td><td>" << esc(params) << "</td></tr>";
+        }
+        os << "</table>";
+    }
+    const bool after = best && best->fitted.size() == tests.size();
+    os << "<h2>Curves</h2><p>Dots: measured. Grey: the model as it is."
+       << (after ? " Blue: with " + esc(best->effect) + " at the parameters fitted on all tests."
+                 : std::string())
+       << "</p>";
+    for (size_t t = 0; t < tests.size(); ++t) {
+        const std::string mass = num(tests[t].gasMass * 1e3, "%.2f") + " g";
+        for (size_t c = 0; c < tests[t].channels.size(); ++c) {
+            const auto& ch = tests[t].channels[c];
+            if (ch.kind == diagnose::ChannelKind::Mass) continue;
+            const bool byTime = ch.kind == diagnose::ChannelKind::Pressure;
+            std::vector<Series> s = {makeSeries(ch, true, byTime, "measured", "#c00"),
+                                     makeSeries(ch, false, byTime, "model", "#888")};
+            if (after)
+                s.push_back(makeSeries(best->fitted[t].channels[c], false, byTime,
+                                       "with " + best->effect, "#06c"));
+            const std::string unit = diagnose::getChannelUnit(ch.kind);
+            os << plot("test " + std::to_string(t + 1) + " (" + mass + "): " +
+                           diagnose::getChannelName(ch.kind),
+                       byTime ? "time [s]" : "displacement [mm]",
+                       diagnose::getChannelName(ch.kind) + " [" + unit + "]", s);
+            // The residuals over time, before and after.
+            Series r0, r1;
+            r0.name = "model";
+            r0.colour = "#888";
+            r1.name = after ? "with " + best->effect : "";
+            r1.colour = "#06c";
+            const double u = diagnose::getChannelUnitScale(ch.kind);
+            for (size_t i = 0; i < ch.measured.size(); ++i) {
+                r0.x.push_back(ch.time[i]);
+                r0.y.push_back((ch.measured[i] - ch.simulated[i]) / u);
+                if (after) {
+                    const auto& f = best->fitted[t].channels[c];
+                    r1.x.push_back(f.time[i]);
+                    r1.y.push_back((f.measured[i] - f.simulated[i]) / u);
+                }
+            }
+            std::vector<Series> rs = {r0};
+            if (after) rs.push_back(r1);
+            os << plot("residual measured - simulated", "time [s]",
+                       diagnose::getChannelName(ch.kind) + " [" + unit + "]", rs)
+               << "<br>";
+        }
+    }
+    os << "</body></html>\n";
+    return os.str();
+}
+
+}  // namespace io
