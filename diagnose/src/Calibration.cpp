@@ -354,7 +354,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
     if (where.withinValidation) {
         report.verdict = "none";
         report.reason = "every channel's RMSE is within twice its validation uncertainty "
-                        "(sensor noise and numerical uncertainty)";
+                        "(sensor noise, numerical and input uncertainty)";
     } else if (best && best->score >= o.explainThreshold) {
         report.verdict = best->effect;
         report.reason = "it shrinks the held-out gap beyond the validation uncertainty by " +
