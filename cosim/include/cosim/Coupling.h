@@ -52,9 +52,9 @@ struct CouplingOptions {
     AccelerationKind acceleration = AccelerationKind::IQNILS;
     double macroStep = 1e-3;          ///< [s]
     double relativeTolerance = 1e-5;  ///< [-] of |H(x)|
-    /// [N] must lie above the bags' own solve tolerance (bags::AirbagSpec::forceTolerance):
-    /// the wrench a bag returns is no more exact than that.
-    double absoluteTolerance = 1e-3;
+    /// [N] must lie above the bags' own solve tolerance (bags::AirbagSpec::forceTolerance,
+    /// 0.05 N by default): the wrench a bag returns is no more exact than that.
+    double absoluteTolerance = 0.1;
     double torqueLength = 0.1;       ///< [m] torques count as torque / torqueLength [N]
     int maxIterations = 50;          ///< implicit iterations per macro step
     double initialRelaxation = 0.5;  ///< [-] first iteration of a step (and Constant)
