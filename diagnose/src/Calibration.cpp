@@ -362,12 +362,12 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                         fmt("%.4f", best->excessBefore) + " to " + fmt("%.4f", best->excessAfter) +
                         "; the whole gap by " + fmt("%.0f", 100 * best->shrink) + " %, from " +
                         fmt("%.4f", best->heldoutBefore) + " to " + fmt("%.4f", best->heldoutAfter) + ")";
-        if (!report.confusable.empty())
-            report.reason += "; confusable with " +
-                             (report.confusable[0].first == best->effect
-                                  ? report.confusable[0].second
-                                  : report.confusable[0].first) +
-                             " on these data";
+        // The effects these data cannot tell from the one named.
+        std::string others;
+        for (const auto& [a, b] : report.confusable)
+            if (a == best->effect || b == best->effect)
+                others += (others.empty() ? "" : ", ") + (a == best->effect ? b : a);
+        if (!others.empty()) report.reason += "; confusable with " + others + " on these data";
     } else {
         report.verdict = "unexplained";
         report.reason = "no candidate shrinks the held-out gap beyond the validation "
