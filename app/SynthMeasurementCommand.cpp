@@ -288,6 +288,7 @@ int run(const Args& a) {
                              "the scenario switches rig effects on; give synth-measurement a "
                              "scenario without a rig section (the effect is chosen by --effect)");
     const std::vector<double> readings = sc.options.gasMasses;  // what the flowmeter reads
+    const double roomTemperature = sc.options.gas.temperature;   // what the lab's thermometer reads
     bags::LoadTestOptions truth = sc.options;
     diagnose::RigEffects rig;
     for (size_t i = 0; i < effects.size(); ++i) {
@@ -326,10 +327,12 @@ int run(const Args& a) {
                                      " stopped: " + c.failure);
 
     diagnose::Protocol protocol;
+    // The protocol as the lab states it: the scenario's, not the truth's (whose gas may be
+    // warmer than the room).
     protocol.blockSize = truth.blockSize;
     protocol.rate = truth.loadingRate;
     protocol.peakForce = truth.peakForce;
-    protocol.roomTemperature = truth.gas.temperature;
+    protocol.roomTemperature = roomTemperature;
     diagnose::MeasuredData data =
         diagnose::synthesizeMeasurement(result.curves, readings, rig, protocol, so);
     data.description = "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
