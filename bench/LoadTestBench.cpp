@@ -60,6 +60,32 @@ int main(int argc, char** argv) {
             o.predictor = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--sparsify") == 0) {
             o.solver.sparsifyWideCouplings = std::atoi(val) != 0;
+        } else if (std::strcmp(key, "--damping") == 0) {
+            o.damping = std::atof(val);
+        } else if (std::strcmp(key, "--onset") == 0) {
+            o.blockContact.onsetGap = o.floorContact.onsetGap = std::atof(val) * 1e-3;
+        } else if (std::strcmp(key, "--truncated") == 0) {
+            o.solver.truncatedNewton = std::atoi(val) != 0;
+        } else if (std::strcmp(key, "--truncate") == 0) {
+            o.solver.truncateAtNegativeCurvature = std::atoi(val) != 0;
+        } else if (std::strcmp(key, "--krylov-tolerance") == 0) {
+            o.solver.krylovTolerance = std::atof(val);
+        } else if (std::strcmp(key, "--forcing") == 0) {
+            o.solver.forcingTerm = std::atof(val);
+        } else if (std::strcmp(key, "--residual-tolerance") == 0) {
+            o.residualTolerance = std::atof(val);
+        } else if (std::strcmp(key, "--self") == 0) {
+            o.selfContact = std::atoi(val) != 0;
+        } else if (std::strcmp(key, "--wrinkling") == 0) {
+            o.wrinklingResidual = std::atof(val);
+        } else if (std::strcmp(key, "--penalty") == 0) {
+            o.blockContact.pressurePenalty = o.floorContact.pressurePenalty = std::atof(val);
+        } else if (std::strcmp(key, "--monitor") == 0) {
+            if (std::atoi(val) != 0)
+                o.solver.monitor = [](int it, double r, double alpha, double shift) {
+                    std::printf("        it %2d residual %.3e N alpha %.3g shift %.3g\n", it, r,
+                                alpha, shift);
+                };
         } else if (std::strcmp(key, "--verbose") == 0) {
             verbose = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--threads") == 0) {
@@ -115,12 +141,23 @@ int main(int argc, char** argv) {
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     std::printf("mesh %.2f mm: %d nodes, %d triangles\n", meshMm, nodes, tris);
-    for (const auto& c : r.curves)
+    for (const auto& c : r.curves) {
+        double work = 0.0, held = 0.0;
+        for (size_t i = 1; i < c.steps.size(); ++i)
+            if (c.steps[i].loading) {
+                work += 0.5 * (c.steps[i].force + c.steps[i - 1].force) *
+                        (c.steps[i].displacement - c.steps[i - 1].displacement);
+                held += c.steps[i].stabilizationEnergy;
+            }
+        std::printf("  %.2f g: loading work %.4f J, springs/damping %.3g J (%.2g)\n",
+                    c.gasMass * 1e3, work, held, work > 0 ? held / work : 0.0);
         std::printf("  %.2f g: p0 %.2f kPa, %zu steps, k = %.3f N/mm, r2 = %.4f, F(5 mm) = %.2f N, "
-                    "stage %d, peak %s%s%s\n",
+                    "stage %d, peak %s, springs' share %.2g%s%s\n",
                     c.gasMass * 1e3, c.inflatedGaugePressure * 1e-3, c.steps.size(),
                     c.stiffness * 1e-3, c.r2, forceAt(c, 5e-3), c.stage, c.reachedPeak ? "yes" : "no",
+                    c.stabilizationShare,
                     c.failure.empty() ? "" : ", stopped: ", c.failure.c_str());
+    }
     std::printf("steps %d (loading %d), Newton iterations %d\n", steps, loadingSteps, iterations);
     if (tFirst > 0) std::printf("inflation + first curve (loading and unloading): %.2f s\n", tFirst);
     std::printf("inflation (flat panels to the first gas mass): %.2f s\n", tInflated);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -130,6 +131,8 @@ void AirbagSpec::validate() const {
     require(selfContactPenalty > 0.0, "selfContactPenalty", selfContactPenalty, "use > 0 Pa/m");
     require(stabilization >= 0.0, "stabilization", stabilization,
             "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
+    require(damping >= 0.0 && std::isfinite(damping), "damping", damping,
+            "use a stiffness per area >= 0 Pa/m (0: no damper; e.g. 1e5)");
     require(forceTolerance > 0.0 && forceTolerance <= 1.0, "forceTolerance", forceTolerance,
             "use 0 < tolerance <= 1 N (e.g. 0.05 N)");
     require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
@@ -287,12 +290,73 @@ struct Airbag::Impl {
         }
     }
 
+    // The damper's weight per node: 1 on film that is not taut, 0 on taut film and where a
+    // rigid shape or the bed presses the node at `at` (the contact holds those nodes; a damper
+    // there would add to the force the shape feels).
+    std::vector<double> calcDampingWeights(const Eigen::Matrix3Xd& at) const {
+        // Film that is slack or wrinkled somewhere around the node: taut film has a definite
+        // tangent of its own.
+        std::vector<double> w(mesh.getNumNodes(), 0.0);
+        const std::vector<int> states = model->calcWrinkleStates(at);
+        for (int e = 0; e < mesh.getNumTris(); ++e)
+            if (states[e] != 0)
+                for (int k = 0; k < 3; ++k) w[mesh.tris(k, e)] = 1.0;
+        auto clear = [&](const RigidContact& c) {
+            const Eigen::VectorXd p = c.calcNodalPressure(at);
+            for (int i = 0; i < p.size(); ++i)
+                if (p(i) > 0.0) w[i] = 0.0;
+        };
+        for (const Shape& sh : shapes) clear(*sh.contact);
+        if (bedContact) clear(*bedContact);
+        return w;
+    }
+
     double calcFreeResidual(const Eigen::Matrix3Xd& xs) const {
         EnergyAccumulator acc(static_cast<int>(xs.cols()));
         acc.wantHessian = false;
         model->addEnergy(xs, acc);
         for (int d : model->getFixedDofs()) acc.grad(d) = 0.0;
         return acc.grad.norm();
+    }
+
+    // Damped step: dampers on the film that is not taut, anchored at the step's start (a
+    // pseudo-time step). Where that solve was easy (smooth film) the damper-free equilibrium
+    // is a few iterations away: it is taken, the damper's bias gone. Otherwise the damped
+    // state is kept once the force the dampers hold is below the force tolerance; until then
+    // the dampers are re-anchored at it and the loads solved again (up to kRelaxations
+    // pseudo-time steps). *work: the dampers' work (force k A dx times dx, twice what a
+    // spring anchored at the start holds), summed. False: the undamped path follows.
+    bool solveDamped(Eigen::Matrix3Xd& xs, SolveSummary* sum, double* work,
+                     const SolverOptions& so) {
+        constexpr int kEasySolve = 4, kRelaxations = 8;
+        *work = 0.0;
+        Eigen::Matrix3Xd anchor = x;
+        for (int r = 0; r < kRelaxations; ++r) {
+            const int before = sum->iterations;
+            model->setStabilization(spec.damping, anchor, calcDampingWeights(anchor));
+            const bool ok = runNewton(xs, sum, so);
+            if (ok) *work += 2.0 * model->calcStabilizationEnergy(xs);
+            model->setStabilization(0.0, x);
+            if (!ok) return false;
+            if (sum->iterations - before <= kEasySolve) {
+                SolverOptions quick = so;
+                quick.maxIterations = kEasySolve;
+                Eigen::Matrix3Xd free = xs;
+                SolveSummary relaxed = *sum;
+                if (runNewton(free, &relaxed, quick)) {
+                    *sum = relaxed;
+                    xs = free;
+                    *work = 0.0;
+                    return true;
+                }
+                sum->iterations = relaxed.iterations;
+                sum->factorizations = relaxed.factorizations;
+            }
+            sum->residualNorm = calcFreeResidual(xs);
+            if (sum->residualNorm <= spec.forceTolerance) return true;
+            anchor = xs;
+        }
+        return false;
     }
 
     // Solves the current loads starting from x. If Newton fails, retries with the
@@ -313,6 +377,8 @@ struct Airbag::Impl {
             return true;
         };
         Eigen::Matrix3Xd xs = x;
+        if (spec.damping > 0.0 && solveDamped(xs, sum, stabEnergy, so)) return accept(xs, *stabEnergy);
+        xs = x;
         if (runNewton(xs, sum, so)) return accept(xs, 0.0);
         if (spec.stabilization <= 0.0) return false;
         for (int level = 0; level < levels; ++level) {
@@ -775,6 +841,7 @@ ChamberState Airbag::getChamberState(int c) const {
 
 const Mesh& Airbag::getMesh() const { return m_impl->mesh; }
 const Eigen::Matrix3Xd& Airbag::getPositions() const { return m_impl->x; }
+const AirbagSpec& Airbag::getSpec() const { return m_impl->spec; }
 const MembraneModel& Airbag::getModel() const { return *m_impl->model; }
 double Airbag::calcResidual() const { return m_impl->calcFreeResidual(m_impl->x); }
 

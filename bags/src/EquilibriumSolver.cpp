@@ -94,13 +94,16 @@ struct WoodburySolve {
     }
 };
 
-// Preconditioned CG on A = K + U C U^T (K stored as its lower triangle). Returns false on
-// negative curvature or when maxIt is reached.
-bool solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c,
-              const WoodburySolve& M, const Eigen::VectorXd& b, double rtol, int maxIt,
-              Eigen::VectorXd& x, int* iterations, double shift = 0.0) {
+// Preconditioned CG on A = K + U C U^T + shift I (K stored as its lower triangle), from 0,
+// until |b - A x| <= rtol |b|.
+enum class PcgStatus { Converged, NegativeCurvature, MaxIterations };
+PcgStatus solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c,
+                   const WoodburySolve& M, const Eigen::VectorXd& b, double rtol, int maxIt,
+                   Eigen::VectorXd& x, int* iterations, double shift = 0.0,
+                   Eigen::VectorXd* firstDirection = nullptr) {
     x.setZero(b.size());
     Eigen::VectorXd res = b, z = M.apply(res), p = z, Ap(b.size());
+    if (firstDirection) *firstDirection = z;
     double rz = res.dot(z);
     const double stop = rtol * b.norm();
     for (int k = 1; k <= maxIt; ++k) {
@@ -109,17 +112,17 @@ bool solvePcg(const SpMat& K, const Eigen::MatrixXd& U, const Eigen::VectorXd& c
         if (U.cols() > 0) Ap += U * c.cwiseProduct(U.transpose() * p);
         const double pAp = p.dot(Ap);
         *iterations = k;
-        if (!(pAp > 0.0)) return false;
+        if (!(pAp > 0.0)) return PcgStatus::NegativeCurvature;
         const double a = rz / pAp;
         x += a * p;
         res -= a * Ap;
-        if (res.norm() <= stop) return true;
+        if (res.norm() <= stop) return PcgStatus::Converged;
         z = M.apply(res);
         const double rzNew = res.dot(z);
         p = z + (rzNew / rz) * p;
         rz = rzNew;
     }
-    return false;
+    return PcgStatus::MaxIterations;
 }
 
 // For each node, the sorted nodes it shares a triangle with, itself included.
@@ -207,6 +210,8 @@ struct SolverWorkspace::Impl {
     int nfree = -1;
     bool valid = false;
     int factorizations = 0;
+    double precondShift = 0.0;  // [N/m] on the last factorisation's diagonal (truncated Newton)
+    SpMat shifted;              // the factored matrix plus its shift
 };
 
 SolverWorkspace::SolverWorkspace() : m_impl(std::make_unique<Impl>()) {}
@@ -215,6 +220,66 @@ SolverWorkspace::SolverWorkspace(SolverWorkspace&&) noexcept = default;
 SolverWorkspace& SolverWorkspace::operator=(SolverWorkspace&&) noexcept = default;
 void SolverWorkspace::reset() { m_impl->valid = false; }
 int SolverWorkspace::getNumFactorizations() const { return m_impl->factorizations; }
+
+namespace {
+// The direction d of an inexact Newton step: CG on the whole tangent K + shift I (gas terms
+// included) to the forcing tolerance, preconditioned by a factorisation of P (K, or K without
+// its wide couplings) whose diagonal is raised only until the factorisation succeeds, so
+// that a preconditioner that fails to factor does not shift the Newton system itself. At
+// negative curvature of K + shift I: with truncation (Nocedal & Wright, Algorithm 7.1) CG's
+// iterate so far, a descent direction (on its first iteration the preconditioned gradient);
+// without, false. The factorisation is reused while CG converges within maxKrylovIterations
+// on it. With P = K and no raise needed it is an exact (shifted) Newton solve.
+bool calcInexactNewtonDirection(const SpMat& K, const SpMat& P, bool wide,
+                                const Eigen::MatrixXd& U, const Eigen::VectorXd& cgas,
+                                const Eigen::VectorXd& r, double shift, double diagMean,
+                                double tolerance, const SolverOptions& options,
+                                SolverWorkspace::Impl& ws, SolveSummary& sum,
+                                Eigen::VectorXd& d) {
+    Eigen::VectorXd first;
+    const bool truncate = options.truncateAtNegativeCurvature;
+    PcgStatus status = PcgStatus::Converged;
+    auto run = [&](int maxIt) {
+        int kit = 0;
+        const WoodburySolve M(ws.llt, U, cgas);
+        status = solvePcg(K, U, cgas, M, -r, tolerance, maxIt, d, &kit, shift, &first);
+        sum.krylovIterations += kit;
+        if (status == PcgStatus::NegativeCurvature && kit == 1) d = first;
+        return status;
+    };
+    if (options.reuseFactorization && ws.valid && run(options.maxKrylovIterations) !=
+                                                      PcgStatus::MaxIterations)
+        return truncate || status == PcgStatus::Converged;
+    // A raise that sufficed last time, tried a tenth as large first.
+    double raise = 0.1 * ws.precondShift;
+    if (raise < 1e-8 * diagMean) raise = 0.0;
+    bool factored = false;
+    for (int attempt = 0; attempt < 30 && !factored; ++attempt) {
+        ++sum.factorizations;
+        ++ws.factorizations;
+        if (shift + raise > 0.0) {
+            ws.shifted = P;  // same pattern: the diagonal slots hold
+            for (int i = 0; i < P.cols(); ++i)
+                ws.shifted.valuePtr()[wide ? ws.sparsifier.diagonalSlot(i)
+                                           : ws.assembler.diagonalSlot(i)] += shift + raise;
+            factored = ws.llt.factorize(ws.shifted);
+        } else {
+            factored = ws.llt.factorize(P);
+        }
+        if (!factored) raise = raise > 0.0 ? raise * 10.0 : options.pseudoTransientShift * diagMean;
+    }
+    ws.valid = factored;
+    if (!factored) throw NumericalError("tangent could not be factored", -1, 0);
+    ws.precondShift = raise;
+    if (!wide && raise == 0.0) {
+        d = WoodburySolve(ws.llt, U, cgas).apply(-r);
+        return true;
+    }
+    // Converged, or CG's last iterate after its iteration limit; at negative curvature the
+    // iterate so far when truncating, else false (the caller shifts the tangent).
+    return run(options.maxSparsifiedKrylovIterations) != PcgStatus::NegativeCurvature || truncate;
+}
+}  // namespace
 
 SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
                               const SolverOptions& options, SolverWorkspace* workspace) {
@@ -298,11 +363,28 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
         // fast, otherwise factor K + shift I (shift raised until positive definite).
         Eigen::VectorXd d;
         bool solved = false;
-        if (options.reuseFactorization && ws.valid && shift == 0.0) {
+        // Inexact Newton: the linear solve need only be as accurate as the forcing term, or
+        // as brings the residual to half the tolerance, whichever is tighter.
+        const double krylovTolerance =
+            options.truncatedNewton
+                ? std::clamp(0.5 * tol / rnorm, options.krylovTolerance, options.forcingTerm)
+                : options.krylovTolerance;
+        if (options.truncatedNewton) {
+            int attempts = 0;
+            while (!calcInexactNewtonDirection(K, *P, wide, U, cgas, r, shift, diagMean,
+                                               krylovTolerance, options, ws, sum, d)) {
+                // The tangent itself is indefinite: shift it (pseudo-transient), as below.
+                shift = shift > 0.0 ? shift * 10.0 : options.pseudoTransientShift * diagMean;
+                if (++attempts > 30) throw NumericalError("tangent could not be shifted", -1, it);
+            }
+            if (shift > 0.0) ++sum.shiftedIterations;
+            solved = true;
+        }
+        if (!solved && options.reuseFactorization && ws.valid && shift == 0.0) {
             int kit = 0;
             const WoodburySolve M(llt, U, cgas);
-            solved = solvePcg(K, U, cgas, M, -r, options.krylovTolerance,
-                              options.maxKrylovIterations, d, &kit);
+            solved = solvePcg(K, U, cgas, M, -r, krylovTolerance, options.maxKrylovIterations,
+                              d, &kit) == PcgStatus::Converged;
             sum.krylovIterations += kit;
         }
         if (!solved) {
@@ -326,8 +408,9 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
                     // factorisation fails.
                     int kit = 0;
                     const WoodburySolve M(llt, U, cgas);
-                    ok = solvePcg(K, U, cgas, M, -r, options.krylovTolerance,
-                                  options.maxSparsifiedKrylovIterations, d, &kit, shift);
+                    ok = solvePcg(K, U, cgas, M, -r, krylovTolerance,
+                                  options.maxSparsifiedKrylovIterations, d, &kit,
+                                  shift) == PcgStatus::Converged;
                     sum.krylovIterations += kit;
                 }
                 if (ok) {

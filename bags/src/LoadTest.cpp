@@ -62,6 +62,7 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     spec.solver = o.solver;
     if (spec.solver.maxStep == 0.0) spec.solver.maxStep = o.geometry.meshSize;
     spec.stabilization = o.stabilization;
+    spec.damping = o.damping;
     spec.forceTolerance = calcLoadTestForceTolerance(o);
     spec.threads = o.threads;
     spec.predictor = o.predictor;
@@ -124,6 +125,8 @@ void LoadTestOptions::validate() const {
             " needs an imperfection (amplitude > 0): bags without one are all the same bag");
     require(stabilization >= 0.0, "stabilization", stabilization,
             "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
+    require(damping >= 0.0 && std::isfinite(damping), "damping", damping,
+            "use a stiffness per area >= 0 Pa/m (0: no damper; e.g. 1e5)");
     blockContact.validate();
     floorContact.validate();
     solver.validate();

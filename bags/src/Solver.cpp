@@ -63,6 +63,8 @@ void SolverOptions::validate() const {
         fail("maxSparsifiedKrylovIterations", maxSparsifiedKrylovIterations, "use >= 1");
     if (!(krylovTolerance > 0.0 && krylovTolerance < 1.0))
         fail("krylovTolerance", krylovTolerance, "use 0 < tol < 1 (e.g. 1e-4)");
+    if (!(forcingTerm > 0.0 && forcingTerm < 1.0))
+        fail("forcingTerm", forcingTerm, "use 0 < eta < 1 (e.g. 0.1)");
     if (!(acceptableResidual >= 0.0))
         fail("acceptableResidual", acceptableResidual, "use >= 0 N (0: only the tolerance)");
 }
@@ -125,13 +127,24 @@ void MembraneModel::setStabilization(double k, const Eigen::Matrix3Xd& anchor) {
     if (!(k >= 0.0)) throw std::invalid_argument("stabilisation stiffness must be >= 0");
     m_stabilization = k;
     m_anchor = anchor;
+    m_stabilizationWeight.clear();
+}
+
+void MembraneModel::setStabilization(double k, const Eigen::Matrix3Xd& anchor,
+                                     std::vector<double> weight) {
+    setStabilization(k, anchor);
+    if (!weight.empty() && static_cast<int>(weight.size()) != m_mesh.getNumNodes())
+        throw std::invalid_argument("stabilisation weights: one per node");
+    m_stabilizationWeight = std::move(weight);
 }
 
 double MembraneModel::calcStabilizationEnergy(const Eigen::Matrix3Xd& x) const {
     if (m_stabilization == 0.0) return 0.0;
     double e = 0.0;
     for (int i = 0; i < m_mesh.getNumNodes(); ++i)
-        e += 0.5 * m_stabilization * m_nodalArea(i) * (x.col(i) - m_anchor.col(i)).squaredNorm();
+        e += 0.5 * m_stabilization * m_nodalArea(i) *
+             (m_stabilizationWeight.empty() ? 1.0 : m_stabilizationWeight[i]) *
+             (x.col(i) - m_anchor.col(i)).squaredNorm();
     return e;
 }
 
@@ -350,7 +363,9 @@ void MembraneModel::addLoadEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& 
     if (m_selfContact) m_selfContact->addEnergy(x, acc);
     if (m_stabilization > 0.0) {
         for (int i = 0; i < m_mesh.getNumNodes(); ++i) {
-            const double k = m_stabilization * m_nodalArea(i);
+            const double k = m_stabilization * m_nodalArea(i) *
+                             (m_stabilizationWeight.empty() ? 1.0 : m_stabilizationWeight[i]);
+            if (k == 0.0) continue;
             const Vec3 d = x.col(i) - m_anchor.col(i);
             acc.energy += 0.5 * k * d.squaredNorm();
             if (acc.wantGradient) acc.grad.segment<3>(3 * i) += k * d;

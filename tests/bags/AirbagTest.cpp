@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <tuple>
 
 using namespace bags;
 
@@ -85,11 +86,13 @@ TEST(Airbag, ProtocolInflatesPressesCommitsAndRollsBack) {
     EXPECT_EQ(bag.getTime(), 0.0);
     EXPECT_EQ(bag.calcShapeWrench(p.shape).force.norm(), 0.0);
     // The same step again reaches the same state within the solve's tolerance (the
-    // factorisation that preconditions the solve is the first attempt's, so the roundoff
-    // differs; whole runs are bit-identical, see below).
+    // factorisation that preconditions the solve is the first attempt's, so the iterates
+    // differ; whole runs are bit-identical, see below): the wrench within the bag's force
+    // tolerance (0.05 N), the nodes within 0.1 mm (measured 11 um).
     bag.setShapePose(p.shape, p.pose(0.010));
     ASSERT_TRUE(bag.advance(60.0).converged);
-    EXPECT_LT((bag.getPositions() - x1).cwiseAbs().maxCoeff(), 1e-6);
+    EXPECT_LT((bag.getPositions() - x1).cwiseAbs().maxCoeff(), 1e-4);
+    EXPECT_LT((bag.calcShapeWrench(p.shape).force - w.force).norm(), bag.getSpec().forceTolerance);
     const Eigen::Matrix3Xd x1b = bag.getPositions();
     bag.commit();
     const auto checkpoint = bag.getSnapshot();
@@ -101,7 +104,7 @@ TEST(Airbag, ProtocolInflatesPressesCommitsAndRollsBack) {
     bag.setSnapshot(checkpoint);
     EXPECT_EQ((bag.getPositions() - x1b).cwiseAbs().maxCoeff(), 0.0);
     EXPECT_DOUBLE_EQ(bag.getTime(), 60.0);
-    EXPECT_NEAR((bag.calcShapeWrench(p.shape).force - w.force).norm(), 0.0, 1e-4);
+    EXPECT_LT((bag.calcShapeWrench(p.shape).force - w.force).norm(), bag.getSpec().forceTolerance);
 }
 
 TEST(Airbag, GasFlowsInAndOutOverTheStepAndStopsAtTheTarget) {
@@ -239,4 +242,33 @@ TEST(Airbag, ResultsAreBitIdenticalOnOneAndTwoThreads) {
     EXPECT_EQ((one.first - two.first).cwiseAbs().maxCoeff(), 0.0);
     EXPECT_EQ((two.first - again.first).cwiseAbs().maxCoeff(), 0.0);
     EXPECT_EQ(one.second, two.second);
+}
+
+TEST(Airbag, DampedStepsRelaxOnTautFilmAndReportTheDampersWorkOnSlackFilm) {
+    // Taut bag (4.5 g): the damped solve is easy, so the damper-free equilibrium is taken:
+    // no damper work, the wrench of the undamped bag within the force tolerance (0.05 N).
+    auto press = [](double mass, double damping, double depth) {
+        AirbagSpec spec = coarseSpec();
+        spec.damping = damping;
+        PressedBag p(spec, mass);
+        p.bag->setShapePose(p.shape, p.pose(depth));
+        const AdvanceSummary a = p.bag->advance(60.0);
+        EXPECT_TRUE(a.converged);
+        return std::make_tuple(a, p.bag->calcShapeWrench(p.shape).force, std::move(p.bag));
+    };
+    const auto [tautDamped, fTautDamped, b0] = press(4.5e-3, 1e5, 0.006);
+    const auto [taut, fTaut, b1] = press(4.5e-3, 0.0, 0.006);
+    EXPECT_EQ(tautDamped.stabilizationEnergy, 0.0);
+    EXPECT_LT((fTautDamped - fTaut).norm(), b0->getSpec().forceTolerance);
+    EXPECT_GT(fTaut.z(), 1.0);
+    // Slack bag (2.0 g; this coarse literal bag is just full at about 3.6 g) pressed 20 mm in
+    // one step: the damped solve is not easy; the dampers are re-anchored until the force they
+    // hold is within the force tolerance, and their work on the way is reported.
+    const auto [slackDamped, fSlack, b2] = press(2.0e-3, 1e5, 0.020);
+    std::printf("slack press: damper work %.3g J, shape work about %.3g J, residual %.3g N, "
+                "%d iterations\n",
+                slackDamped.stabilizationEnergy, 0.5 * fSlack.z() * 0.020, slackDamped.residual,
+                slackDamped.newtonIterations);
+    EXPECT_GT(slackDamped.stabilizationEnergy, 0.0);
+    EXPECT_LE(slackDamped.residual, b2->getSpec().forceTolerance);
 }

@@ -88,6 +88,13 @@ struct AirbagSpec {
     /// [Pa/m] springs to the last converged state per unit area, used when Newton fails on a
     /// slack, wrinkling state (escalated 1x, 10x, 100x); 0 disables them.
     double stabilization = 1.0e4;
+    /// [Pa/m] Damped stepping (pseudo-dynamics): each step is first solved with a spring of
+    /// this stiffness per unit area from every node of film that is not taut (and not pressed
+    /// by a shape or the bed) to its position at the step's start: a viscous damper
+    /// c = damping * dt (backward Euler) where the film's own tangent is weak. An easy damped
+    /// solve is followed by a damper-free one. The damper's work is reported
+    /// (AdvanceSummary::stabilizationEnergy); docs/solver.md. 0: no damper.
+    double damping = 0.0;
     /// [N] a step is converged when the out-of-balance nodal force norm is below this (or
     /// the solver's own tolerances). A property of the bag, never scaled by a load.
     double forceTolerance = 0.05;
@@ -121,7 +128,9 @@ struct AdvanceSummary {
     int newtonIterations = 0;      ///< over every solve of the call
     int factorizations = 0;
     double residual = 0.0;         ///< [N] spring-free force residual at the accepted state
-    double stabilizationEnergy = 0.0;  ///< [J] held by springs at the accepted state
+    /// [J] held by the stabilisation springs at the accepted state, or the damper's work over
+    /// the step
+    double stabilizationEnergy = 0.0;
 };
 
 class Airbag {
@@ -186,6 +195,7 @@ public:
     const Mesh& getMesh() const;          ///< in Ground (X_GB applied), imperfection included
     const Eigen::Matrix3Xd& getPositions() const;  ///< nodes [m], Ground
     const MembraneModel& getModel() const;
+    const AirbagSpec& getSpec() const;     ///< as built (validated)
     /// Force [N] residual of the current state without stabilisation springs.
     double calcResidual() const;
 

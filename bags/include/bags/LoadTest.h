@@ -70,6 +70,8 @@ struct LoadTestOptions {
     /// Stabilisation [Pa/m] used when Newton fails on a step (slack, wrinkling bag): a spring
     /// of this stiffness per unit area to the last converged state; 0 disables it.
     double stabilization = 1.0e4;
+    /// [Pa/m] damper on film that is not taut, per step (AirbagSpec::damping); 0: none
+    double damping = 0.0;
     /// A step is converged when the norm of the out-of-balance nodal forces is below this
     /// fraction of the peak force, the peak force counted at most kToleranceForceCap (50 N), or
     /// below solver.absoluteTolerance, whichever is larger; 0 leaves only the solver's own

@@ -40,6 +40,16 @@ struct SolverOptions {
     /// about 6 times dearer (docs/performance.md).
     bool sparsifyWideCouplings = true;
     int maxSparsifiedKrylovIterations = 150;  ///< CG iterations on a fresh sparsified factor
+    /// Inexact Newton: the Newton system is solved by CG on the exact tangent only to the
+    /// relative forcing tolerance below (tighter near convergence), preconditioned by a
+    /// factorisation whose diagonal is raised just enough to factor; the tangent itself is
+    /// shifted (pseudo-transient) only where CG meets negative curvature. false: the tangent
+    /// is shifted whenever it does not factor, and solved to krylovTolerance.
+    bool truncatedNewton = true;
+    double forcingTerm = 0.1;          ///< relative residual of the inexact Newton solve
+    /// At negative curvature take CG's iterate so far (truncated Newton-CG) instead of
+    /// shifting the tangent.
+    bool truncateAtNegativeCurvature = false;
     /// [N] If Newton stalls (non-smooth contact: the residual stops falling for 8 iterations)
     /// below this residual, the state is accepted and SolveSummary::stalled is set. 0: never.
     double acceptableResidual = 0.0;
@@ -73,10 +83,10 @@ public:
     /// Forgets the stored factorisation (e.g. after the model's structure changed).
     void reset();
     int getNumFactorizations() const;  ///< factorisations made through this workspace
+    struct Impl;  ///< defined in the solver's source only
 private:
     friend SolveSummary solveEquilibrium(const MembraneModel&, Eigen::Matrix3Xd&,
                                          const SolverOptions&, SolverWorkspace*);
-    struct Impl;
     std::unique_ptr<Impl> m_impl;
 };
 
@@ -109,6 +119,9 @@ public:
     /// automatic stabilisation): adds 1/2 k A_a |x_a - anchor_a|^2 per node, k [Pa/m], A_a the
     /// nodal reference area. The anchor is the last converged state; 0 switches it off.
     void setStabilization(double stiffnessPerArea, const Eigen::Matrix3Xd& anchor);
+    /// As above, node i's spring scaled by weight[i] (empty: all 1).
+    void setStabilization(double stiffnessPerArea, const Eigen::Matrix3Xd& anchor,
+                          std::vector<double> weight);
     double getStabilization() const { return m_stabilization; }
     /// Energy [J] held by the stabilisation at x (a measure of how far x is from a true
     /// equilibrium: its gradient is the artificial force).
@@ -177,6 +190,7 @@ private:
     int m_threads = 0;                    ///< 0: OpenMP default
     double m_stabilization = 0.0;         ///< [Pa/m]
     Eigen::Matrix3Xd m_anchor;
+    std::vector<double> m_stabilizationWeight;  ///< per node; empty: all 1
     Eigen::VectorXd m_nodalArea;          ///< [m^2]
     // Per triangle: inverse of the reference edge matrix in a local 2D frame, reference area.
     std::vector<Eigen::Matrix2d> m_DmInv;
