@@ -26,6 +26,15 @@ Eigen::VectorXd totalGradient(const MembraneModel& m, const Eigen::Matrix3Xd& x)
     return acc.grad;
 }
 
+// A wrinkling neo-Hookean box bag under 200 Pa with bending (1e-4 N m).
+MembraneModel makeBendingBoxModel(const Mesh& mesh) {
+    auto mat = std::make_shared<WrinklingMaterial>(makeNeoHookean(1e6), 1e-3);
+    MembraneModel model(mesh, mat, 0.2e-3);
+    model.setChamberPressure(0, 200.0);
+    model.setBendingStiffness(1e-4);
+    return model;
+}
+
 double totalEnergy(const MembraneModel& m, const Eigen::Matrix3Xd& x) {
     EnergyAccumulator acc(m.getMesh().getNumNodes());
     acc.wantHessian = false;
@@ -141,11 +150,8 @@ TEST(Solver, BendingTangentIsSolvedThroughItsSparsifiedFactorisation) {
     // share no triangle and solves the whole tangent by CG with it: the same equilibrium as
     // the direct solve of the whole tangent (to the solve tolerance), reached with CG
     // iterations that the direct path does not take.
-    Mesh mesh = makeBoxBag(0.1, 0.1, 0.05, 0.02, true);
-    auto mat = std::make_shared<WrinklingMaterial>(makeNeoHookean(1e6), 1e-3);
-    MembraneModel model(mesh, mat, 0.2e-3);
-    model.setChamberPressure(0, 200.0);
-    model.setBendingStiffness(1e-4);
+    const Mesh mesh = makeBoxBag(0.1, 0.1, 0.05, 0.02, true);
+    const MembraneModel model = makeBendingBoxModel(mesh);
     auto solve = [&](bool sparsify, SolveSummary* s) {
         SolverOptions o;
         o.sparsifyWideCouplings = sparsify;
@@ -169,11 +175,8 @@ TEST(Solver, InexactNewtonReachesTheSameEquilibriumWithFewerKrylovIterations) {
     // CG to the forcing term 0.1 (tighter near convergence) against CG to 1e-4 of each
     // Newton residual: the same equilibrium within the solve tolerance (1e-3 N), fewer CG
     // iterations. Bending makes the sparsified path take CG on every direction.
-    Mesh mesh = makeBoxBag(0.1, 0.1, 0.05, 0.02, true);
-    auto mat = std::make_shared<WrinklingMaterial>(makeNeoHookean(1e6), 1e-3);
-    MembraneModel model(mesh, mat, 0.2e-3);
-    model.setChamberPressure(0, 200.0);
-    model.setBendingStiffness(1e-4);
+    const Mesh mesh = makeBoxBag(0.1, 0.1, 0.05, 0.02, true);
+    const MembraneModel model = makeBendingBoxModel(mesh);
     // From the inflated equilibrium moved by a smooth bump (the tangent definite on the way).
     Eigen::Matrix3Xd start = mesh.X;
     ASSERT_TRUE(solveEquilibrium(model, start, SolverOptions()).converged);
