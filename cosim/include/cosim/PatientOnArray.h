@@ -1,0 +1,87 @@
+#pragma once
+/// @file The patient (body::BodyModel) lying on an array of airbags (ArrayLayout), coupled:
+/// every segment's contact shape is registered, as its own bags::RigidShape, on each bag that
+/// findShapeBagPairs() says it may touch, and linked to the segment's frame on the body side.
+/// The patient is placed in the spec's posture at the height where the first of his shapes
+/// touches the first bag node (bisected), released at rest, and falls onto the bags and
+/// settles under gravity through the coupling (stepAdaptive()).
+///
+/// Order of use: construct (builds the model, the bags, inflates them, finds the touching
+/// height and initializes the coupling; it can take a while: one inflation per bag), then
+/// step() per macro step; read the bags' force on the body and the mechanical energy between
+/// steps.
+///
+/// Only the bags with at least one shape over them take part in the coupling (a bag no shape
+/// can reach carries nothing); getBagIndices() lists them (ArrayBag::index).
+
+#include <bags/Airbag.h>
+#include <body/BodyModel.h>
+
+#include <memory>
+#include <vector>
+
+#include "cosim/ArrayLayout.h"
+#include "cosim/BagParticipant.h"
+#include "cosim/BodyParticipant.h"
+#include "cosim/Coupling.h"
+#include "cosim/ShapeBagPairs.h"
+
+namespace cosim {
+
+struct PatientOnArrayOptions {
+    ArrayLayout layout;  ///< the array (validated against bag.geometry)
+    /// Every bag's spec: geometry, material, tolerances (X_GB is set per bag from the layout).
+    bags::AirbagSpec bag;
+    bags::RigidContact::Options contact;  ///< contact of the body's shapes with the membranes
+    double pairMargin = 0.03;  ///< [m] findShapeBagPairs() margin around each flat footprint
+    double dropHeight = 0.0;   ///< [m] released this far above the touching height
+    body::BodyModelOptions body;
+    BodyIntegratorOptions integrator;
+    CouplingOptions coupling;
+    /// @throws std::invalid_argument naming the option (the layout's errors name their keys).
+    void validate() const;
+};
+
+class PatientOnArray {
+  public:
+    /// Builds and initializes everything (see the file comment).
+    /// @throws std::invalid_argument if spec or options are invalid, or if a segment has no
+    /// bag under it (the patient lies off the array; the error names the segments).
+    PatientOnArray(const body::PatientSpec& spec, const PatientOnArrayOptions& options);
+    ~PatientOnArray();
+    PatientOnArray(const PatientOnArray&) = delete;
+    PatientOnArray& operator=(const PatientOnArray&) = delete;
+
+    /// One macro step, halved while it fails (Coupling::stepAdaptive()).
+    StepSummary step();
+    double getTime() const;  ///< [s] since the release
+
+    /// Vertical force [N] the bags exert on the body, summed over every link (last step).
+    double calcBagForce() const;
+    /// The same per bag of getBagIndices() [N].
+    std::vector<double> calcBagForces() const;
+    /// The body's weight m g [N] with the model's gravity.
+    double getWeight() const;
+    /// Mechanical energy [J]: the body's kinetic and potential energy (gravity, joint springs
+    /// as Simbody reports them) plus every coupled bag's total potential energy (membrane,
+    /// gas, its own weight, contact with the shapes) at its current state.
+    double calcEnergy() const;
+    /// Largest speed [m/s] of a segment's origin.
+    double calcMaxSpeed() const;
+    /// Height [m] of the body's lowest point above the bed board at release, and the
+    /// touching height found by bisection (equal unless dropHeight > 0).
+    double getReleaseClearance() const;
+
+    const std::vector<ShapeBagPair>& getPairs() const;  ///< shape = segment, bag = ArrayBag index
+    const std::vector<int>& getBagIndices() const;      ///< ArrayBag index per participant
+    const body::BodyModel& getModel() const;
+    const BodyParticipant& getBody() const;
+    const BagParticipant& getBag(int participant) const;
+    Coupling& updCoupling();
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace cosim

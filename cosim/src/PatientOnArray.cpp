@@ -1,0 +1,205 @@
+#include "cosim/PatientOnArray.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "cosim/BodyShapes.h"
+
+namespace cosim {
+
+void PatientOnArrayOptions::validate() const {
+    layout.validate(bag.geometry);
+    if (!(pairMargin >= 0.0) || !std::isfinite(pairMargin))
+        throw std::invalid_argument("pairMargin must be finite and >= 0 [m]");
+    if (!(dropHeight >= 0.0) || !std::isfinite(dropHeight))
+        throw std::invalid_argument("dropHeight must be finite and >= 0 [m]");
+    body.validate();
+    integrator.validate();
+    coupling.validate();
+}
+
+struct PatientOnArray::Impl {
+    std::unique_ptr<body::BodyModel> model;
+    std::unique_ptr<BodyParticipant> body;
+    std::vector<std::unique_ptr<BagParticipant>> bags;
+    std::vector<int> bagIndices;       // ArrayBag index per participant
+    std::vector<ShapeBagPair> pairs;   // shape = segment
+    std::vector<int> linkParticipant;  // per link
+    std::unique_ptr<Coupling> coupling;
+    double clearance = 0.0;
+    double gravity = 0.0;
+};
+
+namespace {
+
+Eigen::Isometry3d shapePose(const body::BodyModel& model, const SimTK::State& s, int segment,
+                            const SimTK::Transform& X_BS) {
+    const SimTK::Transform X_GB =
+        model.getMobilizedBody(static_cast<body::Segment>(segment)).getBodyTransform(s);
+    return toEigen(X_GB * X_BS);
+}
+
+}  // namespace
+
+PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
+                               const PatientOnArrayOptions& options)
+    : m_impl(std::make_unique<Impl>()) {
+    options.validate();
+    Impl& m = *m_impl;
+    m.model = std::make_unique<body::BodyModel>(spec, options.body);
+    m.gravity = options.body.gravity;
+    body::BodyModel& model = *m.model;
+    m.body = std::make_unique<BodyParticipant>(model.updSystem(), model.updForces(),
+                                               options.integrator);
+
+    // Where the shapes lie in the posture (lowest point on the bed board) picks the pairs.
+    model.updSystem().realizeTopology();
+    SimTK::State state = model.getSystem().getDefaultState();
+    model.setPosture(state, 0.0);
+    model.getSystem().realize(state, SimTK::Stage::Position);
+    std::vector<Eigen::Vector3d> centres;
+    std::vector<double> radii;
+    for (int k = 0; k < body::kSegmentCount; ++k) {
+        const auto seg = static_cast<body::Segment>(k);
+        const body::ContactShape& s = model.getContactShape(seg);
+        const SimTK::Vec3 c =
+            model.getMobilizedBody(seg).getBodyTransform(state) * s.getBoundingCentre();
+        centres.emplace_back(c[0], c[1], c[2]);
+        radii.push_back(s.getBoundingRadius());
+    }
+    const std::vector<ArrayBag> cells = makeArrayBags(options.layout, options.bag.geometry);
+    m.pairs = findShapeBagPairs(centres, radii, cells, options.pairMargin);
+    const std::vector<int> off = findUnsupportedShapes(body::kSegmentCount, m.pairs);
+    if (!off.empty()) {
+        std::ostringstream s;
+        s << "patient: no bag of the array lies under segment(s)";
+        for (int k : off) s << ' ' << k;
+        s << " (patient.position or the array's rows, columns, pitches and centre)";
+        throw std::invalid_argument(s.str());
+    }
+
+    // The bags that some shape may touch; each pair gets its own bag shape (bags advance on
+    // different threads and set their shapes' poses) and its own body shape (one link each).
+    std::vector<int> participantOf(cells.size(), -1);
+    for (const ShapeBagPair& p : m.pairs)
+        if (participantOf[p.bag] < 0) {
+            participantOf[p.bag] = int(m.bagIndices.size());
+            m.bagIndices.push_back(p.bag);
+        }
+    // Parked well clear above the flat panels while the bags inflate.
+    const double parked = options.bag.geometry.height + 0.5;
+    model.setPosture(state, parked);
+    model.getSystem().realize(state, SimTK::Stage::Position);
+    std::vector<std::unique_ptr<bags::Airbag>> airbags;
+    for (int b : m.bagIndices) {
+        bags::AirbagSpec bs = options.bag;
+        bs.X_GB = cells[b].X_GB;
+        airbags.push_back(std::make_unique<bags::Airbag>(bs));
+    }
+    std::vector<Link> links;
+    std::vector<std::shared_ptr<bags::RigidShape>> probes;  // per pair, for the touch search
+    std::vector<SimTK::Transform> X_BS;                     // per pair
+    for (const ShapeBagPair& p : m.pairs) {
+        const auto seg = static_cast<body::Segment>(p.shape);
+        BagShapeOfBody b = makeBagShape(model.getContactShape(seg));
+        b.shape->setPose(shapePose(model, state, p.shape, b.X_BS));
+        const int part = participantOf[p.bag];
+        const int local = airbags[part]->addShape(b.shape, options.contact);
+        const int bodyShape = m.body->addShape(model.getMobilizedBodyIndex(seg), b.X_BS);
+        links.push_back(Link{bodyShape, part, local});
+        m.linkParticipant.push_back(part);
+        probes.push_back(makeBagShape(model.getContactShape(seg)).shape);
+        X_BS.push_back(b.X_BS);
+    }
+    for (size_t i = 0; i < airbags.size(); ++i)
+        airbags[i]->inflate(cells[m.bagIndices[i]].gasMass);
+
+    // The lowest clearance at which no node of a paired bag lies inside a shape (bisection to
+    // 1e-6 m over [0, parked]).
+    auto touches = [&](double clearance) {
+        model.setPosture(state, clearance);
+        model.getSystem().realize(state, SimTK::Stage::Position);
+        for (size_t i = 0; i < m.pairs.size(); ++i) {
+            bags::RigidShape& s = *probes[i];
+            s.setPose(shapePose(model, state, m.pairs[i].shape, X_BS[i]));
+            const Eigen::Matrix3Xd& x = airbags[m.linkParticipant[i]]->getPositions();
+            for (int n = 0; n < x.cols(); ++n)
+                if (s.calcSignedDistance(x.col(n), nullptr, nullptr) < 0.0) return true;
+        }
+        return false;
+    };
+    double lo = 0.0, hi = parked;
+    if (touches(hi)) throw std::runtime_error("patient: touches the bags even when parked");
+    while (hi - lo > 1e-6) (touches(0.5 * (lo + hi)) ? lo : hi) = 0.5 * (lo + hi);
+    m.clearance = hi + options.dropHeight;
+    model.setPosture(state, m.clearance);
+    m.body->initialize(state);
+
+    for (auto& a : airbags) m.bags.push_back(std::make_unique<BagParticipant>(std::move(a)));
+    std::vector<Participant*> ps;
+    for (auto& b : m.bags) ps.push_back(b.get());
+    m.coupling = std::make_unique<Coupling>(*m.body, ps, links, options.coupling);
+    m.coupling->initialize();
+}
+
+PatientOnArray::~PatientOnArray() = default;
+
+StepSummary PatientOnArray::step() { return m_impl->coupling->stepAdaptive(); }
+double PatientOnArray::getTime() const { return m_impl->coupling->getTime(); }
+
+std::vector<double> PatientOnArray::calcBagForces() const {
+    std::vector<double> f(m_impl->bags.size(), 0.0);
+    for (size_t i = 0; i < m_impl->linkParticipant.size(); ++i)
+        f[m_impl->linkParticipant[i]] += m_impl->coupling->getLinkWrench(int(i)).force.z();
+    return f;
+}
+
+double PatientOnArray::calcBagForce() const {
+    double sum = 0.0;
+    for (double f : calcBagForces()) sum += f;
+    return sum;
+}
+
+double PatientOnArray::getWeight() const {
+    return m_impl->model->calcTotalMass() * m_impl->gravity;
+}
+
+double PatientOnArray::calcEnergy() const {
+    const Impl& m = *m_impl;
+    SimTK::State s = m.body->getState();
+    m.model->getSystem().realize(s, SimTK::Stage::Dynamics);
+    double e = m.model->getSystem().calcEnergy(s);
+    for (const auto& b : m.bags) {
+        const bags::Airbag& a = b->getAirbag();
+        bags::EnergyAccumulator acc(a.getMesh().getNumNodes());
+        acc.wantGradient = false;
+        acc.wantHessian = false;
+        a.getModel().addEnergy(a.getPositions(), acc);
+        e += acc.energy;
+    }
+    return e;
+}
+
+double PatientOnArray::calcMaxSpeed() const {
+    const SimTK::State& s = m_impl->body->getState();
+    double v = 0.0;
+    for (int k = 0; k < body::kSegmentCount; ++k)
+        v = std::max(v, m_impl->model->getMobilizedBody(static_cast<body::Segment>(k))
+                            .getBodyOriginVelocity(s)
+                            .norm());
+    return v;
+}
+
+double PatientOnArray::getReleaseClearance() const { return m_impl->clearance; }
+const std::vector<ShapeBagPair>& PatientOnArray::getPairs() const { return m_impl->pairs; }
+const std::vector<int>& PatientOnArray::getBagIndices() const { return m_impl->bagIndices; }
+const body::BodyModel& PatientOnArray::getModel() const { return *m_impl->model; }
+const BodyParticipant& PatientOnArray::getBody() const { return *m_impl->body; }
+const BagParticipant& PatientOnArray::getBag(int participant) const {
+    return *m_impl->bags.at(participant);
+}
+Coupling& PatientOnArray::updCoupling() { return *m_impl->coupling; }
+
+}  // namespace cosim
