@@ -113,3 +113,21 @@ TEST(PatientOnArray, ALightPatientSettlesOnTheArrayTheBagsCarryHisWeightAndEnerg
     EXPECT_LT(stepRise, 1e-3);
     EXPECT_LT(energy.back(), energy.front() - 1.0);  // it did fall and settle
 }
+
+TEST(PatientOnArray, APatientBesideTheArrayIsRefusedNamingTheSegments) {
+    // Mid-hip 1.2 m to the side of the array's centre line: no bag under any segment. The
+    // error is thrown before any bag is built.
+    body::PatientSpec p = lightPatient();
+    p.position = {{0.0, 1.2}};
+    try {
+        PatientOnArray poa(p, coarseOptions());
+        FAIL() << "no error";
+    } catch (const std::invalid_argument& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("no bag of the array lies under segment(s) 0 1 2"), std::string::npos)
+            << what;
+    }
+    PatientOnArrayOptions bad = coarseOptions();
+    bad.pairMargin = -0.01;
+    EXPECT_THROW(PatientOnArray(lightPatient(), bad), std::invalid_argument);
+}
