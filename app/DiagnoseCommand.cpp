@@ -14,7 +14,6 @@
 #include <cstdint>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -61,10 +60,6 @@ const char* kHelp =
     "\n"
     "exit status: 0 diagnosed, 1 a simulation failed, 2 bad input, 130/143 interrupted.\n";
 
-struct UsageError : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
-
 struct Args {
     std::string measured, out, commandLine;
     bool force = false, whereOnly = false, quiet = false;
@@ -72,22 +67,13 @@ struct Args {
     int threads = 1;
 };
 
-std::string fmt(const char* f, double v) {
-    char b[64];
-    std::snprintf(b, sizeof b, f, v);
-    return b;
-}
-
 Args parseArgs(int argc, char** argv) {
     Args a;
     a.commandLine = "bagsim diagnose";
     for (int i = 0; i < argc; ++i) a.commandLine += std::string(" ") + argv[i];
     for (int i = 0; i < argc; ++i) {
         const std::string arg = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw UsageError(arg + " needs a value (see --help)");
-            return argv[++i];
-        };
+        auto value = [&] { return takeOptionValue(argc, argv, i); };
         if (arg == "--measured") a.measured = value();
         else if (arg == "--out") a.out = value();
         else if (arg == "--force") a.force = true;
@@ -128,9 +114,7 @@ void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
         << (w.withinValidation ? ", within the validation uncertainty" : "") << "\n";
     out << "  channel   RMSE        range       noise       numerical   input       share of gap\n";
     for (const auto& c : w.channels) {
-        const auto kind = c.channel == "force"      ? diagnose::ChannelKind::Force
-                          : c.channel == "pressure" ? diagnose::ChannelKind::Pressure
-                                                    : diagnose::ChannelKind::Mass;
+        const auto kind = diagnose::getChannelKind(c.channel);
         const double u = diagnose::getChannelUnitScale(kind);
         const std::string un = " " + diagnose::getChannelUnit(kind);
         char line[200];
@@ -152,8 +136,7 @@ void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
     out << "  signatures per test (bias, scale, lag, loop area measured / simulated):\n";
     for (const auto& s : w.signatures) {
         if (s.channel == "mass") continue;
-        const auto kind =
-            s.channel == "force" ? diagnose::ChannelKind::Force : diagnose::ChannelKind::Pressure;
+        const auto kind = diagnose::getChannelKind(s.channel);
         const double u = diagnose::getChannelUnitScale(kind);
         const std::string un = diagnose::getChannelUnit(kind);
         out << "    " << s.channel << " " << fmt("%.2f g", s.gasMass * 1e3) << ": bias "
@@ -277,8 +260,7 @@ int run(const Args& a) {
                      ++k) {
                     const auto& m0 = b.heldoutMetricsBefore[k];
                     const auto& m1 = b.heldoutMetricsAfter[k];
-                    const auto kind = m0.channel == "force" ? diagnose::ChannelKind::Force
-                                                            : diagnose::ChannelKind::Pressure;
+                    const auto kind = diagnose::getChannelKind(m0.channel);
                     const double u = diagnose::getChannelUnitScale(kind);
                     const std::string un = " " + diagnose::getChannelUnit(kind);
                     double uval = 0.0;
@@ -330,31 +312,8 @@ int run(const Args& a) {
 }  // namespace
 
 int runDiagnoseCommand(int argc, char** argv) {
-    for (int i = 0; i < argc; ++i)
-        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-            std::cout << kHelp;
-            return 0;
-        }
-    const InterruptGuard guard;
-    try {
-        return run(parseArgs(argc, argv));
-    } catch (const UsageError& e) {
-        std::cerr << "bagsim diagnose: " << e.what() << " (see --help)\n";
-        return 2;
-    } catch (const io::InputError& e) {
-        std::cerr << "bagsim diagnose: error: " << e.what() << "\n";
-        return 2;
-    } catch (const Interrupted& e) {
-        std::cerr << "bagsim diagnose: " << e.what() << "; nothing written\n";
-        return getInterruptExitCode(e.signal);
-    } catch (const std::exception& e) {
-        if (getInterruptSignal()) {
-            std::cerr << "bagsim diagnose: interrupted; nothing written\n";
-            return getInterruptExitCode(getInterruptSignal());
-        }
-        std::cerr << "bagsim diagnose: failed: " << e.what() << "\n";
-        return 1;
-    }
+    return runCommandMain("bagsim diagnose", kHelp, argc, argv,
+                          [](int n, char** v) { return run(parseArgs(n, v)); });
 }
 
 }  // namespace bagsim::app

@@ -3,9 +3,60 @@
 #include <bags/SeedReading.h>
 #include <io/InputError.h>
 
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+
+#include "Interrupt.h"
+
 namespace bagsim::app {
 
 namespace fs = std::filesystem;
+
+std::string fmt(const char* f, double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return b;
+}
+
+std::string takeOptionValue(int argc, char** argv, int& i) {
+    if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + " needs a value (see --help)");
+    return argv[++i];
+}
+
+bool printHelpIfAsked(int argc, char** argv, const char* help) {
+    for (int i = 0; i < argc; ++i)
+        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+            std::cout << help;
+            return true;
+        }
+    return false;
+}
+
+int runCommandMain(const std::string& command, const char* help, int argc, char** argv,
+                   const std::function<int(int, char**)>& run) {
+    if (printHelpIfAsked(argc, argv, help)) return 0;
+    const InterruptGuard guard;
+    try {
+        return run(argc, argv);
+    } catch (const UsageError& e) {
+        std::cerr << command << ": " << e.what() << " (see --help)\n";
+        return 2;
+    } catch (const io::InputError& e) {
+        std::cerr << command << ": error: " << e.what() << "\n";
+        return 2;
+    } catch (const Interrupted& e) {
+        std::cerr << command << ": " << e.what() << "; nothing written\n";
+        return getInterruptExitCode(e.signal);
+    } catch (const std::exception& e) {
+        if (getInterruptSignal()) {
+            std::cerr << command << ": interrupted; nothing written\n";
+            return getInterruptExitCode(getInterruptSignal());
+        }
+        std::cerr << command << ": failed: " << e.what() << "\n";
+        return 1;
+    }
+}
 
 void prepareGeometry(io::LoadTestScenario& sc) {
     if (!(sc.fillMass > 0.0)) return;

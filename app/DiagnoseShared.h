@@ -1,13 +1,39 @@
 #pragma once
 // Shared by bagsim synth-measurement and bagsim diagnose: the seed rig's scenario made ready to
-// simulate, and output folders that are never overwritten by surprise.
+// simulate, output folders that are never overwritten by surprise, and the command's main with
+// its messages and exit statuses. UsageError, fmt, takeOptionValue and printHelpIfAsked serve
+// bagsim fit-material too.
 #include <io/LoadTestScenario.h>
 
 #include <filesystem>
+#include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace bagsim::app {
+
+/// A user mistake on the command line: printed with the command's prefix, exit status 2.
+struct UsageError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+/// One number formatted with the printf format `f` (e.g. "%.4g").
+std::string fmt(const char* f, double v);
+
+/// The value of the option argv[i]: argv[++i]; a UsageError ("--out needs a value (see --help)")
+/// if there is none.
+std::string takeOptionValue(int argc, char** argv, int& i);
+
+/// If argv holds --help or -h: prints `help` to stdout and returns true.
+bool printHelpIfAsked(int argc, char** argv, const char* help);
+
+/// The main of synth-measurement and diagnose: --help, else `run` under an InterruptGuard.
+/// Messages start with `command` ("bagsim diagnose"); exit status 2 for a UsageError (" (see
+/// --help)") or an io::InputError, that of the signal when interrupted ("; nothing written"),
+/// 1 for another failure; else what `run` returns.
+int runCommandMain(const std::string& command, const char* help, int argc, char** argv,
+                   const std::function<int(int, char**)>& run);
 
 /// With airbag.fill_mass, sizes the bag (a few inflations) so its geometry is fixed before
 /// the simulations; prints nothing.

@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -17,6 +16,7 @@
 #include <vector>
 
 #include "Commands.h"
+#include "DiagnoseShared.h"
 
 namespace bagsim::app {
 
@@ -64,17 +64,6 @@ struct Args {
     bags::MaterialFitOptions fit;
 };
 
-/// A user mistake: printed with the command's prefix, exit status 2.
-struct UsageError : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
-
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
-
 std::string formatConstant(const std::string& name, double value) {
     if (bags::isStressConstant(name)) return name + " = " + fmt("%.7g", value * 1e-6) + " MPa";
     return name + " = " + fmt("%.7g", value);
@@ -92,10 +81,7 @@ Args parseArgs(int argc, char** argv) {
     Args a;
     for (int i = 0; i < argc; ++i) {
         const std::string arg = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw UsageError(arg + " needs a value (see --help)");
-            return argv[++i];
-        };
+        auto value = [&] { return takeOptionValue(argc, argv, i); };
         if (arg == "--model") {
             a.model = value();
         } else if (arg == "--strain-unit") {
@@ -342,11 +328,7 @@ int run(const Args& a) {
 }  // namespace
 
 int runFitMaterialCommand(int argc, char** argv) {
-    for (int i = 0; i < argc; ++i)
-        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-            std::cout << kHelp;
-            return 0;
-        }
+    if (printHelpIfAsked(argc, argv, kHelp)) return 0;
     try {
         const Args a = parseArgs(argc, argv);
         a.fit.validate();

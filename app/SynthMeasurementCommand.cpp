@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -73,10 +72,6 @@ const char* kHelp =
 /// The truth's imperfection seed is the scenario's plus this.
 constexpr std::uint64_t kTruthSeedOffset = 100;
 
-struct UsageError : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
-
 struct Args {
     std::string scenario, effect, out, labelOut;
     std::vector<std::string> params, noise;
@@ -85,20 +80,11 @@ struct Args {
     bool force = false, quiet = false;
 };
 
-std::string fmt(const char* f, double v) {
-    char b[64];
-    std::snprintf(b, sizeof b, f, v);
-    return b;
-}
-
 Args parseArgs(int argc, char** argv) {
     Args a;
     for (int i = 0; i < argc; ++i) {
         const std::string arg = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw UsageError(arg + " needs a value (see --help)");
-            return argv[++i];
-        };
+        auto value = [&] { return takeOptionValue(argc, argv, i); };
         if (arg == "--scenario") a.scenario = value();
         else if (arg == "--effect") a.effect = value();
         else if (arg == "--param") a.params.push_back(value());
@@ -382,31 +368,8 @@ int run(const Args& a) {
 }  // namespace
 
 int runSynthMeasurementCommand(int argc, char** argv) {
-    for (int i = 0; i < argc; ++i)
-        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-            std::cout << kHelp;
-            return 0;
-        }
-    const InterruptGuard guard;
-    try {
-        return run(parseArgs(argc, argv));
-    } catch (const UsageError& e) {
-        std::cerr << "bagsim synth-measurement: " << e.what() << " (see --help)\n";
-        return 2;
-    } catch (const io::InputError& e) {
-        std::cerr << "bagsim synth-measurement: error: " << e.what() << "\n";
-        return 2;
-    } catch (const Interrupted& e) {
-        std::cerr << "bagsim synth-measurement: " << e.what() << "; nothing written\n";
-        return getInterruptExitCode(e.signal);
-    } catch (const std::exception& e) {
-        if (getInterruptSignal()) {
-            std::cerr << "bagsim synth-measurement: interrupted; nothing written\n";
-            return getInterruptExitCode(getInterruptSignal());
-        }
-        std::cerr << "bagsim synth-measurement: failed: " << e.what() << "\n";
-        return 1;
-    }
+    return runCommandMain("bagsim synth-measurement", kHelp, argc, argv,
+                          [](int n, char** v) { return run(parseArgs(n, v)); });
 }
 
 }  // namespace bagsim::app

@@ -6,23 +6,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
+
+#include "Format.h"
 
 namespace diagnose {
 
 namespace {
 
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string fmt(const char* f, double v) {
-    char b[64];
-    std::snprintf(b, sizeof b, f, v);
-    return b;
-}
+using detail::fmt;
+using detail::kNaN;
 
 // Simulated comparisons of one effect at trial parameter values, with the load tests of
 // effects that change the bag cached by parameter value (shared by all folds).

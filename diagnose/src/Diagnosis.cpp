@@ -2,22 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <limits>
 #include <map>
 #include <numeric>
+
+#include "Format.h"
 
 namespace diagnose {
 
 namespace {
 
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string fmt(const char* f, double v) {
-    char b[64];
-    std::snprintf(b, sizeof b, f, v);
-    return b;
-}
+using detail::fmt;
+using detail::kNaN;
 
 // One branch of a simulated curve with increasing crosshead displacement.
 struct Branch {
@@ -104,6 +99,11 @@ std::pair<double, double> calcLag(const std::vector<double>& t, const std::vecto
 
 std::string getChannelName(ChannelKind c) {
     return c == ChannelKind::Force ? "force" : c == ChannelKind::Pressure ? "pressure" : "mass";
+}
+ChannelKind getChannelKind(const std::string& name) {
+    return name == "force"      ? ChannelKind::Force
+           : name == "pressure" ? ChannelKind::Pressure
+                                : ChannelKind::Mass;
 }
 std::string getChannelUnit(ChannelKind c) {
     return c == ChannelKind::Force ? "N" : c == ChannelKind::Pressure ? "kPa" : "g";

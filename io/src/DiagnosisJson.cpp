@@ -8,6 +8,8 @@ namespace io {
 
 namespace {
 
+using diagnose::getChannelKind;
+
 std::string num(double v, const char* f = "%.6g") {
     if (!std::isfinite(v)) return "null";
     char b[64];
@@ -26,15 +28,9 @@ std::string str(const std::string& s) {
     return o + "\"";
 }
 
-diagnose::ChannelKind kindOf(const std::string& name) {
-    return name == "force" ? diagnose::ChannelKind::Force
-           : name == "pressure" ? diagnose::ChannelKind::Pressure
-                                : diagnose::ChannelKind::Mass;
-}
-
 // A channel value [SI] in the channel's unit.
 double inUnit(const std::string& channel, double v) {
-    return v / diagnose::getChannelUnitScale(kindOf(channel));
+    return v / diagnose::getChannelUnitScale(getChannelKind(channel));
 }
 
 std::string formatParameters(const diagnose::Effect* e, const std::vector<double>& v,
@@ -69,7 +65,8 @@ std::string formatMetrics(const diagnose::CandidateResult& c, const diagnose::Wh
         for (const auto& ch : w.channels)
             if (ch.channel == b.channel) uval = ch.validation;
         os << (i ? ", " : "") << str(b.channel) << ": {\"unit\": "
-           << str(diagnose::getChannelUnit(kindOf(b.channel))) << ", \"samples\": " << b.samples
+           << str(diagnose::getChannelUnit(getChannelKind(b.channel)))
+           << ", \"samples\": " << b.samples
            << ", \"validation_uncertainty\": " << num(inUnit(b.channel, uval))
            << ", \"before\": " << formatMetric(b) << ", \"after\": "
            << (i < c.heldoutMetricsAfter.size() ? formatMetric(c.heldoutMetricsAfter[i])
@@ -98,7 +95,7 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
     for (size_t i = 0; i < w.channels.size(); ++i) {
         const auto& c = w.channels[i];
         os << "      {\"channel\": " << str(c.channel) << ", \"unit\": "
-           << str(diagnose::getChannelUnit(kindOf(c.channel))) << ", \"rmse\": "
+           << str(diagnose::getChannelUnit(getChannelKind(c.channel))) << ", \"rmse\": "
            << num(inUnit(c.channel, c.rmse)) << ", \"range\": " << num(inUnit(c.channel, c.range))
            << ", \"noise\": " << num(inUnit(c.channel, c.noise))
            << ", \"numerical_uncertainty\": " << num(inUnit(c.channel, c.numerical))
@@ -127,7 +124,8 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
            << num(s.lagCorrelation, "%.4f") << ", \"loop_area_measured\": "
            << num(inUnit(s.channel, s.loopAreaMeasured) * 1e3) << ", \"loop_area_simulated\": "
            << num(inUnit(s.channel, s.loopAreaSimulated) * 1e3)
-           << ", \"loop_area_unit\": " << str(diagnose::getChannelUnit(kindOf(s.channel)) + " mm")
+           << ", \"loop_area_unit\": "
+           << str(diagnose::getChannelUnit(getChannelKind(s.channel)) + " mm")
            << ", \"drift_per_s\": " << num(inUnit(s.channel, s.drift)) << "}"
            << (i + 1 < w.signatures.size() ? "," : "") << "\n";
     }

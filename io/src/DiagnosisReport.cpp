@@ -125,9 +125,7 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
        << ".</p><table><tr><th>channel</th><th>RMSE</th><th>range</th><th>noise</th>"
        << "<th>numerical</th><th>input</th><th>validation</th><th>share of gap</th></tr>";
     for (const auto& c : w.channels) {
-        const auto kind = c.channel == "force"      ? diagnose::ChannelKind::Force
-                          : c.channel == "pressure" ? diagnose::ChannelKind::Pressure
-                                                    : diagnose::ChannelKind::Mass;
+        const auto kind = diagnose::getChannelKind(c.channel);
         const double u = diagnose::getChannelUnitScale(kind);
         const std::string un = " " + diagnose::getChannelUnit(kind);
         os << "<tr><td>" << c.channel << "</td><td>" << num(c.rmse / u) << un << "</td><td>"
@@ -142,9 +140,7 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
        << "<th>share of the channel's squared error</th></tr>";
     for (const auto& r : w.regimes) {
         if (r.regime == "all") continue;
-        const auto kind = r.channel == "force"      ? diagnose::ChannelKind::Force
-                          : r.channel == "pressure" ? diagnose::ChannelKind::Pressure
-                                                    : diagnose::ChannelKind::Mass;
+        const auto kind = diagnose::getChannelKind(r.channel);
         const double u = diagnose::getChannelUnitScale(kind);
         const std::string un = " " + diagnose::getChannelUnit(kind);
         os << "<tr><td>" << r.channel << ", " << esc(r.regime) << "</td><td>" << r.samples

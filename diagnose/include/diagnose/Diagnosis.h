@@ -29,6 +29,8 @@ namespace diagnose {
 /// The channels compared (the flowmeter's is a consistency check, not part of the gap).
 enum class ChannelKind { Force, Pressure, Mass };
 std::string getChannelName(ChannelKind c);  ///< "force", "pressure", "mass"
+/// The kind of a channel named by getChannelName: "force", "pressure", else Mass.
+ChannelKind getChannelKind(const std::string& name);
 std::string getChannelUnit(ChannelKind c);  ///< "N", "kPa", "g" (how it is reported)
 double getChannelUnitScale(ChannelKind c);  ///< SI per reported unit
 
