@@ -20,7 +20,7 @@ std::string fmt(const char* f, double v) {
 }
 
 std::string takeOptionValue(int argc, char** argv, int& i) {
-    if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + " needs a value (see --help)");
+    if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + " needs a value");
     return argv[++i];
 }
 

@@ -21,7 +21,7 @@ struct UsageError : std::runtime_error {
 /// One number formatted with the printf format `f` (e.g. "%.4g").
 std::string fmt(const char* f, double v);
 
-/// The value of the option argv[i]: argv[++i]; a UsageError ("--out needs a value (see --help)")
+/// The value of the option argv[i]: argv[++i]; a UsageError ("--out needs a value")
 /// if there is none.
 std::string takeOptionValue(int argc, char** argv, int& i);
 
