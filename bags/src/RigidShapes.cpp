@@ -30,41 +30,36 @@ double RigidShape::calcDistanceLowerBound(const Vec3& p_G) const {
     return (p_G - m_X_GS.translation()).norm() - R;
 }
 
+double LocalRigidShape::calcSignedDistance(const Vec3& p_G, Vec3* closest_G,
+                                           Vec3* normal_G) const {
+    double d;
+    calcContactGeometry(p_G, &d, closest_G, normal_G, nullptr);
+    return d;
+}
+
+Mat3 LocalRigidShape::calcNormalDerivative(const Vec3& p_G) const {
+    Mat3 dn;
+    calcContactGeometry(p_G, nullptr, nullptr, nullptr, &dn);
+    return dn;
+}
+
+void LocalRigidShape::calcContactGeometry(const Vec3& p_G, double* distance, Vec3* closest_G,
+                                          Vec3* normal_G, Mat3* dndp_G) const {
+    const Mat3& R = m_X_GS.linear();
+    const Vec3 p_S = R.transpose() * (p_G - m_X_GS.translation());
+    double d;
+    Vec3 c_S, n_S;
+    Mat3 dn_S;
+    evalLocal(p_S, d, c_S, n_S, dndp_G ? &dn_S : nullptr);
+    if (distance) *distance = d;
+    if (closest_G) *closest_G = m_X_GS * c_S;
+    if (normal_G) *normal_G = R * n_S;
+    if (dndp_G) *dndp_G = R * dn_S * R.transpose();
+}
+
 namespace {
 
-/// Shapes that evaluate everything in their own frame in one pass.
-class LocalShape : public RigidShape {
-public:
-    double calcSignedDistance(const Vec3& p_G, Vec3* closest_G, Vec3* normal_G) const override {
-        double d;
-        calcContactGeometry(p_G, &d, closest_G, normal_G, nullptr);
-        return d;
-    }
-    Mat3 calcNormalDerivative(const Vec3& p_G) const override {
-        Mat3 dn;
-        calcContactGeometry(p_G, nullptr, nullptr, nullptr, &dn);
-        return dn;
-    }
-    void calcContactGeometry(const Vec3& p_G, double* distance, Vec3* closest_G, Vec3* normal_G,
-                             Mat3* dndp_G) const override {
-        const Mat3& R = m_X_GS.linear();
-        const Vec3 p_S = R.transpose() * (p_G - m_X_GS.translation());
-        double d;
-        Vec3 c_S, n_S;
-        Mat3 dn_S;
-        evalLocal(p_S, d, c_S, n_S, dndp_G ? &dn_S : nullptr);
-        if (distance) *distance = d;
-        if (closest_G) *closest_G = m_X_GS * c_S;
-        if (normal_G) *normal_G = R * n_S;
-        if (dndp_G) *dndp_G = R * dn_S * R.transpose();
-    }
-
-protected:
-    /// Signed distance d, closest point c, unit outward normal n and d n / d p, all in S.
-    virtual void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dn) const = 0;
-};
-
-class Plane final : public LocalShape {
+class Plane final : public LocalRigidShape {
 public:
     std::string getName() const override { return "plane"; }
     double calcDistanceLowerBound(const Vec3& p_G) const override {
@@ -83,7 +78,7 @@ protected:
 inline double signOf(double v) { return v < 0.0 ? -1.0 : 1.0; }
 
 /// Box = inner box (half extents h - r) Minkowski sphere of radius r; exact signed distance.
-class Box final : public LocalShape {
+class Box final : public LocalRigidShape {
 public:
     Box(const Vec3& h, double r) : m_h(h), m_r(r), m_inner(h.array() - r) {}
     std::string getName() const override { return "box"; }
@@ -131,7 +126,7 @@ private:
 };
 
 /// Capsule: points within r of the segment z in [-L, L].
-class Capsule final : public LocalShape {
+class Capsule final : public LocalRigidShape {
 public:
     Capsule(double r, double L) : m_r(r), m_L(L) {}
     std::string getName() const override { return "capsule"; }
@@ -171,7 +166,7 @@ private:
 /// hence concave and increasing, so Newton from a point left of the root converges
 /// monotonically (and in one step when one axis dominates, as near an axis). Working in s keeps
 /// full relative precision of s + d_k near the pole, where points approach the short axis.
-class Ellipsoid final : public LocalShape {
+class Ellipsoid final : public LocalRigidShape {
 public:
     explicit Ellipsoid(const Vec3& a) : m_a(a) {
         m_a.minCoeff(&m_k);

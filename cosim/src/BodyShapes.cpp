@@ -11,7 +11,7 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
-class RoundCone : public bags::RigidShape {
+class RoundCone : public bags::LocalRigidShape {
   public:
     RoundCone(const Vec3& pA, double rA, const Vec3& pB, double rB)
         : m_pA(pA), m_pB(pB), m_rA(rA), m_rB(rB) {
@@ -28,20 +28,13 @@ class RoundCone : public bags::RigidShape {
         m_sin = (rA - rB) / h;
         m_cos = std::sqrt(1.0 - m_sin * m_sin);
     }
-    double calcSignedDistance(const Vec3& p_G, Vec3* closest_G, Vec3* normal_G) const override {
-        double d;
-        calcContactGeometry(p_G, &d, closest_G, normal_G, nullptr);
-        return d;
+    double getBoundingRadius() const override {
+        return std::max(m_pA.norm() + m_rA, m_pB.norm() + m_rB);
     }
-    Mat3 calcNormalDerivative(const Vec3& p_G) const override {
-        Mat3 dn;
-        calcContactGeometry(p_G, nullptr, nullptr, nullptr, &dn);
-        return dn;
-    }
-    void calcContactGeometry(const Vec3& p_G, double* distance, Vec3* closest_G, Vec3* normal_G,
-                             Mat3* dndp_G) const override {
-        const Mat3& R = m_X_GS.linear();
-        const Vec3 p = R.transpose() * (p_G - m_X_GS.translation());
+    std::string getName() const override { return "round-cone"; }
+
+  protected:
+    void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dnOut) const override {
         const Vec3 v = p - m_pA;
         const double y = v.dot(m_e);
         const Vec3 w = v - y * m_e;
@@ -55,16 +48,14 @@ class RoundCone : public bags::RigidShape {
             er = m_e.unitOrthogonal();
         }
         const double s = -x * m_sin + y * m_cos;  // along the tangent line
-        double d;
-        Vec3 n, c;
-        Mat3 dn = Mat3::Zero();
+        if (dnOut) dnOut->setZero();
         auto sphere = [&](const Vec3& centre, double r) {
             const Vec3 q = p - centre;
             const double len = q.norm();
             n = len > 0.0 ? Vec3(q / len) : Vec3(m_cos * er + m_sin * m_e);
             d = len - r;
             c = centre + r * n;
-            if (len > 0.0) dn = (Mat3::Identity() - n * n.transpose()) / len;
+            if (dnOut && len > 0.0) *dnOut = (Mat3::Identity() - n * n.transpose()) / len;
         };
         if (s < 0.0) {
             sphere(m_pA, m_rA);
@@ -74,18 +65,11 @@ class RoundCone : public bags::RigidShape {
             n = m_cos * er + m_sin * m_e;
             d = x * m_cos + y * m_sin - m_rA;
             c = p - d * n;
-            if (x > 1e-14 * m_h)
-                dn = m_cos * (Mat3::Identity() - m_e * m_e.transpose() - er * er.transpose()) / x;
+            if (dnOut && x > 1e-14 * m_h)
+                *dnOut =
+                    m_cos * (Mat3::Identity() - m_e * m_e.transpose() - er * er.transpose()) / x;
         }
-        if (distance) *distance = d;
-        if (closest_G) *closest_G = R * c + m_X_GS.translation();
-        if (normal_G) *normal_G = R * n;
-        if (dndp_G) *dndp_G = R * dn * R.transpose();
     }
-    double getBoundingRadius() const override {
-        return std::max(m_pA.norm() + m_rA, m_pB.norm() + m_rB);
-    }
-    std::string getName() const override { return "round-cone"; }
 
   private:
     Vec3 m_pA, m_pB, m_e;

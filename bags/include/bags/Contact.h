@@ -45,6 +45,20 @@ protected:
     Eigen::Isometry3d m_X_GS = Eigen::Isometry3d::Identity();
 };
 
+/// A shape that evaluates everything in its own frame S in one pass: derived classes give
+/// evalLocal(); the distance queries and the transforms to and from Ground are done here.
+class LocalRigidShape : public RigidShape {
+public:
+    double calcSignedDistance(const Vec3& p_G, Vec3* closest_G, Vec3* normal_G) const override;
+    Mat3 calcNormalDerivative(const Vec3& p_G) const override;
+    void calcContactGeometry(const Vec3& p_G, double* distance, Vec3* closest_G, Vec3* normal_G,
+                             Mat3* dndp_G) const override;
+
+protected:
+    /// Signed distance d, closest point c, unit outward normal n and d n / d p, all in S.
+    virtual void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dn) const = 0;
+};
+
 /// Half-space below the plane through the frame origin with normal +z of the frame.
 std::unique_ptr<RigidShape> makePlane();
 /// Box with half-extents h [m], edges rounded by radius r [m] (r < min(h)).
