@@ -64,10 +64,6 @@ int main(int argc, char** argv) {
             o.damping = std::atof(val);
         } else if (std::strcmp(key, "--onset") == 0) {
             o.blockContact.onsetGap = o.floorContact.onsetGap = std::atof(val) * 1e-3;
-        } else if (std::strcmp(key, "--truncated") == 0) {
-            o.solver.truncatedNewton = std::atoi(val) != 0;
-        } else if (std::strcmp(key, "--truncate") == 0) {
-            o.solver.truncateAtNegativeCurvature = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--krylov-tolerance") == 0) {
             o.solver.krylovTolerance = std::atof(val);
         } else if (std::strcmp(key, "--forcing") == 0) {

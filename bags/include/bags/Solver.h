@@ -32,7 +32,7 @@ struct SolverOptions {
     /// takes more than maxKrylovIterations.
     bool reuseFactorization = true;
     int maxKrylovIterations = 40;
-    double krylovTolerance = 1e-4;     ///< relative residual of the inner linear solve
+    double krylovTolerance = 1e-4;     ///< tightest relative residual of the inner linear solve
     /// With a bending term: factor the tangent without the bending couplings between nodes
     /// that share no element (each dropped entry's magnitude added to its two diagonal
     /// entries, so the factored matrix stays positive definite) and solve the exact tangent
@@ -40,16 +40,11 @@ struct SolverOptions {
     /// about 6 times dearer (docs/performance.md).
     bool sparsifyWideCouplings = true;
     int maxSparsifiedKrylovIterations = 150;  ///< CG iterations on a fresh sparsified factor
-    /// Inexact Newton: the Newton system is solved by CG on the exact tangent only to the
-    /// relative forcing tolerance below (tighter near convergence), preconditioned by a
-    /// factorisation whose diagonal is raised just enough to factor; the tangent itself is
-    /// shifted (pseudo-transient) only where CG meets negative curvature. false: the tangent
-    /// is shifted whenever it does not factor, and solved to krylovTolerance.
-    bool truncatedNewton = true;
-    double forcingTerm = 0.1;          ///< relative residual of the inexact Newton solve
-    /// At negative curvature take CG's iterate so far (truncated Newton-CG) instead of
-    /// shifting the tangent.
-    bool truncateAtNegativeCurvature = false;
+    /// Inexact Newton: the Newton system is solved by CG on the exact tangent only to this
+    /// relative residual (tighter near convergence, never below krylovTolerance),
+    /// preconditioned by a factorisation whose diagonal is raised just enough to factor; the
+    /// tangent itself is shifted (pseudo-transient) only where CG meets negative curvature.
+    double forcingTerm = 0.1;
     /// [N] If Newton stalls (non-smooth contact: the residual stops falling for 8 iterations)
     /// below this residual, the state is accepted and SolveSummary::stalled is set. 0: never.
     double acceptableResidual = 0.0;
