@@ -121,6 +121,14 @@ TEST(LoadTestScenario, BaseScenarioIsValidAndUsesDefaults) {
     EXPECT_EQ(e.getKey(), "solver.residual_tolerance");
     EXPECT_NE(std::string(e.what()).find("fraction of the peak force"), std::string::npos)
         << e.what();
+    // The damper: off by default, a stiffness per area with its unit, never negative.
+    EXPECT_EQ(sc.options.damping, 0.0);
+    const io::LoadTestScenario sc4 = io::readLoadTestScenario(
+        ScenarioFile::parse(kBase + "solver: {damping: 100 kPa/m}\n", "d.yaml"));
+    EXPECT_DOUBLE_EQ(sc4.options.damping, 1e5);
+    const InputError ed = errorFor(kBase + "solver:\n  damping: -1 Pa/m\n");
+    EXPECT_EQ(ed.getKey(), "solver.damping");
+    EXPECT_NE(std::string(ed.what()).find("Pa/m"), std::string::npos) << ed.what();
 }
 
 TEST(LoadTestScenario, OrificeAndExtrapolationKeys) {
