@@ -72,7 +72,7 @@ double GasSchedule::findNextChange(double t) const {
 
 void GasSchedule::apply(double t, const std::vector<BagParticipant*>& bags) const {
     for (int b = 0; b < int(bags.size()); ++b) {
-        const GasCommand* c = findCommand(b, t);
+        const GasCommand* c = bags[b] ? findCommand(b, t) : nullptr;
         if (!c) continue;
         bags::Airbag& bag = bags[b]->updAirbag();
         if (c->kind == GasCommand::Kind::Flow)

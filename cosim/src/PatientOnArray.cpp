@@ -27,6 +27,7 @@ struct PatientOnArray::Impl {
     std::vector<int> bagIndices;       // ArrayBag index per participant
     std::vector<ShapeBagPair> pairs;   // shape = segment
     std::vector<int> linkParticipant;  // per link
+    std::vector<Link> links;           // per pair
     std::unique_ptr<Coupling> coupling;
     double clearance = 0.0;
     double gravity = 0.0;
@@ -140,6 +141,7 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
     for (auto& a : airbags) m.bags.push_back(std::make_unique<BagParticipant>(std::move(a)));
     std::vector<Participant*> ps;
     for (auto& b : m.bags) ps.push_back(b.get());
+    m.links = links;
     m.coupling = std::make_unique<Coupling>(*m.body, ps, links, options.coupling);
     m.coupling->initialize();
 }
@@ -200,6 +202,8 @@ const BodyParticipant& PatientOnArray::getBody() const { return *m_impl->body; }
 const BagParticipant& PatientOnArray::getBag(int participant) const {
     return *m_impl->bags.at(participant);
 }
+const std::vector<Link>& PatientOnArray::getLinks() const { return m_impl->links; }
+BagParticipant& PatientOnArray::updBag(int participant) { return *m_impl->bags.at(participant); }
 Coupling& PatientOnArray::updCoupling() { return *m_impl->coupling; }
 
 }  // namespace cosim

@@ -39,6 +39,8 @@ class GasSchedule {
     /// The first start time of any command strictly after t [s] (infinity if none).
     double findNextChange(double t) const;
     /// Sets each bag's flow for a step starting at t (bags without a command are left alone).
+    /// `bags` is indexed by the array's bag index; null entries (bags not simulated, e.g. no
+    /// shape over them) are skipped.
     void apply(double t, const std::vector<BagParticipant*>& bags) const;
 
   private:

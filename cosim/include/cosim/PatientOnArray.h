@@ -74,9 +74,14 @@ class PatientOnArray {
 
     const std::vector<ShapeBagPair>& getPairs() const;  ///< shape = segment, bag = ArrayBag index
     const std::vector<int>& getBagIndices() const;      ///< ArrayBag index per participant
+    /// The coupling's links, one per pair (link i is pair i): body shape, participant, and the
+    /// shape's index on that participant (for its contact pressures).
+    const std::vector<Link>& getLinks() const;
     const body::BodyModel& getModel() const;
     const BodyParticipant& getBody() const;
     const BagParticipant& getBag(int participant) const;
+    /// The participant's bag, to set its gas flow between steps (GasSchedule::apply()).
+    BagParticipant& updBag(int participant);
     Coupling& updCoupling();
 
   private:

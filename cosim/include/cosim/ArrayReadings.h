@@ -1,0 +1,69 @@
+#pragma once
+/// @file What a clinician and an engineer read off the patient on the array between steps:
+/// loads per body region (peak and mean interface pressure, contact area, force), the state
+/// of every coupled bag (gas mass, pressure, volume, force), the pelvis' and thorax' tilt, and
+/// the pressure mat's frame.
+///
+/// Order of use: after PatientOnArray::step() (or right after construction), call any of
+/// them; they read the committed state and change nothing.
+///
+/// Region loads: every node of a coupled bag with a contact pressure from a segment's shape is
+/// placed on that segment (its position in the segment's frame) and given to the segment's
+/// body region (body::BodyModel::findRegion()); a node in no region counts under its segment's
+/// name. Per region: the peak nodal pressure, the contact area (the nodes' lumped reference
+/// areas where the pressure exceeds a threshold, 5 mmHg by default), the mean pressure over
+/// that area (the nodes' normal force over it), and the force: the vertical part of the
+/// nodes' contact forces (pressure times area along the shape's outward normal), so that the
+/// regions' forces add up to PatientOnArray::calcBagForce() (without friction).
+
+#include <string>
+#include <vector>
+
+#include "cosim/PatientOnArray.h"
+#include "cosim/PressureMat.h"
+
+namespace cosim {
+
+/// Loads on one body region (or on a segment, for nodes in no region).
+struct RegionLoad {
+    std::string name;           ///< body::BodyRegion::name, or the segment's name
+    double peakPressure = 0.0;  ///< [Pa] highest nodal contact pressure
+    double meanPressure = 0.0;  ///< [Pa] normal force over the area (0 with no area)
+    double area = 0.0;          ///< [m^2] nodes' areas where the pressure exceeds the threshold
+    double force = 0.0;         ///< [N] vertical (Ground +z) part of the contact force
+};
+
+/// The names loads are reported under: the model's regions in order, then the 16 segments
+/// (for nodes in no region). Index i of calcRegionLoads() is name i.
+std::vector<std::string> getRegionLoadNames(const body::BodyModel& model);
+
+/// Loads per getRegionLoadNames() entry at the committed state (see the file comment).
+/// @param areaThreshold [Pa] pressure above which a node's area counts as contact area
+std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa,
+                                        double areaThreshold = 5.0 * 133.322387415);
+
+/// State of one coupled bag.
+struct BagReading {
+    int bag = 0;                 ///< ArrayBag index
+    double gasMass = 0.0;        ///< [kg] total
+    double gaugePressure = 0.0;  ///< [Pa] volume-weighted over the chambers
+    double volume = 0.0;         ///< [m^3] total
+    double force = 0.0;          ///< [N] vertical force of the bag on the body
+};
+
+/// One reading per participant (PatientOnArray::getBagIndices() order).
+std::vector<BagReading> calcBagReadings(const PatientOnArray& poa);
+
+/// How far a segment is turned about the bed's long axis [rad]: the angle of its anterior
+/// axis (body frame X) from Ground +z, seen along Ground +x; positive when he turns onto his
+/// left side (his anterior axis towards Ground -y, his right side raised).
+double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment);
+
+/// Clears the mat and adds every coupled bag's nodal contact pressures (all shapes) to it.
+void fillPressureMat(const PatientOnArray& poa, PressureMat& mat);
+
+/// A mat over the array's flat footprints (their bounding box), rows x columns sensels.
+PressureMatOptions makeArrayMatOptions(const ArrayLayout& layout,
+                                       const bags::DoubleWedgeParams& bag, int rows, int columns);
+
+}  // namespace cosim

@@ -1,0 +1,125 @@
+#include "cosim/ArrayReadings.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "cosim/BodyShapes.h"
+
+namespace cosim {
+
+std::vector<std::string> getRegionLoadNames(const body::BodyModel& model) {
+    std::vector<std::string> names;
+    for (const body::BodyRegion& r : model.getRegions()) names.push_back(r.name);
+    for (int k = 0; k < body::kSegmentCount; ++k)
+        names.push_back(body::getSegmentName(static_cast<body::Segment>(k)));
+    return names;
+}
+
+std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaThreshold) {
+    const body::BodyModel& model = poa.getModel();
+    const std::vector<std::string> names = getRegionLoadNames(model);
+    std::vector<RegionLoad> loads(names.size());
+    std::vector<double> normalForce(names.size(), 0.0);
+    for (size_t i = 0; i < names.size(); ++i) loads[i].name = names[i];
+    const int numRegions = int(model.getRegions().size());
+
+    const SimTK::State& state = poa.getBody().getState();
+    std::vector<Eigen::VectorXd> nodalAreas(poa.getBagIndices().size());
+    // One probe per segment: the shape's outward normal at a node gives its force's direction.
+    std::vector<std::shared_ptr<bags::RigidShape>> probes(body::kSegmentCount);
+    const std::vector<ShapeBagPair>& pairs = poa.getPairs();
+    const std::vector<Link>& links = poa.getLinks();
+    for (size_t i = 0; i < pairs.size(); ++i) {
+        const Link& link = links[i];
+        const auto seg = static_cast<body::Segment>(pairs[i].shape);
+        const bags::Airbag& bag = poa.getBag(link.participant).getAirbag();
+        const Eigen::VectorXd p = poa.getBag(link.participant).calcContactPressure(link.shape);
+        if (!(p.maxCoeff() > 0.0)) continue;
+        Eigen::VectorXd& area = nodalAreas[link.participant];
+        if (area.size() == 0) area = bag.getMesh().calcNodalAreas();
+        std::shared_ptr<bags::RigidShape>& probe = probes[pairs[i].shape];
+        if (!probe) probe = makeBagShape(model.getContactShape(seg)).shape;
+        probe->setPose(poa.getBody().getShapeState(link.bodyShape).X_GS);
+        const SimTK::Transform X_GB = model.getMobilizedBody(seg).getBodyTransform(state);
+        const Eigen::Matrix3Xd& x = bag.getPositions();
+        for (int n = 0; n < int(p.size()); ++n) {
+            if (!(p[n] > 0.0)) continue;
+            const SimTK::Vec3 p_B = ~X_GB * SimTK::Vec3(x(0, n), x(1, n), x(2, n));
+            const int region = model.findRegion(seg, p_B);
+            RegionLoad& r = loads[region >= 0 ? region : numRegions + pairs[i].shape];
+            Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+            probe->calcSignedDistance(x.col(n), nullptr, &normal);
+            // The node pushes the shape along the shape's inward normal: the force on the body
+            // points out of the membrane, against the shape's outward normal.
+            r.force += p[n] * area[n] * -normal.z();
+            r.peakPressure = std::max(r.peakPressure, p[n]);
+            if (p[n] > areaThreshold) {
+                r.area += area[n];
+                normalForce[&r - loads.data()] += p[n] * area[n];
+            }
+        }
+    }
+    for (size_t i = 0; i < loads.size(); ++i)
+        loads[i].meanPressure = loads[i].area > 0.0 ? normalForce[i] / loads[i].area : 0.0;
+    return loads;
+}
+
+std::vector<BagReading> calcBagReadings(const PatientOnArray& poa) {
+    const std::vector<double> forces = poa.calcBagForces();
+    std::vector<BagReading> out;
+    for (size_t i = 0; i < poa.getBagIndices().size(); ++i) {
+        const bags::Airbag& a = poa.getBag(int(i)).getAirbag();
+        BagReading r;
+        r.bag = poa.getBagIndices()[i];
+        r.gasMass = a.getTotalGasMass();
+        double pv = 0.0;
+        for (int c = 0; c < a.getNumChambers(); ++c) {
+            const bags::ChamberState s = a.getChamberState(c);
+            r.volume += s.volume;
+            pv += s.gaugePressure * s.volume;
+        }
+        r.gaugePressure = r.volume > 0.0 ? pv / r.volume : 0.0;
+        r.force = forces[i];
+        out.push_back(r);
+    }
+    return out;
+}
+
+double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment) {
+    const SimTK::Rotation& R_GB =
+        poa.getModel().getMobilizedBody(segment).getBodyRotation(poa.getBody().getState());
+    const SimTK::Vec3 anterior = R_GB * SimTK::Vec3(1, 0, 0);
+    return std::atan2(-anterior[1], anterior[2]);
+}
+
+void fillPressureMat(const PatientOnArray& poa, PressureMat& mat) {
+    mat.clear();
+    for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
+        const BagParticipant& bag = poa.getBag(int(b));
+        const int shapes = bag.getNumShapes();
+        if (shapes == 0) continue;
+        Eigen::VectorXd p = bag.calcContactPressure(0);
+        for (int s = 1; s < shapes; ++s) p += bag.calcContactPressure(s);
+        if (!(p.maxCoeff() > 0.0)) continue;
+        const bags::Airbag& a = bag.getAirbag();
+        mat.addNodalPressures(a.getPositions(), p, a.getMesh().calcNodalAreas());
+    }
+}
+
+PressureMatOptions makeArrayMatOptions(const ArrayLayout& layout,
+                                       const bags::DoubleWedgeParams& bag, int rows, int columns) {
+    const std::vector<ArrayBag> bags = makeArrayBags(layout, bag);
+    Eigen::Vector2d lo = bags.front().footprintMin, hi = bags.front().footprintMax;
+    for (const ArrayBag& b : bags) {
+        lo = lo.cwiseMin(b.footprintMin);
+        hi = hi.cwiseMax(b.footprintMax);
+    }
+    PressureMatOptions o;
+    o.rows = rows;
+    o.columns = columns;
+    o.origin = lo;
+    o.size = hi - lo;
+    return o;
+}
+
+}  // namespace cosim
