@@ -29,6 +29,7 @@
 
 #include "Commands.h"
 #include "Interrupt.h"
+#include "ArrayRun.h"
 #include "PatientRun.h"
 
 namespace bagsim::app {
@@ -43,7 +44,10 @@ const char* kHelp =
     "by a rigid block to a peak force and released; it prints the stiffness per gas mass and the\n"
     "k(m) fit next to the seed's. The kind patient-on-support settles the scenario's patient on\n"
     "a rigid flat support and writes region_loads.csv and summary.txt (share of the weight per\n"
-    "body region). Scenario keys: docs/scenario-reference.md.\n"
+    "body region). The kind patient-on-array lowers the patient onto an array of airbags, lets\n"
+    "him settle and runs the scenario's gas schedule (the co-simulation); it writes regions.csv,\n"
+    "bags.csv, tilt.csv and the pressure mat's frames in results.h5 (docs/cosim.md).\n"
+    "Scenario keys: docs/scenario-reference.md.\n"
     "\n"
     "options:\n"
     "  --out DIR          output folder (default: out/<scenario name>)\n"
@@ -317,8 +321,11 @@ int runRunCommand(int argc, char** argv) {
     try {
         file = io::ScenarioFile::load(args.scenario);
         for (const std::string& s : args.sets) file.applyOverride(s);
-        if (io::readScenarioKind(file) == "patient-on-support")
+        const std::string kind = io::readScenarioKind(file);
+        if (kind == "patient-on-support")
             return runPatientOnSupport(file, args.out, args.force, args.quiet);
+        if (kind == "patient-on-array")
+            return runPatientOnArray(file, args.out, args.force, args.quiet, args.commandLine);
         sc = io::readLoadTestScenario(file);
         outPath = args.out.empty() ? std::filesystem::path("out") / sc.name
                                    : std::filesystem::path(args.out);

@@ -42,7 +42,37 @@ Eigen::Isometry3d shapePose(const body::BodyModel& model, const SimTK::State& s,
     return toEigen(X_GB * X_BS);
 }
 
+// The pairs of segment and bag with the patient in the spec's posture, his lowest point on the
+// bed board. @pre the system's topology is realized; `state` is set to that posture.
+std::vector<ShapeBagPair> findPairsAtPosture(const body::BodyModel& model, SimTK::State& state,
+                                             const std::vector<ArrayBag>& cells, double margin) {
+    model.setPosture(state, 0.0);
+    model.getSystem().realize(state, SimTK::Stage::Position);
+    std::vector<Eigen::Vector3d> centres;
+    std::vector<double> radii;
+    for (int k = 0; k < body::kSegmentCount; ++k) {
+        const auto seg = static_cast<body::Segment>(k);
+        const body::ContactShape& s = model.getContactShape(seg);
+        const SimTK::Vec3 c =
+            model.getMobilizedBody(seg).getBodyTransform(state) * s.getBoundingCentre();
+        centres.emplace_back(c[0], c[1], c[2]);
+        radii.push_back(s.getBoundingRadius());
+    }
+    return findShapeBagPairs(centres, radii, cells, margin);
+}
+
 }  // namespace
+
+std::vector<int> findSegmentsOffArray(const body::PatientSpec& spec,
+                                      const PatientOnArrayOptions& options) {
+    options.validate();
+    body::BodyModel model(spec, options.body);
+    model.updSystem().realizeTopology();
+    SimTK::State state = model.getSystem().getDefaultState();
+    const std::vector<ArrayBag> cells = makeArrayBags(options.layout, options.bag.geometry);
+    return findUnsupportedShapes(body::kSegmentCount,
+                                 findPairsAtPosture(model, state, cells, options.pairMargin));
+}
 
 PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
                                const PatientOnArrayOptions& options)
@@ -58,20 +88,8 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
     // Where the shapes lie in the posture (lowest point on the bed board) picks the pairs.
     model.updSystem().realizeTopology();
     SimTK::State state = model.getSystem().getDefaultState();
-    model.setPosture(state, 0.0);
-    model.getSystem().realize(state, SimTK::Stage::Position);
-    std::vector<Eigen::Vector3d> centres;
-    std::vector<double> radii;
-    for (int k = 0; k < body::kSegmentCount; ++k) {
-        const auto seg = static_cast<body::Segment>(k);
-        const body::ContactShape& s = model.getContactShape(seg);
-        const SimTK::Vec3 c =
-            model.getMobilizedBody(seg).getBodyTransform(state) * s.getBoundingCentre();
-        centres.emplace_back(c[0], c[1], c[2]);
-        radii.push_back(s.getBoundingRadius());
-    }
     const std::vector<ArrayBag> cells = makeArrayBags(options.layout, options.bag.geometry);
-    m.pairs = findShapeBagPairs(centres, radii, cells, options.pairMargin);
+    m.pairs = findPairsAtPosture(model, state, cells, options.pairMargin);
     const std::vector<int> off = findUnsupportedShapes(body::kSegmentCount, m.pairs);
     if (!off.empty()) {
         std::ostringstream s;
@@ -149,6 +167,16 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
 PatientOnArray::~PatientOnArray() = default;
 
 StepSummary PatientOnArray::step() { return m_impl->coupling->stepAdaptive(); }
+
+StepSummary PatientOnArray::stepUntil(double limit) {
+    Coupling& c = *m_impl->coupling;
+    const double t = c.getTime(), dt = c.getOptions().macroStep;
+    if (t + dt <= limit + 1e-12 * std::max(1.0, std::abs(limit))) return c.stepAdaptive();
+    c.setMacroStep(limit - t);
+    const StepSummary s = c.stepAdaptive();
+    if (s.cuts == 0) c.setMacroStep(dt);
+    return s;
+}
 double PatientOnArray::getTime() const { return m_impl->coupling->getTime(); }
 
 std::vector<double> PatientOnArray::calcBagForces() const {

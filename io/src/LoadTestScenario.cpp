@@ -671,13 +671,15 @@ double estimateForceCapacity(const bags::LoadTestOptions& o) {
     return std::max(0.0, p1 - o.gas.ambientPressure) * g.longSide * g.width;
 }
 
-std::vector<std::string> getScenarioKinds() { return {kKind, "patient-on-support"}; }
+std::vector<std::string> getScenarioKinds() {
+    return {kKind, "patient-on-support", "patient-on-array"};
+}
 
 std::string readScenarioKind(const ScenarioFile& file) {
     const ScenarioNode root = file.getRoot();
     if (!root.has("kind"))
         root.fail("missing required key 'kind' at the top of the scenario; valid kinds: " +
-                  std::string(kKind) + ", patient-on-support");
+                  std::string(kKind) + ", patient-on-support, patient-on-array");
     return root.getChoice("kind", getScenarioKinds());
 }
 

@@ -71,7 +71,9 @@ std::vector<std::string> getPostureChoices() {
     root.fail(text);
 }
 
-void checkName(const ScenarioNode& root, const std::string& name) {
+}  // namespace
+
+void checkScenarioName(const ScenarioNode& root, const std::string& name) {
     if (name.empty() ||
         name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
                                "._-") != std::string::npos)
@@ -79,8 +81,6 @@ void checkName(const ScenarioNode& root, const std::string& name) {
                               "\" names the output folder: use letters, digits, "
                               "'.', '_' and '-' only");
 }
-
-}  // namespace
 
 body::PatientSpec readPatientSection(const ScenarioNode& s) {
     if (!s.isMap())
@@ -154,7 +154,7 @@ PatientOnSupportScenario readPatientOnSupportScenario(const ScenarioFile& file) 
 
     PatientOnSupportScenario sc;
     sc.name = root.getString("name", file.getStem());
-    checkName(root, sc.name);
+    checkScenarioName(root, sc.name);
     sc.description = root.getString("description", "");
     sc.patient = readPatientSection(root.getSection("patient"));
 

@@ -33,8 +33,9 @@ std::string getUtcTimestamp() {
 namespace {
 
 // Files a run writes; --force removes them first so no stale result survives a failed rerun.
-const char* const kOwnedFiles[] = {kResultsH5, kResultsXdmf, kLoadDisplacementCsv, kStiffnessCsv,
-                                   kRigReadingsCsv, "results.xdmf.tmp"};
+const char* const kOwnedFiles[] = {kResultsH5,      kResultsXdmf,      kLoadDisplacementCsv,
+                                   kStiffnessCsv,   kRigReadingsCsv,   "results.xdmf.tmp",
+                                   "regions.csv",   "bags.csv",        "tilt.csv"};
 
 }  // namespace
 

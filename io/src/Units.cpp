@@ -76,6 +76,11 @@ const std::vector<UnitInfo>& getUnitTable() {
         {"N*m", D::Moment, 1.0},
         {"N mm", D::Moment, 1e-3},
         {"mN m", D::Moment, 1e-3},
+
+        {"g/s", D::MassFlow, 1e-3},
+        {"g/min", D::MassFlow, 1e-3 / 60.0},
+        {"mg/s", D::MassFlow, 1e-6},
+        {"kg/s", D::MassFlow, 1.0},
     };
     return table;
 }
@@ -138,6 +143,8 @@ std::string getDimensionName(Dimension d) {
             return "a pressure per length";
         case Dimension::Moment:
             return "a moment (force times length)";
+        case Dimension::MassFlow:
+            return "a mass flow";
     }
     return "a quantity";
 }
@@ -172,6 +179,8 @@ std::string getSiUnit(Dimension d) {
             return "Pa/m";
         case Dimension::Moment:
             return "N m";
+        case Dimension::MassFlow:
+            return "kg/s";
     }
     return "";
 }
@@ -206,6 +215,8 @@ std::string getExample(Dimension d) {
             return "1e7 Pa/m";
         case Dimension::Moment:
             return "1.7e-4 N m";
+        case Dimension::MassFlow:
+            return "0.05 g/s";
     }
     return "";
 }

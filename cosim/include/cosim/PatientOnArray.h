@@ -42,6 +42,13 @@ struct PatientOnArrayOptions {
     void validate() const;
 };
 
+/// The segments (body::Segment indices) with no bag of the layout under them in the spec's
+/// posture and position: a patient who lies (partly) off the array. Builds the body model
+/// only, no bag, so a scenario reader can refuse such a patient before anything runs.
+/// @throws std::invalid_argument if spec or options are invalid.
+std::vector<int> findSegmentsOffArray(const body::PatientSpec& spec,
+                                      const PatientOnArrayOptions& options);
+
 class PatientOnArray {
   public:
     /// Builds and initializes everything (see the file comment).
@@ -54,6 +61,10 @@ class PatientOnArray {
 
     /// One macro step, halved while it fails (Coupling::stepAdaptive()).
     StepSummary step();
+    /// One macro step as step(), shortened if needed so it ends at `limit` [s] at the latest
+    /// (a gas command's start, the run's end); the step size is restored afterwards unless the
+    /// shortened step itself had to be cut.
+    StepSummary stepUntil(double limit);
     double getTime() const;  ///< [s] since the release
 
     /// Vertical force [N] the bags exert on the body, summed over every link (last step).

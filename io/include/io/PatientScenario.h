@@ -29,6 +29,10 @@ struct PatientOnSupportScenario {
 /// @throws InputError on a missing, misspelt or invalid key or value.
 body::PatientSpec readPatientSection(const ScenarioNode& section);
 
+/// Checks a scenario's name (it names the output folder): letters, digits, '.', '_', '-'.
+/// @throws InputError at the root's 'name' key.
+void checkScenarioName(const ScenarioNode& root, const std::string& name);
+
 /// Reads the `patient:` section at the top of any scenario. @throws InputError, also if the
 /// scenario has no patient section.
 body::PatientSpec readScenarioPatient(const ScenarioFile& file);

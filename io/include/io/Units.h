@@ -27,6 +27,7 @@ enum class Dimension {
     Stiffness,         ///< force per length [N/m]
     StiffnessPerArea,  ///< pressure per length, e.g. a contact penalty [Pa/m]
     Moment,            ///< force times length, e.g. a plate's bending stiffness [N m]
+    MassFlow,          ///< mass per time, e.g. a bag's gas flow [kg/s]
 };
 
 /// A unit the parser knows: value_SI = factor * value + offset.

@@ -1,0 +1,222 @@
+// bagsim run, kind patient-on-array: the patient lowered onto an array of airbags, settling,
+// then the gas of bags or groups changed over time (the coupling: cosim::PatientOnArray).
+#include "ArrayRun.h"
+
+#include <bagsim/Version.h>
+#include <cosim/ArrayReadings.h>
+#include <io/ArrayResults.h>
+#include <io/ArrayScenario.h>
+#include <io/InputError.h>
+#include <io/Units.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "Interrupt.h"
+
+namespace bagsim::app {
+
+namespace {
+
+std::string fmt(const char* f, double v) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+constexpr double kDeg = 180.0 / 3.14159265358979323846;
+
+struct Totals {
+    int steps = 0, passes = 0, cuts = 0;
+};
+
+}  // namespace
+
+int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool force, bool quiet,
+                      const std::string& commandLine) {
+    io::PatientOnArrayScenario sc;
+    std::filesystem::path outPath;
+    std::unique_ptr<io::OutputDir> outDir;
+    try {
+        sc = io::readPatientOnArrayScenario(file);
+        outPath = out.empty() ? std::filesystem::path("out") / sc.name : std::filesystem::path(out);
+        outDir = std::make_unique<io::OutputDir>(outPath, force);
+    } catch (const io::InputError& e) {
+        std::cerr << "bagsim: error: " << e.what() << "\n";
+        return 2;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    auto wall = [&] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    // Ctrl-C is noticed within one Newton iteration of a bag (inflating the bags takes many).
+    sc.options.bag.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
+    const cosim::ArrayLayout& layout = sc.options.layout;
+    const body::PatientSpec& p = sc.patient;
+    if (!quiet) {
+        std::cerr << "bagsim " << bagsim::kVersion << ": " << file.getFileName() << " (" << sc.name
+                  << ")\n  patient " << body::getSexName(p.sex) << ", " << fmt("%.2f m", p.height)
+                  << ", " << fmt("%.1f kg", p.mass) << ", " << body::getPostureName(p.posture)
+                  << "\n  array " << layout.rows << " x " << layout.columns << " seed wedges ("
+                  << sc.bagReading << ", mesh " << io::formatSignificant(sc.options.bag.geometry.meshSize, "mm")
+                  << ", self-contact " << (sc.options.bag.selfContact ? "on" : "off") << "), "
+                  << io::formatQuantity(layout.gasMass, "g", 2) << " each";
+        for (const cosim::BagGroup& g : layout.groups)
+            std::cerr << ", group '" << g.name << "' " << io::formatQuantity(g.gasMass, "g", 2);
+        std::cerr << "\n  " << cosim::toString(sc.options.coupling.scheme) << " coupling ("
+                  << cosim::toString(sc.options.coupling.acceleration) << "), macro step "
+                  << io::formatSignificant(sc.options.coupling.macroStep, "ms") << "; settle "
+                  << fmt("%g s", sc.settleTime) << ", then " << fmt("%g s", sc.duration) << "\n";
+        for (const io::GasCommandText& g : sc.gasText)
+            std::cerr << "  gas from " << fmt("%g s", g.at) << " after the settle: " << g.who
+                      << " " << g.what << "\n";
+        std::cerr << "  writing to " << outPath.string()
+                  << "/ (Ctrl-C stops and keeps what was computed, marked INCOMPLETE)\n";
+    }
+
+    io::RunInfo info{file.getFileName(), file.getText(), file.getOverrides(), commandLine};
+    std::unique_ptr<io::ArrayResultsWriter> writer;
+    try {
+        writer = std::make_unique<io::ArrayResultsWriter>(*outDir, info, sc.mat);
+    } catch (const std::exception& e) {
+        std::cerr << "bagsim: error: cannot write the results: " << e.what() << "\n";
+        outDir->setStatus("failed", e.what());
+        return 1;
+    }
+
+    std::unique_ptr<cosim::PatientOnArray> poa;
+    cosim::PressureMat mat(sc.mat);
+    Totals totals;
+    const double end = sc.getEndTime();
+    double nextOutput = 0.0;
+    auto record = [&] {
+        io::ArrayFrame f;
+        f.time = poa->getTime();
+        f.regions = cosim::calcRegionLoads(*poa);
+        f.bags = cosim::calcBagReadings(*poa);
+        f.pelvisTilt = cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk);
+        f.thoraxTilt = cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk);
+        cosim::fillPressureMat(*poa, mat);
+        f.mat = &mat;
+        writer->addFrame(f);
+        return f;
+    };
+    auto where = [&] {
+        return poa ? fmt("at %.4f s", poa->getTime()) + fmt(" of %g s", end)
+                   : std::string("while building the model (inflating the bags)");
+    };
+    auto stop = [&](const std::string& status, const std::string& msg) {
+        writer->fail(status, msg);
+        std::cerr << "bagsim: " << msg << "; results so far kept in " << outPath.string()
+                  << "/ (marked INCOMPLETE)\n";
+    };
+    try {
+        outDir->setStatus("running", "building the patient and inflating the bags");
+        poa = std::make_unique<cosim::PatientOnArray>(sc.patient, sc.options);
+        std::vector<cosim::BagParticipant*> bags(size_t(layout.rows) * layout.columns, nullptr);
+        for (size_t i = 0; i < poa->getBagIndices().size(); ++i)
+            bags[poa->getBagIndices()[i]] = &poa->updBag(int(i));
+        if (!quiet)
+            std::cerr << "  built in " << fmt("%.1f s", wall()) << ": "
+                      << poa->getBagIndices().size() << " bags under him, "
+                      << poa->getPairs().size() << " segment-bag pairs; released "
+                      << fmt("%.1f mm", 1e3 * poa->getReleaseClearance())
+                      << " above the board\n";
+        outDir->setStatus("running", "the patient on the bags");
+        record();
+        nextOutput = sc.outputInterval;
+        double lastPrint = wall();
+        while (poa->getTime() < end - 1e-9) {
+            const double t = poa->getTime() + 1e-9;
+            sc.gas.apply(t, bags);
+            const cosim::StepSummary s = poa->stepUntil(std::min(end, sc.gas.findNextChange(t)));
+            ++totals.steps;
+            totals.passes += s.iterations;
+            totals.cuts += s.cuts;
+            throwIfInterrupted();
+            if (poa->getTime() >= nextOutput - 1e-9 || poa->getTime() >= end - 1e-9) {
+                const io::ArrayFrame f = record();
+                while (nextOutput <= poa->getTime() + 1e-9) nextOutput += sc.outputInterval;
+                if (!quiet && wall() - lastPrint > 5.0) {
+                    lastPrint = wall();
+                    std::cerr << "  t " << fmt("%7.3f s", f.time) << "  bags carry "
+                              << fmt("%7.1f N", poa->calcBagForce()) << " of "
+                              << fmt("%.1f N", poa->getWeight()) << "  tilt pelvis "
+                              << fmt("%+5.1f", f.pelvisTilt * kDeg) << " thorax "
+                              << fmt("%+5.1f deg", f.thoraxTilt * kDeg) << "  "
+                              << fmt("%.1f passes/step", double(totals.passes) / totals.steps)
+                              << "  " << fmt("%.0f s", wall()) << "\n";
+                }
+            }
+        }
+    } catch (const Interrupted& e) {
+        stop("interrupted", std::string(e.what()) + " " + where());
+        return getInterruptExitCode(e.signal);
+    } catch (const std::exception& e) {
+        if (getInterruptSignal()) {
+            stop("interrupted", Interrupted(getInterruptSignal()).what() + std::string(" ") + where());
+            return getInterruptExitCode(getInterruptSignal());
+        }
+        stop("failed", std::string("run failed ") + where() + ": " + e.what());
+        return 1;
+    }
+
+    // The summary: the force balance, the tilt, the heaviest-loaded regions at the end.
+    const double weight = poa->getWeight(), carried = poa->calcBagForce();
+    std::vector<cosim::RegionLoad> regions = cosim::calcRegionLoads(*poa);
+    std::sort(regions.begin(), regions.end(),
+              [](const cosim::RegionLoad& a, const cosim::RegionLoad& b) {
+                  return a.peakPressure > b.peakPressure;
+              });
+    std::ostringstream table;
+    table << "at " << fmt("%.3f s", poa->getTime()) << ": the bags carry " << fmt("%.2f N", carried)
+          << " of his " << fmt("%.2f N", weight) << " ("
+          << fmt("%+.3f %%", 100.0 * (carried - weight) / weight) << "); the mat reads "
+          << fmt("%.2f N", mat.calcTotalForce()) << " (normal force, "
+          << fmt("%.2f N", mat.getOffMatForce()) << " off the mat)\n"
+          << "tilt: pelvis " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk) * kDeg)
+          << ", thorax " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk) * kDeg)
+          << " (positive: turned onto his left side)\n"
+          << "  region           PPI [mmHg]  mean [mmHg]  area [cm^2]  force [N]\n";
+    for (const cosim::RegionLoad& r : regions) {
+        if (!(r.peakPressure > 0.0)) continue;
+        char line[160];
+        std::snprintf(line, sizeof line, "  %-15s %11.1f %12.1f %12.1f %10.2f\n", r.name.c_str(),
+                      r.peakPressure / 133.322387415, r.meanPressure / 133.322387415,
+                      r.area * 1e4, r.force);
+        table << line;
+    }
+    table << totals.steps << " macro steps (" << totals.cuts << " cuts), "
+          << fmt("%.2f", totals.steps ? double(totals.passes) / totals.steps : 0.0)
+          << " coupling passes a step; " << fmt("%.1f s", wall()) << " wall-clock\n";
+    try {
+        std::ofstream s(outDir->getFile("summary.txt"));
+        s << "bagsim " << bagsim::kVersion << " patient-on-array: " << file.getFileName() << " ("
+          << sc.name << ")\n";
+        if (!sc.description.empty()) s << sc.description << "\n";
+        s << table.str();
+        s.close();
+        if (!s) throw std::runtime_error("cannot write summary.txt in " + outPath.string());
+        writer->finish(fmt("%.4f s simulated", poa->getTime()));
+    } catch (const std::exception& e) {
+        stop("failed", e.what());
+        return 1;
+    }
+    std::cout << table.str() << "results in " << outPath.string() << "/:\n"
+              << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N\n"
+              << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N\n"
+              << "  " << io::kTiltCsv << "      time_s,pelvis_tilt_deg,thorax_tilt_deg\n"
+              << "  " << io::kResultsH5 << "    pressure-mat frames (/mat), " << io::kResultsXdmf
+              << " to open them in ParaView\n"
+              << "  summary.txt\n";
+    return 0;
+}
+
+}  // namespace bagsim::app

@@ -1,0 +1,221 @@
+#include <bagsim/Version.h>
+#include <io/ArrayResults.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "Hdf5.h"
+
+namespace io {
+
+namespace {
+
+constexpr double kMmHg = 133.322387415;  // [Pa]
+constexpr double kPi = 3.14159265358979323846;
+
+std::string fmt(const char* f, double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+}  // namespace
+
+struct ArrayResultsWriter::Impl {
+    explicit Impl(const OutputDir& d) : dir(d) {}
+    const OutputDir& dir;
+    cosim::PressureMatOptions mat;
+    h5::Handle file, meta, matGroup;
+    h5::GrowingDataset matTime, matPressure, matForce, matOffForce;
+    std::ofstream regions, bags, tilt;
+    std::vector<double> frameTimes;
+    int frames = 0;
+    bool closed = false;
+    std::chrono::steady_clock::time_point lastFlush = std::chrono::steady_clock::now();
+
+    void flush() {
+        regions.flush();
+        bags.flush();
+        tilt.flush();
+        if (!regions || !bags || !tilt)
+            throw std::runtime_error("cannot write the CSV files in " + dir.getPath().string());
+        if (file.isValid()) h5::check(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "cannot flush results");
+        lastFlush = std::chrono::steady_clock::now();
+    }
+    void close() {
+        if (closed) return;
+        closed = true;
+        matTime = {};
+        matPressure = {};
+        matForce = {};
+        matOffForce = {};
+        matGroup.reset();
+        meta.reset();
+        file.reset();
+        regions.close();
+        bags.close();
+        tilt.close();
+    }
+    void writeXdmf() const;
+};
+
+// The mat as a 2-D rectilinear grid per frame: XDMF's slow axis (its "Y") is the bed's y and
+// its fast axis ("X") the bed's x, as /mat/pressure is stored (frames, columns, rows).
+void ArrayResultsWriter::Impl::writeXdmf() const {
+    const std::string R = std::to_string(mat.rows), C = std::to_string(mat.columns);
+    const std::string N = std::to_string(frameTimes.size());
+    const double dx = mat.size.x() / mat.rows, dy = mat.size.y() / mat.columns;
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
+      << "<Xdmf xmlns:xi=\"http://www.w3.org/2001/XInclude\" Version=\"3.0\">\n"
+      << "  <Domain>\n"
+      << "    <Grid Name=\"pressure mat\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (size_t f = 0; f < frameTimes.size(); ++f) {
+        x << "      <Grid Name=\"mat " << f << "\" GridType=\"Uniform\">\n"
+          << "        <Time Value=\"" << fmt("%.9g", frameTimes[f]) << "\"/>\n"
+          << "        <Topology TopologyType=\"2DCoRectMesh\" Dimensions=\"" << mat.columns + 1
+          << " " << mat.rows + 1 << "\"/>\n"
+          << "        <Geometry GeometryType=\"ORIGIN_DXDY\">\n"
+          << "          <DataItem Dimensions=\"2\" Format=\"XML\">" << fmt("%.9g", mat.origin.y())
+          << " " << fmt("%.9g", mat.origin.x()) << "</DataItem>\n"
+          << "          <DataItem Dimensions=\"2\" Format=\"XML\">" << fmt("%.9g", dy) << " "
+          << fmt("%.9g", dx) << "</DataItem>\n"
+          << "        </Geometry>\n"
+          << "        <Attribute Name=\"pressure_Pa\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+          << "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"" << C << " " << R
+          << "\" Type=\"HyperSlab\">\n"
+          << "            <DataItem Dimensions=\"3 3\" Format=\"XML\">" << f << " 0 0 1 1 1 1 "
+          << C << " " << R << "</DataItem>\n"
+          << "            <DataItem Dimensions=\"" << N << " " << C << " " << R
+          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << kResultsH5
+          << ":/mat/pressure</DataItem>\n"
+          << "          </DataItem>\n"
+          << "        </Attribute>\n"
+          << "      </Grid>\n";
+    }
+    x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
+    const std::filesystem::path tmp = dir.getFile(std::string(kResultsXdmf) + ".tmp");
+    {
+        std::ofstream out(tmp, std::ios::trunc);
+        out << x.str();
+        if (!out.flush()) throw std::runtime_error("cannot write " + tmp.string());
+    }
+    std::filesystem::rename(tmp, dir.getFile(kResultsXdmf));
+}
+
+ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info,
+                                       const cosim::PressureMatOptions& mat)
+    : m_impl(std::make_unique<Impl>(dir)) {
+    Impl& d = *m_impl;
+    d.mat = mat;
+    h5::silenceErrors();
+    d.file = h5::createFile(dir.getFile(kResultsH5).string());
+    d.meta = h5::createGroup(d.file.get(), "meta");
+    h5::setAttribute(d.meta.get(), "program", std::string("bagsim"));
+    h5::setAttribute(d.meta.get(), "version", std::string(bagsim::kVersion));
+    h5::setAttribute(d.meta.get(), "kind", std::string("patient-on-array"));
+    h5::setAttribute(d.meta.get(), "scenario", info.scenarioText);
+    h5::setAttribute(d.meta.get(), "scenario_file", info.scenarioFile);
+    h5::setAttribute(d.meta.get(), "overrides", info.overrides);
+    h5::setAttribute(d.meta.get(), "command_line", info.commandLine);
+    h5::setAttribute(d.meta.get(), "started", getUtcTimestamp());
+    h5::setAttribute(d.meta.get(), "status", std::string("running"));
+    h5::setAttribute(d.meta.get(), "message", std::string(""));
+    d.matGroup = h5::createGroup(d.file.get(), "mat");
+    const hid_t g = d.matGroup.get();
+    h5::setAttribute(g, "rows", mat.rows);
+    h5::setAttribute(g, "columns", mat.columns);
+    h5::setAttribute(g, "origin", std::vector<double>{mat.origin.x(), mat.origin.y()});
+    h5::setAttribute(g, "size", std::vector<double>{mat.size.x(), mat.size.y()});
+    h5::setAttribute(g, "layout", std::string("pressure[frame][column (bed y)][row (bed x)]; "
+                                              "sensel (r, c) centred at origin + ((r + 1/2) "
+                                              "size_x / rows, (c + 1/2) size_y / columns)"));
+    d.matTime = h5::GrowingDataset(g, "time", H5T_NATIVE_DOUBLE, {}, 256, "s");
+    d.matPressure = h5::GrowingDataset(g, "pressure", H5T_NATIVE_DOUBLE,
+                                       {hsize_t(mat.columns), hsize_t(mat.rows)}, 8, "Pa");
+    d.matForce = h5::GrowingDataset(g, "force", H5T_NATIVE_DOUBLE, {}, 256, "N");
+    d.matOffForce = h5::GrowingDataset(g, "off_mat_force", H5T_NATIVE_DOUBLE, {}, 256, "N");
+    h5::check(H5Fflush(d.file.get(), H5F_SCOPE_LOCAL), "cannot flush results");
+
+    auto open = [&](std::ofstream& f, const char* name, const char* header) {
+        f.open(dir.getFile(name), std::ios::trunc);
+        f << header << "\n";
+        if (!f) throw std::runtime_error("cannot write " + dir.getFile(name).string());
+    };
+    open(d.regions, kRegionsCsv, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N");
+    open(d.bags, kBagsCsv, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N");
+    open(d.tilt, kTiltCsv, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
+}
+
+ArrayResultsWriter::~ArrayResultsWriter() {
+    if (!m_impl->closed) fail("failed", "the writer was closed before the run finished");
+}
+
+void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
+    Impl& d = *m_impl;
+    if (d.closed) throw std::logic_error("ArrayResultsWriter::addFrame after finish/fail");
+    const std::string t = fmt("%.4f", f.time);
+    for (const cosim::RegionLoad& r : f.regions) {
+        if (!(r.peakPressure > 0.0)) continue;
+        d.regions << t << "," << r.name << "," << fmt("%.3f", r.peakPressure / kMmHg) << ","
+                  << fmt("%.3f", r.meanPressure / kMmHg) << "," << fmt("%.4f", r.area * 1e4)
+                  << "," << fmt("%.5f", r.force) << "\n";
+    }
+    for (const cosim::BagReading& b : f.bags)
+        d.bags << t << "," << b.bag << "," << fmt("%.6f", b.gasMass * 1e3) << ","
+               << fmt("%.5f", b.gaugePressure * 1e-3) << "," << fmt("%.6f", b.volume * 1e3)
+               << "," << fmt("%.5f", b.force) << "\n";
+    d.tilt << t << "," << fmt("%.4f", f.pelvisTilt * 180.0 / kPi) << ","
+           << fmt("%.4f", f.thoraxTilt * 180.0 / kPi) << "\n";
+    if (f.mat) {
+        d.matTime.append(&f.time);
+        d.matPressure.append(f.mat->getPressure().data());  // column-major: [column][row]
+        const double force = f.mat->calcTotalForce(), off = f.mat->getOffMatForce();
+        d.matForce.append(&force);
+        d.matOffForce.append(&off);
+        d.frameTimes.push_back(f.time);
+    }
+    ++d.frames;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - d.lastFlush).count() > 5.0)
+        d.flush();
+}
+
+void ArrayResultsWriter::finish(const std::string& message) {
+    Impl& d = *m_impl;
+    h5::setAttribute(d.meta.get(), "status", std::string("complete"));
+    h5::setAttribute(d.meta.get(), "message", message);
+    h5::setAttribute(d.meta.get(), "finished", getUtcTimestamp());
+    d.flush();
+    d.close();
+    d.writeXdmf();
+    d.dir.markComplete();
+}
+
+void ArrayResultsWriter::fail(const std::string& status, const std::string& message) noexcept {
+    Impl& d = *m_impl;
+    if (d.closed) return;
+    try {
+        h5::setAttribute(d.meta.get(), "status", status);
+        h5::setAttribute(d.meta.get(), "message", message);
+        h5::setAttribute(d.meta.get(), "finished", getUtcTimestamp());
+        d.flush();
+    } catch (...) {
+        // Keep going: the marker below still says the folder is incomplete.
+    }
+    d.close();
+    try {
+        d.writeXdmf();
+    } catch (...) {
+    }
+    try {
+        d.dir.setStatus(status, message);
+    } catch (...) {
+    }
+}
+
+int ArrayResultsWriter::getNumFrames() const { return m_impl->frames; }
+
+}  // namespace io

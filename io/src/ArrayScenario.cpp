@@ -1,0 +1,400 @@
+// Reading the patient-on-array scenario kind.
+#include <io/ArrayScenario.h>
+#include <io/PatientScenario.h>
+
+#include <bags/MaterialFit.h>
+#include <cosim/ArrayReadings.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+namespace io {
+
+namespace {
+
+using D = Dimension;
+
+std::string fmtUnit(double si, const std::string& unit) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "%g %s", toUnit(si, unit), unit.c_str());
+    return buf;
+}
+
+// A value of `key` must lie in [lo, hi] (SI), shown in `unit`.
+void checkBetween(const ScenarioNode& s, const std::string& key, double v, double lo, double hi,
+                  const std::string& unit, const std::string& why = "") {
+    if (v >= lo && v <= hi && std::isfinite(v)) return;
+    const std::string range = std::isinf(hi) ? ">= " + fmtUnit(lo, unit)
+                                             : "in [" + fmtUnit(lo, unit) + ", " +
+                                                   fmtUnit(hi, unit) + "]";
+    s.fail(key, fmtUnit(v, unit) + " is not valid; valid: " + range +
+                    (why.empty() ? "" : " (" + why + ")"));
+}
+
+void checkPositive(const ScenarioNode& s, const std::string& key, double v,
+                   const std::string& unit) {
+    if (v > 0.0 && std::isfinite(v)) return;
+    s.fail(key, fmtUnit(v, unit) + " is not valid; valid: greater than 0 " + unit);
+}
+
+// The node at a dotted key path such as "array.groups[1].gas_mass" from the root, as far as it
+// exists; the error goes to the deepest key found.
+[[noreturn]] void failAtPath(const ScenarioNode& root, const std::string& path,
+                             const std::string& message) {
+    ScenarioNode node = root;
+    std::string rest = path;
+    while (!rest.empty()) {
+        const size_t dot = rest.find('.');
+        std::string part = rest.substr(0, dot);
+        rest = dot == std::string::npos ? "" : rest.substr(dot + 1);
+        int index = -1;
+        const size_t bracket = part.find('[');
+        if (bracket != std::string::npos) {
+            index = std::atoi(part.c_str() + bracket + 1);
+            part = part.substr(0, bracket);
+        }
+        if (!node.isMap() || !node.has(part)) node.fail(message);
+        if (rest.empty() && index < 0) node.fail(part, message);
+        ScenarioNode child = node.get(part);
+        if (index >= 0) {
+            if (!child.isSequence() || index >= int(child.getElements().size()))
+                node.fail(part, message);
+            child = child.getElements()[index];
+            if (rest.empty()) child.fail(message);
+        }
+        node = child;
+    }
+    node.fail(message);
+}
+
+// cosim's layout errors read "key 'array.row_pitch': <what>": the error goes to that key.
+[[noreturn]] void failFromCosim(const ScenarioNode& root, const std::string& message) {
+    const std::string prefix = "key '";
+    if (message.rfind(prefix, 0) == 0) {
+        const size_t end = message.find("': ", prefix.size());
+        if (end != std::string::npos)
+            failAtPath(root, message.substr(prefix.size(), end - prefix.size()),
+                       message.substr(end + 3));
+    }
+    root.fail("invalid: " + message);
+}
+
+std::vector<int> readIndices(const ScenarioNode& s, const std::string& key, int count,
+                             const std::string& what) {
+    std::vector<int> out;
+    if (!s.has(key)) return out;
+    const ScenarioNode list = s.get(key);
+    if (!list.isSequence())
+        s.fail(key, "must be a list of " + what + " indices from 0, e.g. [0, 1]");
+    for (const ScenarioNode& e : list.getElements()) {
+        const int i = e.asInteger();
+        if (i < 0 || i >= count)
+            e.fail(what + " " + std::to_string(i) + " does not exist; valid: 0 to " +
+                   std::to_string(count - 1));
+        out.push_back(i);
+    }
+    return out;
+}
+
+Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std::string& example) {
+    const ScenarioNode v = s.get(key);
+    if (!v.isSequence() || v.getElements().size() != 2)
+        s.fail(key, "must be two lengths [x, y], e.g. " + example);
+    const std::vector<ScenarioNode> xy = v.getElements();
+    return Eigen::Vector2d(xy[0].asQuantity(D::Length), xy[1].asQuantity(D::Length));
+}
+
+// ---------------------------------------------------------------------------------------- bag
+
+void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc) {
+    s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
+                     "contact_penalty"});
+    bags::AirbagSpec& b = sc.options.bag;
+    bags::DoubleWedgeParams& g = b.geometry;
+    sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
+    if (sc.bagReading == "fill-2.8g") {
+        // The seed's sizes scaled (side profile, width kept) until 2.8 g of air just fills the
+        // inflated bag: s = 0.8796 at the 10 mm mesh (docs/geometry.md).
+        g.longSide = 0.3079;
+        g.shortSide = 0.1759;
+        g.height = 0.1319;
+    }  // literal: the sizes as written, DoubleWedgeParams' defaults (350, 200, 100, 150 mm)
+    g.meshSize = s.getQuantity("mesh_size", D::Length, 0.030);
+    checkBetween(s, "mesh_size", g.meshSize, 0.005, 0.05, "mm",
+                 "finer than 5 mm makes every bag thousands of nodes");
+    g.diaphragm = s.getBool("diaphragm", g.diaphragm);
+    b.selfContact = s.getBool("self_contact", false);
+    b.forceTolerance = s.getQuantity("force_tolerance", D::Force, 1e-4);
+    checkBetween(s, "force_tolerance", b.forceTolerance, 1e-6, 1.0, "N");
+    sc.options.contact.pressurePenalty =
+        s.getQuantity("contact_penalty", D::StiffnessPerArea, 1e8);
+    checkBetween(s, "contact_penalty", sc.options.contact.pressurePenalty, 1e5, 1e10, "Pa/m");
+    // The seed's Yeoh fit of its tensile test, 0.2 mm film (scenarios/seed-load-test.yaml).
+    b.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    b.threads = 1;  // bags run in parallel, one per thread
+}
+
+// -------------------------------------------------------------------------------------- array
+
+void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
+    s.checkKeys({"rows", "columns", "gas_mass"},
+                {"row_pitch", "column_pitch", "centre", "orientation", "groups"});
+    cosim::ArrayLayout& a = sc.options.layout;
+    a.rows = s.get("rows").asInteger();
+    a.columns = s.get("columns").asInteger();
+    if (a.rows < 1) s.fail("rows", std::to_string(a.rows) + "; valid: 1 or more");
+    if (a.columns < 1) s.fail("columns", std::to_string(a.columns) + "; valid: 1 or more");
+    if (a.rows * a.columns > kMaxArrayBags)
+        s.fail("rows", std::to_string(a.rows) + " x " + std::to_string(a.columns) +
+                           " bags; valid: at most " + std::to_string(kMaxArrayBags) +
+                           " bags in all (docs/scenario-reference.md#limits)");
+    if (a.rows > 1 && !s.has("row_pitch"))
+        s.fail("row_pitch", "missing: " + std::to_string(a.rows) +
+                                " rows need the distance between row centres, e.g. 105 mm");
+    if (a.columns > 1 && !s.has("column_pitch"))
+        s.fail("column_pitch", "missing: " + std::to_string(a.columns) +
+                                   " columns need the distance between column centres, e.g. "
+                                   "360 mm");
+    a.rowPitch = s.getQuantity("row_pitch", D::Length, 0.0);
+    a.columnPitch = s.getQuantity("column_pitch", D::Length, 0.0);
+    if (s.has("centre")) a.centre = readXY(s, "centre", "[0 m, 0 m]");
+    if (s.has("orientation")) {
+        const ScenarioNode o = s.get("orientation");
+        const std::vector<std::string> choices = {"across", "across-flipped", "along",
+                                                  "along-flipped"};
+        if (o.isScalar()) {
+            a.rowOrientation = {cosim::parseBagOrientation(o.asChoice(choices))};
+        } else if (o.isSequence() && !o.getElements().empty()) {
+            for (const ScenarioNode& e : o.getElements())
+                a.rowOrientation.push_back(cosim::parseBagOrientation(e.asChoice(choices)));
+        } else {
+            s.fail("orientation",
+                   "must be one orientation or a list repeated over the rows, e.g. [across, "
+                   "across-flipped]; valid: across, across-flipped, along, along-flipped");
+        }
+    }
+    a.gasMass = s.getQuantity("gas_mass", D::Mass);
+    checkPositive(s, "gas_mass", a.gasMass, "g");
+    if (s.has("groups")) {
+        const ScenarioNode gs = s.get("groups");
+        if (!gs.isSequence())
+            s.fail("groups", "must be a list of groups, e.g. - {name: left, columns: [0], "
+                             "gas_mass: 4.5 g}");
+        for (const ScenarioNode& e : gs.getElements()) {
+            e.checkKeys({"name"}, {"rows", "columns", "gas_mass"});
+            cosim::BagGroup g;
+            g.name = e.getString("name");
+            g.rows = readIndices(e, "rows", a.rows, "row");
+            g.columns = readIndices(e, "columns", a.columns, "column");
+            g.gasMass = e.getQuantity("gas_mass", D::Mass, a.gasMass);
+            checkPositive(e, "gas_mass", g.gasMass, "g");
+            a.groups.push_back(g);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------- gas
+
+void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
+    if (!root.has("gas")) return;
+    const ScenarioNode gs = root.get("gas");
+    if (!gs.isSequence())
+        root.fail("gas", "must be a list of commands, e.g. - {at: 0 s, group: right, target: "
+                         "5.5 g, rate: 0.05 g/s}");
+    const cosim::ArrayLayout& a = sc.options.layout;
+    const int numBags = a.rows * a.columns;
+    std::vector<std::string> groupNames;
+    for (const cosim::BagGroup& g : a.groups) groupNames.push_back(g.name);
+    int index = 0;
+    for (const ScenarioNode& e : gs.getElements()) {
+        e.checkKeys({}, {"at", "group", "bags", "target", "rate", "flow"});
+        GasCommandText text;
+        std::vector<int> bags;
+        if (e.has("group") == e.has("bags"))
+            e.fail("name the bags with either 'group' (one of array.groups) or 'bags' (a list of "
+                   "bag indices, row x columns + column), not both or neither");
+        if (e.has("group")) {
+            if (groupNames.empty())
+                e.fail("group", "the array has no groups; define them in array.groups, or use "
+                                "'bags: [...]'");
+            const std::string name = e.getChoice("group", groupNames);
+            const int gi = int(std::find(groupNames.begin(), groupNames.end(), name) -
+                               groupNames.begin());
+            for (const cosim::ArrayBag& b : cosim::makeArrayBags(a, sc.options.bag.geometry))
+                if (b.group == gi) bags.push_back(b.index);
+            text.who = "group '" + name + "'";
+        } else {
+            bags = readIndices(e, "bags", numBags, "bag");
+            if (bags.empty()) e.fail("bags", "is empty; valid: bag indices 0 to " +
+                                                 std::to_string(numBags - 1));
+            text.who = "bags";
+            for (size_t i = 0; i < bags.size(); ++i)
+                text.who += (i ? ", " : " ") + std::to_string(bags[i]);
+        }
+        cosim::GasCommand c;
+        text.at = e.getQuantity("at", D::Time, 0.0);
+        checkBetween(e, "at", text.at, 0.0, INFINITY, "s",
+                     "from the end of the settle, run.settle_time");
+        if (text.at > sc.duration)
+            e.fail("at", fmtUnit(text.at, "s") + " is after the run's end (run.duration " +
+                             fmtUnit(sc.duration, "s") + "); valid: 0 s to " +
+                             fmtUnit(sc.duration, "s"));
+        c.time = sc.settleTime + text.at;
+        if (e.has("target") == e.has("flow"))
+            e.fail("give either 'target' (a gas mass per bag, with 'rate') or 'flow' (a mass "
+                   "flow into each bag, negative out), not both or neither");
+        if (e.has("target")) {
+            c.kind = cosim::GasCommand::Kind::Target;
+            c.targetMass = e.getQuantity("target", D::Mass);
+            checkPositive(e, "target", c.targetMass, "g");
+            if (!e.has("rate"))
+                e.fail("rate", "missing: a target is reached at a stated mass flow, e.g. rate: "
+                               "0.05 g/s");
+            c.rate = e.getQuantity("rate", D::MassFlow);
+            checkPositive(e, "rate", c.rate, "g/s");
+            text.what = "target " + fmtUnit(c.targetMass, "g") + " at " + fmtUnit(c.rate, "g/s");
+        } else {
+            if (e.has("rate"))
+                e.fail("rate", "only applies with 'target'; a flow is its own rate");
+            c.kind = cosim::GasCommand::Kind::Flow;
+            c.massFlow = e.getQuantity("flow", D::MassFlow);
+            if (!std::isfinite(c.massFlow)) e.fail("flow", "must be finite");
+            text.what = "flow " + fmtUnit(c.massFlow, "g/s");
+        }
+        const std::string name = "gas[" + std::to_string(index) + "]";
+        sc.gas.add(bags, c, name);
+        try {
+            sc.gas.validate(numBags);
+        } catch (const std::invalid_argument& err) {
+            e.fail(std::string(err.what()) +
+                   "; valid: one command per bag and start time (give a later 'at')");
+        }
+        sc.gasText.push_back(text);
+        ++index;
+    }
+}
+
+// ----------------------------------------------------------------------------------- coupling
+
+void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
+    s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step",
+                     "relative_tolerance", "absolute_tolerance", "max_iterations", "threads",
+                     "body_accuracy"});
+    cosim::CouplingOptions& c = o.coupling;
+    c.scheme = cosim::parseScheme(s.getChoice("scheme", {"explicit", "implicit", "tangent"},
+                                              "implicit"));
+    c.acceleration = cosim::parseAcceleration(
+        s.getChoice("acceleration", {"constant", "aitken", "iqn-ils"}, "iqn-ils"));
+    c.macroStep = s.getQuantity("macro_step", D::Time, 0.01);
+    checkBetween(s, "macro_step", c.macroStep, 1e-5, 0.1, "ms");
+    c.minMacroStep = s.getQuantity("min_macro_step", D::Time, 1e-5);
+    checkBetween(s, "min_macro_step", c.minMacroStep, 1e-7, c.macroStep, "ms",
+                 "at most the macro step");
+    c.relativeTolerance = s.getNumber("relative_tolerance", 1e-6);
+    if (!(c.relativeTolerance > 0.0 && c.relativeTolerance < 1.0))
+        s.fail("relative_tolerance", "must lie between 0 and 1, e.g. 1e-6");
+    c.absoluteTolerance = s.getQuantity("absolute_tolerance", D::Force, 1e-3);
+    checkBetween(s, "absolute_tolerance", c.absoluteTolerance, 1e-6, 10.0, "N");
+    if (!(c.absoluteTolerance > o.bag.forceTolerance))
+        s.fail("absolute_tolerance",
+               fmtUnit(c.absoluteTolerance, "N") + " is not above the bags' own solve "
+               "tolerance bag.force_tolerance (" + fmtUnit(o.bag.forceTolerance, "N") +
+               "): a bag's wrench is no more exact than that; valid: above it");
+    c.maxIterations = s.getInteger("max_iterations", 50);
+    if (c.maxIterations < 1 || c.maxIterations > 1000)
+        s.fail("max_iterations", std::to_string(c.maxIterations) + "; valid: 1 to 1000");
+    c.threads = s.getInteger("threads", 0);
+    if (c.threads < 0 || c.threads > 256)
+        s.fail("threads", std::to_string(c.threads) + "; valid: 0 (one per core) to 256");
+    o.integrator.accuracy = s.getNumber("body_accuracy", 1e-6);
+    if (!(o.integrator.accuracy > 0.0 && o.integrator.accuracy < 1e-2))
+        s.fail("body_accuracy", "must lie between 0 and 0.01, e.g. 1e-6");
+}
+
+}  // namespace
+
+PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
+    const ScenarioNode root = file.getRoot();
+    root.checkKeys({"kind", "patient", "array"},
+                   {"name", "description", "bag", "gas", "coupling", "run", "mat", "output"});
+    root.getChoice("kind", {kPatientOnArrayKind});
+    PatientOnArrayScenario sc;
+    sc.name = root.getString("name", file.getStem());
+    checkScenarioName(root, sc.name);
+    sc.description = root.getString("description", "");
+    sc.patient = readPatientSection(root.getSection("patient"));
+
+    readBag(root.getSection("bag", false), sc);
+    readArray(root.getSection("array"), sc);
+    readCoupling(root.getSection("coupling", false), sc.options);
+
+    const ScenarioNode run = root.getSection("run", false);
+    run.checkKeys({}, {"settle_time", "duration", "drop_height"});
+    sc.settleTime = run.getQuantity("settle_time", D::Time, sc.settleTime);
+    checkBetween(run, "settle_time", sc.settleTime, 0.0, 600.0, "s");
+    sc.duration = run.getQuantity("duration", D::Time, 0.0);
+    checkBetween(run, "duration", sc.duration, 0.0, 3600.0, "s");
+    if (!(sc.getEndTime() > 0.0))
+        run.fail("settle_time", "the run has no time: give run.settle_time or run.duration > 0 s");
+    sc.options.dropHeight = run.getQuantity("drop_height", D::Length, 0.0);
+    checkBetween(run, "drop_height", sc.options.dropHeight, 0.0, 0.5, "mm");
+
+    try {
+        sc.options.layout.validate(sc.options.bag.geometry);
+    } catch (const std::invalid_argument& e) {
+        failFromCosim(root, e.what());
+    }
+    readGas(root, sc);
+
+    const ScenarioNode mat = root.getSection("mat", false);
+    mat.checkKeys({}, {"rows", "columns", "origin", "size"});
+    sc.mat = cosim::makeArrayMatOptions(sc.options.layout, sc.options.bag.geometry,
+                                        mat.getInteger("rows", 64), mat.getInteger("columns", 32));
+    if (sc.mat.rows < 1 || sc.mat.rows > 1024)
+        mat.fail("rows", std::to_string(sc.mat.rows) + " sensels; valid: 1 to 1024");
+    if (sc.mat.columns < 1 || sc.mat.columns > 1024)
+        mat.fail("columns", std::to_string(sc.mat.columns) + " sensels; valid: 1 to 1024");
+    if (mat.has("origin")) sc.mat.origin = readXY(mat, "origin", "[-0.96 m, -0.40 m]");
+    if (mat.has("size")) {
+        sc.mat.size = readXY(mat, "size", "[1.92 m, 0.80 m]");
+        if (!(sc.mat.size.minCoeff() > 0.0))
+            mat.fail("size", "both extents must be greater than 0 m, e.g. [1.92 m, 0.80 m]");
+    }
+
+    const ScenarioNode out = root.getSection("output", false);
+    out.checkKeys({}, {"every"});
+    sc.outputInterval = out.getQuantity("every", D::Time, sc.outputInterval);
+    checkBetween(out, "every", sc.outputInterval, 1e-3, 60.0, "ms");
+
+    try {
+        sc.options.validate();
+    } catch (const std::invalid_argument& e) {
+        failFromCosim(root, e.what());
+    }
+    // A patient (partly) off the array: named at patient.position.
+    const std::vector<int> off = cosim::findSegmentsOffArray(sc.patient, sc.options);
+    if (!off.empty()) {
+        const cosim::PressureMatOptions extent = cosim::makeArrayMatOptions(
+            sc.options.layout, sc.options.bag.geometry, 1, 1);
+        std::ostringstream s;
+        s << "no bag of the array lies under his ";
+        for (size_t i = 0; i < off.size(); ++i)
+            s << (i ? ", " : "") << body::getSegmentName(static_cast<body::Segment>(off[i]));
+        s << " (mid-hip at [" << fmtUnit(sc.patient.position[0], "mm") << ", "
+          << fmtUnit(sc.patient.position[1], "mm") << "]; the bags cover x from "
+          << fmtUnit(extent.origin.x(), "mm") << " to "
+          << fmtUnit(extent.origin.x() + extent.size.x(), "mm") << " and y from "
+          << fmtUnit(extent.origin.y(), "mm") << " to "
+          << fmtUnit(extent.origin.y() + extent.size.y(), "mm")
+          << "); valid: a position that puts him on the array, or more rows or columns";
+        const ScenarioNode p = root.getSection("patient");
+        if (p.has("position")) p.fail("position", s.str());
+        p.fail(s.str());
+    }
+    return sc;
+}
+
+}  // namespace io
