@@ -75,6 +75,22 @@ BagOrientation ArrayLayout::getOrientation(int row) const {
     return rowOrientation[row % rowOrientation.size()];
 }
 
+BagOrientation ArrayLayout::getOrientation(int row, int column) const {
+    const BagOrientation o = getOrientation(row);
+    if (!mirrorColumns || column % 2 == 0) return o;
+    switch (o) {
+        case BagOrientation::Across:
+            return BagOrientation::AcrossFlipped;
+        case BagOrientation::AcrossFlipped:
+            return BagOrientation::Across;
+        case BagOrientation::Along:
+            return BagOrientation::AlongFlipped;
+        case BagOrientation::AlongFlipped:
+            return BagOrientation::Along;
+    }
+    return o;
+}
+
 void ArrayLayout::validate(const bags::DoubleWedgeParams& bag) const {
     if (rows < 1) fail("array.rows", std::to_string(rows) + "; valid: 1 or more");
     if (columns < 1) fail("array.columns", std::to_string(columns) + "; valid: 1 or more");
@@ -165,7 +181,7 @@ std::vector<ArrayBag> makeArrayBags(const ArrayLayout& layout, const bags::Doubl
             b.index = r * layout.columns + c;
             b.row = r;
             b.column = c;
-            b.orientation = layout.getOrientation(r);
+            b.orientation = layout.getOrientation(r, c);
             const Eigen::Vector2d cell =
                 layout.centre +
                 Eigen::Vector2d((r - 0.5 * (layout.rows - 1)) * layout.rowPitch,

@@ -85,11 +85,15 @@ std::vector<BagReading> calcBagReadings(const PatientOnArray& poa) {
     return out;
 }
 
-double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment) {
-    const SimTK::Rotation& R_GB =
-        poa.getModel().getMobilizedBody(segment).getBodyRotation(poa.getBody().getState());
+double calcSegmentTilt(const body::BodyModel& model, const SimTK::State& state,
+                       body::Segment segment) {
+    const SimTK::Rotation& R_GB = model.getMobilizedBody(segment).getBodyRotation(state);
     const SimTK::Vec3 anterior = R_GB * SimTK::Vec3(1, 0, 0);
     return std::atan2(-anterior[1], anterior[2]);
+}
+
+double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment) {
+    return calcSegmentTilt(poa.getModel(), poa.getBody().getState(), segment);
 }
 
 void fillPressureMat(const PatientOnArray& poa, PressureMat& mat) {

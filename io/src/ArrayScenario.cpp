@@ -141,7 +141,8 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc) {
 
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     s.checkKeys({"rows", "columns", "gas_mass"},
-                {"row_pitch", "column_pitch", "centre", "orientation", "groups"});
+                {"row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
+                 "groups"});
     cosim::ArrayLayout& a = sc.options.layout;
     a.rows = s.get("rows").asInteger();
     a.columns = s.get("columns").asInteger();
@@ -176,6 +177,7 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
                    "across-flipped]; valid: across, across-flipped, along, along-flipped");
         }
     }
+    a.mirrorColumns = s.getBool("mirror_columns", false);
     a.gasMass = s.getQuantity("gas_mass", D::Mass);
     checkPositive(s, "gas_mass", a.gasMass, "g");
     if (s.has("groups")) {

@@ -50,6 +50,11 @@ struct ArrayLayout {
     /// Orientation per row, repeated cyclically over the rows: {Across} for all rows alike,
     /// {Across, AcrossFlipped} for wedges that alternate. Empty: Across.
     std::vector<BagOrientation> rowOrientation;
+    /// Odd columns turned half a turn from their row's orientation (across <-> across-flipped,
+    /// along <-> along-flipped): the double wedge is symmetric across its width, so they are
+    /// the mirror images of the even columns about the bed's long axis, and a patient lying
+    /// across two columns lies on a surface symmetric left to right.
+    bool mirrorColumns = false;
     double gasMass = 0.0;          ///< [kg] per bag not in a group
     std::vector<BagGroup> groups;  ///< a bag may be in at most one group
 
@@ -58,6 +63,9 @@ struct ArrayLayout {
     /// bag's positive). @throws std::invalid_argument naming the key and what would be valid.
     void validate(const bags::DoubleWedgeParams& bag) const;
     BagOrientation getOrientation(int row) const;  ///< the row's orientation
+    /// The orientation of the bag at (row, column): the row's, turned for odd columns when
+    /// mirrorColumns is set.
+    BagOrientation getOrientation(int row, int column) const;
 };
 
 /// One bag of the array.

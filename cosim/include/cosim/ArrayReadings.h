@@ -58,6 +58,9 @@ std::vector<BagReading> calcBagReadings(const PatientOnArray& poa);
 /// axis (body frame X) from Ground +z, seen along Ground +x; positive when he turns onto his
 /// left side (his anterior axis towards Ground -y, his right side raised).
 double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment);
+/// The same for a model's segment in a state realized to Position.
+double calcSegmentTilt(const body::BodyModel& model, const SimTK::State& state,
+                       body::Segment segment);
 
 /// Clears the mat and adds every coupled bag's nodal contact pressures (all shapes) to it.
 void fillPressureMat(const PatientOnArray& poa, PressureMat& mat);

@@ -1,0 +1,88 @@
+// What is read off the patient on the array: the tilt's sign and size on the body model's own
+// tilted postures, and the mat placed over the array's footprints.
+#include <cosim/ArrayReadings.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace cosim;
+
+namespace {
+
+// Pelvis and thorax tilt [deg] in a posture (body::BodyModel::setPosture, realized).
+std::pair<double, double> tiltOf(body::Posture posture) {
+    body::PatientSpec p;
+    p.height = 1.75;
+    p.mass = 75.0;
+    p.posture = posture;
+    body::BodyModel m(p);
+    m.updSystem().realizeTopology();
+    SimTK::State s = m.getSystem().getDefaultState();
+    m.setPosture(s, 0.0);
+    m.getSystem().realize(s, SimTK::Stage::Position);
+    const double deg = 180.0 / M_PI;
+    return {deg * calcSegmentTilt(m, s, body::Segment::LowerTrunk),
+            deg * calcSegmentTilt(m, s, body::Segment::UpperTrunk)};
+}
+
+}  // namespace
+
+TEST(ArrayReadings, TiltIsPositiveOntoTheLeftSideAndReadsThePosturesAngle) {
+    // Reference: body/Posture.h's tilt-left-30 turns him 30 deg onto his left side (left side
+    // down), tilt-right-30 onto his right; supine is 0.
+    const auto supine = tiltOf(body::Posture::Supine);
+    EXPECT_NEAR(supine.first, 0.0, 1e-9);
+    EXPECT_NEAR(supine.second, 0.0, 1e-9);
+    const auto left = tiltOf(body::Posture::TiltLeft30);
+    EXPECT_NEAR(left.first, 30.0, 1e-6);
+    EXPECT_NEAR(left.second, 30.0, 1e-6);
+    const auto right = tiltOf(body::Posture::TiltRight30);
+    EXPECT_NEAR(right.first, -30.0, 1e-6);
+    EXPECT_NEAR(right.second, -30.0, 1e-6);
+}
+
+TEST(ArrayReadings, TheArraysMatCoversEveryFootprintExactly) {
+    ArrayLayout a;
+    a.rows = 20;
+    a.columns = 2;
+    a.rowPitch = 0.105;
+    a.columnPitch = 0.36;
+    a.centre = Eigen::Vector2d(-0.03, 0.0);
+    a.rowOrientation = {BagOrientation::Across, BagOrientation::AcrossFlipped};
+    a.gasMass = 4.5e-3;
+    const PressureMatOptions o = makeArrayMatOptions(a, bags::DoubleWedgeParams(), 64, 32);
+    // 20 rows of 100 mm wide bags at 105 mm: 2.095 m; 2 columns of 350 mm at 360 mm: 0.71 m.
+    EXPECT_NEAR(o.origin.x(), -0.03 - 1.0475, 1e-12);
+    EXPECT_NEAR(o.size.x(), 2.095, 1e-12);
+    EXPECT_NEAR(o.origin.y(), -0.355, 1e-12);
+    EXPECT_NEAR(o.size.y(), 0.71, 1e-12);
+    EXPECT_EQ(o.rows, 64);
+    EXPECT_EQ(o.columns, 32);
+    EXPECT_NO_THROW(o.validate());
+}
+
+TEST(ArrayReadings, MirroredColumnsFaceAwayFromEachOtherSymmetricAboutTheBedsAxis) {
+    // Reference: the mirror image about y = 0 of column 0's bag frame origin (its steep end)
+    // and x axis. Row 0 (across): column 0's steep end at the outer edge y = -355 mm, column
+    // 1's at +355 mm; row 1 (across-flipped): both at the inner edges, -5 and +5 mm.
+    ArrayLayout a;
+    a.rows = 2;
+    a.columns = 2;
+    a.rowPitch = 0.105;
+    a.columnPitch = 0.36;
+    a.rowOrientation = {BagOrientation::Across, BagOrientation::AcrossFlipped};
+    a.mirrorColumns = true;
+    a.gasMass = 4.5e-3;
+    const std::vector<ArrayBag> b = makeArrayBags(a, bags::DoubleWedgeParams());
+    EXPECT_EQ(b[1].orientation, BagOrientation::AcrossFlipped);
+    EXPECT_EQ(b[3].orientation, BagOrientation::Across);
+    const double edge[2] = {-0.355, -0.005};
+    for (int r = 0; r < 2; ++r) {
+        const Eigen::Isometry3d& left = b[2 * r].X_GB;
+        const Eigen::Isometry3d& right = b[2 * r + 1].X_GB;
+        EXPECT_NEAR(left.translation().y(), edge[r], 1e-12);
+        EXPECT_NEAR(right.translation().y(), -left.translation().y(), 1e-12);
+        EXPECT_NEAR(right.translation().x(), left.translation().x(), 1e-12);
+        EXPECT_NEAR(right.linear().col(0).y(), -left.linear().col(0).y(), 1e-12);
+    }
+}

@@ -1,0 +1,171 @@
+// The patient-on-array scenario kind (io::readPatientOnArrayScenario): the shipped scenarios
+// read into SI, and located errors (file, line, key, what is valid) for overlapping bags, a
+// patient off the array, gas commands that name no bags or mix their kinds, and wrong units.
+#include <gtest/gtest.h>
+#include <io/ArrayScenario.h>
+#include <io/InputError.h>
+
+#include <cmath>
+#include <string>
+
+#include "InputErrorTestUtil.h"
+
+using io::test::expectInputError;
+
+namespace {
+
+const std::string kBase =
+    "kind: patient-on-array\n"                                                    // 1
+    "patient: {sex: male, height: 1.75 m, mass: 75 kg, position: [0 m, 0 m]}\n"  // 2
+    "bag: {mesh_size: 30 mm}\n"                                                   // 3
+    "array:\n"                                                                    // 4
+    "  rows: 20\n"                                                                // 5
+    "  columns: 2\n"                                                              // 6
+    "  row_pitch: 105 mm\n"                                                       // 7
+    "  column_pitch: 360 mm\n"                                                    // 8
+    "  centre: [-30 mm, 0 mm]\n"                                                  // 9
+    "  orientation: [across, across-flipped]\n"                                   // 10
+    "  gas_mass: 4.5 g\n"                                                         // 11
+    "  groups:\n"                                                                 // 12
+    "    - {name: left, columns: [0]}\n"                                          // 13
+    "    - {name: right, columns: [1], gas_mass: 5 g}\n"                          // 14
+    "run: {settle_time: 1 s, duration: 10 s}\n";                                  // 15
+
+io::PatientOnArrayScenario read(const std::string& text) {
+    return io::readPatientOnArrayScenario(io::ScenarioFile::parse(text, "a.yaml"));
+}
+
+io::InputError readError(const std::string& text) {
+    return expectInputError([&] { read(text); });
+}
+
+}  // namespace
+
+TEST(ArrayScenario, ReadsTheShippedScenariosInSI) {
+    for (const char* name : {"supine-on-array", "turn-left"}) {
+        const io::PatientOnArrayScenario sc = io::readPatientOnArrayScenario(io::ScenarioFile::load(
+            std::string(BAGSIM_SOURCE_DIR) + "/scenarios/" + name + ".yaml"));
+        EXPECT_EQ(sc.name, name);
+        EXPECT_DOUBLE_EQ(sc.patient.height, 1.75);
+        EXPECT_DOUBLE_EQ(sc.patient.mass, 75.0);
+        EXPECT_GE(sc.options.layout.rows * sc.options.layout.columns, 24);
+        EXPECT_DOUBLE_EQ(sc.options.layout.gasMass, 4.5e-3);
+        EXPECT_DOUBLE_EQ(sc.options.layout.rowPitch, 0.105);
+        EXPECT_EQ(sc.mat.rows, 64);
+        EXPECT_EQ(sc.mat.columns, 32);
+    }
+    const io::PatientOnArrayScenario turn = io::readPatientOnArrayScenario(
+        io::ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/turn-left.yaml"));
+    EXPECT_DOUBLE_EQ(turn.duration, 30.0);
+    ASSERT_EQ(turn.gasText.size(), 2u);
+    // The right group (column 1) is filled to 6 g from the end of the settle, at 0.05 g/s.
+    const cosim::GasCommand* c = turn.gas.findCommand(1, turn.settleTime);
+    ASSERT_NE(c, nullptr);
+    EXPECT_EQ(c->kind, cosim::GasCommand::Kind::Target);
+    EXPECT_NEAR(c->targetMass, 6.0e-3, 1e-15);
+    EXPECT_NEAR(c->rate, 0.05e-3, 1e-15);
+    EXPECT_EQ(turn.gas.findCommand(1, turn.settleTime - 1e-3), nullptr);
+    const cosim::GasCommand* left = turn.gas.findCommand(0, turn.settleTime);
+    ASSERT_NE(left, nullptr);
+    EXPECT_NEAR(left->targetMass, 3.0e-3, 1e-15);
+}
+
+TEST(ArrayScenario, ReadsGroupsGasCommandsAndDefaults) {
+    const io::PatientOnArrayScenario sc =
+        read(kBase +
+             "gas:\n"
+             "  - {at: 2 s, group: right, target: 6 g, rate: 0.05 g/s}\n"
+             "  - {at: 1 s, bags: [0, 2], flow: -3 g/min}\n");
+    EXPECT_EQ(sc.bagReading, "literal");
+    EXPECT_DOUBLE_EQ(sc.options.bag.geometry.meshSize, 0.030);
+    EXPECT_FALSE(sc.options.bag.selfContact);
+    ASSERT_EQ(sc.options.layout.groups.size(), 2u);
+    EXPECT_DOUBLE_EQ(sc.options.layout.groups[0].gasMass, 4.5e-3);  // the array's by default
+    EXPECT_DOUBLE_EQ(sc.options.layout.groups[1].gasMass, 5.0e-3);
+    const cosim::GasCommand* flow = sc.gas.findCommand(2, 2.0);  // settle 1 s + at 1 s
+    ASSERT_NE(flow, nullptr);
+    EXPECT_NEAR(flow->massFlow, -0.05e-3, 1e-15);
+    EXPECT_EQ(sc.gas.findCommand(2, 1.99), nullptr);
+    EXPECT_EQ(sc.gas.findCommand(1, 2.99), nullptr);
+    EXPECT_NE(sc.gas.findCommand(1, 3.0), nullptr);  // row 0, column 1: group right
+    EXPECT_EQ(sc.gas.findCommand(4, 10.0), nullptr);  // row 2, column 0: no command
+    EXPECT_DOUBLE_EQ(sc.getEndTime(), 11.0);
+}
+
+TEST(ArrayScenario, OverlappingRowsAreRefusedAtTheRowPitch) {
+    std::string text = kBase;
+    text.replace(text.find("105 mm"), 6, "90 mm");
+    const io::InputError e = readError(text);
+    EXPECT_EQ(e.getLine(), 7);
+    EXPECT_EQ(e.getKey(), "array.row_pitch");
+    EXPECT_NE(e.getMessage().find("would overlap; valid: 100 mm or more"), std::string::npos)
+        << e.what();
+}
+
+TEST(ArrayScenario, APatientOffTheArrayIsRefusedAtHisPositionNamingTheSegments) {
+    std::string text = kBase;
+    text.replace(text.find("position: [0 m, 0 m]"), 20, "position: [0 m, 0.6 m]");
+    const io::InputError e = readError(text);
+    EXPECT_EQ(e.getLine(), 2);
+    EXPECT_EQ(e.getKey(), "patient.position");
+    EXPECT_NE(e.getMessage().find("no bag of the array lies under his lower_trunk, middle_trunk, head"), std::string::npos)
+        << e.what();
+    EXPECT_NE(e.getMessage().find("the bags cover x from -1077.5 mm to 1017.5 mm and y from -355 mm "
+                                  "to 355 mm"),
+              std::string::npos)
+        << e.what();
+}
+
+TEST(ArrayScenario, GasCommandsNameOneGroupOrBagsAndOneKind) {
+    const io::InputError unknown =
+        readError(kBase + "gas:\n  - {group: rigth, target: 6 g, rate: 0.05 g/s}\n");
+    EXPECT_EQ(unknown.getLine(), 17);
+    EXPECT_EQ(unknown.getKey(), "gas[0].group");
+    EXPECT_NE(unknown.getMessage().find("right"), std::string::npos) << unknown.what();
+
+    const io::InputError both =
+        readError(kBase + "gas:\n  - {group: right, target: 6 g, flow: 0.01 g/s}\n");
+    EXPECT_EQ(both.getKey(), "gas[0]");
+    EXPECT_NE(both.getMessage().find("either 'target'"), std::string::npos) << both.what();
+
+    const io::InputError noRate = readError(kBase + "gas:\n  - {group: right, target: 6 g}\n");
+    EXPECT_EQ(noRate.getKey(), "gas[0].rate");
+    EXPECT_NE(noRate.getMessage().find("0.05 g/s"), std::string::npos) << noRate.what();
+
+    const io::InputError unit =
+        readError(kBase + "gas:\n  - {bags: [1], flow: 0.05 g}\n");
+    EXPECT_EQ(unit.getKey(), "gas[0].flow");
+    EXPECT_NE(unit.getMessage().find("g/s"), std::string::npos) << unit.what();
+
+    const io::InputError bag = readError(kBase + "gas:\n  - {bags: [40], flow: 0.05 g/s}\n");
+    EXPECT_NE(bag.getMessage().find("bag 40 does not exist; valid: 0 to 39"), std::string::npos)
+        << bag.what();
+
+    const io::InputError late =
+        readError(kBase + "gas:\n  - {at: 12 s, group: left, flow: -0.05 g/s}\n");
+    EXPECT_EQ(late.getKey(), "gas[0].at");
+    EXPECT_NE(late.getMessage().find("after the run's end"), std::string::npos) << late.what();
+
+    const io::InputError twice = readError(kBase +
+                                           "gas:\n  - {group: left, flow: -0.05 g/s}\n"
+                                           "  - {bags: [0], flow: 0.05 g/s}\n");
+    EXPECT_EQ(twice.getLine(), 18);
+    EXPECT_NE(twice.getMessage().find("one command per bag and start time"), std::string::npos)
+        << twice.what();
+}
+
+TEST(ArrayScenario, GroupErrorsAreLocatedInTheirGroup) {
+    std::string text = kBase;
+    text.replace(text.find("columns: [1], gas_mass: 5 g"), 27, "columns: [0], gas_mass: 5 g");
+    const io::InputError e = readError(text);
+    EXPECT_EQ(e.getLine(), 14);
+    EXPECT_NE(e.getMessage().find("in group 'left' and in group 'right'"), std::string::npos)
+        << e.what();
+
+    std::string column = kBase;
+    column.replace(column.find("columns: [1]"), 12, "columns: [2]");
+    const io::InputError c = readError(column);
+    EXPECT_EQ(c.getKey(), "array.groups[1].columns[0]");
+    EXPECT_NE(c.getMessage().find("column 2 does not exist; valid: 0 to 1"), std::string::npos)
+        << c.what();
+}
