@@ -12,6 +12,12 @@ void BodyIntegratorOptions::validate() const {
         s << "BodyIntegratorOptions: accuracy = " << accuracy << "; valid: 0 < accuracy < 1";
         throw std::invalid_argument(s.str());
     }
+    if (!(contactDamping >= 0.0) || !std::isfinite(contactDamping)) {
+        std::ostringstream s;
+        s << "BodyIntegratorOptions: contactDamping = " << contactDamping
+          << " s/m; valid: 0 (none) or a positive value";
+        throw std::invalid_argument(s.str());
+    }
     if (!(maxStepSize >= 0.0) || !std::isfinite(maxStepSize)) {
         std::ostringstream s;
         s << "BodyIntegratorOptions: maxStepSize = " << maxStepSize
@@ -79,8 +85,8 @@ Vec6 calcLoad(const BodyParticipant::Shape& s, const Eigen::Isometry3d& X_GS) {
 class CouplingForce : public SimTK::Force::Custom::Implementation {
   public:
     CouplingForce(const SimTK::SimbodyMatterSubsystem& matter,
-                  std::shared_ptr<std::vector<BodyParticipant::Shape>> shapes)
-        : m_matter(matter), m_shapes(std::move(shapes)) {}
+                  std::shared_ptr<std::vector<BodyParticipant::Shape>> shapes, double damping)
+        : m_matter(matter), m_shapes(std::move(shapes)), m_damping(damping) {}
     void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& bodyForces,
                    SimTK::Vector_<SimTK::Vec3>& particleForces,
                    SimTK::Vector& mobilityForces) const override {
@@ -89,7 +95,10 @@ class CouplingForce : public SimTK::Force::Custom::Implementation {
             const SimTK::Transform& X_GB = mobod.getBodyTransform(state);
             const SimTK::Transform X_GS = X_GB * s.X_BS;
             const Vec6 w = calcLoad(s, toEigen(X_GS));
-            const SimTK::Vec3 force = vecToSimTK(Vec3(w.tail<3>()));
+            SimTK::Vec3 force = vecToSimTK(Vec3(w.tail<3>()));
+            if (m_damping > 0.0)
+                force -= m_damping * s.W0.force.norm() *
+                         mobod.findStationVelocityInGround(state, s.X_BS.p());
             // torque about the body origin = torque about S's origin + r_BS x force
             const SimTK::Vec3 torque =
                 vecToSimTK(Vec3(w.head<3>())) + SimTK::cross(X_GS.p() - X_GB.p(), force);
@@ -101,6 +110,7 @@ class CouplingForce : public SimTK::Force::Custom::Implementation {
   private:
     const SimTK::SimbodyMatterSubsystem& m_matter;
     std::shared_ptr<std::vector<BodyParticipant::Shape>> m_shapes;
+    double m_damping;  // [s/m] BodyIntegratorOptions::contactDamping
 };
 
 }  // namespace
@@ -128,7 +138,8 @@ BodyParticipant::BodyParticipant(SimTK::MultibodySystem& system,
     : m_impl(std::make_unique<Impl>(system, options)) {
     options.validate();
     // Force::Custom takes ownership of the implementation.
-    SimTK::Force::Custom(forces, new CouplingForce(system.getMatterSubsystem(), m_impl->shapes));
+    SimTK::Force::Custom(forces, new CouplingForce(system.getMatterSubsystem(), m_impl->shapes,
+                                                   options.contactDamping));
 }
 
 BodyParticipant::~BodyParticipant() = default;

@@ -334,7 +334,7 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     readCoupling(root.getSection("coupling", false), sc.options);
 
     const ScenarioNode run = root.getSection("run", false);
-    run.checkKeys({}, {"settle_time", "duration", "drop_height"});
+    run.checkKeys({}, {"settle_time", "duration", "drop_height", "contact_damping"});
     sc.settleTime = run.getQuantity("settle_time", D::Time, sc.settleTime);
     checkBetween(run, "settle_time", sc.settleTime, 0.0, 600.0, "s");
     sc.duration = run.getQuantity("duration", D::Time, 0.0);
@@ -343,6 +343,11 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
         run.fail("settle_time", "the run has no time: give run.settle_time or run.duration > 0 s");
     sc.options.dropHeight = run.getQuantity("drop_height", D::Length, 0.0);
     checkBetween(run, "drop_height", sc.options.dropHeight, 0.0, 0.5, "mm");
+    // [s/m]: io::Units has no unit for it, so a plain number in s/m.
+    sc.options.integrator.contactDamping = run.getNumber("contact_damping", 0.0);
+    if (!(sc.options.integrator.contactDamping >= 0.0 &&
+          sc.options.integrator.contactDamping <= 100.0))
+        run.fail("contact_damping", "must be a number of s/m from 0 (none) to 100, e.g. 2");
 
     try {
         sc.options.layout.validate(sc.options.bag.geometry);

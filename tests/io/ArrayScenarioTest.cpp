@@ -50,7 +50,8 @@ TEST(ArrayScenario, ReadsTheShippedScenariosInSI) {
         EXPECT_DOUBLE_EQ(sc.patient.mass, 75.0);
         EXPECT_GE(sc.options.layout.rows * sc.options.layout.columns, 24);
         EXPECT_DOUBLE_EQ(sc.options.layout.gasMass, 4.5e-3);
-        EXPECT_DOUBLE_EQ(sc.options.layout.rowPitch, 0.105);
+        EXPECT_DOUBLE_EQ(sc.options.layout.rowPitch, 0.36);
+        EXPECT_DOUBLE_EQ(sc.options.integrator.contactDamping, 2.0);
         EXPECT_EQ(sc.mat.rows, 64);
         EXPECT_EQ(sc.mat.columns, 32);
     }
@@ -58,13 +59,14 @@ TEST(ArrayScenario, ReadsTheShippedScenariosInSI) {
         io::ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/turn-left.yaml"));
     EXPECT_DOUBLE_EQ(turn.duration, 30.0);
     ASSERT_EQ(turn.gasText.size(), 2u);
-    // The right group (column 1) is filled to 6 g from the end of the settle, at 0.05 g/s.
-    const cosim::GasCommand* c = turn.gas.findCommand(1, turn.settleTime);
+    // The right group (columns 4-6) is filled to 6 g from the end of the settle, at 0.05 g/s.
+    const cosim::GasCommand* c = turn.gas.findCommand(6, turn.settleTime);
     ASSERT_NE(c, nullptr);
     EXPECT_EQ(c->kind, cosim::GasCommand::Kind::Target);
     EXPECT_NEAR(c->targetMass, 6.0e-3, 1e-15);
     EXPECT_NEAR(c->rate, 0.05e-3, 1e-15);
-    EXPECT_EQ(turn.gas.findCommand(1, turn.settleTime - 1e-3), nullptr);
+    EXPECT_EQ(turn.gas.findCommand(6, turn.settleTime - 1e-3), nullptr);
+    EXPECT_EQ(turn.gas.findCommand(3, turn.settleTime + 1.0), nullptr);  // the middle column
     const cosim::GasCommand* left = turn.gas.findCommand(0, turn.settleTime);
     ASSERT_NE(left, nullptr);
     EXPECT_NEAR(left->targetMass, 3.0e-3, 1e-15);

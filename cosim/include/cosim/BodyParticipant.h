@@ -35,6 +35,13 @@ struct BodyIntegratorOptions {
     double accuracy = 1e-7;
     /// Largest internal step [s] (0: Simbody's default, no limit).
     double maxStepSize = 0.0;
+    /// [s/m] Contact damping d: each linked shape whose held load has a force F0 is also
+    /// pushed by -d |F0| v_S (v_S the velocity of the shape's origin, Ground), inside the
+    /// body's step. It stands for the losses in the bags' film and air that the quasi-static
+    /// bags leave out, and lets a patient come to rest on them (a vertical bounce of angular
+    /// frequency w gets a damping ratio of about d g / (2 w)). It vanishes at rest and off
+    /// contact, is not part of the bags' wrench, and only takes energy out. 0: none.
+    double contactDamping = 0.0;
     void validate() const;  ///< throws std::invalid_argument naming the option
 };
 

@@ -1,0 +1,53 @@
+// bagsim run on a patient-on-array scenario, end to end and short: the coarse supine scenario
+// released and stepped for 0.1 s. Every file is written with its columns, the run is marked
+// complete, and at every output time the regions' forces add up to the bags' (both the
+// vertical force of the bags on him; reference: the coupling's link wrenches).
+#include <filesystem>
+
+#include "ArrayRunTestUtil.h"
+
+using namespace app::test;
+
+TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
+    const std::filesystem::path out =
+        std::filesystem::path(BAGSIM_BINARY_DIR) / "tests/app/array-short";
+    ASSERT_EQ(runScenario("supine-on-array-coarse.yaml", out, "--set run.settle_time='0.1 s'"), 0);
+    for (const char* f : {"regions.csv", "bags.csv", "tilt.csv", "results.h5", "results.xdmf",
+                          "summary.txt"})
+        EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+    EXPECT_FALSE(std::filesystem::exists(out / "INCOMPLETE"));
+    const Csv regions = readCsv(out / "regions.csv");
+    const Csv bags = readCsv(out / "bags.csv");
+    const Csv tilt = readCsv(out / "tilt.csv");
+    EXPECT_EQ(regions.header, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N");
+    EXPECT_EQ(bags.header, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N");
+    EXPECT_EQ(tilt.header, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
+    EXPECT_EQ(tilt.rows.size(), 11u);  // every 10 ms from 0 to 0.1 s
+    const auto regionSum = sumPerTime(regions, "force_N");
+    const auto bagSum = sumPerTime(bags, "force_N");
+    ASSERT_GE(regionSum.size(), 2u);
+    for (const auto& [t, f] : regionSum) {
+        ASSERT_EQ(bagSum.count(t), 1u) << t;
+        EXPECT_NEAR(f, bagSum.at(t), 1e-3 * bagSum.at(t) + 1e-3) << "at " << t << " s";
+        EXPECT_GT(f, 0.0);
+    }
+    // Every bag holds the scenario's 4.5 g (no gas command).
+    const int mass = bags.column("mass_g");
+    for (const auto& r : bags.rows) EXPECT_NEAR(std::stod(r.at(mass)), 4.5, 1e-6);
+}
+
+TEST(ArrayRun, AnExistingOutputFolderIsNeverOverwrittenSilently) {
+    const std::filesystem::path out =
+        std::filesystem::path(BAGSIM_BINARY_DIR) / "tests/app/array-existing";
+    std::filesystem::remove_all(out);
+    std::filesystem::create_directories(out);
+    { std::ofstream(out / "regions.csv") << "keep\n"; }
+    const std::string cmd = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\" run \"" +
+                            BAGSIM_SOURCE_DIR +
+                            "/scenarios/tests/supine-on-array-coarse.yaml\" --quiet --out \"" +
+                            out.string() + "\" > /dev/null 2>&1";
+    const int rc = std::system(cmd.c_str());
+    EXPECT_EQ(WEXITSTATUS(rc), 2);
+    EXPECT_EQ(readCsv(out / "regions.csv").header, "keep");
+    EXPECT_FALSE(std::filesystem::exists(out / "INCOMPLETE"));
+}
