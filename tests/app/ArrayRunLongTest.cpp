@@ -1,5 +1,7 @@
 // bagsim run on the coarse variants of the shipped patient-on-array scenarios, end to end
 // (label long: minutes each on the shared 2-core machine).
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "ArrayRunTestUtil.h"
