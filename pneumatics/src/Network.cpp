@@ -121,6 +121,15 @@ void Network::checkLink(int link, const char* what) const {
     }
 }
 
+Network::Link Network::makeLink(const std::string& name, LinkKind kind, int a, int b) {
+    Link l;
+    l.name = name;
+    l.kind = kind;
+    l.a = a;
+    l.b = b;
+    return l;
+}
+
 int Network::addLink(Link link) {
     checkNode(link.a, link.name.c_str());
     checkNode(link.b, link.name.c_str());
@@ -133,11 +142,7 @@ int Network::addLink(Link link) {
 
 int Network::addValve(const std::string& name, int a, int b, const ValveSpec& spec, bool open) {
     spec.validate(name);
-    Link l;
-    l.name = name;
-    l.kind = LinkKind::Valve;
-    l.a = a;
-    l.b = b;
+    Link l = makeLink(name, LinkKind::Valve, a, b);
     l.valve = spec;
     l.opening = l.command = open ? 1.0 : 0.0;
     return addLink(l);
@@ -150,11 +155,7 @@ int Network::addVent(const std::string& name, int node, const ValveSpec& spec, b
 int Network::addPump(const std::string& name, int inlet, int outlet, const PumpSpec& spec,
                      double speed) {
     spec.validate(name);
-    Link l;
-    l.name = name;
-    l.kind = LinkKind::Pump;
-    l.a = inlet;
-    l.b = outlet;
+    Link l = makeLink(name, LinkKind::Pump, inlet, outlet);
     l.pump = spec;
     const int link = addLink(l);
     setPumpSpeed(link, speed);
@@ -163,11 +164,7 @@ int Network::addPump(const std::string& name, int inlet, int outlet, const PumpS
 
 int Network::addOrifice(const std::string& name, int a, int b, const bags::OrificeOptions& spec) {
     spec.validate();
-    Link l;
-    l.name = name;
-    l.kind = LinkKind::Orifice;
-    l.a = a;
-    l.b = b;
+    Link l = makeLink(name, LinkKind::Orifice, a, b);
     l.orifice = spec;
     return addLink(l);
 }

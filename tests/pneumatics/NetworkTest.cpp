@@ -26,19 +26,12 @@ bags::GasOptions makeGas() {
     return g;
 }
 
-ValveSpec makeValve(double C = 1e-8, double b = 0.3) {
-    ValveSpec v;
-    v.sonicConductance = C;
-    v.criticalPressureRatio = b;
-    return v;
-}
+/// A valve of sonic conductance C [m^3/(s Pa)] and critical pressure ratio b.
+ValveSpec makeValve(double C = 1e-8, double b = 0.3) { return ValveSpec{C, b}; }
 
+/// A volume V [m^3] at p [Pa] absolute and 296.15 K.
 VolumeSpec makeTank(double V, double p, Thermal thermal) {
-    VolumeSpec s;
-    s.volume = V;
-    s.pressure = p;
-    s.thermal = thermal;
-    return s;
+    return VolumeSpec{V, p, 296.15, thermal};
 }
 
 /// Choked mass flow of a fully open valve from upstream p1 [Pa], T1 [K] (ISO 6358-1).
@@ -46,6 +39,22 @@ double calcChokedFlow(const ValveSpec& v, double p1, double T1) {
     return v.sonicConductance * kIsoReferenceDensity * p1 *
            std::sqrt(kIsoReferenceTemperature / T1);
 }
+
+/// A rigid tank at 1e5 Pa filled from a 6e5 Pa, 293.15 K supply through one valve.
+struct FillRig {
+    Network net;
+    int supply = 0, tank = 0, valve = 0;
+    FillRig(double V, Thermal thermal, double maxSubstep, const ValveSpec& v, bool open)
+        : net(makeGas(), [&] {
+              NetworkOptions o;
+              o.maxSubstep = maxSubstep;
+              return o;
+          }()) {
+        supply = net.addReservoir("supply", 6e5, 293.15);
+        tank = net.addVolume("tank", makeTank(V, 1e5, thermal));
+        valve = net.addValve("inlet", supply, tank, v, open);
+    }
+};
 
 /// Runs `net` (no bags) in steps of dt until the pressure of `node` crosses `target`
 /// (upwards if rising) and returns the crossing time, linear between the two steps.
@@ -87,12 +96,9 @@ TEST(Filling, RigidVolumeThroughChokedValveTakesTheAnalyticTimeIsothermalAndAdia
     const double q0 = calcChokedFlow(valve, ps, Ts);
     const double R = makeGas().getSpecificGasConstant(), gamma = makeGas().gamma;
     for (Thermal thermal : {Thermal::Isothermal, Thermal::Adiabatic}) {
-        NetworkOptions o;
-        o.maxSubstep = 1e-4;
-        Network net(makeGas(), o);
-        const int supply = net.addReservoir("supply", ps, Ts);
-        const int tank = net.addVolume("tank", makeTank(V, p0, thermal));
-        net.addValve("inlet", supply, tank, valve, true);
+        FillRig rig(V, thermal, 1e-4, valve, true);
+        Network& net = rig.net;
+        const int tank = rig.tank;
         // Reference: choked inflow is constant, so dp/dt = q0 R T / V (isothermal at the
         // tank's T = 296.15 K) or gamma R Ts q0 / V (adiabatic: the enthalpy cp Ts enters).
         // Choked until p = b ps; then, with u = (p/ps - b)/(1 - b), du/dt = sqrt(1 - u^2)/
@@ -399,13 +405,10 @@ TEST(Stability, SmallManifoldStaysBetweenItsNeighboursAtOneToTenMillisecondSteps
 // --- instruments
 
 TEST(Sensor, LagFollowsTheExactFirstOrderResponseOfAFillingTank) {
-    NetworkOptions o;
-    o.maxSubstep = 1e-3;
-    Network net(makeGas(), o);
-    const int supply = net.addReservoir("supply", 6e5, 293.15);
-    const int tank = net.addVolume("tank", makeTank(1e-3, 1e5, Thermal::Isothermal));
     const ValveSpec v = makeValve();
-    net.addValve("inlet", supply, tank, v, true);
+    FillRig rig(1e-3, Thermal::Isothermal, 1e-3, v, true);
+    Network& net = rig.net;
+    const int tank = rig.tank;
     SensorSpec s;
     s.timeConstant = 0.05;
     s.offset = 150.0;
@@ -479,14 +482,11 @@ TEST(Flowmeter, IntegratesTheMassThroughItsValve) {
 // --- valves' opening time, orifices between bags
 
 TEST(Valve, OpeningOverItsTimeRampsTheChokedFlow) {
-    NetworkOptions o;
-    o.maxSubstep = 1e-3;
-    Network net(makeGas(), o);
-    const int supply = net.addReservoir("supply", 6e5, 293.15);
-    const int tank = net.addVolume("tank", makeTank(1e-2, 1e5, Thermal::Isothermal));
     ValveSpec v = makeValve();
     v.openingTime = 0.1;
-    const int valve = net.addValve("inlet", supply, tank, v, false);
+    FillRig rig(1e-2, Thermal::Isothermal, 1e-3, v, false);
+    Network& net = rig.net;
+    const int tank = rig.tank, valve = rig.valve;
     net.setValveOpen(valve, true);
     const double m0 = net.getNodeState(tank).mass, q0 = calcChokedFlow(v, 6e5, 293.15);
     net.step(0.05, {});

@@ -208,6 +208,7 @@ private:
     struct Substep;  // volumes and openings of one sub-step
 
     int addNode(Node node);
+    static Link makeLink(const std::string& name, LinkKind kind, int a, int b);
     int addLink(Link link);
     void checkNode(int node, const char* what) const;
     void checkLink(int link, const char* what) const;
