@@ -1,4 +1,3 @@
-#include <bagsim/Version.h>
 #include <io/ArrayResults.h>
 
 #include <chrono>
@@ -8,6 +7,7 @@
 #include <stdexcept>
 
 #include "Hdf5.h"
+#include "RunMeta.h"
 
 namespace io {
 
@@ -113,17 +113,7 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info
     d.mat = mat;
     h5::silenceErrors();
     d.file = h5::createFile(dir.getFile(kResultsH5).string());
-    d.meta = h5::createGroup(d.file.get(), "meta");
-    h5::setAttribute(d.meta.get(), "program", std::string("bagsim"));
-    h5::setAttribute(d.meta.get(), "version", std::string(bagsim::kVersion));
-    h5::setAttribute(d.meta.get(), "kind", std::string("patient-on-array"));
-    h5::setAttribute(d.meta.get(), "scenario", info.scenarioText);
-    h5::setAttribute(d.meta.get(), "scenario_file", info.scenarioFile);
-    h5::setAttribute(d.meta.get(), "overrides", info.overrides);
-    h5::setAttribute(d.meta.get(), "command_line", info.commandLine);
-    h5::setAttribute(d.meta.get(), "started", getUtcTimestamp());
-    h5::setAttribute(d.meta.get(), "status", std::string("running"));
-    h5::setAttribute(d.meta.get(), "message", std::string(""));
+    d.meta = createRunMeta(d.file.get(), info, "patient-on-array");
     d.matGroup = h5::createGroup(d.file.get(), "mat");
     const hid_t g = d.matGroup.get();
     h5::setAttribute(g, "rows", mat.rows);

@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "Hdf5.h"
+#include "RunMeta.h"
 
 namespace io {
 
@@ -377,6 +378,21 @@ void LoadTestWriter::Impl::close() {
     file.reset();
 }
 
+h5::Handle createRunMeta(hid_t file, const RunInfo& info, const std::string& kind) {
+    h5::Handle meta = h5::createGroup(file, "meta");
+    h5::setAttribute(meta.get(), "program", std::string("bagsim"));
+    h5::setAttribute(meta.get(), "version", std::string(bagsim::kVersion));
+    h5::setAttribute(meta.get(), "kind", kind);
+    h5::setAttribute(meta.get(), "scenario", info.scenarioText);
+    h5::setAttribute(meta.get(), "scenario_file", info.scenarioFile);
+    h5::setAttribute(meta.get(), "overrides", info.overrides);
+    h5::setAttribute(meta.get(), "command_line", info.commandLine);
+    h5::setAttribute(meta.get(), "started", getUtcTimestamp());
+    h5::setAttribute(meta.get(), "status", std::string("running"));
+    h5::setAttribute(meta.get(), "message", std::string(""));
+    return meta;
+}
+
 LoadTestWriter::LoadTestWriter(const OutputDir& dir, const RunInfo& info,
                                const bags::LoadTestOptions& test, const Options& options)
     : m_impl(std::make_unique<Impl>(dir)) {
@@ -384,17 +400,7 @@ LoadTestWriter::LoadTestWriter(const OutputDir& dir, const RunInfo& info,
     d.options = options;
     d.gasMasses = test.gasMasses;
     d.file = h5::createFile(dir.getFile(kResultsH5).string());
-    d.meta = h5::createGroup(d.file.get(), "meta");
-    h5::setAttribute(d.meta.get(), "program", std::string("bagsim"));
-    h5::setAttribute(d.meta.get(), "version", std::string(bagsim::kVersion));
-    h5::setAttribute(d.meta.get(), "kind", std::string("seed-load-test"));
-    h5::setAttribute(d.meta.get(), "scenario", info.scenarioText);
-    h5::setAttribute(d.meta.get(), "scenario_file", info.scenarioFile);
-    h5::setAttribute(d.meta.get(), "overrides", info.overrides);
-    h5::setAttribute(d.meta.get(), "command_line", info.commandLine);
-    h5::setAttribute(d.meta.get(), "started", getUtcTimestamp());
-    h5::setAttribute(d.meta.get(), "status", std::string("running"));
-    h5::setAttribute(d.meta.get(), "message", std::string(""));
+    d.meta = createRunMeta(d.file.get(), info, "seed-load-test");
     h5::setAttribute(d.meta.get(), "frame_every", options.frameEvery);
     d.mesh = h5::createGroup(d.file.get(), "mesh");
     d.curvesGroup = h5::createGroup(d.file.get(), "curves");

@@ -25,6 +25,18 @@ std::pair<double, double> tiltOf(body::Posture posture) {
             deg * calcSegmentTilt(m, s, body::Segment::UpperTrunk)};
 }
 
+// Two columns of wedges across the bed, alternating per row.
+ArrayLayout twoColumns(int rows) {
+    ArrayLayout a;
+    a.rows = rows;
+    a.columns = 2;
+    a.rowPitch = 0.105;
+    a.columnPitch = 0.36;
+    a.rowOrientation = {BagOrientation::Across, BagOrientation::AcrossFlipped};
+    a.gasMass = 4.5e-3;
+    return a;
+}
+
 }  // namespace
 
 TEST(ArrayReadings, TiltIsPositiveOntoTheLeftSideAndReadsThePosturesAngle) {
@@ -42,14 +54,8 @@ TEST(ArrayReadings, TiltIsPositiveOntoTheLeftSideAndReadsThePosturesAngle) {
 }
 
 TEST(ArrayReadings, TheArraysMatCoversEveryFootprintExactly) {
-    ArrayLayout a;
-    a.rows = 20;
-    a.columns = 2;
-    a.rowPitch = 0.105;
-    a.columnPitch = 0.36;
+    ArrayLayout a = twoColumns(20);
     a.centre = Eigen::Vector2d(-0.03, 0.0);
-    a.rowOrientation = {BagOrientation::Across, BagOrientation::AcrossFlipped};
-    a.gasMass = 4.5e-3;
     const PressureMatOptions o = makeArrayMatOptions(a, bags::DoubleWedgeParams(), 64, 32);
     // 20 rows of 100 mm wide bags at 105 mm: 2.095 m; 2 columns of 350 mm at 360 mm: 0.71 m.
     EXPECT_NEAR(o.origin.x(), -0.03 - 1.0475, 1e-12);
@@ -65,14 +71,8 @@ TEST(ArrayReadings, MirroredColumnsFaceAwayFromEachOtherSymmetricAboutTheBedsAxi
     // Reference: the mirror image about y = 0 of column 0's bag frame origin (its steep end)
     // and x axis. Row 0 (across): column 0's steep end at the outer edge y = -355 mm, column
     // 1's at +355 mm; row 1 (across-flipped): both at the inner edges, -5 and +5 mm.
-    ArrayLayout a;
-    a.rows = 2;
-    a.columns = 2;
-    a.rowPitch = 0.105;
-    a.columnPitch = 0.36;
-    a.rowOrientation = {BagOrientation::Across, BagOrientation::AcrossFlipped};
+    ArrayLayout a = twoColumns(2);
     a.mirrorColumns = true;
-    a.gasMass = 4.5e-3;
     const std::vector<ArrayBag> b = makeArrayBags(a, bags::DoubleWedgeParams());
     EXPECT_EQ(b[1].orientation, BagOrientation::AcrossFlipped);
     EXPECT_EQ(b[3].orientation, BagOrientation::Across);
