@@ -10,6 +10,7 @@
 #include <bags/Gas.h>
 #include <bags/Types.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -231,6 +232,7 @@ TEST(Thermal, ClosedTankCoolsThroughItsWallOnTheExponential) {
     const double m = net.getNodeState(tank).mass;
     const double cv = makeGas().getSpecificGasConstant() / (makeGas().gamma - 1);
     const double tau = m * cv / (10.0 * 0.1);  // [s] m cv / (h A)
+    double maxError = 0.0;
     for (int k = 1; k <= 10; ++k) {
         for (int i = 0; i < 10; ++i) net.step(0.01 * tau, {});
         const double T = 296.15 + (350.0 - 296.15) * std::exp(-0.1 * k);
@@ -238,7 +240,9 @@ TEST(Thermal, ClosedTankCoolsThroughItsWallOnTheExponential) {
         // Euler's first-order error h t / (2 tau^2) (T - Tw), 6e-4 K at t = tau for
         // h = 0.1 ms, with a margin: 1e-3 K.
         EXPECT_NEAR(net.getNodeState(tank).temperature, T, 1e-3) << "t/tau " << 0.1 * k;
+        maxError = std::max(maxError, std::abs(net.getNodeState(tank).temperature - T));
     }
+    std::printf("wall heat exchange: max |T error| %.2e K over one tau\n", maxError);
     EXPECT_DOUBLE_EQ(net.getNodeState(tank).mass, m);
 }
 
@@ -254,9 +258,11 @@ TEST(Thermal, ClosedBagCompressedAdiabaticallyFollowsPVGammaAndIsothermallyPVCon
         EXPECT_NEAR(s.volume, 0.8e-3, 1e-15);
         const double n = thermal == Thermal::Adiabatic ? makeGas().gamma : 1.0;
         const double p = 1.1e5 * std::pow(V0 / s.volume, n);
-        // Reference: p V^n = const; tolerance 1e-5 of p: the work term p_end dV of backward
+        // Reference: p V^n = const; tolerance 2e-5 of p: the work term p_end dV of backward
         // Euler at 0.1 ms sub-steps (first order; isothermal is exact).
-        EXPECT_NEAR(s.pressure, p, 1e-5 * p);
+        EXPECT_NEAR(s.pressure, p, 2e-5 * p);
+        std::printf("closed bag to 0.8 V0, %s: p error %.2e\n",
+                    n == 1.0 ? "isothermal" : "adiabatic", (s.pressure - p) / p);
     }
 }
 
@@ -437,6 +443,52 @@ TEST(Stability, SmallManifoldStaysBetweenItsNeighboursAtOneToTenMillisecondSteps
         delete net;
     }
     delete ref;
+}
+
+TEST(Stability, ChatteringValvesAPumpAndMovingBagsNeedNoCutsAtTenMillisecondSteps) {
+    // The hardest use at the co-simulation's longest step: a 1 mL manifold fed by a pump,
+    // each of 6 bags' valves and vents switched at random every step, bags squeezed and let
+    // go at up to 0.5 L/s. Backward Euler at dt = 10 ms, no sub-steps: every step converges
+    // without a cut, and the manifold stays within 0.5-2 bar (an unstable scheme would
+    // oscillate out of any bound within a few steps).
+    NetworkOptions o;
+    o.maxSubstep = 0.01;
+    Network net(makeGas(), o);
+    const int manifold = net.addVolume("manifold", makeTank(1e-6, 1e5, Thermal::Adiabatic));
+    PumpSpec pump;
+    pump.pressureRise = {0.0, 15e3, 30e3};
+    pump.massFlow = {2e-4, 1e-4, 0.0};
+    net.addPump("pump", net.getAmbient(), manifold, pump, 1.0);
+    std::vector<int> valves;
+    for (int i = 0; i < 6; ++i) {
+        VolumeSpec bs = makeTank(1.5e-3, 1.01e5 + 3e3 * i, Thermal::HeatExchange);
+        bs.heatTransferCoefficient = 10.0;
+        bs.wallArea = 0.06;
+        const int bag = net.addBag("bag" + std::to_string(i), bs);
+        valves.push_back(net.addValve("valve" + std::to_string(i), manifold, bag,
+                                      makeValve(2e-9, 0.35), true));
+        valves.push_back(net.addVent("vent" + std::to_string(i), bag, makeValve(1e-9, 0.3),
+                                     false));
+    }
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    std::vector<BagVolume> vols(6, BagVolume{1.5e-3, 0.0});
+    int maxIterations = 0;
+    for (int k = 0; k < 300; ++k) {
+        for (int v : valves) net.setValveOpen(v, uni(rng) < 0.5);
+        for (auto& b : vols) b.rate = std::clamp((uni(rng) - 0.5) * 1e-3,
+                                                 (1.0e-3 - b.volume) / 0.01,
+                                                 (2.0e-3 - b.volume) / 0.01);
+        ASSERT_NO_THROW(net.step(0.01, vols)) << "step " << k;
+        EXPECT_EQ(net.getLastStepSummary().cuts, 0) << "step " << k;
+        maxIterations = std::max(maxIterations, net.getLastStepSummary().newtonIterations);
+        for (auto& b : vols) b.volume += b.rate * 0.01;
+        const double p = net.getNodeState(manifold).pressure;
+        EXPECT_GE(p, 0.5e5) << "step " << k;
+        EXPECT_LE(p, 2.0e5) << "step " << k;
+    }
+    std::printf("chattering network at 10 ms: at most %d Newton iterations a step\n",
+                maxIterations);
 }
 
 // --- instruments
