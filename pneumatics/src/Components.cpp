@@ -12,8 +12,8 @@ void checkParameter(bool ok, const std::string& owner, const char* parameter, do
                     const char* unit, const char* valid) {
     if (ok) return;
     std::ostringstream s;
-    s << owner << ": '" << parameter << "' = " << value << " " << unit << " is invalid; valid: "
-      << valid;
+    s << owner << ": '" << parameter << "' = " << value << " " << unit
+      << " is invalid; valid: " << valid;
     throw std::invalid_argument(s.str());
 }
 
@@ -71,8 +71,7 @@ void calcValveFlowDownstream(const ValveSpec& v, double s, double p1, double T1,
 }
 }  // namespace
 
-Flow calcValveFlow(const ValveSpec& v, double opening, double pa, double Ta, double pb,
-                   double Tb) {
+Flow calcValveFlow(const ValveSpec& v, double opening, double pa, double Ta, double pb, double Tb) {
     Flow f;
     if (opening <= 0.0) return f;
     if (pa >= pb) {
@@ -101,8 +100,8 @@ void PumpSpec::validate(const std::string& name) const {
         checkParameter(pressureRise[i] > pressureRise[i - 1] && std::isfinite(pressureRise[i]),
                        name, ("pressureRise" + at).c_str(), pressureRise[i], "Pa",
                        "pressure rises strictly increasing");
-        checkParameter(massFlow[i] <= massFlow[i - 1], name, ("massFlow" + at).c_str(),
-                       massFlow[i], "kg/s", "mass flows non-increasing with the pressure rise");
+        checkParameter(massFlow[i] <= massFlow[i - 1], name, ("massFlow" + at).c_str(), massFlow[i],
+                       "kg/s", "mass flows non-increasing with the pressure rise");
     }
     checkParameter(massFlow[n - 1] == 0.0, name, "massFlow[last]", massFlow[n - 1], "kg/s",
                    "0 kg/s: the last point is the shut-off pressure");

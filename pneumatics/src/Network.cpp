@@ -3,7 +3,6 @@
 #include <bags/Types.h>
 
 #include <Eigen/LU>
-
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -20,19 +19,19 @@ void VolumeSpec::validate(const std::string& name) const {
                    "Pa (absolute)", "pressure > 0 Pa absolute");
     checkParameter(std::isfinite(temperature) && temperature > 0.0, name, "temperature",
                    temperature, "K", "temperature > 0 K");
-    checkParameter(heatTransferCoefficient >= 0.0 && std::isfinite(heatTransferCoefficient),
-                   name, "heatTransferCoefficient", heatTransferCoefficient, "W/(m^2 K)",
+    checkParameter(heatTransferCoefficient >= 0.0 && std::isfinite(heatTransferCoefficient), name,
+                   "heatTransferCoefficient", heatTransferCoefficient, "W/(m^2 K)",
                    "h >= 0 W/(m^2 K) (still air on a film: about 5-25)");
-    checkParameter(wallArea >= 0.0 && std::isfinite(wallArea), name, "wallArea", wallArea,
-                   "m^2", "A >= 0 m^2");
-    checkParameter(std::isfinite(wallTemperature) && wallTemperature > 0.0, name,
-                   "wallTemperature", wallTemperature, "K", "Tw > 0 K");
+    checkParameter(wallArea >= 0.0 && std::isfinite(wallArea), name, "wallArea", wallArea, "m^2",
+                   "A >= 0 m^2");
+    checkParameter(std::isfinite(wallTemperature) && wallTemperature > 0.0, name, "wallTemperature",
+                   wallTemperature, "K", "Tw > 0 K");
 }
 
 void NetworkOptions::validate() const {
     const std::string name = "network options";
-    checkParameter(std::isfinite(maxSubstep) && maxSubstep > 0.0, name, "maxSubstep",
-                   maxSubstep, "s", "maxSubstep > 0 s (e.g. 1e-3 s)");
+    checkParameter(std::isfinite(maxSubstep) && maxSubstep > 0.0, name, "maxSubstep", maxSubstep,
+                   "s", "maxSubstep > 0 s (e.g. 1e-3 s)");
     checkParameter(tolerance > 0.0 && tolerance < 1e-3, name, "tolerance", tolerance, "(-)",
                    "0 < tolerance < 1e-3 (relative; default 1e-12)");
     checkParameter(maxIterations >= 1, name, "maxIterations", maxIterations, "(count)",
@@ -84,8 +83,7 @@ int Network::addVolume(const std::string& name, const VolumeSpec& spec) {
     n.name = name;
     n.spec = spec;
     n.volume = spec.volume;
-    n.temperature = spec.thermal == Thermal::Isothermal ? spec.wallTemperature
-                                                        : spec.temperature;
+    n.temperature = spec.thermal == Thermal::Isothermal ? spec.wallTemperature : spec.temperature;
     n.mass = spec.pressure * spec.volume / (m_R * n.temperature);
     return addNode(n);
 }
@@ -223,9 +221,12 @@ Flow Network::calcLinkFlow(const Link& l, double opening, const Eigen::VectorXd&
     const double pa = na.reservoir ? na.pressure : calcMass(na, x) * m_R * Ta / V[l.a];
     const double pb = nb.reservoir ? nb.pressure : calcMass(nb, x) * m_R * Tb / V[l.b];
     switch (l.kind) {
-        case LinkKind::Valve: return calcValveFlow(l.valve, opening, pa, Ta, pb, Tb);
-        case LinkKind::Pump: return calcPumpFlow(l.pump, l.speed, pa, pb);
-        case LinkKind::Orifice: return calcOrificeFlow(l.orifice, m_R, pa, Ta, pb, Tb);
+        case LinkKind::Valve:
+            return calcValveFlow(l.valve, opening, pa, Ta, pb, Tb);
+        case LinkKind::Pump:
+            return calcPumpFlow(l.pump, l.speed, pa, pb);
+        case LinkKind::Orifice:
+            return calcOrificeFlow(l.orifice, m_R, pa, Ta, pb, Tb);
     }
     return Flow();
 }
@@ -309,8 +310,7 @@ Eigen::VectorXd Network::calcResidual(const Substep& s, const Eigen::VectorXd& x
 }
 
 Eigen::VectorXd Network::calcSubstepResidual(double h, const std::vector<double>& bagVolumesEnd,
-                                             const Eigen::VectorXd& x,
-                                             Eigen::MatrixXd* J) const {
+                                             const Eigen::VectorXd& x, Eigen::MatrixXd* J) const {
     if (int(bagVolumesEnd.size()) != getNumBags() || x.size() != m_numUnknowns)
         throw std::invalid_argument("calcSubstepResidual: one volume per bag, one x per unknown");
     Substep s;
@@ -337,8 +337,7 @@ bool Network::solveSubstep(const Substep& s, Eigen::VectorXd* x, int* iterations
             if (xi + dx[i] < 0.1 * xi) alpha = std::min(alpha, 0.9 * xi / -dx[i]);
         }
         for (const Node& n : m_nodes) {
-            if (n.massIndex >= 0)
-                change = std::max(change, std::abs(dx[n.massIndex]) / n.mass);
+            if (n.massIndex >= 0) change = std::max(change, std::abs(dx[n.massIndex]) / n.mass);
             if (n.temperatureIndex >= 0)
                 change = std::max(change, std::abs(dx[n.temperatureIndex]) / n.temperature);
         }
@@ -356,9 +355,9 @@ void Network::takeSubstep(double h, const std::vector<BagVolume>& bags, double t
     for (int b = 0; b < getNumBags(); ++b) {
         const double V = bags[b].volume + bags[b].rate * (t0 + h);
         if (!(V > 0.0))
-            throw bags::NumericalError("pneumatics: bag '" + m_nodes[m_bags[b]].name +
-                                           "' volume would not be positive",
-                                       m_time + t0 + h);
+            throw bags::NumericalError(
+                "pneumatics: bag '" + m_nodes[m_bags[b]].name + "' volume would not be positive",
+                m_time + t0 + h);
         s.volumeEnd[m_bags[b]] = V;
     }
     for (const Link& l : m_links) {
@@ -425,10 +424,9 @@ std::vector<double> Network::step(double dt, const std::vector<BagVolume>& bags)
                                     " bags; give one per bag, in the order added");
     for (int b = 0; b < getNumBags(); ++b) {
         checkParameter(std::isfinite(bags[b].volume) && bags[b].volume > 0.0,
-                       m_nodes[m_bags[b]].name, "volume", bags[b].volume, "m^3",
-                       "volume > 0 m^3");
-        checkParameter(std::isfinite(bags[b].rate), m_nodes[m_bags[b]].name, "rate",
-                       bags[b].rate, "m^3/s", "a finite rate in m^3/s");
+                       m_nodes[m_bags[b]].name, "volume", bags[b].volume, "m^3", "volume > 0 m^3");
+        checkParameter(std::isfinite(bags[b].rate), m_nodes[m_bags[b]].name, "rate", bags[b].rate,
+                       "m^3/s", "a finite rate in m^3/s");
         m_nodes[m_bags[b]].volume = bags[b].volume;
     }
     const std::vector<Node> nodes = m_nodes;

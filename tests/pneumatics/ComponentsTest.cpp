@@ -28,14 +28,14 @@ void expectTangent(const std::function<Flow(double, double, double, double)>& la
                    double Ta, double pb, double Tb, const std::string& where) {
     const Flow f = law(pa, Ta, pb, Tb);
     const double hp = 1e-3, hT = 1e-5;  // [Pa], [K]: far from any kink in these cases
-    const double dpa = (law(pa + hp, Ta, pb, Tb).massFlow - law(pa - hp, Ta, pb, Tb).massFlow) /
-                       (2 * hp);
-    const double dpb = (law(pa, Ta, pb + hp, Tb).massFlow - law(pa, Ta, pb - hp, Tb).massFlow) /
-                       (2 * hp);
-    const double dTa = (law(pa, Ta + hT, pb, Tb).massFlow - law(pa, Ta - hT, pb, Tb).massFlow) /
-                       (2 * hT);
-    const double dTb = (law(pa, Ta, pb, Tb + hT).massFlow - law(pa, Ta, pb, Tb - hT).massFlow) /
-                       (2 * hT);
+    const double dpa =
+        (law(pa + hp, Ta, pb, Tb).massFlow - law(pa - hp, Ta, pb, Tb).massFlow) / (2 * hp);
+    const double dpb =
+        (law(pa, Ta, pb + hp, Tb).massFlow - law(pa, Ta, pb - hp, Tb).massFlow) / (2 * hp);
+    const double dTa =
+        (law(pa, Ta + hT, pb, Tb).massFlow - law(pa, Ta - hT, pb, Tb).massFlow) / (2 * hT);
+    const double dTb =
+        (law(pa, Ta, pb, Tb + hT).massFlow - law(pa, Ta, pb, Tb - hT).massFlow) / (2 * hT);
     // Reference: the differences; tolerance 1e-6 of the largest pressure derivative (and of
     // q/T for the temperature ones), well above their truncation and roundoff error here.
     const double scaleP = std::max({std::abs(dpa), std::abs(dpb), 1e-30});
@@ -64,21 +64,21 @@ TEST(Valve, ChokedFlowIsIso6358SonicConductanceTimesUpstreamDensity) {
     const ValveSpec v = makeValve();
     const double p1 = 6e5, T1 = 310.0;
     // Reference: ISO 6358-1:2013, qm = C rho0 p1 sqrt(T0/T1) for p2/p1 <= b; roundoff only.
-    const double q0 = v.sonicConductance * kIsoReferenceDensity * p1 *
-                      std::sqrt(kIsoReferenceTemperature / T1);
+    const double q0 =
+        v.sonicConductance * kIsoReferenceDensity * p1 * std::sqrt(kIsoReferenceTemperature / T1);
     for (double r : {0.0, 0.1, 0.2999}) {
         EXPECT_NEAR(calcValveFlow(v, 1.0, p1, T1, r * p1, 296.0).massFlow, q0, 1e-14 * q0);
     }
     // Subsonic: the elliptic law with m = 0.5.
     const double r = 0.8, u = (r - 0.3) / 0.7;
-    EXPECT_NEAR(calcValveFlow(v, 1.0, p1, T1, r * p1, 296.0).massFlow,
-                q0 * std::sqrt(1.0 - u * u), 1e-14 * q0);
+    EXPECT_NEAR(calcValveFlow(v, 1.0, p1, T1, r * p1, 296.0).massFlow, q0 * std::sqrt(1.0 - u * u),
+                1e-14 * q0);
     // Half open: half the flow; closed: none; reversed ports: the same flow, negative.
     EXPECT_NEAR(calcValveFlow(v, 0.5, p1, T1, r * p1, 296.0).massFlow,
                 0.5 * q0 * std::sqrt(1.0 - u * u), 1e-14 * q0);
     EXPECT_EQ(calcValveFlow(v, 0.0, p1, T1, r * p1, 296.0).massFlow, 0.0);
-    EXPECT_NEAR(calcValveFlow(v, 1.0, r * p1, 296.0, p1, T1).massFlow,
-                -q0 * std::sqrt(1.0 - u * u), 1e-14 * q0);
+    EXPECT_NEAR(calcValveFlow(v, 1.0, r * p1, 296.0, p1, T1).massFlow, -q0 * std::sqrt(1.0 - u * u),
+                1e-14 * q0);
 }
 
 TEST(Valve, FlowIsContinuousAtTheCriticalAndTheLaminarRatio) {

@@ -3,13 +3,11 @@
 // mass balance across a manifold with several valves; its implicit step's Jacobian against
 // central differences; its stability at the co-simulation's steps; the sensor and the
 // flowmeter on a running network.
+#include <bags/Gas.h>
+#include <bags/Types.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
-#include <bags/Gas.h>
-#include <bags/Types.h>
-
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -67,8 +65,7 @@ double findCrossingTime(Network& net, int node, double target, double dt, bool r
     while (net.getTime() < tMax) {
         net.step(dt, {});
         const double p1 = net.getNodeState(node).pressure, t1 = net.getTime();
-        if (rising ? p1 >= target : p1 <= target)
-            return t0 + (target - p0) / (p1 - p0) * (t1 - t0);
+        if (rising ? p1 >= target : p1 <= target) return t0 + (target - p0) / (p1 - p0) * (t1 - t0);
         p0 = p1;
         t0 = t1;
     }
@@ -123,10 +120,11 @@ TEST(Filling, RigidVolumeThroughChokedValveTakesTheAnalyticTimeIsothermalAndAdia
         EXPECT_NEAR(tFillSim, tFill, 2e-4 * tFill) << (iso ? "isothermal" : "adiabatic");
         RecordProperty(iso ? "fill_isothermal_rel_error" : "fill_adiabatic_rel_error",
                        std::to_string((tFillSim - tFill) / tFill));
-        std::printf("%s: choked %.9f s (analytic %.9f), to u = 0.99 %.6f s (analytic %.6f, "
-                    "%.2e)\n",
-                    iso ? "isothermal" : "adiabatic", tChokedSim, tChoked, tFillSim, tFill,
-                    (tFillSim - tFill) / tFill);
+        std::printf(
+            "%s: choked %.9f s (analytic %.9f), to u = 0.99 %.6f s (analytic %.6f, "
+            "%.2e)\n",
+            iso ? "isothermal" : "adiabatic", tChokedSim, tChoked, tFillSim, tFill,
+            (tFillSim - tFill) / tFill);
     }
 }
 
@@ -147,9 +145,8 @@ TEST(BlowDown, VentEmptiesRigidVolumeOnTheClosedFormChokedAndSubsonic) {
         // Choked while p >= pa / b. Isothermal: dp/dt = -p / tau, tau = V/(C rho0 R
         // sqrt(T0 T)). Adiabatic: P = p/p0 = (1 + k t/tau0)^(-1/k), k = (gamma - 1)/(2 gamma),
         // tau0 = V/(gamma C rho0 R sqrt(T0 T0_tank)); T = T0 P^(2k).
-        const double tau = V / ((iso ? 1.0 : gamma) * vent.sonicConductance *
-                                kIsoReferenceDensity * R *
-                                std::sqrt(kIsoReferenceTemperature * T));
+        const double tau = V / ((iso ? 1.0 : gamma) * vent.sonicConductance * kIsoReferenceDensity *
+                                R * std::sqrt(kIsoReferenceTemperature * T));
         const double k = (gamma - 1.0) / (2.0 * gamma);
         const double pEnd = pa / b;
         const double tChoked =
@@ -287,8 +284,9 @@ TEST(MassBalance, ManifoldWithSeveralValvesConservesMassToRoundoff) {
         const int bag = net.addBag("bag" + std::to_string(i), bs);
         bagValves.push_back(net.addValve("valve" + std::to_string(i), manifold, bag,
                                          makeValve(1e-9 * (1 + i), 0.35), i % 2 == 0));
-        if (i >= 2) vents.push_back(net.addVent("vent" + std::to_string(i), bag,
-                                                makeValve(5e-10, 0.3), false));
+        if (i >= 2)
+            vents.push_back(
+                net.addVent("vent" + std::to_string(i), bag, makeValve(5e-10, 0.3), false));
     }
     bags::OrificeOptions shared;
     shared.diameter = 1e-3;
@@ -316,8 +314,8 @@ TEST(MassBalance, ManifoldWithSeveralValvesConservesMassToRoundoff) {
             const double gain = net.getNodeState(net.getBagNode(i)).mass - before[i];
             EXPECT_NEAR(flows[i] * dt, gain, 1e-15 * before[i]);
         }
-        const double received = net.getReservoirMassReceived(net.getAmbient()) +
-                                net.getReservoirMassReceived(supply);
+        const double received =
+            net.getReservoirMassReceived(net.getAmbient()) + net.getReservoirMassReceived(supply);
         maxError = std::max(maxError, std::abs(net.calcVolumeMass() + received - total0));
     }
     // Requirement: conserved to 1e-9 of the total; by construction it is roundoff (~1e-16).
@@ -389,14 +387,12 @@ TEST(Stability, SmallManifoldStaysBetweenItsNeighboursAtOneToTenMillisecondSteps
         o.maxSubstep = maxSubstep;
         Network* net = new Network(makeGas(), o);
         const int supply = net->addReservoir("supply", 1.3e5, 296.15);
-        const int manifold = net->addVolume("manifold", makeTank(1e-6, 1e5,
-                                                                 Thermal::Adiabatic));
+        const int manifold = net->addVolume("manifold", makeTank(1e-6, 1e5, Thermal::Adiabatic));
         net->addValve("inlet", supply, manifold, makeValve(1e-8, 0.4), true);
         for (int i = 0; i < 2; ++i) {
             const int bag = net->addBag("bag" + std::to_string(i),
                                         makeTank(1.5e-3, 1.02e5 + 4e3 * i, Thermal::Isothermal));
-            net->addValve("valve" + std::to_string(i), manifold, bag, makeValve(1e-8, 0.3),
-                          true);
+            net->addValve("valve" + std::to_string(i), manifold, bag, makeValve(1e-8, 0.3), true);
         }
         *out = net;
         return manifold;
@@ -437,8 +433,8 @@ TEST(Stability, SmallManifoldStaysBetweenItsNeighboursAtOneToTenMillisecondSteps
         // And it tracks the fine solution: first-order error, 2 % at 10 ms (stated bound).
         const double p = net->getNodeState(manifold).pressure;
         EXPECT_NEAR(p - 1e5, pRef - 1e5, 0.02 * (pRef - 1e5)) << "dt " << dt;
-        std::printf("dt %5.3f s: manifold gauge %.2f Pa (fine %.2f Pa, %.2e), %d Newton it.\n",
-                    dt, p - 1e5, pRef - 1e5, (p - pRef) / (pRef - 1e5),
+        std::printf("dt %5.3f s: manifold gauge %.2f Pa (fine %.2f Pa, %.2e), %d Newton it.\n", dt,
+                    p - 1e5, pRef - 1e5, (p - pRef) / (pRef - 1e5),
                     net->getLastStepSummary().newtonIterations);
         delete net;
     }
@@ -465,10 +461,9 @@ TEST(Stability, ChatteringValvesAPumpAndMovingBagsNeedNoCutsAtTenMillisecondStep
         bs.heatTransferCoefficient = 10.0;
         bs.wallArea = 0.06;
         const int bag = net.addBag("bag" + std::to_string(i), bs);
-        valves.push_back(net.addValve("valve" + std::to_string(i), manifold, bag,
-                                      makeValve(2e-9, 0.35), true));
-        valves.push_back(net.addVent("vent" + std::to_string(i), bag, makeValve(1e-9, 0.3),
-                                     false));
+        valves.push_back(
+            net.addValve("valve" + std::to_string(i), manifold, bag, makeValve(2e-9, 0.35), true));
+        valves.push_back(net.addVent("vent" + std::to_string(i), bag, makeValve(1e-9, 0.3), false));
     }
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
@@ -476,9 +471,9 @@ TEST(Stability, ChatteringValvesAPumpAndMovingBagsNeedNoCutsAtTenMillisecondStep
     int maxIterations = 0;
     for (int k = 0; k < 300; ++k) {
         for (int v : valves) net.setValveOpen(v, uni(rng) < 0.5);
-        for (auto& b : vols) b.rate = std::clamp((uni(rng) - 0.5) * 1e-3,
-                                                 (1.0e-3 - b.volume) / 0.01,
-                                                 (2.0e-3 - b.volume) / 0.01);
+        for (auto& b : vols)
+            b.rate = std::clamp((uni(rng) - 0.5) * 1e-3, (1.0e-3 - b.volume) / 0.01,
+                                (2.0e-3 - b.volume) / 0.01);
         ASSERT_NO_THROW(net.step(0.01, vols)) << "step " << k;
         EXPECT_EQ(net.getLastStepSummary().cuts, 0) << "step " << k;
         maxIterations = std::max(maxIterations, net.getLastStepSummary().newtonIterations);
@@ -504,8 +499,8 @@ TEST(Sensor, LagFollowsTheExactFirstOrderResponseOfAFillingTank) {
     const int sensor = net.addPressureSensor(tank, s);
     // Choked isothermal filling: the gauge pressure is a ramp u = rate t, so the lag is
     // y = u - rate tau + rate tau exp(-t/tau) from y(0) = 0 (tolerance 1e-9 of u).
-    const double rate = calcChokedFlow(v, 6e5, 293.15) * makeGas().getSpecificGasConstant() *
-                        296.15 / 1e-3;
+    const double rate =
+        calcChokedFlow(v, 6e5, 293.15) * makeGas().getSpecificGasConstant() * 296.15 / 1e-3;
     for (int k = 1; k <= 60; ++k) {  // choked until 0.1325 s
         net.step(0.002, {});
         const double t = 0.002 * k, u = rate * t, tau = 0.05;

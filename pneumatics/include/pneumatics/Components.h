@@ -38,9 +38,9 @@ struct Flow {
 /// (laminarPressureRatio) the flow is taken linear in (1 - r) from its value at rLam to zero,
 /// which keeps the tangent finite for the implicit step (as Simscape's laminar region does).
 struct ValveSpec {
-    double sonicConductance = 1.0e-8;  ///< C [m^3/(s Pa)] (1e-8 = 1 dm^3/(s bar))
-    double criticalPressureRatio = 0.5;///< b [-], in [0, 1)
-    double subsonicIndex = 0.5;        ///< m [-], in (0, 1] (0.5: the elliptic law of ISO 6358)
+    double sonicConductance = 1.0e-8;     ///< C [m^3/(s Pa)] (1e-8 = 1 dm^3/(s bar))
+    double criticalPressureRatio = 0.5;   ///< b [-], in [0, 1)
+    double subsonicIndex = 0.5;           ///< m [-], in (0, 1] (0.5: the elliptic law of ISO 6358)
     double laminarPressureRatio = 0.999;  ///< rLam [-], in (b, 1)
     double openingTime = 0.0;  ///< [s] from closed to open (and back), linear; 0: at once
     /// @throws std::invalid_argument naming the parameter, its unit and the valid range.
@@ -48,8 +48,7 @@ struct ValveSpec {
 };
 
 /// ISO 6358 mass flow from a to b with the valve opened to the fraction `opening` in [0, 1].
-Flow calcValveFlow(const ValveSpec& v, double opening, double pa, double Ta, double pb,
-                   double Tb);
+Flow calcValveFlow(const ValveSpec& v, double opening, double pa, double Ta, double pb, double Tb);
 
 /// A pump: mass flow [kg/s] against the pressure rise p_out - p_in [Pa], piecewise linear
 /// through the given points. The first point holds below its pressure rise; the last point
@@ -76,9 +75,9 @@ Flow calcOrificeFlow(const bags::OrificeOptions& o, double R, double pa, double 
 /// A pressure sensor on one gas volume: reads the gauge pressure p - pAmbient through a
 /// first-order lag, plus an offset and Gaussian noise drawn from its own seeded generator.
 struct SensorSpec {
-    double timeConstant = 0.0;  ///< [s] of the first-order lag, >= 0 (0: no lag)
-    double offset = 0.0;        ///< [Pa] added to every reading
-    double noiseStdDev = 0.0;   ///< [Pa] standard deviation of the Gaussian noise, >= 0
+    double timeConstant = 0.0;    ///< [s] of the first-order lag, >= 0 (0: no lag)
+    double offset = 0.0;          ///< [Pa] added to every reading
+    double noiseStdDev = 0.0;     ///< [Pa] standard deviation of the Gaussian noise, >= 0
     unsigned long long seed = 1;  ///< of the noise generator
     /// @throws std::invalid_argument naming the parameter, its unit and the valid range.
     void validate(const std::string& name = "sensor") const;

@@ -24,7 +24,6 @@
 #include <bags/Gas.h>
 
 #include <Eigen/Core>
-
 #include <random>
 #include <string>
 #include <vector>
@@ -76,16 +75,16 @@ struct StepSummary {
 
 /// How the network integrates.
 struct NetworkOptions {
-    double maxSubstep = 1.0e-3;   ///< [s] longest backward-Euler sub-step
-    double tolerance = 1.0e-12;   ///< relative Newton tolerance on mass and temperature
-    int maxIterations = 30;       ///< Newton iterations before a sub-step is halved
-    int maxCuts = 12;             ///< halvings before a step fails
+    double maxSubstep = 1.0e-3;  ///< [s] longest backward-Euler sub-step
+    double tolerance = 1.0e-12;  ///< relative Newton tolerance on mass and temperature
+    int maxIterations = 30;      ///< Newton iterations before a sub-step is halved
+    int maxCuts = 12;            ///< halvings before a step fails
     /// @throws std::invalid_argument naming the option, its unit and the valid range.
     void validate() const;
 };
 
 class Network {
-public:
+  public:
     /// The ambient air (gas.ambientPressure, gas.temperature) is node 0.
     explicit Network(const bags::GasOptions& gas, const NetworkOptions& options = NetworkOptions());
 
@@ -103,8 +102,7 @@ public:
     /// A valve from `node` to the ambient air.
     int addVent(const std::string& name, int node, const ValveSpec& spec, bool open);
     /// A pump from inlet to outlet, running at `speed` in [0, 1].
-    int addPump(const std::string& name, int inlet, int outlet, const PumpSpec& spec,
-                double speed);
+    int addPump(const std::string& name, int inlet, int outlet, const PumpSpec& spec, double speed);
     int addOrifice(const std::string& name, int a, int b, const bags::OrificeOptions& spec);
 
     /// Commands a valve (or vent) open or closed; it moves there over its opening time.
@@ -130,7 +128,7 @@ public:
     int getNumNodes() const { return int(m_nodes.size()); }
     int getNumLinks() const { return int(m_links.size()); }
     int getNumBags() const { return int(m_bags.size()); }
-    int getBagNode(int bag) const;     ///< the node of the bag'th bag
+    int getBagNode(int bag) const;  ///< the node of the bag'th bag
     NodeState getNodeState(int node) const;
     const std::string& getNodeName(int node) const;
     const std::string& getLinkName(int link) const;
@@ -168,17 +166,17 @@ public:
     Eigen::VectorXd calcSubstepResidual(double h, const std::vector<double>& bagVolumesEnd,
                                         const Eigen::VectorXd& x, Eigen::MatrixXd* J) const;
 
-private:
+  private:
     struct Node {
         std::string name;
         bool reservoir = false;
         bool bag = false;
         VolumeSpec spec;
-        double mass = 0.0;         // [kg]
-        double temperature = 0.0;  // [K]
-        double volume = 0.0;       // [m^3]
-        double pressure = 0.0;     // reservoirs: fixed [Pa]
-        double received = 0.0;     // reservoirs: net mass received [kg]
+        double mass = 0.0;                          // [kg]
+        double temperature = 0.0;                   // [K]
+        double volume = 0.0;                        // [m^3]
+        double pressure = 0.0;                      // reservoirs: fixed [Pa]
+        double received = 0.0;                      // reservoirs: net mass received [kg]
         int massIndex = -1, temperatureIndex = -1;  // in the unknowns, -1: none
     };
     enum class LinkKind { Valve, Pump, Orifice };
