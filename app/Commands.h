@@ -10,5 +10,6 @@ int runBodyCommand(int argc, char** argv);         ///< bagsim body --sex ... --
 int runFitMaterialCommand(int argc, char** argv);  ///< bagsim fit-material TENSILE.csv --model ...
 int runSynthMeasurementCommand(int argc, char** argv);  ///< bagsim synth-measurement --scenario ...
 int runDiagnoseCommand(int argc, char** argv);  ///< bagsim diagnose --measured DIR
+int runStudyCommand(int argc, char** argv);     ///< bagsim study STUDY.yaml [--out DIR]
 
 }  // namespace bagsim::app

@@ -21,6 +21,7 @@ const char* kUsage =
     "  synth-measurement --scenario S --effect E --out DIR --label-out FILE\n"
     "                                  measured data from a truth run with an effect on\n"
     "  diagnose --measured DIR         where simulation and measured data disagree, and why\n"
+    "  study STUDY.yaml [--out DIR]    run every case of a study into one table\n"
     "\n"
     "  bagsim <command> --help   says what a command does and its options\n"
     "  bagsim --version          prints the version\n";
@@ -44,7 +45,8 @@ int main(int argc, char** argv) {
     if (cmd == "synth-measurement")
         return bagsim::app::runSynthMeasurementCommand(argc - 2, argv + 2);
     if (cmd == "diagnose") return bagsim::app::runDiagnoseCommand(argc - 2, argv + 2);
+    if (cmd == "study") return bagsim::app::runStudyCommand(argc - 2, argv + 2);
     std::cerr << "bagsim: unknown command '" << cmd
-              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose (see bagsim --help)\n";
+              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose, study (see bagsim --help)\n";
     return 2;
 }
