@@ -136,6 +136,18 @@ void AirbagSpec::validate() const {
     require(forceTolerance > 0.0 && forceTolerance <= 1.0, "forceTolerance", forceTolerance,
             "use 0 < tolerance <= 1 N (e.g. 0.05 N)");
     require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
+    require(cluster.size() <= 64, "cluster", static_cast<double>(cluster.size()),
+            "use 0 to 64 bags in one module");
+    if (cluster.size() > 1) {
+        if (!selfContact)
+            throw std::invalid_argument(
+                "airbag option 'cluster' places " + std::to_string(cluster.size()) +
+                " bags in one module: their walls meet through its self-contact, so "
+                "'selfContact' must be on");
+        if (connection != Connection::Open)
+            throw std::invalid_argument(
+                "airbag option 'cluster' needs the open connection (one gas body per bag)");
+    }
     solver.validate();
 }
 
@@ -168,10 +180,16 @@ struct Airbag::Impl {
     SolverWorkspace workspace;
     double time = 0.0;
     double meanEdge = 0.0;
-    // Gas flow for the following advance() calls.
-    double massFlow = 0.0;
-    bool hasTarget = false;
-    double targetMass = 0.0;
+    // The bags of the module (one unless AirbagSpec::cluster): node range, chambers and
+    // (once inflated) gas bodies of each.
+    int numBags = 1;
+    int nodesPerBag = 0;
+    std::vector<std::vector<int>> bagChambers;
+    std::vector<std::vector<int>> bagGases;
+    // Gas flow per bag for the following advance() calls.
+    std::vector<double> massFlow;
+    std::vector<char> hasTarget;
+    std::vector<double> targetMass;
     std::shared_ptr<const Snapshot> committed;
     bool inflated = false;
     // The last committed step: node increment and the shapes' translations (predictor).
@@ -228,6 +246,17 @@ struct Airbag::Impl {
         for (int g = 0; g < model->getNumGases(); ++g) m += model->getGas(g).getMass();
         return m;
     }
+    double bagMass(int b) const {
+        double m = 0.0;
+        for (int g : bagGases[b]) m += model->getGas(g).getMass();
+        return m;
+    }
+    // No gas moves in any bag over the following advance().
+    bool isGasStill() const {
+        for (int b = 0; b < numBags; ++b)
+            if (massFlow[b] != 0.0 && !(hasTarget[b] && targetMass[b] == bagMass(b))) return false;
+        return true;
+    }
     std::shared_ptr<Snapshot> snapshot() const {
         auto s = std::make_shared<Snapshot>();
         s->x = x;
@@ -245,29 +274,48 @@ struct Airbag::Impl {
         time = s.time;
     }
 
-    // Sets the total gas mass, shared among the gas bodies at equal pressure (a body's share
+    // Sets bag b's gas mass, shared among its gas bodies at equal pressure (a body's share
     // is its volume's share at a fixed temperature), each resealed at its current volume.
-    void setTotalGasMass(double m) {
+    void setBagGasMass(int b, double m) {
         double Vsum = 0.0;
-        const std::vector<double> V = calcGasVolumes(&Vsum);
-        for (int g = 0; g < model->getNumGases(); ++g)
-            model->updGas(g).setMass(m * V[g] / Vsum, V[g]);
+        const std::vector<double> V = calcGasVolumes(b, &Vsum);
+        for (size_t i = 0; i < V.size(); ++i)
+            model->updGas(bagGases[b][i]).setMass(m * V[i] / Vsum, V[i]);
     }
-    // Adds dm [kg] to the gas bodies in proportion to their volumes at x.
-    void addGasMass(double dm) {
+    // Adds dm [kg] to bag b's gas bodies in proportion to their volumes at x.
+    void addBagGasMass(int b, double dm) {
         if (dm == 0.0) return;
         double Vsum = 0.0;
-        const std::vector<double> V = calcGasVolumes(&Vsum);
-        for (int g = 0; g < model->getNumGases(); ++g)
-            model->updGas(g).transferMass(dm * V[g] / Vsum, V[g]);
+        const std::vector<double> V = calcGasVolumes(b, &Vsum);
+        for (size_t i = 0; i < V.size(); ++i)
+            model->updGas(bagGases[b][i]).transferMass(dm * V[i] / Vsum, V[i]);
     }
-    // Each gas body's volume [m^3] at x, and their sum.
-    std::vector<double> calcGasVolumes(double* sum) const {
-        std::vector<double> V(model->getNumGases());
+    // The volume [m^3] at x of each of bag b's gas bodies, and their sum.
+    std::vector<double> calcGasVolumes(int b, double* sum) const {
+        std::vector<double> V(bagGases[b].size());
         *sum = 0.0;
-        for (size_t g = 0; g < V.size(); ++g)
-            *sum += V[g] = model->calcGasVolume(static_cast<int>(g), x, nullptr);
+        for (size_t i = 0; i < V.size(); ++i) *sum += V[i] = model->calcGasVolume(bagGases[b][i], x, nullptr);
         return V;
+    }
+    // Takes every bag quasi-statically from its gas mass now to masses[b], the bags' masses
+    // moving in proportion (the ramp's parameter is the mass of the bag that changes most).
+    void rampGasMasses(const std::vector<double>& masses) {
+        std::vector<double> from(numBags);
+        int ref = 0;
+        for (int b = 0; b < numBags; ++b) {
+            from[b] = bagMass(b);
+            if (std::abs(masses[b] - from[b]) > std::abs(masses[ref] - from[ref])) ref = b;
+        }
+        const double span = masses[ref] - from[ref];
+        solveRamp(from[ref], masses[ref],
+                  [&](double m) {
+                      for (int b = 0; b < numBags; ++b)
+                          setBagGasMass(b, b == ref || span == 0.0
+                                               ? (b == ref ? m : masses[b])
+                                               : from[b] + (m - from[ref]) / span *
+                                                               (masses[b] - from[b]));
+                  },
+                  "changing the gas mass");
     }
 
     // --- solving
@@ -475,7 +523,11 @@ struct Airbag::Impl {
     // 100 times their stiffness.
     template <class Apply>
     void solveRamp(double s0, double s1, const Apply& apply, const char* what) {
-        double s = s0, ds = s1 - s0;
+        // Several bags ramp in at least kClusterRampSteps steps: their walls then meet a
+        // little at a time rather than deep inside each other.
+        constexpr int kClusterRampSteps = 16;
+        const double dsMax = numBags > 1 ? (s1 - s0) / kClusterRampSteps : s1 - s0;
+        double s = s0, ds = dsMax;
         int cuts = 0;
         bool solved = false;
         while (!solved || s != s1) {
@@ -484,16 +536,35 @@ struct Airbag::Impl {
             SolveSummary sum;
             double stab = 0.0;
             if (self) self->updateCandidates(x);
-            if (trySolve(&sum, &stab, 3, spec.solver)) {
+            if (trySolve(&sum, &stab, 3, spec.solver) && recheckCandidates(&sum)) {
                 s = next;
                 solved = true;
-                if (sum.iterations < 8) ds *= 2.0;
+                if (sum.iterations < 8) ds = std::abs(2.0 * ds) < std::abs(dsMax) ? 2.0 * ds : dsMax;
             } else {
                 apply(s);
                 ds *= 0.5;
                 if (++cuts > 30) throw NumericalError(std::string("no convergence while ") + what);
             }
         }
+    }
+
+    // Several bags: a solve that moved some node further than the self-contact's candidate
+    // list covers may have brought it near a neighbour's wall unseen. The candidates are then
+    // rebuilt at the solved state and the loads solved again, up to kRechecks times. False
+    // if a re-solve fails (the solved state stays).
+    static constexpr int kRechecks = 6;
+    bool recheckCandidates(SolveSummary* sum) {
+        for (int r = 0; r < kRechecks && numBags > 1 && self && !self->isCandidateListValid(x);
+             ++r) {
+            self->updateCandidates(x);
+            SolveSummary again;
+            double stab = 0.0;
+            if (!trySolve(&again, &stab, 3, spec.solver)) return false;
+            sum->iterations += again.iterations;
+            sum->factorizations += again.factorizations;
+            sum->residualNorm = again.residualNorm;
+        }
+        return true;
     }
 
     // One (sub-)step from the current state: shapes to the poses at fraction s1 of the way
@@ -505,7 +576,7 @@ struct Airbag::Impl {
         // neither before nor after: the energy of the state is unchanged, so is the state.
         // A bag nothing touches costs next to nothing, and a released bag that was accepted
         // with stabilisation springs is not re-solved just because a shape moved away.
-        const bool gasStill = (massFlow == 0.0 || (hasTarget && targetMass == totalMass())) &&
+        const bool gasStill = isGasStill() &&
                               (spec.connection != AirbagSpec::Connection::Orifice ||
                                model->getNumGases() < 2 || dt <= 0.0);
         bool untouched = gasStill;
@@ -534,17 +605,20 @@ struct Airbag::Impl {
         double stab = 0.0;
         bool ok = false;
         try {
-            // Gas in or out over the step, at the volumes of the start of the step.
-            double dm = massFlow * dt;
-            if (hasTarget) {
-                const double left = targetMass - totalMass();
-                dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
+            // Gas in or out of each bag over the step, at the volumes of the start of the step.
+            for (int b = 0; b < numBags; ++b) {
+                double dm = massFlow[b] * dt;
+                if (hasTarget[b]) {
+                    const double left = targetMass[b] - bagMass(b);
+                    dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
+                }
+                addBagGasMass(b, dm);
             }
-            addGasMass(dm);
             if (!predicted) predict(before->poses);
             predicted = true;
             if (self) self->updateCandidates(x);
             ok = solveWithFlow(copyGases(), dt, &sum, &stab);
+            if (ok) ok = recheckCandidates(&sum);
         } catch (const NumericalError&) {
             ok = false;  // e.g. a gas transfer no chamber could give
         }
@@ -607,6 +681,19 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     Impl& m = *m_impl;
     m.spec = spec;
     Mesh mesh = spec.mesh.getNumNodes() > 0 ? spec.mesh : makeDoubleWedgeBag(spec.geometry);
+    const int chambersPerBag = static_cast<int>(mesh.chambers.size());
+    m.nodesPerBag = mesh.getNumNodes();
+    if (!spec.cluster.empty()) {
+        mesh = placeCopies(mesh, spec.cluster);
+        m.numBags = static_cast<int>(spec.cluster.size());
+    }
+    m.bagChambers.resize(m.numBags);
+    for (int b = 0; b < m.numBags; ++b)
+        for (int c = 0; c < chambersPerBag; ++c) m.bagChambers[b].push_back(b * chambersPerBag + c);
+    m.bagGases.resize(m.numBags);
+    m.massFlow.assign(m.numBags, 0.0);
+    m.hasTarget.assign(m.numBags, 0);
+    m.targetMass.assign(m.numBags, 0.0);
     applyImperfection(mesh, spec.imperfection);
     for (int i = 0; i < mesh.getNumNodes(); ++i) mesh.X.col(i) = spec.X_GB * Vec3(mesh.X.col(i));
     m.mesh = mesh;
@@ -632,7 +719,14 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
         SelfContact::Options so;
         so.pressurePenalty = spec.selfContactPenalty;
         so.thickness = std::max(2.0 * spec.thickness, 0.5e-3);
+        if (m.numBags > 1) {
+            // Neighbours start apart and bulge towards each other: a wider search margin,
+            // pressure and gas ramps in small steps, and candidates re-checked after each
+            // solve, so that walls meet before they could pass through each other.
+            so.candidateMargin = std::max(so.candidateMargin, 0.5 * m.meanEdge);
+        }
         m.self = std::make_shared<SelfContact>(mesh, so);
+
         m.model->setSelfContact(m.self);
     }
     m.x = mesh.X;
@@ -659,76 +753,145 @@ int Airbag::addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Opti
 
 int Airbag::getNumShapes() const { return static_cast<int>(m_impl->shapes.size()); }
 
-void Airbag::inflate(double mass) {
+void Airbag::inflate(double mass) { inflate(std::vector<double>(m_impl->numBags, mass)); }
+
+namespace {
+void checkMasses(const std::vector<double>& masses, int numBags, const char* what) {
+    if (static_cast<int>(masses.size()) != numBags)
+        throw std::invalid_argument(std::string(what) + ": give one gas mass per bag (" +
+                                    std::to_string(numBags) + ", got " +
+                                    std::to_string(masses.size()) + ")");
+    for (double mass : masses)
+        if (!(mass > 0.0 && mass < 1.0))
+            throw std::invalid_argument(std::string(what) + ": use a gas mass > 0 and < 1 kg");
+}
+}  // namespace
+
+void Airbag::inflate(const std::vector<double>& masses) {
     Impl& m = *m_impl;
-    if (!(mass > 0.0 && mass < 1.0))
-        throw std::invalid_argument("Airbag::inflate: use a gas mass > 0 and < 1 kg");
+    checkMasses(masses, m.numBags, "Airbag::inflate");
     if (m.inflated) throw std::logic_error("Airbag::inflate called twice");
     const Mesh& mesh = m.mesh;
-    const int nc = static_cast<int>(mesh.chambers.size());
     for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].target = m.shapes[i].shape->getPose();
-    // A prescribed pressure ramp shapes the flat panels, then the gas takes over.
-    double Vflat = 0.0;
-    for (int c = 0; c < nc; ++c) Vflat += calcChamberVolume(mesh, c, m.x);
-    GasChamber probe(m.spec.gas, mass);
-    probe.seal(Vflat);
-    const double pTarget = std::clamp(probe.calcGaugePressure(Vflat), 200.0, 5000.0);
-    m.solveRamp(0.0, pTarget,
+    // A prescribed pressure ramp shapes the flat panels, then the gas takes over. Each bag
+    // goes to the pressure its gas would have in its flat panels; with several bags the ramp's
+    // parameter is the highest of these, the others following in proportion.
+    std::vector<double> pTarget(m.numBags);
+    double pMax = 0.0;
+    for (int b = 0; b < m.numBags; ++b) {
+        double Vflat = 0.0;
+        for (int c : m.bagChambers[b]) Vflat += calcChamberVolume(mesh, c, m.x);
+        GasChamber probe(m.spec.gas, masses[b]);
+        probe.seal(Vflat);
+        pTarget[b] = std::clamp(probe.calcGaugePressure(Vflat), 200.0, 5000.0);
+        pMax = std::max(pMax, pTarget[b]);
+    }
+    m.solveRamp(0.0, pMax,
                 [&](double p) {
-                    for (int c = 0; c < nc; ++c) m.model->setChamberPressure(c, p);
+                    for (int b = 0; b < m.numBags; ++b)
+                        for (int c : m.bagChambers[b])
+                            m.model->setChamberPressure(
+                                c, pTarget[b] == pMax ? p : p * (pTarget[b] / pMax));
                 },
                 "inflating the airbag");
-    for (int c = 0; c < nc; ++c) m.model->setChamberPressure(c, 0.0);
-    // Seal the gas that is in the bag at this pressure (one body, or one per chamber behind
-    // orifices); the mass ramp then takes it to its value in steps it can cut.
-    auto sealGas = [&](const std::vector<int>& chambers) {
+    for (int c = 0; c < static_cast<int>(mesh.chambers.size()); ++c)
+        m.model->setChamberPressure(c, 0.0);
+    // Seal the gas that is in each bag at this pressure (one body per bag, or one per chamber
+    // behind orifices); the mass ramp then takes it to its value in steps it can cut.
+    auto sealGas = [&](int b, const std::vector<int>& chambers) {
         double V = 0.0;
         for (int c : chambers) V += calcChamberVolume(mesh, c, m.x);
         const GasOptions& g = m.spec.gas;
         const double mSeal =
-            (g.ambientPressure + pTarget) * V / (g.getSpecificGasConstant() * g.temperature);
+            (g.ambientPressure + pTarget[b]) * V / (g.getSpecificGasConstant() * g.temperature);
         GasChamber gas(g, mSeal);
         gas.seal(V);
-        m.model->addGas(gas, chambers);
+        m.bagGases[b].push_back(m.model->addGas(gas, chambers));
     };
-    if (m.spec.connection == AirbagSpec::Connection::Orifice && nc >= 2) {
-        for (int c = 0; c < nc; ++c) sealGas({c});
-    } else {
-        std::vector<int> all(nc);
-        for (int c = 0; c < nc; ++c) all[c] = c;
-        sealGas(all);
+    for (int b = 0; b < m.numBags; ++b) {
+        const std::vector<int>& chambers = m.bagChambers[b];
+        if (m.spec.connection == AirbagSpec::Connection::Orifice && chambers.size() >= 2) {
+            for (int c : chambers) sealGas(b, {c});
+        } else {
+            sealGas(b, chambers);
+        }
     }
     m.inflated = true;
-    changeGasMass(mass);
+    changeGasMass(masses);
 }
 
 void Airbag::changeGasMass(double mass) {
+    changeGasMass(std::vector<double>(m_impl->numBags, mass));
+}
+
+void Airbag::changeGasMass(const std::vector<double>& masses) {
     Impl& m = *m_impl;
     if (!m.inflated) throw std::logic_error("Airbag::changeGasMass before inflate");
-    if (!(mass > 0.0 && mass < 1.0))
-        throw std::invalid_argument("Airbag::changeGasMass: use a gas mass > 0 and < 1 kg");
-    m.solveRamp(m.totalMass(), mass, [&](double mm) { m.setTotalGasMass(mm); },
-                "changing the gas mass");
+    checkMasses(masses, m.numBags, "Airbag::changeGasMass");
+    m.rampGasMasses(masses);
     m.committed = m.snapshot();
     m.forgetIncrement();
 }
 
 void Airbag::setMassFlow(double massFlow) {
+    for (int b = 0; b < m_impl->numBags; ++b) setMassFlow(b, massFlow);
+}
+
+void Airbag::setMassFlow(int bag, double massFlow) {
     if (!std::isfinite(massFlow)) throw std::invalid_argument("Airbag::setMassFlow: not finite");
-    m_impl->massFlow = massFlow;
-    m_impl->hasTarget = false;
+    Impl& m = *m_impl;
+    m.massFlow.at(bag) = massFlow;
+    m.hasTarget.at(bag) = 0;
 }
 
 void Airbag::setTargetMass(double mass, double rate) {
+    for (int b = 0; b < m_impl->numBags; ++b) setTargetMass(b, mass, rate);
+}
+
+void Airbag::setTargetMass(int bag, double mass, double rate) {
     if (!(mass > 0.0 && mass < 1.0) || !(rate > 0.0) || !std::isfinite(rate))
         throw std::invalid_argument(
             "Airbag::setTargetMass: use a mass > 0 and < 1 kg and a positive rate");
-    m_impl->massFlow = rate;
-    m_impl->hasTarget = true;
-    m_impl->targetMass = mass;
+    Impl& m = *m_impl;
+    m.massFlow.at(bag) = rate;
+    m.hasTarget.at(bag) = 1;
+    m.targetMass.at(bag) = mass;
 }
 
 double Airbag::getTotalGasMass() const { return m_impl->totalMass(); }
+double Airbag::getGasMass(int bag) const { return m_impl->bagMass(checkBag(bag)); }
+int Airbag::getNumBags() const { return m_impl->numBags; }
+
+int Airbag::checkBag(int bag) const {
+    if (bag < 0 || bag >= m_impl->numBags)
+        throw std::out_of_range("Airbag: bag " + std::to_string(bag) + " of " +
+                                std::to_string(m_impl->numBags));
+    return bag;
+}
+
+std::pair<int, int> Airbag::getBagNodes(int bag) const {
+    const Impl& m = *m_impl;
+    checkBag(bag);
+    return {bag * m.nodesPerBag, (bag + 1) * m.nodesPerBag};
+}
+
+const std::vector<int>& Airbag::getBagChambers(int bag) const {
+    return m_impl->bagChambers[checkBag(bag)];
+}
+
+Vec3 Airbag::calcNeighbourForce(int bag) const {
+    // The self-contact energy depends on relative positions only: within one bag its forces
+    // sum to zero, so what is left on a bag's nodes comes from the other bags.
+    const Impl& m = *m_impl;
+    const auto [begin, end] = getBagNodes(bag);
+    Vec3 f = Vec3::Zero();
+    if (!m.self) return f;
+    EnergyAccumulator acc(m.mesh.getNumNodes());
+    acc.wantHessian = false;
+    m.self->addEnergy(m.x, acc);
+    for (int i = begin; i < end; ++i) f -= acc.grad.segment<3>(3 * i);
+    return f;
+}
 
 void Airbag::setShapePose(int shape, const Eigen::Isometry3d& X_GS) {
     m_impl->shapes.at(shape).target = X_GS;

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <map>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace bags {
@@ -607,6 +609,40 @@ Mesh makeDisk(double r, int rings) {
     mesh.supportNodes = prev;
     std::sort(mesh.supportNodes.begin(), mesh.supportNodes.end());
     return mesh;
+}
+
+Mesh placeCopies(const Mesh& bag, const std::vector<Eigen::Isometry3d>& poses) {
+    if (poses.empty()) throw std::invalid_argument("placeCopies: no poses");
+    const int nn = bag.getNumNodes(), nt = bag.getNumTris();
+    const int np = static_cast<int>(bag.panelNames.size());
+    Mesh m;
+    const int n = static_cast<int>(poses.size());
+    m.X.resize(3, static_cast<Eigen::Index>(nn) * n);
+    m.tris.resize(3, static_cast<Eigen::Index>(nt) * n);
+    for (int k = 0; k < n; ++k) {
+        const Eigen::Isometry3d& P = poses[k];
+        const Mat3 R = P.linear();
+        if (!P.matrix().allFinite() || (R.transpose() * R - Mat3::Identity()).norm() > 1e-9 ||
+            R.determinant() < 0.0)
+            throw std::invalid_argument("placeCopies: pose " + std::to_string(k) +
+                                        " is not a rigid motion (rotation and translation)");
+        if (!bag.fixedDofs.empty() && (R - Mat3::Identity()).norm() > 0.0)
+            throw std::invalid_argument("placeCopies: a bag with fixed dofs cannot be rotated");
+        const std::string prefix = "bag" + std::to_string(k) + "/";
+        for (int i = 0; i < nn; ++i) m.X.col(k * nn + i) = P * Vec3(bag.X.col(i));
+        m.tris.middleCols(k * nt, nt) = bag.tris.array() + k * nn;
+        for (int t = 0; t < nt; ++t) m.triPanel.push_back(bag.triPanel[t] + k * np);
+        for (const std::string& name : bag.panelNames) m.panelNames.push_back(prefix + name);
+        for (const ChamberBoundary& c : bag.chambers) {
+            ChamberBoundary cc = c;
+            cc.name = prefix + c.name;
+            for (int& t : cc.tris) t += k * nt;
+            m.chambers.push_back(std::move(cc));
+        }
+        for (int s : bag.supportNodes) m.supportNodes.push_back(s + k * nn);
+        for (int d : bag.fixedDofs) m.fixedDofs.push_back(d + 3 * k * nn);
+    }
+    return m;
 }
 
 }  // namespace bags

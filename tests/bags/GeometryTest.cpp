@@ -10,6 +10,7 @@
 #include <iostream>
 #include <map>
 #include <set>
+#include <stdexcept>
 
 using namespace bags;
 
@@ -435,4 +436,32 @@ TEST(Disk, RimIsSupportedAndTrianglesAreNearlyEquilateral) {
               << " deg, max aspect " << q.maxAspect << "\n";
     EXPECT_GT(q.minAngle, 30 * kDeg);
     EXPECT_LT(q.maxAspect, 1.6);
+}
+
+TEST(PlaceCopies, CopiesKeepTheirVolumesAndNamesAndRefuseNonRigidPoses) {
+    // Reference: each copy is the bag moved rigidly, so each copy's chamber volumes equal the
+    // bag's (to 1e-12 relative) and the copy's nodes follow those of the one before.
+    bags::DoubleWedgeParams p;
+    p.meshSize = 0.03;
+    const bags::Mesh bag = bags::makeDoubleWedgeBag(p);
+    Eigen::Isometry3d a = Eigen::Isometry3d::Identity(), b = Eigen::Isometry3d::Identity();
+    b.translation() = Eigen::Vector3d(0.0, 0.11, 0.0);
+    b.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const bags::Mesh two = bags::placeCopies(bag, {a, b});
+    two.validate();
+    ASSERT_EQ(two.getNumNodes(), 2 * bag.getNumNodes());
+    ASSERT_EQ(two.chambers.size(), 2 * bag.chambers.size());
+    EXPECT_EQ(two.chambers[bag.chambers.size()].name, "bag1/" + bag.chambers[0].name);
+    EXPECT_EQ(two.supportNodes.size(), 2 * bag.supportNodes.size());
+    for (size_t c = 0; c < bag.chambers.size(); ++c) {
+        const double v = bags::calcChamberVolume(bag, static_cast<int>(c), bag.X);
+        for (size_t k = 0; k < 2; ++k)
+            EXPECT_NEAR(bags::calcChamberVolume(two, static_cast<int>(c + k * bag.chambers.size()),
+                                                two.X),
+                        v, 1e-12 * std::abs(v));
+    }
+    Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+    scaled.linear() *= 1.1;
+    EXPECT_THROW(bags::placeCopies(bag, {a, scaled}), std::invalid_argument);
+    EXPECT_THROW(bags::placeCopies(bag, {}), std::invalid_argument);
 }

@@ -42,6 +42,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace bags {
@@ -78,6 +79,12 @@ struct AirbagSpec {
     /// joined by `orifice`, the flow integrated over advance()'s time.
     enum class Connection { Open, Orifice };
     Connection connection = Connection::Open;
+    /// Several bags in one module, side by side on its bed board: the bag (`mesh` or
+    /// `geometry`) is placed at each of these poses in the module frame B (placeCopies), each
+    /// copy with its own gas. Their walls meet through the module's self-contact, which must
+    /// be on; the connection must be open (one gas body per bag). Empty: one bag at B.
+    /// docs/airbag-module.md#several-bags-in-one-module.
+    std::vector<Eigen::Isometry3d> cluster;
     OrificeOptions orifice;
     Imperfection imperfection;
     bool bedBoard = true;                ///< a rigid plane z_B = 0 under the bag
@@ -148,18 +155,35 @@ public:
 
     // --- gas
     /// Inflates the flat bag (a pressure ramp shapes the panels), seals its gas and takes it
-    /// to `mass` [kg] in all; commits. @throws NumericalError if it cannot be solved.
+    /// to `mass` [kg] in all (every bag of a cluster to `mass`); commits.
+    /// @throws NumericalError if it cannot be solved.
     void inflate(double mass);
-    /// Takes the total gas mass to `mass` [kg] now, quasi-statically (shapes held), in
-    /// steps it cuts as needed; commits. @throws NumericalError if it cannot be solved.
+    /// As inflate(mass), bag b of the module to masses[b] [kg].
+    void inflate(const std::vector<double>& masses);
+    /// Takes the gas mass of the bag (of every bag of a cluster) to `mass` [kg] now,
+    /// quasi-statically (shapes held), in steps it cuts as needed; commits.
+    /// @throws NumericalError if it cannot be solved.
     void changeGasMass(double mass);
-    /// Gas mass flow [kg/s] into the bag (negative: out) during the following advance()
-    /// calls, shared among the gas bodies by volume.
+    /// As changeGasMass(mass), bag b to masses[b] [kg], the bags' masses moving together.
+    void changeGasMass(const std::vector<double>& masses);
+    /// Gas mass flow [kg/s] into the bag (into every bag of a cluster; negative: out) during
+    /// the following advance() calls, shared among a bag's gas bodies by volume.
     void setMassFlow(double massFlow);
-    /// Flow at |rate| [kg/s] during the following advance() calls until the total mass is
-    /// `mass` [kg], then none.
+    void setMassFlow(int bag, double massFlow);   ///< one bag of a cluster
+    /// Flow at |rate| [kg/s] during the following advance() calls until the bag's (every
+    /// bag's) mass is `mass` [kg], then none.
     void setTargetMass(double mass, double rate);
-    double getTotalGasMass() const;       ///< [kg]
+    void setTargetMass(int bag, double mass, double rate);  ///< one bag of a cluster
+    double getTotalGasMass() const;       ///< [kg] summed over the module's bags
+    double getGasMass(int bag) const;     ///< [kg] of one bag
+
+    // --- the bags of a module (one unless AirbagSpec::cluster)
+    int getNumBags() const;
+    /// Bag b's nodes are [first, second) of the module's mesh.
+    std::pair<int, int> getBagNodes(int bag) const;
+    const std::vector<int>& getBagChambers(int bag) const;  ///< its chambers' indices
+    /// Force [N] (Ground) the other bags' films exert on bag b's film through contact.
+    Vec3 calcNeighbourForce(int bag) const;
 
     // --- shapes
     void setShapePose(int shape, const Eigen::Isometry3d& X_GS);
@@ -200,6 +224,7 @@ public:
     double calcResidual() const;
 
 private:
+    int checkBag(int bag) const;  ///< bag, or std::out_of_range
     struct Impl;
     std::unique_ptr<Impl> m_impl;
 };

@@ -4,6 +4,10 @@
 
 #include <bags/Mesh.h>
 
+#include <Eigen/Geometry>
+
+#include <vector>
+
 namespace bags {
 
 /// The seed study's double-wedge airbag (see docs/geometry.md for the shape and why).
@@ -28,6 +32,15 @@ struct DoubleWedgeParams {
     double calcFlatVolume() const;
 };
 Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p);
+
+/// Copies of one bag's mesh, copy k placed by poses[k] (rigid: rotation and translation of its
+/// reference nodes), as one mesh: nodes, triangles, panels and chambers of copy k follow those
+/// of copy k-1 (each copy has bag.getNumNodes() nodes, so copy k's nodes start at
+/// k * bag.getNumNodes()); panel and chamber names get the prefix "bag<k>/". Support nodes and
+/// fixed dofs are copied (a fixed dof names a Ground direction, so rotated copies keep only
+/// those of copies whose rotation is the identity). @throws std::invalid_argument for no
+/// poses or a pose that is not a rigid motion.
+Mesh placeCopies(const Mesh& bag, const std::vector<Eigen::Isometry3d>& poses);
 
 /// Rectangular box bag lx x ly x lz with the base on z = 0, centred on x = y = 0 (one chamber
 /// "box"; panels "bottom", "top", "side-x-minus", "side-x-plus", "side-y-minus", "side-y-plus").

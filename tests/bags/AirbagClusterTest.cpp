@@ -1,0 +1,133 @@
+// Several bags in one module (AirbagSpec::cluster): a cluster of one is the single bag, each
+// bag keeps its own gas, and neighbours pressed together by their own inflation exert equal
+// and opposite forces on each other through the module's self-contact.
+#include <bags/Airbag.h>
+#include <bags/MaterialFit.h>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+using namespace bags;
+
+namespace {
+
+AirbagSpec coarseSpec() {
+    AirbagSpec s;
+    s.geometry.meshSize = 0.025;
+    s.material = makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    s.forceTolerance = 1e-6;
+    return s;
+}
+
+Eigen::Isometry3d translation(const Vec3& p) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = p;
+    return X;
+}
+
+// Two bags side by side across their width (y), `gap` [m] between their flat side panels.
+AirbagSpec pairSpec(double gap) {
+    AirbagSpec s = coarseSpec();
+    const double pitch = s.geometry.width + gap;
+    s.cluster = {translation(Vec3(0, -0.5 * pitch, 0)), translation(Vec3(0, 0.5 * pitch, 0))};
+    return s;
+}
+
+}  // namespace
+
+TEST(AirbagCluster, ACopyAtTheIdentityIsTheSingleBag) {
+    // Reference: the single bag of the same spec. The copy's nodes are the bag's nodes times
+    // an identity pose (exact), so the module must give the same state to the bit.
+    AirbagSpec single = coarseSpec();
+    AirbagSpec one = coarseSpec();
+    one.cluster = {Eigen::Isometry3d::Identity()};
+    Airbag a(single), b(one);
+    ASSERT_EQ(b.getNumBags(), 1);
+    auto press = [](Airbag& bag) {
+        int apex = 0;
+        bag.getMesh().X.row(2).maxCoeff(&apex);
+        const Vec3 c(bag.getMesh().X(0, apex), 0.0, 0.0);
+        std::shared_ptr<RigidShape> e(makeEllipsoid(Vec3(0.04, 0.03, 0.02)));
+        e->setPose(translation(c + Vec3(0, 0, 0.5)));
+        const int s = bag.addShape(e, RigidContact::Options());
+        bag.inflate(4.5e-3);
+        const double top = bag.getPositions().row(2).maxCoeff();
+        bag.setShapePose(s, translation(c + Vec3(0, 0, top + 0.02 - 0.008)));
+        EXPECT_TRUE(bag.advance(1.0).converged);
+        bag.commit();
+        return bag.calcShapeWrench(s).force;
+    };
+    const Vec3 fa = press(a), fb = press(b);
+    EXPECT_GT(fa.z(), 1.0);  // the ellipsoid is pressed 8 mm in
+    EXPECT_EQ(fa, fb);
+    EXPECT_EQ((a.getPositions() - b.getPositions()).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(a.getTotalGasMass(), b.getGasMass(0));
+}
+
+TEST(AirbagCluster, NeighboursPressedByTheirOwnInflationBalanceTheirContactForces) {
+    // Two bags 4 mm apart: their side panels bulge by more than that when inflated (4.5 g),
+    // so they press on each other. Reference: Newton's third law, to roundoff of the contact
+    // force (1e-9 relative); the force must be real (above 0.5 N) and push them apart (bag 0
+    // lies at -y).
+    Airbag pair(pairSpec(0.004));
+    ASSERT_EQ(pair.getNumBags(), 2);
+    EXPECT_EQ(pair.getBagNodes(1).first, pair.getBagNodes(0).second);
+    pair.inflate(4.5e-3);
+    const Vec3 f0 = pair.calcNeighbourForce(0), f1 = pair.calcNeighbourForce(1);
+    EXPECT_GT(f1.y(), 0.5);
+    EXPECT_LT(f0.y(), -0.5);
+    EXPECT_LT((f0 + f1).norm(), 1e-9 * f1.norm());
+    // Each bag holds its own gas.
+    EXPECT_NEAR(pair.getGasMass(0), 4.5e-3, 1e-15);
+    EXPECT_NEAR(pair.getGasMass(1), 4.5e-3, 1e-15);
+
+    // Far apart (50 mm) they never meet: no force between them.
+    Airbag apart(pairSpec(0.050));
+    apart.inflate(4.5e-3);
+    EXPECT_EQ(apart.calcNeighbourForce(0).norm(), 0.0);
+}
+
+TEST(AirbagCluster, EachBagKeepsItsOwnGasAndFlows) {
+    // Reference: the masses given, to 1e-12 kg; a flow into one bag leaves the other's mass.
+    Airbag pair(pairSpec(0.004));
+    pair.inflate({4.5e-3, 3.5e-3});
+    EXPECT_NEAR(pair.getGasMass(0), 4.5e-3, 1e-12);
+    EXPECT_NEAR(pair.getGasMass(1), 3.5e-3, 1e-12);
+    EXPECT_NEAR(pair.getTotalGasMass(), 8.0e-3, 1e-12);
+    const double p0 = pair.getChamberState(pair.getBagChambers(0).front()).gaugePressure;
+    const double p1 = pair.getChamberState(pair.getBagChambers(1).front()).gaugePressure;
+    EXPECT_GT(p0, p1);  // the fuller bag is at the higher pressure
+    pair.setTargetMass(1, 4.0e-3, 1e-3);  // 1 g/s into bag 1 up to 4.0 g
+    ASSERT_TRUE(pair.advance(1.0).converged);
+    pair.commit();
+    EXPECT_NEAR(pair.getGasMass(0), 4.5e-3, 1e-12);
+    EXPECT_NEAR(pair.getGasMass(1), 4.0e-3, 1e-12);
+    pair.changeGasMass({4.0e-3, 4.0e-3});
+    EXPECT_NEAR(pair.getGasMass(0), 4.0e-3, 1e-12);
+}
+
+TEST(AirbagCluster, BadClustersAndMassesAreRefusedNamingTheOption) {
+    AirbagSpec noSelf = pairSpec(0.004);
+    noSelf.selfContact = false;
+    try {
+        Airbag bag(noSelf);
+        FAIL() << "a cluster without self-contact was accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("selfContact"), std::string::npos) << e.what();
+    }
+    AirbagSpec orifice = pairSpec(0.004);
+    orifice.connection = AirbagSpec::Connection::Orifice;
+    EXPECT_THROW(Airbag bag(orifice), std::invalid_argument);
+    Airbag pair(pairSpec(0.004));
+    try {
+        pair.inflate(std::vector<double>{4.5e-3});
+        FAIL() << "one mass for two bags was accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("one gas mass per bag"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(pair.getGasMass(2), std::out_of_range);
+}
