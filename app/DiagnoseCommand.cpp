@@ -3,6 +3,7 @@
 #include <bags/LoadTest.h>
 #include <bagsim/Version.h>
 #include <diagnose/Diagnosis.h>
+#include <diagnose/Stiffness.h>
 #include <io/DiagnosisJson.h>
 #include <io/DiagnosisReport.h>
 #include <io/InputError.h>
@@ -17,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -146,15 +148,45 @@ void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
     }
 }
 
+void printStiffness(const diagnose::StiffnessComparison& k, std::ostream& out) {
+    out << "stiffness: measured k(m) beside the simulated one (N/mm over the load range)\n"
+        << "  gas mass   measured   simulated   difference   stage stated / simulated\n";
+    for (const auto& p : k.points) {
+        char line[200];
+        std::snprintf(line, sizeof line, "  %-9s  %-9s  %-10s  %-11s  %s / %s%s\n",
+                      fmt("%.3g g", p.gasMass * 1e3).c_str(), fmt("%.3f", p.measured * 1e-3).c_str(),
+                      std::isfinite(p.simulated) ? fmt("%.3f", p.simulated * 1e-3).c_str() : "none",
+                      std::isfinite(p.simulated)
+                          ? fmt("%+.3f", (p.measured - p.simulated) * 1e-3).c_str()
+                          : "-",
+                      p.measuredStage ? std::to_string(p.measuredStage).c_str() : "-",
+                      p.simulatedStage ? std::to_string(p.simulatedStage).c_str() : "-",
+                      p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
+        out << line;
+    }
+    for (const auto& r : k.regimes)
+        out << "  " << r.regime << ": " << r.points << (r.points == 1 ? " mass" : " masses") << ", RMSE " << fmt("%.3g", r.rmse * 1e-3)
+            << " N/mm, bias (measured - simulated) " << fmt("%+.3g", r.bias * 1e-3) << " N/mm, "
+            << fmt("%.0f %%", 100 * r.relative) << " of the measured, share "
+            << fmt("%.0f %%", 100 * r.share) << "\n";
+    out << "  scale: measured = (1 " << fmt("%+.3f", k.scale) << ") x simulated; least stiffness at "
+        << fmt("%.3g g", k.leastMeasured * 1e3) << " measured, "
+        << (std::isfinite(k.leastSimulated) ? fmt("%.3g g", k.leastSimulated * 1e3) : "none")
+        << " simulated; stages agree at " << k.stagesAgreeing << " of " << k.stagesCompared
+        << " masses; " << k.missing << " without a simulated stiffness\n";
+}
+
 int run(const Args& a) {
     const auto start = std::chrono::steady_clock::now();
     const diagnose::MeasuredData data = io::readMeasuredData(a.measured);
     io::LoadTestScenario sc = io::readMeasuredScenario(data);
     const fs::path out(a.out);
-    claimOutputFolder(out, a.force, {"diagnosis.json", "residuals.csv", "report.html"});
+    claimOutputFolder(out, a.force,
+                      {"diagnosis.json", "residuals.csv", "report.html", "stiffness.csv"});
     if (!a.quiet)
-        std::cerr << "bagsim diagnose: " << data.tests.size() << " tests in " << a.measured
-                  << " against " << data.scenarioFile << "\n";
+        std::cerr << "bagsim diagnose: " << data.tests.size() << " tests"
+                  << (data.stiffness.empty() ? "" : " and a stiffness curve") << " in "
+                  << a.measured << " against " << data.scenarioFile << "\n";
 
     sc.options.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
     prepareGeometry(sc);
@@ -167,6 +199,43 @@ int run(const Args& a) {
                                            " stopped: " + c.failure);
         return r;
     };
+    io::DiagnosisInfo info;
+    info.measuredFolder = a.measured;
+    info.scenarioFile = data.scenarioFile;
+    info.program = std::string("bagsim ") + bagsim::kVersion;
+    info.commandLine = a.commandLine;
+    auto write = [&](const std::string& name, const std::string& text) {
+        const fs::path f = out / name, tmp = out / (name + ".tmp");
+        {
+            std::ofstream o(tmp);
+            o << text;
+            if (!o.flush()) throw std::runtime_error("cannot write " + f.string());
+        }
+        fs::rename(tmp, f);
+    };
+    // A measured stiffness curve: its masses in turn, let down from the largest as in the
+    // seed's test, loading only. A curve that stops or gives no stiffness is a finding, not a
+    // failure of the diagnosis.
+    std::unique_ptr<diagnose::StiffnessComparison> stiffness;
+    if (!data.stiffness.empty()) {
+        bags::LoadTestOptions o = sc.options;
+        o.gasMasses.assign(data.stiffness.gasMass.rbegin(), data.stiffness.gasMass.rend());
+        o.unload = false;
+        stiffness = std::make_unique<diagnose::StiffnessComparison>(
+            diagnose::compareStiffness(data.stiffness, bags::runLoadTest(o)));
+        ++simulations;
+        if (!a.quiet) printStiffness(*stiffness, std::cout);
+        write("stiffness.csv", io::formatStiffnessCsv(*stiffness));
+    }
+    if (data.tests.empty()) {
+        info.simulations = simulations;
+        info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        write("diagnosis.json", io::formatDiagnosisJson(info, {}, nullptr, stiffness.get()));
+        std::cout << "verdict: not run (a stiffness curve alone: no tests to hold out)\n"
+                  << "diagnosis in " << out.string() << "/: diagnosis.json, stiffness.csv ("
+                  << simulations << " simulation, " << fmt("%.1f", info.seconds) << " s)\n";
+        return 0;
+    }
     const bags::LoadTestResult base = simulate(sc.options);
     // The numerical uncertainty: the same protocol at half the displacement step.
     bags::LoadTestOptions half = sc.options;
@@ -280,25 +349,11 @@ int run(const Args& a) {
         }
     }
 
-    io::DiagnosisInfo info;
-    info.measuredFolder = a.measured;
-    info.scenarioFile = data.scenarioFile;
-    info.program = std::string("bagsim ") + bagsim::kVersion;
-    info.commandLine = a.commandLine;
     info.simulations = simulations;
     info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    auto write = [&](const std::string& name, const std::string& text) {
-        const fs::path f = out / name, tmp = out / (name + ".tmp");
-        {
-            std::ofstream o(tmp);
-            o << text;
-            if (!o.flush()) throw std::runtime_error("cannot write " + f.string());
-        }
-        fs::rename(tmp, f);
-    };
     write("residuals.csv", io::formatResidualsCsv(tests));
     write("report.html", io::formatDiagnosisReportHtml(info, tests, where, which.get()));
-    write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get()));
+    write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get(), stiffness.get()));
     if (which)
         std::cout << "verdict: " << which->verdict << " (" << which->reason << ")\n";
     else

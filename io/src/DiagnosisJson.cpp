@@ -76,10 +76,37 @@ std::string formatMetrics(const diagnose::CandidateResult& c, const diagnose::Wh
     return os.str() + "}";
 }
 
+// The stiffness curve beside the simulated one, stiffness in N/mm.
+std::string formatStiffness(const diagnose::StiffnessComparison& k) {
+    std::ostringstream os;
+    os << "{\"unit\": \"N/mm\", \"scale\": " << num(k.scale, "%.4f")
+       << ", \"missing\": " << k.missing << ", \"stages_agreeing\": " << k.stagesAgreeing
+       << ", \"stages_compared\": " << k.stagesCompared
+       << ", \"least_stiffness_gas_mass_g\": {\"measured\": " << num(k.leastMeasured * 1e3)
+       << ", \"simulated\": " << num(k.leastSimulated * 1e3) << "},\n    \"regimes\": [";
+    for (size_t i = 0; i < k.regimes.size(); ++i) {
+        const auto& r = k.regimes[i];
+        os << (i ? ", " : "") << "{\"regime\": " << str(r.regime) << ", \"points\": " << r.points
+           << ", \"rmse\": " << num(r.rmse * 1e-3) << ", \"bias\": " << num(r.bias * 1e-3)
+           << ", \"relative\": " << num(r.relative, "%.4f") << ", \"share\": "
+           << num(r.share, "%.4f") << "}";
+    }
+    os << "],\n    \"points\": [";
+    for (size_t i = 0; i < k.points.size(); ++i) {
+        const auto& p = k.points[i];
+        os << (i ? ",\n      " : "\n      ") << "{\"gas_mass_g\": " << num(p.gasMass * 1e3)
+           << ", \"measured\": " << num(p.measured * 1e-3) << ", \"simulated\": "
+           << num(p.simulated * 1e-3) << ", \"measured_stage\": " << p.measuredStage
+           << ", \"simulated_stage\": " << p.simulatedStage << ", \"note\": " << str(p.note) << "}";
+    }
+    return os.str() + "]}";
+}
+
 }  // namespace
 
 std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::WhereReport& w,
-                                const diagnose::WhichReport* which) {
+                                const diagnose::WhichReport* which,
+                                const diagnose::StiffnessComparison* stiffness) {
     std::ostringstream os;
     os << "{\n  \"format\": \"bagsim diagnosis 1\",\n"
        << "  \"measured\": " << str(info.measuredFolder) << ",\n"
@@ -88,6 +115,12 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
        << "  \"command\": " << str(info.commandLine) << ",\n"
        << "  \"simulations\": " << info.simulations << ",\n"
        << "  \"seconds\": " << num(info.seconds, "%.1f") << ",\n";
+    if (stiffness) os << "  \"stiffness\": " << formatStiffness(*stiffness) << ",\n";
+    if (w.channels.empty()) {
+        os << "  \"where\": null,\n  \"verdict\": null,\n  \"reason\": \"which effect: not run "
+              "(a stiffness curve alone: no tests to hold out)\"\n}\n";
+        return os.str();
+    }
     os << "  \"where\": {\n    \"gap\": " << num(w.gap)
        << ",\n    \"gap_definition\": \"RMS over force and pressure of RMSE / measured range\",\n"
        << "    \"within_validation_uncertainty\": " << (w.withinValidation ? "true" : "false")
@@ -187,6 +220,23 @@ std::string formatResidualsCsv(const std::vector<diagnose::TestComparison>& test
                    << "," << num(ch.measured[i] / u) << "," << num(ch.simulated[i] / u) << ","
                    << num((ch.measured[i] - ch.simulated[i]) / u) << "\n";
         }
+    return os.str();
+}
+
+std::string formatStiffnessCsv(const diagnose::StiffnessComparison& k) {
+    std::ostringstream os;
+    os << "gas_mass_g,measured_N_per_mm,simulated_N_per_mm,difference_N_per_mm,measured_stage,"
+          "simulated_stage,note\n";
+    for (const auto& p : k.points) {
+        const bool has = std::isfinite(p.simulated);
+        std::string note = p.note;
+        for (char& c : note)
+            if (c == ',' || c == '\n') c = ';';
+        os << num(p.gasMass * 1e3) << "," << num(p.measured * 1e-3) << ","
+           << (has ? num(p.simulated * 1e-3) : "") << ","
+           << (has ? num((p.measured - p.simulated) * 1e-3) : "") << "," << p.measuredStage << ","
+           << p.simulatedStage << "," << note << "\n";
+    }
     return os.str();
 }
 

@@ -49,7 +49,7 @@ std::pair<std::string, std::string> splitHeader(const std::string& h) {
             return {trim(h.substr(0, p)), trim(h.substr(p + 1, q == std::string::npos ? q : q - p - 1))};
         }
     }
-    const size_t u = h.find('_');
+    const size_t u = h.rfind('_');  // the unit follows the last '_': gas_mass_g
     if (u == std::string::npos) return {trim(h), ""};
     return {trim(h.substr(0, u)), trim(h.substr(u + 1))};
 }
@@ -68,6 +68,9 @@ std::string fmt(const char* f, double v) {
 
 std::string formatMass(double kg) { return fmt("%.4g", kg * 1e3) + " g"; }
 
+void readStiffnessChannel(const ScenarioNode& root, const fs::path& dir,
+                          diagnose::MeasuredData& data);
+
 }  // namespace
 
 std::vector<std::vector<double>> readChannelCsv(const std::string& path,
@@ -79,7 +82,11 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
     };
     std::string expected;
     for (const ChannelColumn& c : columns)
-        expected += (expected.empty() ? "" : ",") + c.name + "_" + getUnits(c.dimension)[0].symbol;
+        if (!c.optional)
+            expected += (expected.empty() ? "" : ",") + c.name +
+                        (c.dimension == Dimension::Dimensionless
+                             ? std::string()
+                             : "_" + getUnits(c.dimension)[0].symbol);
 
     std::vector<int> index(columns.size(), -1);  // file column of each wanted column
     std::vector<double> factor(columns.size()), offset(columns.size());
@@ -106,6 +113,13 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
                     if (index[w] >= 0)
                         fail(lineNo, col + "a second '" + want.name + "' column (the first is column " +
                                          std::to_string(index[w] + 1) + "); keep one");
+                    if (want.dimension == Dimension::Dimensionless) {
+                        if (!unit.empty())
+                            fail(lineNo, col + "a plain number takes no unit; valid: '" +
+                                             want.name + "'");
+                        index[w] = static_cast<int>(c), factor[w] = 1.0, offset[w] = 0.0;
+                        continue;
+                    }
                     if (unit.empty())
                         fail(lineNo, col + "no unit; write it in the header, e.g. " + want.name +
                                          "_" + getUnits(want.dimension)[0].symbol + " or \"" +
@@ -120,7 +134,7 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
                     factor[w] = u->factor;
                     offset[w] = u->offset;
                 }
-                if (index[w] < 0)
+                if (index[w] < 0 && !want.optional)
                     fail(lineNo, "no '" + want.name + "' column in the header '" + t +
                                      "'; valid: a header with the columns " + expected +
                                      " (units may differ; other columns are ignored)");
@@ -133,6 +147,7 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
                              std::to_string(header.size()));
         for (size_t w = 0; w < columns.size(); ++w) {
             const int c = index[w];
+            if (c < 0) continue;  // an optional column the file does not have
             const std::string& cell = cells[c];
             const std::string col = "column " + std::to_string(c + 1) + " '" + header[c] + "': ";
             char* end = nullptr;
@@ -180,7 +195,10 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
     const ScenarioFile file =
         ScenarioFile::parse(readInputFile(mname, kMaxScenarioBytes, "measured-data manifest"), mname);
     const ScenarioNode root = file.getRoot();
-    root.checkKeys({"format", "scenario", "protocol", "tests"}, {"description"});
+    root.checkKeys({"format", "scenario", "protocol"}, {"description", "tests", "stiffness"});
+    if (!root.has("tests") && !root.has("stiffness"))
+        root.fail("lists no 'tests' and no 'stiffness'; valid: a 'tests' list (one entry per gas "
+                  "mass), a 'stiffness' curve file, or both (docs/measured-data.md)");
     const std::string format = root.getString("format");
     if (format != kMeasuredFormat)
         root.fail("format", "\"" + format + "\" is not a format this bagsim reads; valid: \"" +
@@ -210,6 +228,8 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
                                  {"room_temperature", pr.roomTemperature}})
         if (!(v > 0.0)) p.fail(key, "must be greater than zero");
 
+    if (root.has("stiffness")) readStiffnessChannel(root, dir, data);
+    if (!root.has("tests")) return data;
     const ScenarioNode tests = root.get("tests");
     const std::vector<ScenarioNode> entries = tests.getElements();
     if (entries.empty()) tests.fail("lists no test; valid: one entry per gas mass");
@@ -263,11 +283,66 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
     return data;
 }
 
+namespace {
+
+// The manifest's `stiffness` file: gas_mass, stiffness and an optional stage column.
+void readStiffnessChannel(const ScenarioNode& root, const fs::path& dir,
+                          diagnose::MeasuredData& data) {
+    const std::string name = root.getString("stiffness");
+    const fs::path f = fs::path(name).is_absolute() ? fs::path(name) : dir / name;
+    std::error_code ec;
+    if (!fs::exists(f, ec))
+        root.fail("stiffness", "stiffness file \"" + name + "\" is missing (" + f.string() +
+                                   "); valid: a CSV file with the columns gas_mass_g, "
+                                   "stiffness_N/mm and optionally stage (docs/measured-data.md)");
+    data.stiffnessFile = f.string();
+    const auto cols = readChannelCsv(data.stiffnessFile, data.stiffnessFile,
+                                     {{"gas_mass", Dimension::Mass},
+                                      {"stiffness", Dimension::Stiffness},
+                                      {"stage", Dimension::Dimensionless, true}});
+    diagnose::StiffnessChannel& k = data.stiffness;
+    k.gasMass = cols[0];
+    k.stiffness = cols[1];
+    // The file's line of data row i (the reader skips comments and blank lines).
+    auto rowLine = [&](size_t row) {
+        std::istringstream text(readInputFile(data.stiffnessFile, kMaxChannelBytes, "channel file"));
+        std::string line;
+        int lineNo = 0;
+        size_t seen = 0;
+        while (std::getline(text, line)) {
+            ++lineNo;
+            const std::string t = trim(line);
+            if (!t.empty() && t[0] != '#' && seen++ == row + 1) return lineNo;
+        }
+        return 0;
+    };
+    for (size_t i = 0; i < cols[0].size(); ++i) {
+        if (!(k.gasMass[i] > 0.0) || !(k.stiffness[i] > 0.0))
+            throw InputError(data.stiffnessFile, rowLine(i), "",
+                             "gas mass " + formatMass(k.gasMass[i]) + ", stiffness " +
+                                 fmt("%g N/mm", k.stiffness[i] * 1e-3) +
+                                 "; valid: both greater than zero");
+        if (cols[2].empty()) continue;
+        const double s = cols[2][i];
+        if (s != std::floor(s) || s < 0.0 || s > 3.0)
+            throw InputError(data.stiffnessFile, rowLine(i), "",
+                             "column 'stage': " + fmt("%g", s) +
+                                 " is not a stage; valid: 1, 2, 3, or 0 (not stated)");
+        k.stage.push_back(static_cast<int>(s));
+    }
+}
+
+}  // namespace
+
 ScenarioFile loadMeasuredScenarioFile(const diagnose::MeasuredData& data) {
     ScenarioFile file = ScenarioFile::load(data.scenarioFile);
     std::string masses = "[";
     for (size_t i = 0; i < data.tests.size(); ++i)
         masses += (i ? ", " : "") + fmt("%.9g", data.tests[i].gasMass * 1e3) + " g";
+    if (data.tests.empty())  // a stiffness curve alone: its masses, let down from the largest
+        for (size_t i = data.stiffness.gasMass.size(); i-- > 0;)
+            masses += (masses.size() > 1 ? ", " : "") +
+                      fmt("%.9g", data.stiffness.gasMass[i] * 1e3) + " g";
     masses += "]";
     const diagnose::Protocol& p = data.protocol;
     file.applyOverride("test.gas_masses", masses);
@@ -295,8 +370,9 @@ LoadTestScenario readMeasuredScenario(const diagnose::MeasuredData& data) {
         for (const auto& [set, key] : keys)
             if (e.getWhere() == "--set " + set || e.getKey().rfind(set, 0) == 0) {
                 const ScenarioFile m = ScenarioFile::load(manifest);
-                const std::string section = key.substr(0, key.find('.'));
                 const ScenarioNode root = m.getRoot();
+                std::string section = key.substr(0, key.find('.'));
+                if (section == "tests" && !root.has("tests")) section = "stiffness";
                 int line = root.getLine(section);
                 if (key.find('.') != std::string::npos)
                     line = root.getSection(section).getLine(key.substr(key.find('.') + 1));

@@ -195,6 +195,50 @@ TEST_F(MeasuredDataTest, ProtocolIsAppliedToTheScenario) {
     EXPECT_NEAR(sc.options.gas.temperature, 296.15, 1e-9);
 }
 
+// A stiffness curve k(m) alone (the seed study's kind of data): read in SI with its stages; the
+// scenario runs its masses from the largest down.
+TEST_F(MeasuredDataTest, StiffnessCurveAloneReadsInSi) {
+    write("measured.yaml", kManifest.substr(0, kManifest.find("tests:")) + "stiffness: k.csv\n");
+    write("k.csv", "# k(m)\ngas_mass_g,stiffness [N/mm],stage\n1.0,3.47,3\n2.5,1.64,2\n3.5,7.91,1\n");
+    const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
+    EXPECT_TRUE(d.tests.empty());
+    ASSERT_EQ(d.stiffness.gasMass.size(), 3u);
+    EXPECT_DOUBLE_EQ(d.stiffness.gasMass[1], 2.5e-3);
+    EXPECT_DOUBLE_EQ(d.stiffness.stiffness[1], 1640.0);
+    EXPECT_EQ(d.stiffness.stage, (std::vector<int>{3, 2, 1}));
+    const io::LoadTestScenario sc = io::readMeasuredScenario(d);
+    ASSERT_EQ(sc.options.gasMasses.size(), 3u);
+    EXPECT_NEAR(sc.options.gasMasses[0], 3.5e-3, 1e-15);
+    EXPECT_NEAR(sc.options.gasMasses[2], 1.0e-3, 1e-15);
+}
+
+TEST_F(MeasuredDataTest, StiffnessCurveBadStageNamesItsLine) {
+    write("measured.yaml", kManifest + "stiffness: k.csv\n");
+    write("k.csv", "# k(m)\ngas_mass_g,stiffness_N/mm,stage\n1.0,3.47,3\n2.5,1.64,4\n");
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getWhere(), file("k.csv"));
+    EXPECT_EQ(e.getLine(), 4);
+    EXPECT_NE(e.getMessage().find("column 'stage': 4 is not a stage; valid: 1, 2, 3, or 0"),
+              std::string::npos)
+        << e.what();
+}
+
+TEST_F(MeasuredDataTest, StiffnessCurveWrongUnitListsTheValidOnes) {
+    write("measured.yaml", kManifest + "stiffness: k.csv\n");
+    write("k.csv", "gas_mass_g,stiffness_kPa\n1.0,3.47\n2.5,1.64\n");
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getLine(), 1);
+    EXPECT_NE(e.getMessage().find("'kPa' is not a unit of"), std::string::npos) << e.what();
+    EXPECT_NE(e.getMessage().find("N/mm"), std::string::npos) << e.what();
+}
+
+TEST_F(MeasuredDataTest, NoTestsAndNoStiffnessIsRefused) {
+    write("measured.yaml", kManifest.substr(0, kManifest.find("tests:")));
+    const io::InputError e = readError();
+    EXPECT_NE(e.getMessage().find("lists no 'tests' and no 'stiffness'"), std::string::npos)
+        << e.what();
+}
+
 TEST_F(MeasuredDataTest, WrittenFolderReadsBack) {
     const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
     const fs::path out = m_dir / "copy";

@@ -35,13 +35,25 @@ struct Protocol {
     double roomTemperature = 0.0;  ///< [K] (the gas temperature of the test)
 };
 
+/// A measured stiffness curve k(m): the stiffness over the scenario's load range
+/// (test.stiffness_range) at each gas mass, as a study reports it (a table, or a fitted
+/// polynomial evaluated at the masses it names), with the stage it states for each mass.
+struct StiffnessChannel {
+    std::vector<double> gasMass;    ///< [kg] strictly increasing
+    std::vector<double> stiffness;  ///< [N/m]
+    std::vector<int> stage;         ///< 1, 2, 3, or 0 (not stated); empty if the file has none
+    bool empty() const { return gasMass.empty(); }
+};
+
 /// A measured data set: the tests and what they correspond to.
 struct MeasuredData {
     std::string folder;        ///< where it was read from
     std::string scenarioFile;  ///< path of the scenario it corresponds to
     std::string description;
     Protocol protocol;
-    std::vector<MeasuredTest> tests;
+    std::vector<MeasuredTest> tests;   ///< may be empty when a stiffness curve is given
+    StiffnessChannel stiffness;        ///< empty unless the manifest names one
+    std::string stiffnessFile;         ///< the stiffness curve's file as named in messages
 };
 
 }  // namespace diagnose

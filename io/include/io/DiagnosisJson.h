@@ -5,6 +5,7 @@
 /// units the keys or a "unit" field name (N, kPa, g, s, mm), never bare SI.
 
 #include <diagnose/Diagnosis.h>
+#include <diagnose/Stiffness.h>
 
 #include <string>
 #include <vector>
@@ -20,12 +21,19 @@ struct DiagnosisInfo {
     double seconds = 0.0;     ///< wall time
 };
 
-/// The whole diagnosis as JSON text; `which` may be null (part 2 not run).
+/// The whole diagnosis as JSON text; `which` may be null (part 2 not run); `stiffness`, when
+/// given, the measured stiffness curve beside the simulated one (key `stiffness`); a `where`
+/// without channels (no tests, a stiffness curve alone) is written as null.
 std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::WhereReport& where,
-                                const diagnose::WhichReport* which);
+                                const diagnose::WhichReport* which,
+                                const diagnose::StiffnessComparison* stiffness = nullptr);
 
 /// One row per compared sample: test,gas_mass_g,channel,unit,time_s,displacement_mm,branch,
 /// measured,simulated,residual (channel values in the channel's unit).
 std::string formatResidualsCsv(const std::vector<diagnose::TestComparison>& tests);
+
+/// One row per gas mass: gas_mass_g,measured_N_per_mm,simulated_N_per_mm,difference_N_per_mm,
+/// measured_stage,simulated_stage,note (no simulated stiffness: empty cells and the reason).
+std::string formatStiffnessCsv(const diagnose::StiffnessComparison& stiffness);
 
 }  // namespace io

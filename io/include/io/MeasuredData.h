@@ -35,7 +35,8 @@ inline constexpr double kPeakForceTolerance = 0.10;
 /// One column a channel file must have: its name and its kind of unit.
 struct ChannelColumn {
     std::string name;  ///< "time", "displacement", "force", "pressure", "mass"
-    Dimension dimension;
+    Dimension dimension;  ///< Dimensionless: a plain number, written without a unit
+    bool optional = false;  ///< a missing column is returned empty instead of refused
 };
 
 /// Reads one CSV channel file: '#' comment lines and blank lines are skipped; the first other
@@ -50,12 +51,15 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
                                                 const std::string& shownName,
                                                 const std::vector<ChannelColumn>& columns);
 
-/// Reads a measured-data folder. @throws InputError (missing manifest, key, channel file or
+/// Reads a measured-data folder: its tests, and the stiffness curve k(m) when the manifest
+/// names one (`stiffness`: columns gas_mass, stiffness and an optional stage; either may be
+/// given alone). @throws InputError (missing manifest, key, channel file or
 /// column; bad units; NaN; unsorted time; a flowmeter reading or a peak force that disagrees
 /// with the manifest).
 diagnose::MeasuredData readMeasuredData(const std::string& folder);
 
-/// The scenario the data correspond to, with the protocol applied to it (its gas masses, block,
+/// The scenario the data correspond to, with the protocol applied to it (its gas masses: the
+/// tests', or without tests the stiffness curve's from the largest down; its block,
 /// rate, peak force and room temperature replace the scenario's), read and checked as
 /// `bagsim run` would. @throws InputError at the manifest's key when the scenario cannot run
 /// the protocol (saying why), or for the scenario's own errors.
