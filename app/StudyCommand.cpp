@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "Commands.h"
 #include "Interrupt.h"
@@ -61,41 +63,45 @@ struct Args {
     std::string commandLine;
 };
 
+/// Splits "--name=value" into ("--name", "value"); other words come back whole.
+std::pair<std::string, std::string> splitOption(const std::string& word) {
+    const auto eq = word.find('=');
+    if (word.rfind("--", 0) != 0 || eq == std::string::npos) return {word, ""};
+    return {word.substr(0, eq), word.substr(eq + 1)};
+}
+
+int parseJobs(const std::string& v) {
+    char* end = nullptr;
+    const long n = std::strtol(v.c_str(), &end, 10);
+    if (end == v.c_str() || *end || n < 1 || n > 1024)
+        throw UsageError("--jobs '" + v + "': a whole number of cases at once, 1 to 1024");
+    return int(n);
+}
+
 Args parseArgs(int argc, char** argv) {
     Args a;
+    const std::vector<std::string> words(argv, argv + argc);
     a.commandLine = "bagsim study";
-    for (int i = 0; i < argc; ++i) a.commandLine += std::string(" ") + argv[i];
-    for (int i = 0; i < argc; ++i) {
-        const std::string arg = argv[i];
-        auto value = [&](const std::string& name) -> std::string {
-            const std::string prefix = name + "=";
-            if (arg.rfind(prefix, 0) == 0) return arg.substr(prefix.size());
-            if (i + 1 >= argc) throw UsageError(name + " needs a value");
-            return argv[++i];
-        };
-        if (arg == "-h" || arg == "--help") {
-            a.help = true;
-        } else if (arg == "--retry-failed") {
-            a.retryFailed = true;
-        } else if (arg == "--quiet" || arg == "-q") {
-            a.quiet = true;
-        } else if (arg == "--out" || arg.rfind("--out=", 0) == 0) {
-            a.out = value("--out");
-        } else if (arg == "--jobs" || arg.rfind("--jobs=", 0) == 0 || arg == "-j") {
-            const std::string v = value(arg == "-j" ? "-j" : "--jobs");
-            char* end = nullptr;
-            const long n = std::strtol(v.c_str(), &end, 10);
-            if (end == v.c_str() || *end || n < 1 || n > 1024)
-                throw UsageError("--jobs '" + v + "': a whole number of cases at once, 1 to 1024");
-            a.jobs = int(n);
-        } else if (arg.rfind("-", 0) == 0 && arg.size() > 1) {
-            throw UsageError("unknown option '" + arg +
-                             "'; valid: --out DIR, --jobs N, --retry-failed, --quiet, --help");
-        } else if (a.study.empty()) {
-            a.study = arg;
-        } else {
-            throw UsageError("one study at a time ('" + a.study + "' and '" + arg + "')");
+    for (const std::string& w : words) a.commandLine += " " + w;
+    for (size_t i = 0; i < words.size(); ++i) {
+        auto [name, inlineValue] = splitOption(words[i]);
+        const bool takesValue = name == "--out" || name == "--jobs" || name == "-j";
+        std::string v = inlineValue;
+        if (takesValue && v.empty()) {
+            if (i + 1 == words.size()) throw UsageError(name + " needs a value");
+            v = words[++i];
         }
+        if (name == "--out") a.out = v;
+        else if (name == "--jobs" || name == "-j") a.jobs = parseJobs(v);
+        else if (name == "-h" || name == "--help") a.help = true;
+        else if (name == "--retry-failed") a.retryFailed = true;
+        else if (name == "--quiet" || name == "-q") a.quiet = true;
+        else if (name.size() > 1 && name[0] == '-')
+            throw UsageError("unknown option '" + words[i] +
+                             "'; valid: --out DIR, --jobs N, --retry-failed, --quiet, --help");
+        else if (!a.study.empty())
+            throw UsageError("one study at a time ('" + a.study + "' and '" + words[i] + "')");
+        else a.study = name;
     }
     if (!a.help && a.study.empty())
         throw UsageError("which study? e.g. bagsim study scenarios/seed-mass-study.yaml");
