@@ -158,8 +158,13 @@ int runStudyCommand(int argc, char** argv) {
     o.outDir = args.out.empty() ? std::filesystem::path("out") / sc.name
                                 : std::filesystem::path(args.out);
     std::error_code ec;
+    // Each case is this same program, `bagsim run`.
     o.program = std::filesystem::read_symlink("/proc/self/exe", ec).string();
-    if (ec) o.program = argv[-1];
+    if (ec) {
+        std::cerr << "bagsim: study failed: cannot find this program's path: " << ec.message()
+                  << "\n";
+        return 1;
+    }
     o.jobs = args.jobs > 0 ? args.jobs : std::max(1u, std::thread::hardware_concurrency());
     o.retryFailed = args.retryFailed;
     o.commandLine = args.commandLine;

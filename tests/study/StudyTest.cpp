@@ -6,6 +6,7 @@
 #include <io/StudyScenario.h>
 #include <io/StudyTable.h>
 #include <study/StudyRunner.h>
+#include <hdf5.h>
 
 #include <cmath>
 #include <filesystem>
@@ -185,6 +186,49 @@ TEST(StudyTable, RowPerCaseWithUnitsStatusAndOutputs) {
     EXPECT_EQ(io::quoteCsvCell(t.rows[1][4]), "\"no convergence, twice\"");
     EXPECT_EQ(io::splitCsvLine("a,\"b, \"\"c\"\"\",d"),
               (std::vector<std::string>{"a", "b, \"c\"", "d"}));
+}
+
+TEST(StudyTable, Hdf5HoldsTheSameTable) {
+    io::StudyTable t;
+    t.header = {"case", "contact.penalty [Pa/m]", "status", "k"};
+    t.rows = {{"1", "1e7", "ok", "0.5"}, {"2", "1e8", "failed", ""}};
+    t.status = "complete";
+    const std::string path =
+        (std::filesystem::temp_directory_path() / "bagsim-study-table-test.h5").string();
+    io::writeStudyH5(t, path);
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    // Column 1 is numeric (doubles), column 2 strings, column 3 numeric with NaN for "".
+    double v[2] = {0, 0};
+    hid_t d = H5Dopen2(f, "/table/001", H5P_DEFAULT);
+    ASSERT_GE(d, 0);
+    ASSERT_GE(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v), 0);
+    EXPECT_DOUBLE_EQ(v[0], 1e7);
+    EXPECT_DOUBLE_EQ(v[1], 1e8);
+    H5Dclose(d);
+    d = H5Dopen2(f, "/table/003", H5P_DEFAULT);
+    ASSERT_GE(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v), 0);
+    EXPECT_DOUBLE_EQ(v[0], 0.5);
+    EXPECT_TRUE(std::isnan(v[1]));
+    H5Dclose(d);
+    d = H5Dopen2(f, "/table/002", H5P_DEFAULT);
+    const hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, H5T_VARIABLE);
+    H5Tset_cset(type, H5T_CSET_UTF8);
+    char* cells[2] = {nullptr, nullptr};
+    ASSERT_GE(H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, cells), 0);
+    EXPECT_STREQ(cells[0], "ok");
+    EXPECT_STREQ(cells[1], "failed");
+    const hid_t name = H5Aopen(d, "name", H5P_DEFAULT);
+    EXPECT_GE(name, 0);
+    H5Aclose(name);
+    const hid_t space = H5Dget_space(d);
+    H5Dvlen_reclaim(type, space, H5P_DEFAULT, cells);
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Dclose(d);
+    H5Fclose(f);
+    std::filesystem::remove(path);
 }
 
 }  // namespace
