@@ -91,17 +91,23 @@ Args parseArgs(int argc, char** argv) {
             if (i + 1 == words.size()) throw UsageError(name + " needs a value");
             v = words[++i];
         }
-        if (name == "--out") a.out = v;
-        else if (name == "--jobs" || name == "-j") a.jobs = parseJobs(v);
-        else if (name == "-h" || name == "--help") a.help = true;
-        else if (name == "--retry-failed") a.retryFailed = true;
-        else if (name == "--quiet" || name == "-q") a.quiet = true;
+        if (name == "--out")
+            a.out = v;
+        else if (name == "--jobs" || name == "-j")
+            a.jobs = parseJobs(v);
+        else if (name == "-h" || name == "--help")
+            a.help = true;
+        else if (name == "--retry-failed")
+            a.retryFailed = true;
+        else if (name == "--quiet" || name == "-q")
+            a.quiet = true;
         else if (name.size() > 1 && name[0] == '-')
             throw UsageError("unknown option '" + words[i] +
                              "'; valid: --out DIR, --jobs N, --retry-failed, --quiet, --help");
         else if (!a.study.empty())
             throw UsageError("one study at a time ('" + a.study + "' and '" + words[i] + "')");
-        else a.study = name;
+        else
+            a.study = name;
     }
     if (!a.help && a.study.empty())
         throw UsageError("which study? e.g. bagsim study scenarios/seed-mass-study.yaml");
@@ -155,8 +161,8 @@ int runStudyCommand(int argc, char** argv) {
     }
 
     study::Options o;
-    o.outDir = args.out.empty() ? std::filesystem::path("out") / sc.name
-                                : std::filesystem::path(args.out);
+    o.outDir =
+        args.out.empty() ? std::filesystem::path("out") / sc.name : std::filesystem::path(args.out);
     std::error_code ec;
     // Each case is this same program, `bagsim run`.
     o.program = std::filesystem::read_symlink("/proc/self/exe", ec).string();
@@ -172,11 +178,11 @@ int runStudyCommand(int argc, char** argv) {
     const bool tty = isatty(STDERR_FILENO) != 0;
     o.onStart = [&](int todo, int skipped, int ranks) {
         if (args.quiet) return;
-        std::cerr << "bagsim " << bagsim::kVersion << " study: " << args.study << " ("
-                  << sc.name << "), base scenario " << sc.baseScenario << "\n  "
-                  << sc.cases.size() << " cases, " << sc.parameters.size() << " parameters; "
-                  << skipped << " done before (skipped), " << todo << " to run, " << o.jobs
-                  << " at once" << (ranks > 1 ? " per rank on " + std::to_string(ranks) + " MPI ranks" : "")
+        std::cerr << "bagsim " << bagsim::kVersion << " study: " << args.study << " (" << sc.name
+                  << "), base scenario " << sc.baseScenario << "\n  " << sc.cases.size()
+                  << " cases, " << sc.parameters.size() << " parameters; " << skipped
+                  << " done before (skipped), " << todo << " to run, " << o.jobs << " at once"
+                  << (ranks > 1 ? " per rank on " + std::to_string(ranks) + " MPI ranks" : "")
                   << "\n  writing to " << o.outDir.string()
                   << "/ (Ctrl-C stops and keeps what is done)\n";
     };
@@ -213,7 +219,8 @@ int runStudyCommand(int argc, char** argv) {
               << sum.table.status << ")\n";
     if (sum.interrupted) {
         const int sig = getInterruptSignal();
-        std::cerr << "bagsim: study " << Interrupted(sig).what() << "; the cases done are kept; run "
+        std::cerr << "bagsim: study " << Interrupted(sig).what()
+                  << "; the cases done are kept; run "
                   << "it again into " << dir << "/ to finish it (marked INCOMPLETE)\n";
         return getInterruptExitCode(sig);
     }

@@ -1,8 +1,8 @@
+#include <bags/Text.h>
 #include <io/ArrayScenario.h>
 #include <io/LoadTestScenario.h>
 #include <io/PatientScenario.h>
 #include <io/StudyScenario.h>
-#include <bags/Text.h>
 
 #include <cmath>
 #include <cstdio>
@@ -164,8 +164,9 @@ Block readRandom(const ScenarioNode& random, std::set<std::string>& seen) {
         addParameter(b, values, key, seen);
         const ScenarioNode spec = values.get(key);
         if (!spec.isMap())
-            spec.fail("a random parameter is {uniform: [LOW, HIGH]} or {normal: [MEAN, SD]} "
-                      "with optional within: [LOW, HIGH]");
+            spec.fail(
+                "a random parameter is {uniform: [LOW, HIGH]} or {normal: [MEAN, SD]} "
+                "with optional within: [LOW, HIGH]");
         spec.checkKeys({}, {"uniform", "normal", "within"});
         const bool uniform = spec.has("uniform");
         if (uniform == spec.has("normal"))
@@ -174,8 +175,8 @@ Block readRandom(const ScenarioNode& random, std::set<std::string>& seen) {
         bool unitSet = false;
         auto pair = [&](const std::string& k, const char* a, const char* bname) {
             const ScenarioNode n = spec.get(k);
-            const std::vector<ScenarioNode> e = n.isSequence() ? n.getElements()
-                                                               : std::vector<ScenarioNode>{};
+            const std::vector<ScenarioNode> e =
+                n.isSequence() ? n.getElements() : std::vector<ScenarioNode>{};
             if (e.size() != 2)
                 n.fail("\"" + emitFlow(n.getYaml()) + "\": two values, [" + a + ", " + bname +
                        "], with the same unit, e.g. [140 mm, 160 mm]");
@@ -189,14 +190,16 @@ Block readRandom(const ScenarioNode& random, std::set<std::string>& seen) {
                     unit = u;
                     unitSet = true;
                 } else if (u != unit) {
-                    e[i].fail("\"" + e[i].asString() + "\": every number of a random parameter "
-                              "takes the same unit ('" + unit + "' here)");
+                    e[i].fail("\"" + e[i].asString() +
+                              "\": every number of a random parameter "
+                              "takes the same unit ('" +
+                              unit + "' here)");
                 }
             }
             return std::pair<double, double>(v[0], v[1]);
         };
-        const auto ab = pair(uniform ? "uniform" : "normal", uniform ? "LOW" : "MEAN",
-                             uniform ? "HIGH" : "SD");
+        const auto ab =
+            pair(uniform ? "uniform" : "normal", uniform ? "LOW" : "MEAN", uniform ? "HIGH" : "SD");
         double lo = -std::numeric_limits<double>::infinity(), hi = -lo;
         if (spec.has("within")) std::tie(lo, hi) = pair("within", "LOW", "HIGH");
         if (uniform) {
@@ -219,8 +222,9 @@ Block readRandom(const ScenarioNode& random, std::set<std::string>& seen) {
                     x = normal(rng);
                 } while ((x < lo || x > hi) && ++tries < 10000);
                 if (x < lo || x > hi)
-                    spec.fail("within", "the bounds hold almost none of the normal "
-                                        "distribution; widen them or move the mean");
+                    spec.fail("within",
+                              "the bounds hold almost none of the normal "
+                              "distribution; widen them or move the mean");
             }
             Value v;
             v.text = formatSample(x, unit);
@@ -296,8 +300,9 @@ std::vector<StudyOutput> readOutputs(const ScenarioNode& root, const std::string
     }
     const ScenarioNode list = root.get("outputs");
     if (!list.isSequence() || list.getElements().empty())
-        list.fail("a list of outputs, e.g. [{file: stiffness.csv, column: stiffness_N_per_mm, "
-                  "per: gas_mass_g}]");
+        list.fail(
+            "a list of outputs, e.g. [{file: stiffness.csv, column: stiffness_N_per_mm, "
+            "per: gas_mass_g}]");
     std::set<std::string> names;
     for (const ScenarioNode& o : list.getElements()) {
         o.checkKeys({"file", "column"}, {"per", "reduce"});
@@ -306,14 +311,15 @@ std::vector<StudyOutput> readOutputs(const ScenarioNode& root, const std::string
         out.column = o.getString("column");
         out.line = o.getLine();
         if (out.file.empty() || out.file.find('/') != std::string::npos ||
-            out.file.find("..") != std::string::npos ||
-            fs::path(out.file).extension() != ".csv")
+            out.file.find("..") != std::string::npos || fs::path(out.file).extension() != ".csv")
             o.fail("file", "\"" + out.file +
                                "\": a CSV file the run writes in its folder, e.g. stiffness.csv");
         if (o.has("per") && o.has("reduce"))
             o.fail("reduce", "give per (a column per row) or reduce (one number), not both");
         out.per = o.getString("per", "");
-        out.reduce = o.has("per") ? "" : o.getChoice("reduce", {"first", "last", "min", "max", "mean"}, "first");
+        out.reduce = o.has("per")
+                         ? ""
+                         : o.getChoice("reduce", {"first", "last", "min", "max", "mean"}, "first");
         const std::string name = out.file + ":" + out.column + ":" + out.per + ":" + out.reduce;
         if (!names.insert(name).second) o.fail("this output is listed twice");
         outputs.push_back(out);
@@ -400,8 +406,9 @@ StudyScenario readStudyScenario(const ScenarioFile& file) {
     if (params.has("zip")) blocks.push_back(readZip(params.getSection("zip"), seen));
     if (params.has("random")) blocks.push_back(readRandom(params.getSection("random"), seen));
     if (blocks.empty() || seen.size() == s.fixedSets.size())
-        params.fail("sweeps nothing; give grid: {KEY: [VALUES]}, zip: {KEY: [VALUES]} or "
-                    "random: {samples: N, values: {KEY: {uniform: [LOW, HIGH]}}}");
+        params.fail(
+            "sweeps nothing; give grid: {KEY: [VALUES]}, zip: {KEY: [VALUES]} or "
+            "random: {samples: N, values: {KEY: {uniform: [LOW, HIGH]}}}");
     combine(s, blocks, params);
     s.outputs = readOutputs(root, s.baseKind);
 

@@ -1,5 +1,5 @@
-#include <io/StudyTable.h>
 #include <bagsim/Version.h>
+#include <io/StudyTable.h>
 
 #include <cerrno>
 #include <cmath>
@@ -116,9 +116,9 @@ void writeStudyH5(const StudyTable& t, const std::string& path) {
                                                    H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
                                         "dataset " + std::string(name)));
                 if (n > 0)
-                    h5::check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT,
-                                       cells.data()),
-                              "dataset " + std::string(name));
+                    h5::check(
+                        H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, cells.data()),
+                        "dataset " + std::string(name));
                 h5::setAttribute(ds.get(), "name", t.header[c]);
                 continue;
             }

@@ -1,9 +1,9 @@
-#include <study/StudyRunner.h>
+#include <fcntl.h>
 #include <io/InputError.h>
 #include <spawn.h>
+#include <study/StudyRunner.h>
 #include <sys/wait.h>
 #include <unistd.h>
-#include <fcntl.h>
 
 #include <chrono>
 #include <cmath>
@@ -80,8 +80,8 @@ std::string collectOutputs(const io::StudyScenario& s, const fs::path& dir, Case
         std::string columns;
         for (const std::string& h : head) columns += (columns.empty() ? "" : ", ") + h;
         if (col < 0 || per == -1)
-            return where + ": " + o.file + " has no column '" +
-                   (col < 0 ? o.column : o.per) + "'; its columns: " + columns;
+            return where + ": " + o.file + " has no column '" + (col < 0 ? o.column : o.per) +
+                   "'; its columns: " + columns;
         std::vector<std::string> values, keys;
         while (std::getline(in, line)) {
             if (line.empty()) continue;
@@ -91,8 +91,8 @@ std::string collectOutputs(const io::StudyScenario& s, const fs::path& dir, Case
         }
         if (per >= 0) {
             for (size_t k = 0; k < values.size(); ++k)
-                r->outputs.push_back({int(j), o.column + "[" + o.per + "=" + keys[k] + "]",
-                                      values[k]});
+                r->outputs.push_back(
+                    {int(j), o.column + "[" + o.per + "=" + keys[k] + "]", values[k]});
             continue;
         }
         const std::string name = o.reduce == "first" ? o.column : o.column + ":" + o.reduce;
@@ -107,7 +107,9 @@ std::string collectOutputs(const io::StudyScenario& s, const fs::path& dir, Case
                 const double x = std::strtod(t.c_str(), &end);
                 if (end == t.c_str() || !std::isfinite(x)) continue;
                 ++n;
-                acc = o.reduce == "min" ? std::min(acc, x) : o.reduce == "max" ? std::max(acc, x) : acc + x;
+                acc = o.reduce == "min"   ? std::min(acc, x)
+                      : o.reduce == "max" ? std::max(acc, x)
+                                          : acc + x;
             }
             if (n > 0) {
                 char buf[32];
@@ -126,7 +128,8 @@ std::string findReason(const CasePaths& p) {
     const auto at = marker.find("status: ");
     if (at != std::string::npos) {
         const auto nl = marker.find('\n', at);
-        if (nl != std::string::npos && nl + 1 < marker.size()) return oneLine(marker.substr(nl + 1));
+        if (nl != std::string::npos && nl + 1 < marker.size())
+            return oneLine(marker.substr(nl + 1));
     }
     std::istringstream log(readText(p.log));
     std::string line, last, lastError;
@@ -144,8 +147,8 @@ class CaseProcess {
   public:
     CaseProcess(const io::StudyScenario& s, size_t index, const Options& o, bool singleThreaded)
         : m_index(index), m_paths(getCasePaths(o.outDir, io::getCaseKey(s, s.cases[index]))) {
-        std::vector<std::string> args = {o.program, "run", s.baseScenario, "--out",
-                                         m_paths.dir.string(), "--force", "--quiet"};
+        std::vector<std::string> args = {
+            o.program, "run", s.baseScenario, "--out", m_paths.dir.string(), "--force", "--quiet"};
         for (const std::string& set : io::getCaseOverrides(s, s.cases[index])) {
             args.push_back("--set");
             args.push_back(set);
@@ -183,7 +186,8 @@ class CaseProcess {
         posix_spawnattr_setsigmask(&attr, &mask);
         posix_spawnattr_setflags(&attr, flags);
         m_start = Clock::now();
-        const int err = posix_spawn(&m_pid, o.program.c_str(), &fa, &attr, argv.data(), envp.data());
+        const int err =
+            posix_spawn(&m_pid, o.program.c_str(), &fa, &attr, argv.data(), envp.data());
         posix_spawn_file_actions_destroy(&fa);
         posix_spawnattr_destroy(&attr);
         if (err != 0) {
@@ -211,8 +215,8 @@ class CaseProcess {
         if (WIFSIGNALED(waitStatus)) {
             const int sig = WTERMSIG(waitStatus);
             r.status = "failed";
-            r.reason = "the run was killed by signal " + std::to_string(sig) + " (" +
-                       strsignal(sig) + ")";
+            r.reason =
+                "the run was killed by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")";
             return r;
         }
         const int code = WEXITSTATUS(waitStatus);
@@ -241,7 +245,8 @@ class CaseProcess {
 };
 
 bool isInterruptExit(int waitStatus) {
-    return WIFEXITED(waitStatus) && (WEXITSTATUS(waitStatus) == 130 || WEXITSTATUS(waitStatus) == 143);
+    return WIFEXITED(waitStatus) &&
+           (WEXITSTATUS(waitStatus) == 130 || WEXITSTATUS(waitStatus) == 143);
 }
 
 void writeRecord(const fs::path& path, const CaseRecord& r) {
@@ -297,7 +302,8 @@ std::string formatRecord(const CaseRecord& r) {
     std::ostringstream out;
     char secs[32];
     std::snprintf(secs, sizeof secs, "%.3f", r.seconds);
-    out << "status=" << r.status << "\nreason=" << oneLine(r.reason) << "\nseconds=" << secs << "\n";
+    out << "status=" << r.status << "\nreason=" << oneLine(r.reason) << "\nseconds=" << secs
+        << "\n";
     for (const CaseRecord::Output& o : r.outputs)
         out << "output=" << o.output << "\t" << oneLine(o.name) << "\t" << oneLine(o.value) << "\n";
     out << "end\n";
@@ -345,12 +351,14 @@ void prepareStudyDir(const fs::path& dir, const io::StudyScenario& s) {
     std::error_code ec;
     if (fs::exists(dir, ec)) {
         if (!fs::is_directory(dir, ec))
-            throw io::InputError(where, 0, "", "the output path exists and is not a folder; "
-                                               "choose another --out");
+            throw io::InputError(where, 0, "",
+                                 "the output path exists and is not a folder; "
+                                 "choose another --out");
         if (!fs::is_empty(dir, ec) && !fs::exists(dir / kStamp, ec))
             throw io::InputError(where, 0, "",
                                  "the output folder exists, is not empty and is not a study's "
-                                 "folder (no " + std::string(kStamp) +
+                                 "folder (no " +
+                                     std::string(kStamp) +
                                      "); its files are left alone: choose another --out");
     }
     fs::create_directories(dir / "cases", ec);
@@ -522,17 +530,21 @@ Summary runStudy(const io::StudyScenario& s, const Options& o) {
                 // A case that ended on its own just before the signal is kept.
                 if (p->getPid() > 0 && !isInterruptExit(st) && !WIFSIGNALED(st)) {
                     const CaseRecord r = p->finish(s, st);
-                    writeRecord(getCasePaths(o.outDir, io::getCaseKey(s, s.cases[p->getIndex()])).record, r);
+                    writeRecord(
+                        getCasePaths(o.outDir, io::getCaseKey(s, s.cases[p->getIndex()])).record,
+                        r);
                     onDone(p->getIndex(), r);
                 } else {
                     interrupted[p->getIndex()] = true;
                 }
             }
             running.clear();
-            if (cluster) cluster->poll([] { return -1; }, [&](int c, const std::string& text) {
-                CaseRecord r;
-                if (parseRecord(text, &r)) onDone(size_t(c), r);
-            });
+            if (cluster)
+                cluster->poll([] { return -1; },
+                              [&](int c, const std::string& text) {
+                                  CaseRecord r;
+                                  if (parseRecord(text, &r)) onDone(size_t(c), r);
+                              });
             break;
         }
         while (int(running.size()) < o.jobs) {
@@ -569,7 +581,8 @@ Summary runStudy(const io::StudyScenario& s, const Options& o) {
             });
         pr.running = int(running.size()) + (cluster ? cluster->getNumBusy() : 0);
         const bool workLeft = nextTodo < todo.size();
-        if (running.empty() && !workLeft && (!cluster || (cluster->getNumBusy() == 0 && cluster->isAllStopped())))
+        if (running.empty() && !workLeft &&
+            (!cluster || (cluster->getNumBusy() == 0 && cluster->isAllStopped())))
             break;
         pause();
     }

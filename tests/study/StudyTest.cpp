@@ -2,11 +2,11 @@
 // samples are seeded and within their bounds, every bad input is located in the study file, a
 // case's key depends on its parameters only, records survive a round trip.
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <io/InputError.h>
 #include <io/StudyScenario.h>
 #include <io/StudyTable.h>
 #include <study/StudyRunner.h>
-#include <hdf5.h>
 
 #include <cmath>
 #include <filesystem>
@@ -65,14 +65,15 @@ TEST(StudyScenario, GridMultipliesAndZipPairsInOrder) {
 }
 
 TEST(StudyScenario, RandomSamplesAreSeededAndWithinBounds) {
-    const std::string text = std::string(kHead) +
-                             "parameters:\n"
-                             "  random:\n"
-                             "    samples: 50\n"
-                             "    seed: 7\n"
-                             "    values:\n"
-                             "      airbag.height: {uniform: [140 mm, 160 mm]}\n"
-                             "      test.peak_force: {normal: [4 N, 0.5 N], within: [3.5 N, 4.2 N]}\n";
+    const std::string text =
+        std::string(kHead) +
+        "parameters:\n"
+        "  random:\n"
+        "    samples: 50\n"
+        "    seed: 7\n"
+        "    values:\n"
+        "      airbag.height: {uniform: [140 mm, 160 mm]}\n"
+        "      test.peak_force: {normal: [4 N, 0.5 N], within: [3.5 N, 4.2 N]}\n";
     const io::StudyScenario a = readText(text), b = readText(text);
     ASSERT_EQ(a.cases.size(), 50u);
     for (size_t i = 0; i < a.cases.size(); ++i) {
@@ -113,14 +114,18 @@ TEST(StudyScenario, MistakesNameFileLineKeyAndWhatIsValid) {
         {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n  zip: {test.peak_force: [1 N, 2 N], "
          "test.block: [50 mm]}\n",
          "has 1 values and 'test.peak_force' has 2"},
-        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n  zip: {contact.penalty: [1e8 Pa/m]}\n",
+        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n  zip: {contact.penalty: [1e8 "
+         "Pa/m]}\n",
          "is swept twice"},
         {"parameters:\n  grid: {airbag.colour: [red]}\n", "airbag.colour"},
-        {"parameters:\n  random: {samples: 3, values: {airbag.height: {uniform: [160 mm, 15 cm]}}}\n",
+        {"parameters:\n  random: {samples: 3, values: {airbag.height: {uniform: [160 mm, 15 "
+         "cm]}}}\n",
          "same unit"},
-        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: ../x.csv, column: a}\n",
+        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: ../x.csv, "
+         "column: a}\n",
          "a CSV file the run writes in its folder"},
-        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: s.csv, column: a, "
+        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: s.csv, column: "
+         "a, "
          "reduce: median}\n",
          "first, last, min, max, mean"},
     };
@@ -131,14 +136,16 @@ TEST(StudyScenario, MistakesNameFileLineKeyAndWhatIsValid) {
         EXPECT_GT(e.getLine(), 0) << what;
         EXPECT_NE(what.find(c.expect), std::string::npos) << what;
     }
-    const io::InputError base = readError("kind: study\nscenario: nowhere.yaml\nparameters: {grid: {a.b: [1]}}\n");
-    EXPECT_NE(std::string(base.what()).find("inline-study.yaml:2: key 'scenario'"), std::string::npos)
+    const io::InputError base =
+        readError("kind: study\nscenario: nowhere.yaml\nparameters: {grid: {a.b: [1]}}\n");
+    EXPECT_NE(std::string(base.what()).find("inline-study.yaml:2: key 'scenario'"),
+              std::string::npos)
         << base.what();
 }
 
 TEST(StudyScenario, CaseKeyDependsOnParametersAndBaseOnly) {
-    const io::StudyScenario a = readText(std::string(kHead) +
-                                         "parameters: {grid: {contact.penalty: [1e7 Pa/m, 1e8 Pa/m]}}\n");
+    const io::StudyScenario a = readText(
+        std::string(kHead) + "parameters: {grid: {contact.penalty: [1e7 Pa/m, 1e8 Pa/m]}}\n");
     const io::StudyScenario b = readText(std::string(kHead) + "description: another text\n" +
                                          "parameters: {grid: {contact.penalty: [1e8 Pa/m]}}\n");
     EXPECT_EQ(io::getCaseKey(a, a.cases[1]), io::getCaseKey(b, b.cases[0]));
@@ -165,8 +172,9 @@ TEST(StudyRecord, RoundTripsAndRefusesATruncatedOne) {
 }
 
 TEST(StudyTable, RowPerCaseWithUnitsStatusAndOutputs) {
-    const io::StudyScenario s = readText(std::string(kHead) +
-                                         "parameters: {grid: {contact.penalty: [1e7 Pa/m, 1e8 Pa/m, 1e9 Pa/m]}}\n");
+    const io::StudyScenario s =
+        readText(std::string(kHead) +
+                 "parameters: {grid: {contact.penalty: [1e7 Pa/m, 1e8 Pa/m, 1e9 Pa/m]}}\n");
     study::CaseRecord ok, bad;
     ok.status = "ok";
     ok.outputs.push_back({0, "k[m=3.5]", "0.5"});

@@ -39,13 +39,13 @@ struct StudyOutput {
 
 /// A study, its sweep expanded.
 struct StudyScenario {
-    std::string name;           ///< study file stem, or `name`
-    std::string description;    ///< free text
-    std::string studyFile;      ///< as given
-    std::string studyText;      ///< verbatim
-    std::string baseScenario;   ///< path of the base scenario (relative to the study file's folder)
-    std::string baseText;       ///< its text verbatim
-    std::string baseKind;       ///< its kind ("seed-load-test", ...)
+    std::string name;          ///< study file stem, or `name`
+    std::string description;   ///< free text
+    std::string studyFile;     ///< as given
+    std::string studyText;     ///< verbatim
+    std::string baseScenario;  ///< path of the base scenario (relative to the study file's folder)
+    std::string baseText;      ///< its text verbatim
+    std::string baseKind;      ///< its kind ("seed-load-test", ...)
     std::vector<std::string> fixedSets;  ///< the `set` section, "key=value", for every case
     std::vector<StudyParameter> parameters;
     std::vector<StudyCase> cases;

@@ -8,8 +8,8 @@
 /// every case, study.h5 at the end) is rebuilt from the records in the study's case order, so
 /// it does not depend on how many ran at once or where.
 ///
-/// Order of use: io::readStudyScenario(), then runStudy(); the library prints nothing (progress goes
-/// to Options::onProgress).
+/// Order of use: io::readStudyScenario(), then runStudy(); the library prints nothing (progress
+/// goes to Options::onProgress).
 
 #include <io/StudyScenario.h>
 #include <io/StudyTable.h>
@@ -23,9 +23,9 @@ namespace study {
 
 /// What became of one case, as kept in its record.
 struct CaseRecord {
-    std::string status;   ///< ok, partial, failed (or, never recorded: interrupted, not-run)
-    std::string reason;   ///< why it failed or is partial; "" if ok
-    double seconds = 0;   ///< wall-clock time of its run [s]
+    std::string status;  ///< ok, partial, failed (or, never recorded: interrupted, not-run)
+    std::string reason;  ///< why it failed or is partial; "" if ok
+    double seconds = 0;  ///< wall-clock time of its run [s]
     /// Collected outputs: (index of the StudyOutput, column name, value as written by the run).
     struct Output {
         int output = 0;
@@ -42,13 +42,13 @@ bool parseRecord(const std::string& text, CaseRecord* r);
 
 /// Progress after each finished case.
 struct Progress {
-    int total = 0;      ///< cases in the study
-    int finished = 0;   ///< finished so far, skipped ones included
-    int skipped = 0;    ///< done by an earlier run, not run again
-    int failed = 0;     ///< failed so far (this run and earlier)
-    int running = 0;    ///< running now
-    double elapsed = 0;    ///< since this run started [s]
-    double remaining = -1; ///< estimate [s], -1 before the first case of this run finishes
+    int total = 0;           ///< cases in the study
+    int finished = 0;        ///< finished so far, skipped ones included
+    int skipped = 0;         ///< done by an earlier run, not run again
+    int failed = 0;          ///< failed so far (this run and earlier)
+    int running = 0;         ///< running now
+    double elapsed = 0;      ///< since this run started [s]
+    double remaining = -1;   ///< estimate [s], -1 before the first case of this run finishes
     std::string lastCase;    ///< "case 3 (contact.penalty=1e8 Pa/m)"
     std::string lastStatus;  ///< its status
 };
@@ -82,9 +82,10 @@ struct Summary {
 ///   files are left alone), or cannot be created.
 void prepareStudyDir(const std::filesystem::path& dir, const io::StudyScenario& s);
 
-/// Prepares the folder (prepareStudyDir(), on rank 0), runs the cases not yet done and writes study.csv, study.h5 and, while the table is not
-/// complete, the marker INCOMPLETE. Under mpirun (built with BAGSIM_MPI) rank 0 hands out
-/// the cases and writes the table; a rank that dies loses only the case it was running.
+/// Prepares the folder (prepareStudyDir(), on rank 0), runs the cases not yet done and writes
+/// study.csv, study.h5 and, while the table is not complete, the marker INCOMPLETE. Under mpirun
+/// (built with BAGSIM_MPI) rank 0 hands out the cases and writes the table; a rank that dies loses
+/// only the case it was running.
 Summary runStudy(const io::StudyScenario& s, const Options& o);
 
 /// The table from the records (in the study's case order); missing records are `not-run` (or
