@@ -98,7 +98,7 @@ void writeStudyH5(const StudyTable& t, const std::string& path) {
             bool numeric = true;
             for (size_t r = 0; r < n && numeric; ++r)
                 numeric = isNumber(c < t.rows[r].size() ? t.rows[r][c] : "", &numbers[r]);
-            char name[16];
+            char name[24];
             std::snprintf(name, sizeof name, "%03zu", c);
             if (numeric) {
                 h5::writeDataset(table.get(), name, {n}, numbers.data(), "");
