@@ -50,6 +50,16 @@ std::vector<ShapeBagPair> findPairsAtPosture(const body::BodyModel& model, SimTK
     model.getSystem().realize(state, SimTK::Stage::Position);
     std::vector<Eigen::Vector3d> centres;
     std::vector<double> radii;
+    calcSegmentBounds(model, state, centres, radii);
+    return findShapeBagPairs(centres, radii, cells, margin);
+}
+
+}  // namespace
+
+void calcSegmentBounds(const body::BodyModel& model, const SimTK::State& state,
+                       std::vector<Eigen::Vector3d>& centres, std::vector<double>& radii) {
+    centres.clear();
+    radii.clear();
     for (int k = 0; k < body::kSegmentCount; ++k) {
         const auto seg = static_cast<body::Segment>(k);
         const body::ContactShape& s = model.getContactShape(seg);
@@ -58,10 +68,7 @@ std::vector<ShapeBagPair> findPairsAtPosture(const body::BodyModel& model, SimTK
         centres.emplace_back(c[0], c[1], c[2]);
         radii.push_back(s.getBoundingRadius());
     }
-    return findShapeBagPairs(centres, radii, cells, margin);
 }
-
-}  // namespace
 
 std::vector<int> findSegmentsOffArray(const body::PatientSpec& spec,
                                       const PatientOnArrayOptions& options) {

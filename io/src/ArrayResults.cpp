@@ -175,9 +175,7 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
 
 void ArrayResultsWriter::finish(const std::string& message) {
     Impl& d = *m_impl;
-    h5::setAttribute(d.meta.get(), "status", std::string("complete"));
-    h5::setAttribute(d.meta.get(), "message", message);
-    h5::setAttribute(d.meta.get(), "finished", getUtcTimestamp());
+    setRunStatus(d.meta.get(), "complete", message);
     d.flush();
     d.close();
     d.writeXdmf();
@@ -188,9 +186,7 @@ void ArrayResultsWriter::fail(const std::string& status, const std::string& mess
     Impl& d = *m_impl;
     if (d.closed) return;
     try {
-        h5::setAttribute(d.meta.get(), "status", status);
-        h5::setAttribute(d.meta.get(), "message", message);
-        h5::setAttribute(d.meta.get(), "finished", getUtcTimestamp());
+        setRunStatus(d.meta.get(), status, message);
         d.flush();
     } catch (...) {
         // Keep going: the marker below still says the folder is incomplete.

@@ -393,6 +393,12 @@ h5::Handle createRunMeta(hid_t file, const RunInfo& info, const std::string& kin
     return meta;
 }
 
+void setRunStatus(hid_t meta, const std::string& status, const std::string& message) {
+    h5::setAttribute(meta, "status", status);
+    h5::setAttribute(meta, "message", message);
+    h5::setAttribute(meta, "finished", getUtcTimestamp());
+}
+
 LoadTestWriter::LoadTestWriter(const OutputDir& dir, const RunInfo& info,
                                const bags::LoadTestOptions& test, const Options& options)
     : m_impl(std::make_unique<Impl>(dir)) {
@@ -573,9 +579,7 @@ void LoadTestWriter::fail(const std::string& status, const std::string& message)
     try {
         if (d.hasPending && !d.pendingSaved) d.saveFrame(d.pending, d.pendingX);
         d.pendingSaved = true;
-        h5::setAttribute(d.meta.get(), "status", status);
-        h5::setAttribute(d.meta.get(), "message", message);
-        h5::setAttribute(d.meta.get(), "finished", getUtcTimestamp());
+        setRunStatus(d.meta.get(), status, message);
         d.flush();
     } catch (...) {
         // Keep going: the marker below still says the folder is incomplete.

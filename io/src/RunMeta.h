@@ -12,5 +12,7 @@ namespace io {
 
 /// Creates /meta in `file` for a run of the given scenario kind.
 h5::Handle createRunMeta(hid_t file, const RunInfo& info, const std::string& kind);
+/// Sets /meta's status and message and stamps the time it finished.
+void setRunStatus(hid_t meta, const std::string& status, const std::string& message);
 
 }  // namespace io

@@ -2,6 +2,7 @@
 // and for one lying beside it.
 #include <body/BodyModel.h>
 #include <cosim/BodyParticipant.h>
+#include <cosim/PatientOnArray.h>
 #include <cosim/ShapeBagPairs.h>
 #include <gtest/gtest.h>
 
@@ -22,16 +23,7 @@ void findSpheres(double x, double y, std::vector<Eigen::Vector3d>& centres,
     SimTK::State state = model.getSystem().getDefaultState();
     model.setPosture(state);
     model.getSystem().realize(state, SimTK::Stage::Position);
-    centres.clear();
-    radii.clear();
-    for (int k = 0; k < body::kSegmentCount; ++k) {
-        const auto seg = static_cast<body::Segment>(k);
-        const body::ContactShape& s = model.getContactShape(seg);
-        const SimTK::Vec3 c =
-            model.getMobilizedBody(seg).getBodyTransform(state) * s.getBoundingCentre();
-        centres.emplace_back(c[0], c[1], c[2]);
-        radii.push_back(s.getBoundingRadius());
-    }
+    calcSegmentBounds(model, state, centres, radii);
 }
 
 // 20 rows of 2 of the seed's wedges across the bed, 105 mm rows, 360 mm columns.

@@ -42,6 +42,11 @@ struct PatientOnArrayOptions {
     void validate() const;
 };
 
+/// Every segment's contact-shape bounding sphere in Ground (centre [m], radius [m]), segment
+/// order, at a state realized to Position: what findShapeBagPairs() takes.
+void calcSegmentBounds(const body::BodyModel& model, const SimTK::State& state,
+                       std::vector<Eigen::Vector3d>& centres, std::vector<double>& radii);
+
 /// The segments (body::Segment indices) with no bag of the layout under them in the spec's
 /// posture and position: a patient who lies (partly) off the array. Builds the body model
 /// only, no bag, so a scenario reader can refuse such a patient before anything runs.
