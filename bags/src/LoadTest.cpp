@@ -24,10 +24,12 @@ constexpr double kBlockHalfHeight = 0.010;  // [m] thickness of the rigid block 
 
 double calcTop(const Eigen::Matrix3Xd& x) { return x.row(2).maxCoeff(); }
 
-// Top of the bag under the block's footprint [m] (where the block first touches).
-double calcTopUnderBlock(const Eigen::Matrix3Xd& x, const Vec3& centre, double half) {
+// Top of the pressed bag (nodes [begin, end)) under the block's footprint [m] (where the
+// block first touches).
+double calcTopUnderBlock(const Eigen::Matrix3Xd& x, const Vec3& centre, double half, int begin,
+                         int end) {
     double top = -std::numeric_limits<double>::infinity();
-    for (int i = 0; i < x.cols(); ++i)
+    for (int i = begin; i < end; ++i)
         if (std::abs(x(0, i) - centre.x()) <= half && std::abs(x(1, i) - centre.y()) <= half)
             top = std::max(top, x(2, i));
     return std::isfinite(top) ? top : calcTop(x);
@@ -66,7 +68,33 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     spec.forceTolerance = calcLoadTestForceTolerance(o);
     spec.threads = o.threads;
     spec.predictor = o.predictor;
+    spec.cluster = calcNeighbourPoses(o);
     return spec;
+}
+
+std::vector<Eigen::Isometry3d> calcNeighbourPoses(const LoadTestOptions& o) {
+    using N = LoadTestOptions::Neighbours;
+    const double py = o.geometry.width + o.neighbourGap;
+    const double px = o.geometry.longSide + o.neighbourGap;
+    std::vector<Vec3> at;
+    switch (o.neighbours) {
+        case N::None: return {};
+        case N::Pair: at = {Vec3(0, 0, 0), Vec3(0, py, 0)}; break;
+        case N::Row3: at = {Vec3(0, 0, 0), Vec3(0, -py, 0), Vec3(0, py, 0)}; break;
+        case N::Block3x3:
+            at = {Vec3(0, 0, 0)};
+            for (int i = -1; i <= 1; ++i)
+                for (int j = -1; j <= 1; ++j)
+                    if (i != 0 || j != 0) at.push_back(Vec3(i * px, j * py, 0));
+            break;
+    }
+    std::vector<Eigen::Isometry3d> poses;
+    for (const Vec3& p : at) {
+        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+        X.translation() = p;
+        poses.push_back(X);
+    }
+    return poses;
 }
 
 double calcLoadTestForceTolerance(const LoadTestOptions& o) {
@@ -127,6 +155,25 @@ void LoadTestOptions::validate() const {
             "use a stiffness per area >= 0 Pa/m (0 disables it; e.g. 1e4)");
     require(damping >= 0.0 && std::isfinite(damping), "damping", damping,
             "use a stiffness per area >= 0 Pa/m (0: no damper; e.g. 1e5)");
+    if (neighbours != Neighbours::None) {
+        require(neighbourGap > 0.0 && neighbourGap < 0.1, "neighbourGap", neighbourGap,
+                "use a gap between the bags' facing panels of 0 < gap < 100 mm (e.g. 5 mm)");
+        require(neighbourGasMass >= 0.0 && neighbourGasMass < 1.0, "neighbourGasMass",
+                neighbourGasMass,
+                "use a gas mass > 0 (in kg inside; e.g. 3.0 g), or 0 for the pressed bag's own");
+        if (connection != Connection::Open)
+            throw std::invalid_argument(
+                "load test option 'neighbours' needs the open connection (one gas body per "
+                "bag); the orifice connection is not supported among neighbours");
+        if (!selfContact)
+            throw std::invalid_argument(
+                "load test option 'neighbours' needs selfContact: the bags' walls meet "
+                "through it");
+        if (ensemble > 1)
+            throw std::invalid_argument(
+                "load test option 'neighbours' does not run with an ensemble (ensemble = " +
+                std::to_string(ensemble) + "); use ensemble 1");
+    }
     blockContact.validate();
     floorContact.validate();
     solver.validate();
@@ -142,11 +189,30 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
     const auto wallStart = std::chrono::steady_clock::now();
     Airbag bag(makeAirbagSpec(o));
     const Mesh& mesh = bag.getMesh();
-    // Block above the apex ridge, parked well clear while inflating.
+    const bool cluster = o.neighbours != LoadTestOptions::Neighbours::None;
+    // The pressed bag is bag 0 of a cluster: its nodes and chambers are the ones measured.
+    const auto [pressedBegin, pressedEnd] =
+        cluster ? bag.getBagNodes(0) : std::pair<int, int>(0, static_cast<int>(mesh.X.cols()));
+    std::vector<int> chambers;
+    if (cluster) {
+        chambers = bag.getBagChambers(0);
+    } else {
+        for (int c = 0; c < bag.getNumChambers(); ++c) chambers.push_back(c);
+    }
+    // Per-bag gas masses of curve k: the pressed bag's, then its neighbours'.
+    const int nBags = cluster ? static_cast<int>(calcNeighbourPoses(o).size()) : 1;
+    auto bagMasses = [&](size_t k) {
+        std::vector<double> m(nBags, o.neighbourGasMass > 0.0 ? o.neighbourGasMass
+                                                               : o.gasMasses[k]);
+        m[0] = o.gasMasses[k];
+        return m;
+    };
+    // Block above the pressed bag's apex ridge, parked well clear while inflating.
     Vec3 blockCentreXY = Vec3::Zero();
     {
-        int top = 0;
-        mesh.X.row(2).maxCoeff(&top);
+        int top = pressedBegin;
+        for (int i = pressedBegin; i < pressedEnd; ++i)
+            if (mesh.X(2, i) > mesh.X(2, top)) top = i;
         blockCentreXY = Vec3(mesh.X(0, top), 0.0, 0.0);
     }
     auto blockShape = std::shared_ptr<RigidShape>(
@@ -154,9 +220,12 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 std::min(1e-3, 0.1 * o.blockSize)));
     blockShape->setPose(makeBlockPose(blockCentreXY, calcTop(mesh.X) + 0.2));
     const int block = bag.addShape(blockShape, o.blockContact);
-    const int nc = bag.getNumChambers();
 
-    bag.inflate(o.gasMasses.front());
+    if (cluster) {
+        bag.inflate(bagMasses(0));
+    } else {
+        bag.inflate(o.gasMasses.front());
+    }
 
     LoadTestResult result;
     std::shared_ptr<const Airbag::Snapshot> lastUnloaded;  // the last curve's state before loading
@@ -177,7 +246,11 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         }
         bag.commit();
         // Let the gas out (or in) to this curve's mass, block clear.
-        bag.changeGasMass(curve.gasMass);
+        if (cluster) {
+            bag.changeGasMass(bagMasses(k));
+        } else {
+            bag.changeGasMass(curve.gasMass);
+        }
         if (o.connection == LoadTestOptions::Connection::Orifice && o.settleTime > 0.0) {
             // Before loading, the chambers settle towards one pressure (a long wait, 1000 s
             // by default). Backward Euler in steps doubling in length (0.98 s first of 10):
@@ -193,11 +266,12 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 bag.commit();
             }
         }
-        const double top = calcTopUnderBlock(bag.getPositions(), blockCentreXY, 0.5 * o.blockSize);
+        const double top = calcTopUnderBlock(bag.getPositions(), blockCentreXY, 0.5 * o.blockSize,
+                                             pressedBegin, pressedEnd);
         curve.unloadedHeight = top;
         curve.inflatedVolume = 0.0;
-        for (int c = 0; c < nc; ++c) curve.inflatedVolume += bag.getChamberState(c).volume;
-        curve.inflatedGaugePressure = bag.getChamberState(0).gaugePressure;
+        for (int c : chambers) curve.inflatedVolume += bag.getChamberState(c).volume;
+        curve.inflatedGaugePressure = bag.getChamberState(chambers.front()).gaugePressure;
         const auto unloaded = bag.getSnapshot();
         lastUnloaded = unloaded;
 
@@ -211,7 +285,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             const double prevTime = curve.steps.empty() ? 0.0 : curve.steps.back().time;
             st.time = prevTime + std::abs(disp - prevDisp) / o.loadingRate;
             st.force = bag.calcShapeWrench(block).force.z();
-            for (int c = 0; c < nc; ++c) {
+            for (int c : chambers) {
                 const ChamberState cs = bag.getChamberState(c);
                 st.gaugePressure.push_back(cs.gaugePressure);
                 st.volume.push_back(cs.volume);

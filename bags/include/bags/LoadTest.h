@@ -51,6 +51,18 @@ struct LoadTestOptions {
     double settleTime = 1000.0;
     int settleSteps = 10;
     std::vector<double> gasMasses;      ///< [kg], run in this order (seed: 3.5 g down to 1.0 g)
+    /// The pressed bag among neighbours of the same bag, side by side in one module
+    /// (AirbagSpec::cluster; their walls meet through self-contact, so selfContact must be
+    /// on and the connection open). The pressed bag is bag 0 at the origin; across the width
+    /// (y) the pitch is width + neighbourGap, along x (Block3x3 only) longSide + neighbourGap.
+    /// None: the bag alone (the seed's rig); Pair: one neighbour at +y; Row3: one at -y and
+    /// one at +y; Block3x3: the middle of a 3 x 3 block.
+    /// docs/array-coupling.md.
+    enum class Neighbours { None, Pair, Row3, Block3x3 };
+    Neighbours neighbours = Neighbours::None;
+    double neighbourGap = 5.0e-3;       ///< [m] between facing flat panels (0 < gap < 100 mm)
+    /// [kg] every neighbour's gas mass at every curve; 0: the pressed bag's mass of that curve
+    double neighbourGasMass = 0.0;
     double blockSize = 0.050;           ///< square block edge [m]
     double loadingRate = 10.0e-3 / 60.0;///< [m/s] (10 mm/min)
     double peakForce = 50.0;            ///< [N]
@@ -144,8 +156,12 @@ LoadTestResult runLoadTest(const LoadTestOptions& options, const LoadTestObserve
 inline constexpr double kToleranceForceCap = 50.0;
 /// The bag's force tolerance [N] for these options (see residualTolerance).
 double calcLoadTestForceTolerance(const LoadTestOptions& options);
-/// The airbag the load test drives (geometry, material, gas, contact, solver of the options).
+/// The airbag the load test drives (geometry, material, gas, contact, solver of the options);
+/// with neighbours, a cluster whose bag 0 is the pressed one.
 AirbagSpec makeAirbagSpec(const LoadTestOptions& options);
+/// Poses of the bags of the module (bag 0, the pressed one, at the identity) for the options'
+/// neighbours layout; empty for Neighbours::None (one bag, no cluster).
+std::vector<Eigen::Isometry3d> calcNeighbourPoses(const LoadTestOptions& options);
 
 /// Stiffness of a curve's loading branch over the force range [from, to] [N]: least-squares
 /// slope [N/m] and r^2 of force against displacement; NaN for both when the loading never
