@@ -77,6 +77,8 @@ FillMassMeasurement measureFillMass(const LoadTestOptions& rig, double expectedF
     LoadTestOptions o = rig;
     // Only the inflated, unloaded states count: the block barely touches the bag.
     o.connection = LoadTestOptions::Connection::Open;
+    // The fill mass is the bag's own, measured alone (not squeezed by neighbours).
+    o.neighbours = LoadTestOptions::Neighbours::None;
     o.peakForce = 0.5;
     o.stiffnessFrom = 0.1;
     o.stiffnessTo = 0.4;

@@ -123,6 +123,9 @@ const std::vector<KeyAlias>& getAliases() {
         {"stabilization", "solver", "stabilization"},
         {"damping", "solver", "damping"},
         {"residualTolerance", "solver", "residual_tolerance"},
+        {"neighbourGap", "airbag", "neighbours"},
+        {"neighbourGasMass", "airbag", "neighbours"},
+        {"neighbours", "airbag", "neighbours"},
     };
     return aliases;
 }
@@ -159,7 +162,8 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
     bags::DoubleWedgeParams& g = o.geometry;
     s.checkKeys({"long_side", "short_side", "width", "height"},
                 {"mesh_size", "diaphragm", "bond_base", "connection", "orifice_diameter",
-                 "discharge_coefficient", "fill_mass", "fill_scaling", "imperfection"});
+                 "discharge_coefficient", "fill_mass", "fill_scaling", "imperfection",
+                 "neighbours"});
     g.longSide = s.getQuantity("long_side", D::Length);
     g.shortSide = s.getQuantity("short_side", D::Length);
     g.width = s.getQuantity("width", D::Length);
@@ -210,6 +214,31 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
         if (seed < 0)
             imp.fail("seed", std::to_string(seed) + " must be a whole number >= 0");
         o.imperfection.seed = static_cast<std::uint64_t>(seed);
+    }
+
+    // The pressed bag among neighbours of the same bag (docs/array-coupling.md).
+    if (s.has("neighbours")) {
+        const ScenarioNode nb = s.getSection("neighbours");
+        nb.checkKeys({"layout"}, {"gap", "gas_mass"});
+        using N = bags::LoadTestOptions::Neighbours;
+        const std::string layout = nb.getChoice("layout", {"none", "pair", "row3", "block3x3"});
+        o.neighbours = layout == "pair"       ? N::Pair
+                       : layout == "row3"     ? N::Row3
+                       : layout == "block3x3" ? N::Block3x3
+                                              : N::None;
+        // With layout none, gap and gas_mass are read and checked but unused, so a study can
+        // sweep the layout with them set for every case.
+        o.neighbourGap = nb.getQuantity("gap", D::Length, o.neighbourGap);
+        checkRange(nb, "gap", o.neighbourGap, 0, false, 0.1, false, "mm",
+                   "between the facing flat panels of neighbouring bags, e.g. 5 mm");
+        if (nb.has("gas_mass")) {
+            o.neighbourGasMass = nb.getQuantity("gas_mass", D::Mass);
+            checkRange(nb, "gas_mass", o.neighbourGasMass, 0, false, 0.1, false, "g",
+                       "every neighbour's gas mass; leave it out for the pressed bag's own");
+        }
+        if (o.neighbours != N::None && connection == "orifice")
+            s.fail("connection", "orifice is not supported with neighbours (one gas body per "
+                                 "bag); use connection: open");
     }
 }
 
