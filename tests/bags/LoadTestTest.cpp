@@ -297,3 +297,97 @@ TEST(LoadTest, ALargePeakForceDoesNotLoosenTheSolve) {
     o.stiffnessTo = 4.0;
     EXPECT_LT(calcLoadTestForceTolerance(o), usual);
 }
+
+// --- the pressed bag among neighbours (LoadTestOptions::neighbours; docs/array-coupling.md)
+
+namespace {
+
+// One taut curve on a 30 mm mesh, loading only, to just past the stiffness range.
+LoadTestOptions coarseNeighbourOptions() {
+    LoadTestOptions o = coarseOptions();
+    o.geometry.meshSize = 0.030;
+    o.gasMasses = {4.5e-3};
+    o.peakForce = 36.0;
+    o.unload = false;
+    o.displacementStep = 1e-3;  // enough steps in the 10-35 N range for a stiffness
+    return o;
+}
+
+}  // namespace
+
+TEST(LoadTest, NoNeighboursIsTheBagAloneBitForBit) {
+    // Layout none takes no cluster, and ignores the neighbours' gap and gas mass.
+    LoadTestOptions o = coarseNeighbourOptions();
+    EXPECT_TRUE(makeAirbagSpec(o).cluster.empty());
+    LoadTestOptions v = o;
+    v.neighbours = LoadTestOptions::Neighbours::None;
+    v.neighbourGap = 0.02;
+    v.neighbourGasMass = 1.0e-3;
+    const LoadTestResult a = runLoadTest(o), b = runLoadTest(v);
+    ASSERT_EQ(a.curves.size(), 1u);
+    ASSERT_EQ(a.curves[0].steps.size(), b.curves[0].steps.size());
+    EXPECT_EQ(a.curves[0].stiffness, b.curves[0].stiffness);
+    EXPECT_EQ(a.curves[0].inflatedGaugePressure, b.curves[0].inflatedGaugePressure);
+    for (size_t i = 0; i < a.curves[0].steps.size(); ++i) {
+        EXPECT_EQ(a.curves[0].steps[i].force, b.curves[0].steps[i].force);
+        EXPECT_EQ(a.curves[0].steps[i].gaugePressure, b.curves[0].steps[i].gaugePressure);
+    }
+}
+
+TEST(LoadTest, ANeighbourSqueezesThePressedBagAndStiffensIt) {
+    // Two taut bags 5 mm apart flatten their facing side panels against each other: the
+    // pressed bag's pressure rises before the block touches, and its stiffness with it.
+    const LoadTestOptions alone = coarseNeighbourOptions();
+    LoadTestOptions pair = alone;
+    pair.neighbours = LoadTestOptions::Neighbours::Pair;
+    ASSERT_EQ(makeAirbagSpec(pair).cluster.size(), 2u);
+    const LoadTestResult a = runLoadTest(alone), p = runLoadTest(pair);
+    const LoadCurve &ca = a.curves.at(0), &cp = p.curves.at(0);
+    ASSERT_TRUE(std::isfinite(ca.stiffness));
+    ASSERT_TRUE(std::isfinite(cp.stiffness));
+    // The steps record the pressed bag's chambers only: the same columns as alone.
+    EXPECT_EQ(cp.steps.front().gaugePressure.size(), ca.steps.front().gaugePressure.size());
+    EXPECT_GT(cp.inflatedGaugePressure, ca.inflatedGaugePressure * 1.01);
+    EXPECT_LT(cp.inflatedVolume, ca.inflatedVolume);
+    EXPECT_GT(cp.stiffness, ca.stiffness);
+    // The pressed bag holds its own gas: its mass is the curve's, not the pair's.
+    double mass = 0.0;
+    for (double m : cp.steps.front().gasMass) mass += m;
+    EXPECT_NEAR(mass, 4.5e-3, 1e-9);
+}
+
+TEST(LoadTest, RejectsImpossibleNeighbourOptions) {
+    LoadTestOptions o = coarseNeighbourOptions();
+    o.neighbours = LoadTestOptions::Neighbours::Row3;
+    EXPECT_NO_THROW(o.validate());
+    auto message = [](const LoadTestOptions& v) {
+        try {
+            v.validate();
+        } catch (const std::invalid_argument& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    LoadTestOptions v = o;
+    v.neighbourGap = 0.0;
+    EXPECT_NE(message(v).find("neighbourGap"), std::string::npos);
+    v.neighbourGap = 0.1;
+    EXPECT_NE(message(v).find("100 mm"), std::string::npos);
+    v = o;
+    v.neighbourGasMass = -1e-3;
+    EXPECT_NE(message(v).find("neighbourGasMass"), std::string::npos);
+    v = o;
+    v.selfContact = false;
+    EXPECT_NE(message(v).find("selfContact"), std::string::npos);
+    v = o;
+    v.geometry.diaphragm = true;
+    v.connection = LoadTestOptions::Connection::Orifice;
+    EXPECT_NE(message(v).find("open connection"), std::string::npos);
+    // Block3x3: the pressed bag in the middle, pitch long side + gap along x.
+    v = o;
+    v.neighbours = LoadTestOptions::Neighbours::Block3x3;
+    const auto poses = calcNeighbourPoses(v);
+    ASSERT_EQ(poses.size(), 9u);
+    EXPECT_TRUE(poses[0].translation().isZero());
+    EXPECT_NEAR(poses[1].translation().x(), -(v.geometry.longSide + v.neighbourGap), 1e-15);
+}

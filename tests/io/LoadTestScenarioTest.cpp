@@ -491,3 +491,39 @@ TEST(LoadTestScenario, ImperfectionAndEnsembleKeys) {
         EXPECT_EQ(err.getKey(), b.key) << err.what();
     }
 }
+
+TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
+    // The pressed bag among neighbours (docs/array-coupling.md): layout, gap, gas mass.
+    const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 6,
+                    "  height: 150 mm\n  neighbours: {layout: row3, gap: 4 mm, gas_mass: 3.0 g}"),
+        "n.yaml"));
+    EXPECT_EQ(sc.options.neighbours, bags::LoadTestOptions::Neighbours::Row3);
+    EXPECT_NEAR(sc.options.neighbourGap, 4e-3, 1e-15);
+    EXPECT_NEAR(sc.options.neighbourGasMass, 3e-3, 1e-15);
+    const auto base = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
+    EXPECT_EQ(base.options.neighbours, bags::LoadTestOptions::Neighbours::None);
+    EXPECT_EQ(base.options.neighbourGasMass, 0.0);  // the pressed bag's own at each curve
+
+    // Errors name the line, the key and what is valid.
+    const InputError e = errorFor(replaceLine(
+        kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: pair\n    gap: 120 mm"));
+    EXPECT_EQ(e.getLine(), 9);
+    EXPECT_EQ(e.getKey(), "airbag.neighbours.gap");
+    EXPECT_NE(std::string(e.what()).find("100 mm"), std::string::npos) << e.what();
+    const InputError e2 = errorFor(
+        replaceLine(kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: hexagon"));
+    EXPECT_EQ(e2.getLine(), 8);
+    EXPECT_NE(std::string(e2.what()).find("row3"), std::string::npos) << e2.what();
+    const InputError e3 = errorFor(replaceLine(
+        kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: pair\n    gas_mass: -1 g"));
+    EXPECT_EQ(e3.getKey(), "airbag.neighbours.gas_mass");
+    const InputError e4 = errorFor(replaceLine(
+        kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: pair\n    pitch: 110 mm"));
+    EXPECT_EQ(e4.getLine(), 9);
+    const InputError e5 = errorFor(
+        replaceLine(kBase, 6,
+                    "  height: 150 mm\n  diaphragm: true\n  connection: orifice\n"
+                    "  neighbours: {layout: pair}"));
+    EXPECT_EQ(e5.getKey(), "airbag.connection");
+}
