@@ -309,11 +309,10 @@ struct Airbag::Impl {
         const double span = masses[ref] - from[ref];
         solveRamp(from[ref], masses[ref],
                   [&](double m) {
+                      // The way along; span 0: no bag changes, every mass stays.
+                      const double f = span == 0.0 ? 1.0 : (m - from[ref]) / span;
                       for (int b = 0; b < numBags; ++b)
-                          setBagGasMass(b, b == ref || span == 0.0
-                                               ? (b == ref ? m : masses[b])
-                                               : from[b] + (m - from[ref]) / span *
-                                                               (masses[b] - from[b]));
+                          setBagGasMass(b, b == ref ? m : from[b] + f * (masses[b] - from[b]));
                   },
                   "changing the gas mass");
     }
