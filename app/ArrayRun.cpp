@@ -3,6 +3,7 @@
 #include "ArrayRun.h"
 
 #include <bagsim/Version.h>
+#include <cosim/ArrayPneumatics.h>
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayResults.h>
 #include <io/ArrayScenario.h>
@@ -19,6 +20,7 @@
 #include <memory>
 #include <sstream>
 
+#include "ArrayVerdict.h"
 #include "Interrupt.h"
 
 namespace bagsim::app {
@@ -32,6 +34,13 @@ std::string fmt(const char* f, double v) {
 }
 
 constexpr double kDeg = 180.0 / 3.14159265358979323846;
+constexpr double kPressedThreshold = 5.0 * 133.322387415;  // [Pa] 5 mmHg, as regions.csv
+
+double calcBagVolume(const bags::Airbag& a) {
+    double v = 0.0;
+    for (int c = 0; c < a.getNumChambers(); ++c) v += a.getChamberState(c).volume;
+    return v;
+}
 
 struct Totals {
     int steps = 0, passes = 0, cuts = 0;
@@ -77,6 +86,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         for (const io::GasCommandText& g : sc.gasText)
             std::cerr << "  gas from " << fmt("%g s", g.at) << " after the settle: " << g.who
                       << " " << g.what << "\n";
+        if (sc.hasPneumatics) {
+            std::cerr << "  pneumatics: " << sc.pneumatics.channels.size() << " channels";
+            for (const cosim::PneumaticChannel& c : sc.pneumatics.channels)
+                std::cerr << " '" << c.name << "' (" << c.bags.size() << ")";
+            std::cerr << "; control " << (sc.controlKind.empty() ? "none" : sc.controlKind) << "\n";
+            for (const std::string& t : sc.controlText) std::cerr << "    " << t << "\n";
+        }
         std::cerr << "  writing to " << outPath.string()
                   << "/ (Ctrl-C stops and keeps what was computed, marked INCOMPLETE)\n";
     }
@@ -96,6 +112,20 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
     Totals totals;
     const double end = sc.getEndTime();
     double nextOutput = 0.0;
+    ArrayVerdict verdict(layout, sc.options.bag.geometry, sc.settleTime, sc.duration,
+                         sc.targetTilt);
+    // The pneumatics: the network's bags (participants), their volumes at the last committed
+    // step and its rate; the largest relative difference of bag and network gas masses.
+    std::unique_ptr<cosim::ArrayPneumatics> air;
+    std::vector<int> airParticipant;
+    std::vector<double> airVolume, airRate;
+    double massMismatch = 0.0;
+    std::vector<cosim::ControlEvent> events;
+    size_t eventsWritten = 0;
+    auto writeEvents = [&] {
+        for (; eventsWritten < events.size(); ++eventsWritten)
+            writer->addEvent(events[eventsWritten].time, events[eventsWritten].text);
+    };
     auto record = [&] {
         io::ArrayFrame f;
         f.time = poa->getTime();
@@ -103,16 +133,34 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         f.bags = cosim::calcBagReadings(*poa);
         f.pelvisTilt = cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk);
         f.thoraxTilt = cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk);
+        f.centreOfMass = cosim::calcCentreOfMass(*poa);
+        if (air)
+            for (int b : air->getBags()) {
+                const cosim::BagFlow q = air->getBagFlow(b);
+                f.pneumatics.push_back({b, air->readBagSensor(b), q.in, q.out});
+            }
         cosim::fillPressureMat(*poa, mat);
         f.mat = &mat;
         writer->addFrame(f);
+        verdict.addFrame(f, cosim::calcPressedNodeHeights(*poa, kPressedThreshold));
         return f;
     };
     auto where = [&] {
         return poa ? fmt("at %.4f s", poa->getTime()) + fmt(" of %g s", end)
                    : std::string("while building the model (inflating the bags)");
     };
+    auto setTurn = [&] {
+        if (const auto* turn = dynamic_cast<const cosim::TurnController*>(sc.controller.get()))
+            verdict.setTurn(turn->getTiltReachedTime(),
+                            turn->getPhase() == cosim::TurnController::Phase::Done);
+    };
     auto stop = [&](const std::string& status, const std::string& msg) {
+        try {  // the verdict on what was run (the folder stays marked INCOMPLETE)
+            writeEvents();
+            setTurn();
+            writer->writeVerdict(verdict.makeRows());
+        } catch (...) {
+        }
         writer->fail(status, msg);
         std::cerr << "bagsim: " << msg << "; results so far kept in " << outPath.string()
                   << "/ (marked INCOMPLETE)\n";
@@ -129,17 +177,75 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                       << poa->getPairs().size() << " segment-bag pairs; released "
                       << fmt("%.1f mm", 1e3 * poa->getReleaseClearance())
                       << " above the board\n";
+        if (sc.hasPneumatics) {
+            const int n = layout.rows * layout.columns;
+            std::vector<double> masses(n, -1.0), volumes(n, 0.0);
+            for (size_t i = 0; i < poa->getBagIndices().size(); ++i) {
+                const bags::Airbag& a = poa->getBag(int(i)).getAirbag();
+                masses[poa->getBagIndices()[i]] = a.getTotalGasMass();
+                volumes[poa->getBagIndices()[i]] = calcBagVolume(a);
+            }
+            air = std::make_unique<cosim::ArrayPneumatics>(sc.pneumatics, sc.options.bag.gas,
+                                                           masses, volumes);
+            for (int b : air->getBags()) {
+                const auto it = std::find(poa->getBagIndices().begin(),
+                                          poa->getBagIndices().end(), b);
+                airParticipant.push_back(int(it - poa->getBagIndices().begin()));
+                airVolume.push_back(volumes[b]);
+                airRate.push_back(0.0);
+            }
+            // Every attempt of a macro step (a cut step again) steps the network over exactly
+            // that step and gives each bag the mass the network moved into it.
+            poa->updCoupling().setBeforeStep([&](double t, double dt) {
+                std::vector<pneumatics::BagVolume> v(airVolume.size());
+                for (size_t k = 0; k < v.size(); ++k) v[k] = {airVolume[k], airRate[k]};
+                const std::vector<double> q = air->step(t, dt, v);
+                for (size_t k = 0; k < q.size(); ++k)
+                    poa->updBag(airParticipant[k]).updAirbag().setMassFlow(q[k]);
+            });
+            if (!quiet)
+                std::cerr << "  pneumatics: " << air->getBags().size() << " bags in the network\n";
+        }
+        events.push_back({0.0, "released onto the bags"});
+        writeEvents();
         outDir->setStatus("running", "the patient on the bags");
         record();
         nextOutput = sc.outputInterval;
         double lastPrint = wall();
+        bool settled = !(sc.settleTime > 0.0 && sc.duration > 0.0);
         while (poa->getTime() < end - 1e-9) {
             const double t = poa->getTime() + 1e-9;
+            if (!settled && t >= sc.settleTime) {
+                settled = true;
+                events.push_back({poa->getTime(), "settle ended"});
+            }
             sc.gas.apply(t, bags);
-            const cosim::StepSummary s = poa->stepUntil(std::min(end, sc.gas.findNextChange(t)));
+            double limit = std::min(end, sc.gas.findNextChange(t));
+            if (!settled) limit = std::min(limit, sc.settleTime);
+            if (sc.controller) {
+                cosim::ControlInputs in;
+                in.time = poa->getTime();
+                in.pelvisTilt = cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk);
+                sc.controller->update(in, *air, events);
+                limit = std::min(limit, sc.controller->findNextChange(t));
+            }
+            writeEvents();
+            const cosim::StepSummary s = poa->stepUntil(limit);
             ++totals.steps;
             totals.passes += s.iterations;
             totals.cuts += s.cuts;
+            if (air) {
+                // The committed step: each bag's volume now and its rate over the step; the
+                // bag's and the network's masses (one owner: they must agree to roundoff).
+                for (size_t k = 0; k < airVolume.size(); ++k) {
+                    const bags::Airbag& a = poa->getBag(airParticipant[k]).getAirbag();
+                    const double v = calcBagVolume(a);
+                    airRate[k] = (v - airVolume[k]) / s.macroStep;
+                    airVolume[k] = v;
+                    const double mb = a.getTotalGasMass(), mn = air->getBagMass(air->getBags()[k]);
+                    massMismatch = std::max(massMismatch, std::abs(mb - mn) / mn);
+                }
+            }
             throwIfInterrupted();
             if (poa->getTime() >= nextOutput - 1e-9 || poa->getTime() >= end - 1e-9) {
                 const io::ArrayFrame f = record();
@@ -193,15 +299,37 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                       r.area * 1e4, r.force);
         table << line;
     }
+    if (air) {
+        table << "pneumatics: gas masses of bag and network agree to "
+              << fmt("%.1e", massMismatch) << " (largest relative difference over the run)\n";
+        for (int c = 0; c < air->getNumChannels(); ++c) {
+            const size_t n = air->getChannelBags(c).size();
+            table << "  channel '" << air->getChannelName(c) << "': " << n << " bags, "
+                  << fmt("%.4f g", n ? 1e3 * air->getChannelBagMass(c) / double(n) : 0.0)
+                  << " a bag at the end, sensor "
+                  << fmt("%.2f kPa\n", 1e-3 * air->readChannelSensor(c));
+        }
+    }
     table << totals.steps << " macro steps (" << totals.cuts << " cuts), "
           << fmt("%.2f", totals.steps ? double(totals.passes) / totals.steps : 0.0)
           << " coupling passes a step; " << fmt("%.1f s", wall()) << " wall-clock\n";
+    std::string verdictText;
+    try {
+        events.push_back({poa->getTime(), "run ended"});
+        writeEvents();
+        setTurn();
+        verdictText = writer->writeVerdict(verdict.makeRows());
+    } catch (const std::exception& e) {
+        stop("failed", e.what());
+        return 1;
+    }
     try {
         std::ofstream s(outDir->getFile("summary.txt"));
         s << "bagsim " << bagsim::kVersion << " patient-on-array: " << file.getFileName() << " ("
           << sc.name << ")\n";
         if (!sc.description.empty()) s << sc.description << "\n";
         s << table.str();
+        s << "support verdict (verdict.csv):\n" << verdictText;
         s.close();
         if (!s) throw std::runtime_error("cannot write summary.txt in " + outPath.string());
         writer->finish(fmt("%.4f s simulated", poa->getTime()));
@@ -209,10 +337,15 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         stop("failed", e.what());
         return 1;
     }
-    std::cout << table.str() << "results in " << outPath.string() << "/:\n"
+    std::cout << table.str() << "support verdict:\n" << verdictText << "results in " << outPath.string() << "/:\n"
               << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N\n"
               << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N\n"
               << "  " << io::kTiltCsv << "      time_s,pelvis_tilt_deg,thorax_tilt_deg\n"
+              << "  " << io::kBodyCsv << "      time_s,com_x_mm,com_y_mm,com_z_mm\n"
+              << "  " << io::kEventsCsv << "    time_s,event\n"
+              << "  " << io::kPneumaticsCsv
+              << "  time_s,bag,sensor_kPa,inflow_g_per_s,outflow_g_per_s\n"
+              << "  " << io::kVerdictCsv << "   check,status,value,unit,detail\n"
               << "  " << io::kResultsH5 << "    pressure-mat frames (/mat), " << io::kResultsXdmf
               << " to open them in ParaView\n"
               << "  summary.txt\n";

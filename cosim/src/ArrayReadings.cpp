@@ -1,6 +1,7 @@
 #include "cosim/ArrayReadings.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 
 #include "cosim/BodyShapes.h"
@@ -94,6 +95,28 @@ double calcSegmentTilt(const body::BodyModel& model, const SimTK::State& state,
 
 double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment) {
     return calcSegmentTilt(poa.getModel(), poa.getBody().getState(), segment);
+}
+
+Eigen::Vector3d calcCentreOfMass(const PatientOnArray& poa) {
+    const SimTK::Vec3 c = poa.getModel().getMatter().calcSystemMassCenterLocationInGround(
+        poa.getBody().getState());
+    return Eigen::Vector3d(c[0], c[1], c[2]);
+}
+
+std::vector<double> calcPressedNodeHeights(const PatientOnArray& poa, double threshold) {
+    std::vector<double> out;
+    for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
+        const BagParticipant& bag = poa.getBag(int(b));
+        double lowest = std::numeric_limits<double>::infinity();
+        const Eigen::Matrix3Xd& x = bag.getAirbag().getPositions();
+        for (int s = 0; s < bag.getNumShapes(); ++s) {
+            const Eigen::VectorXd p = bag.calcContactPressure(s);
+            for (Eigen::Index i = 0; i < p.size(); ++i)
+                if (p[i] > threshold) lowest = std::min(lowest, x(2, i));
+        }
+        out.push_back(lowest);
+    }
+    return out;
 }
 
 void fillPressureMat(const PatientOnArray& poa, PressureMat& mat) {

@@ -99,6 +99,7 @@ struct Coupling::Impl {
     double baseTime = 0.0;  // time when the macro step was last set
     int stepsSinceBase = 0;
     double largestStep = 0.0;  // the macroStep the coupling was built with
+    std::function<void(double, double)> beforeStep;
     int goodInARow = 0;        // stepAdaptive(): successes at the current step
     int steps = 0;
     bool initialized = false;
@@ -266,6 +267,7 @@ StepSummary Coupling::step() {
     const CouplingOptions& o = m.options;
     const double dt = o.macroStep;
     const double tEnd = m.baseTime + (m.stepsSinceBase + 1) * dt;
+    if (m.beforeStep) m.beforeStep(getTime(), dt);
     const bool tangent = o.scheme == Scheme::Tangent;
     StepSummary sum;
     sum.step = m.steps;
@@ -354,6 +356,10 @@ StepSummary Coupling::stepAdaptive() {
             ++cuts;
         }
     }
+}
+
+void Coupling::setBeforeStep(std::function<void(double t, double dt)> beforeStep) {
+    m_impl->beforeStep = std::move(beforeStep);
 }
 
 void Coupling::setMacroStep(double dt) {

@@ -1,6 +1,8 @@
 #include <io/ArrayResults.h>
+#include <io/StudyTable.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -30,17 +32,15 @@ struct ArrayResultsWriter::Impl {
     cosim::PressureMatOptions mat;
     h5::Handle file, meta, matGroup;
     h5::GrowingDataset matTime, matPressure, matForce, matOffForce;
-    std::ofstream regions, bags, tilt;
+    std::ofstream regions, bags, tilt, body, events, pneumatics;
     std::vector<double> frameTimes;
     int frames = 0;
     bool closed = false;
     std::chrono::steady_clock::time_point lastFlush = std::chrono::steady_clock::now();
 
     void flush() {
-        regions.flush();
-        bags.flush();
-        tilt.flush();
-        if (!regions || !bags || !tilt)
+        for (std::ofstream* f : {&regions, &bags, &tilt, &body, &events, &pneumatics}) f->flush();
+        if (!regions || !bags || !tilt || !body || !events || !pneumatics)
             throw std::runtime_error("cannot write the CSV files in " + dir.getPath().string());
         if (file.isValid()) h5::check(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "cannot flush results");
         lastFlush = std::chrono::steady_clock::now();
@@ -55,9 +55,7 @@ struct ArrayResultsWriter::Impl {
         matGroup.reset();
         meta.reset();
         file.reset();
-        regions.close();
-        bags.close();
-        tilt.close();
+        for (std::ofstream* f : {&regions, &bags, &tilt, &body, &events, &pneumatics}) f->close();
     }
     void writeXdmf() const;
 };
@@ -138,6 +136,9 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info
     open(d.regions, kRegionsCsv, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N");
     open(d.bags, kBagsCsv, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N");
     open(d.tilt, kTiltCsv, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
+    open(d.body, kBodyCsv, "time_s,com_x_mm,com_y_mm,com_z_mm");
+    open(d.events, kEventsCsv, "time_s,event");
+    open(d.pneumatics, kPneumaticsCsv, "time_s,bag,sensor_kPa,inflow_g_per_s,outflow_g_per_s");
 }
 
 ArrayResultsWriter::~ArrayResultsWriter() {
@@ -160,6 +161,12 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
                << "," << fmt("%.5f", b.force) << "\n";
     d.tilt << t << "," << fmt("%.4f", f.pelvisTilt * 180.0 / kPi) << ","
            << fmt("%.4f", f.thoraxTilt * 180.0 / kPi) << "\n";
+    d.body << t << "," << fmt("%.3f", 1e3 * f.centreOfMass.x()) << ","
+           << fmt("%.3f", 1e3 * f.centreOfMass.y()) << "," << fmt("%.3f", 1e3 * f.centreOfMass.z())
+           << "\n";
+    for (const PneumaticsReading& r : f.pneumatics)
+        d.pneumatics << t << "," << r.bag << "," << fmt("%.4f", 1e-3 * r.sensor) << ","
+                     << fmt("%.6f", 1e3 * r.inflow) << "," << fmt("%.6f", 1e3 * r.outflow) << "\n";
     if (f.mat) {
         d.matTime.append(&f.time);
         d.matPressure.append(f.mat->getPressure().data());  // column-major: [column][row]
@@ -200,6 +207,32 @@ void ArrayResultsWriter::fail(const std::string& status, const std::string& mess
         d.dir.setStatus(status, message);
     } catch (...) {
     }
+}
+
+void ArrayResultsWriter::addEvent(double time, const std::string& event) {
+    Impl& d = *m_impl;
+    if (d.closed) throw std::logic_error("ArrayResultsWriter::addEvent after finish/fail");
+    d.events << fmt("%.4f", time) << "," << quoteCsvCell(event) << "\n";
+    d.events.flush();
+}
+
+std::string ArrayResultsWriter::writeVerdict(const std::vector<VerdictRow>& rows) {
+    std::ostringstream csv, table;
+    csv << "check,status,value,unit,detail\n";
+    for (const VerdictRow& r : rows) {
+        const std::string value = std::isfinite(r.value) ? fmt("%.6g", r.value) : "";
+        csv << quoteCsvCell(r.check) << "," << r.status << "," << value << "," << quoteCsvCell(r.unit)
+            << "," << quoteCsvCell(r.detail) << "\n";
+        char line[512];
+        std::snprintf(line, sizeof line, "  %-7s  %-34s %10s %-5s  %s\n", r.status.c_str(),
+                      r.check.c_str(), value.c_str(), r.unit.c_str(), r.detail.c_str());
+        table << line;
+    }
+    const std::filesystem::path path = m_impl->dir.getFile(kVerdictCsv);
+    std::ofstream out(path, std::ios::trunc);
+    out << csv.str();
+    if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
+    return table.str();
 }
 
 int ArrayResultsWriter::getNumFrames() const { return m_impl->frames; }

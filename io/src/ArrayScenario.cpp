@@ -316,12 +316,423 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
         s.fail("body_accuracy", "must lie between 0 and 0.01, e.g. 1e-6");
 }
 
+
+// --------------------------------------------------------------------------------- pneumatics
+
+// Typical values of the clinical alternating-pressure and turning mattress hardware this
+// class of device uses (docs/pneumatics.md#the-scenarios-hardware): stated as typical values
+// of the class, not as one product's data.
+pneumatics::ValveSpec makeTypicalValve() {
+    pneumatics::ValveSpec v;
+    v.sonicConductance = 0.3e-8;  // 0.3 dm^3/(s bar): a miniature 2/2 solenoid valve
+    v.criticalPressureRatio = 0.4;
+    v.openingTime = 0.02;  // 20 ms
+    return v;
+}
+
+pneumatics::ValveSpec readValve(const ScenarioNode& s, pneumatics::ValveSpec v) {
+    s.checkKeys({}, {"conductance", "critical_ratio", "subsonic_index", "opening_time"});
+    v.sonicConductance = s.getQuantity("conductance", D::SonicConductance, v.sonicConductance);
+    checkBetween(s, "conductance", v.sonicConductance, 0.0, 1e-6, "dm^3/(s bar)");
+    v.criticalPressureRatio = s.getNumber("critical_ratio", v.criticalPressureRatio);
+    if (!(v.criticalPressureRatio >= 0.0 && v.criticalPressureRatio < 1.0))
+        s.fail("critical_ratio", "must lie in [0, 1), e.g. 0.4 (ISO 6358's b)");
+    v.subsonicIndex = s.getNumber("subsonic_index", v.subsonicIndex);
+    if (!(v.subsonicIndex > 0.0 && v.subsonicIndex <= 1.0))
+        s.fail("subsonic_index", "must lie in (0, 1], e.g. 0.5 (ISO 6358's m)");
+    v.openingTime = s.getQuantity("opening_time", D::Time, v.openingTime);
+    checkBetween(s, "opening_time", v.openingTime, 0.0, 10.0, "ms");
+    return v;
+}
+
+// A gas volume's thermal model (and its heat exchange) from keys thermal, heat_transfer,
+// wall_area.
+void readThermal(const ScenarioNode& s, pneumatics::VolumeSpec& v) {
+    const std::string t =
+        s.getChoice("thermal", {"isothermal", "adiabatic", "heat-exchange"}, "isothermal");
+    v.thermal = t == "adiabatic"       ? pneumatics::Thermal::Adiabatic
+                : t == "heat-exchange" ? pneumatics::Thermal::HeatExchange
+                                       : pneumatics::Thermal::Isothermal;
+    if (v.thermal != pneumatics::Thermal::HeatExchange) {
+        for (const char* k : {"heat_transfer", "wall_area"})
+            if (s.has(k)) s.fail(k, "only applies with thermal: heat-exchange");
+        return;
+    }
+    for (const char* k : {"heat_transfer", "wall_area"})
+        if (!s.has(k))
+            s.fail(k, "missing: thermal: heat-exchange needs heat_transfer (W/(m^2 K), e.g. 10) "
+                      "and wall_area (e.g. 100 cm^2)");
+    // [W/(m^2 K)]: io::Units has no unit for it, so a plain number in W/(m^2 K).
+    v.heatTransferCoefficient = s.getNumber("heat_transfer");
+    if (!(v.heatTransferCoefficient >= 0.0 && v.heatTransferCoefficient <= 1e4))
+        s.fail("heat_transfer", "must be a number of W/(m^2 K) from 0 to 10000, e.g. 10");
+    v.wallArea = s.getQuantity("wall_area", D::Area);
+    checkBetween(s, "wall_area", v.wallArea, 0.0, 100.0, "cm^2");
+}
+
+// The channel names: a group's name, or the one given.
+int findChannel(const ScenarioNode& s, const std::string& key,
+                const cosim::ArrayPneumaticsSpec& p) {
+    std::vector<std::string> names;
+    for (const cosim::PneumaticChannel& c : p.channels) names.push_back(c.name);
+    const std::string name = s.getChoice(key, names);
+    return int(std::find(names.begin(), names.end(), name) - names.begin());
+}
+
+void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
+    if (!root.has("pneumatics")) return;
+    if (root.has("gas"))
+        root.fail("gas", "a scenario with a pneumatics section moves its gas through the valves "
+                         "(control:); remove the gas list, or the pneumatics section");
+    const ScenarioNode s = root.getSection("pneumatics");
+    s.checkKeys({}, {"pump", "manifold", "valves", "line", "sensor", "channels", "orifices",
+                     "max_substep"});
+    sc.hasPneumatics = true;
+    cosim::ArrayPneumaticsSpec& p = sc.pneumatics;
+    const cosim::ArrayLayout& a = sc.options.layout;
+    const int numBags = a.rows * a.columns;
+    // The pump: a small diaphragm pump, about 8 L/min of free air (0.16 g/s) into no
+    // back-pressure, shut off near 100 kPa.
+    p.pump.pressureRise = {0.0, 50e3, 100e3};
+    p.pump.massFlow = {0.16e-3, 0.10e-3, 0.0};
+    const ScenarioNode pump = s.getSection("pump", false);
+    pump.checkKeys({}, {"curve"});
+    if (pump.has("curve")) {
+        const ScenarioNode c = pump.get("curve");
+        const char* example =
+            "must be a list of [pressure rise, mass flow] points, e.g. [[0 kPa, 0.16 g/s], "
+            "[50 kPa, 0.1 g/s], [100 kPa, 0 g/s]]";
+        if (!c.isSequence() || c.getElements().size() < 2) pump.fail("curve", example);
+        p.pump.pressureRise.clear();
+        p.pump.massFlow.clear();
+        for (const ScenarioNode& e : c.getElements()) {
+            if (!e.isSequence() || e.getElements().size() != 2) e.fail(example);
+            p.pump.pressureRise.push_back(e.getElements()[0].asQuantity(D::Pressure));
+            p.pump.massFlow.push_back(e.getElements()[1].asQuantity(D::MassFlow));
+        }
+        try {
+            p.pump.validate("pump curve");
+        } catch (const std::invalid_argument& err) {
+            pump.fail("curve", std::string(err.what()));
+        }
+    }
+    const ScenarioNode mf = s.getSection("manifold", false);
+    mf.checkKeys({}, {"volume", "thermal", "heat_transfer", "wall_area"});
+    p.manifold.volume = mf.getQuantity("volume", D::Volume, 20e-6);
+    checkBetween(mf, "volume", p.manifold.volume, 1e-7, 0.1, "mL");
+    readThermal(mf, p.manifold);
+    p.manifold.temperature = p.manifold.wallTemperature = sc.options.bag.gas.temperature;
+    const ScenarioNode line = s.getSection("line", false);
+    line.checkKeys({}, {"volume", "connector", "thermal", "heat_transfer", "wall_area"});
+    const double lineVolume = line.getQuantity("volume", D::Volume, 20e-6);
+    checkBetween(line, "volume", lineVolume, 1e-7, 0.01, "mL");
+    bags::OrificeOptions connector;  // bags' orifice law, Cd 0.62
+    connector.diameter = line.getQuantity("connector", D::Length, 4e-3);
+    checkBetween(line, "connector", connector.diameter, 0.2e-3, 20e-3, "mm");
+    readThermal(line, p.line);
+    p.line.temperature = p.line.wallTemperature = sc.options.bag.gas.temperature;
+    const ScenarioNode valves = s.getSection("valves", false);
+    valves.checkKeys({}, {"inflate", "vent"});
+    pneumatics::ValveSpec inflate = makeTypicalValve(), vent = makeTypicalValve();
+    if (valves.has("inflate")) inflate = readValve(valves.getSection("inflate"), inflate);
+    if (valves.has("vent")) vent = readValve(valves.getSection("vent"), vent);
+    const ScenarioNode sensor = s.getSection("sensor", false);
+    sensor.checkKeys({}, {"lag", "offset", "noise", "seed"});
+    p.sensor.timeConstant = sensor.getQuantity("lag", D::Time, 0.05);
+    checkBetween(sensor, "lag", p.sensor.timeConstant, 0.0, 60.0, "ms");
+    p.sensor.offset = sensor.getQuantity("offset", D::Pressure, 0.0);
+    checkBetween(sensor, "offset", p.sensor.offset, -10e3, 10e3, "kPa");
+    p.sensor.noiseStdDev = sensor.getQuantity("noise", D::Pressure, 50.0);
+    checkBetween(sensor, "noise", p.sensor.noiseStdDev, 0.0, 10e3, "kPa");
+    const int seed = sensor.getInteger("seed", 1);
+    if (seed < 0) sensor.fail("seed", std::to_string(seed) + "; valid: 0 or more");
+    p.sensor.seed = static_cast<unsigned long long>(seed);
+    p.network.maxSubstep = s.getQuantity("max_substep", D::Time, 1e-3);
+    checkBetween(s, "max_substep", p.network.maxSubstep, 1e-6, 0.1, "ms");
+
+    const std::vector<cosim::ArrayBag> arrayBags =
+        cosim::makeArrayBags(a, sc.options.bag.geometry);
+    auto groupBags = [&](int gi) {
+        std::vector<int> out;
+        for (const cosim::ArrayBag& b : arrayBags)
+            if (b.group == gi) out.push_back(b.index);
+        return out;
+    };
+    std::vector<std::string> groupNames;
+    for (const cosim::BagGroup& g : a.groups) groupNames.push_back(g.name);
+    if (!s.has("channels")) {
+        // One channel per group of the array.
+        if (a.groups.empty())
+            s.fail("channels", "missing: the array has no groups to give a channel each; list "
+                               "the channels, e.g. - {group: left} or - {bags: [3]}");
+        for (size_t g = 0; g < a.groups.size(); ++g) {
+            cosim::PneumaticChannel c;
+            c.name = a.groups[g].name;
+            c.bags = groupBags(int(g));
+            c.inflate = inflate;
+            c.vent = vent;
+            c.lineVolume = lineVolume;
+            c.connector = connector;
+            p.channels.push_back(c);
+        }
+    } else {
+        const ScenarioNode cs = s.get("channels");
+        if (!cs.isSequence())
+            s.fail("channels", "must be a list of channels, e.g. - {group: left}");
+        for (const ScenarioNode& e : cs.getElements()) {
+            e.checkKeys({}, {"name", "group", "bags", "inflate", "vent", "line_volume"});
+            cosim::PneumaticChannel c;
+            if (e.has("group") == e.has("bags"))
+                e.fail("name the channel's bags with either 'group' (one of array.groups) or "
+                       "'bags' (bag indices), not both or neither");
+            if (e.has("group")) {
+                if (groupNames.empty())
+                    e.fail("group", "the array has no groups; define them in array.groups");
+                c.name = e.getChoice("group", groupNames);
+                c.bags = groupBags(int(std::find(groupNames.begin(), groupNames.end(), c.name) -
+                                       groupNames.begin()));
+            } else {
+                c.bags = readIndices(e, "bags", numBags, "bag");
+                if (c.bags.empty())
+                    e.fail("bags", "is empty; valid: bag indices 0 to " +
+                                       std::to_string(numBags - 1));
+                c.name = "bags";
+                for (int b : c.bags) c.name += " " + std::to_string(b);
+            }
+            c.name = e.getString("name", c.name);
+            c.inflate = e.has("inflate") ? readValve(e.getSection("inflate"), inflate) : inflate;
+            c.vent = e.has("vent") ? readValve(e.getSection("vent"), vent) : vent;
+            // One bag: the valves on the bag unless a line is asked for.
+            c.lineVolume = e.getQuantity("line_volume", D::Volume,
+                                         c.bags.size() == 1 ? 0.0 : lineVolume);
+            checkBetween(e, "line_volume", c.lineVolume, c.bags.size() == 1 ? 0.0 : 1e-7, 0.01,
+                         "mL", "a channel of several bags needs a line");
+            c.connector = connector;
+            for (const cosim::PneumaticChannel& o : p.channels)
+                if (o.name == c.name)
+                    e.fail("name", "'" + c.name + "' is used twice; valid: a name of its own");
+            for (int b : c.bags)
+                for (const cosim::PneumaticChannel& o : p.channels)
+                    if (std::find(o.bags.begin(), o.bags.end(), b) != o.bags.end())
+                        e.fail("bag " + std::to_string(b) + " is already in channel '" + o.name +
+                               "'; valid: a bag in one channel at most");
+            p.channels.push_back(c);
+        }
+    }
+    if (s.has("orifices")) {
+        const ScenarioNode os = s.get("orifices");
+        if (!os.isSequence())
+            s.fail("orifices", "must be a list, e.g. - {bags: [3, 10], diameter: 4 mm}");
+        for (const ScenarioNode& e : os.getElements()) {
+            e.checkKeys({"bags"}, {"diameter", "discharge_coefficient"});
+            const std::vector<int> pair = readIndices(e, "bags", numBags, "bag");
+            if (pair.size() != 2 || pair[0] == pair[1])
+                e.fail("bags", "must name two different bags, e.g. [3, 10]");
+            cosim::BagOrifice o;
+            o.a = pair[0];
+            o.b = pair[1];
+            o.orifice.diameter = e.getQuantity("diameter", D::Length, 4e-3);
+            checkBetween(e, "diameter", o.orifice.diameter, 0.2e-3, 20e-3, "mm");
+            o.orifice.dischargeCoefficient =
+                e.getNumber("discharge_coefficient", o.orifice.dischargeCoefficient);
+            if (!(o.orifice.dischargeCoefficient > 0.0 && o.orifice.dischargeCoefficient <= 1.0))
+                e.fail("discharge_coefficient", "must lie in (0, 1], e.g. 0.62");
+            p.orifices.push_back(o);
+        }
+    }
+    try {
+        p.validate(numBags);
+    } catch (const std::invalid_argument& err) {
+        s.fail(err.what());
+    }
+}
+
+// ------------------------------------------------------------------------------------ control
+
+std::vector<int> readChannelList(const ScenarioNode& s, const std::string& key,
+                                 const cosim::ArrayPneumaticsSpec& p) {
+    std::vector<int> out;
+    if (!s.has(key)) return out;
+    const ScenarioNode list = s.get(key);
+    if (!list.isSequence()) s.fail(key, "must be a list of channel names, e.g. [right]");
+    std::vector<std::string> names;
+    for (const cosim::PneumaticChannel& c : p.channels) names.push_back(c.name);
+    for (const ScenarioNode& e : list.getElements()) {
+        const std::string n = e.asChoice(names);
+        out.push_back(int(std::find(names.begin(), names.end(), n) - names.begin()));
+    }
+    return out;
+}
+
+int readOpenClosed(const ScenarioNode& e, const std::string& key) {
+    if (!e.has(key)) return -1;
+    return e.getChoice(key, {"open", "closed"}) == "open" ? 1 : 0;
+}
+
+void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
+    if (!root.has("control")) return;
+    if (!sc.hasPneumatics)
+        root.fail("control", "a controller commands the valves of the pneumatics section; add "
+                             "one (docs/scenario-reference.md#pneumatics)");
+    const ScenarioNode s = root.getSection("control");
+    const cosim::ArrayPneumaticsSpec& p = sc.pneumatics;
+    const int nc = int(p.channels.size());
+    sc.controlKind = s.getChoice("kind", {"schedule", "target-mass", "target-pressure", "turn"});
+    const double t0 = sc.settleTime;
+    auto readAt = [&](const ScenarioNode& e) {
+        const double at = e.getQuantity("at", D::Time, 0.0);
+        checkBetween(e, "at", at, 0.0, sc.duration, "s",
+                     "from the end of the settle, within run.duration");
+        return at;
+    };
+    try {
+        if (sc.controlKind == "schedule") {
+            s.checkKeys({"kind", "commands"}, {"period"});
+            const double period = s.getQuantity("period", D::Time, 0.0);
+            checkBetween(s, "period", period, 0.0, 3600.0, "s", "0 s: not repeated");
+            const ScenarioNode cs = s.get("commands");
+            if (!cs.isSequence() || cs.getElements().empty())
+                s.fail("commands", "must be a list of valve states, e.g. - {at: 0 s, channel: "
+                                   "right, inflate: open, vent: closed}");
+            std::vector<cosim::ValveCommand> cmds;
+            for (const ScenarioNode& e : cs.getElements()) {
+                e.checkKeys({"channel"}, {"at", "inflate", "vent"});
+                cosim::ValveCommand c;
+                c.time = readAt(e);
+                if (period > 0.0 && !(c.time < period))
+                    e.fail("at", fmtUnit(c.time, "s") + " is not within the period " +
+                                     fmtUnit(period, "s") + "; valid: 0 s up to the period");
+                c.channel = findChannel(e, "channel", p);
+                c.inflate = readOpenClosed(e, "inflate");
+                c.vent = readOpenClosed(e, "vent");
+                if (c.inflate < 0 && c.vent < 0)
+                    e.fail("give inflate and/or vent: open or closed");
+                cmds.push_back(c);
+                sc.controlText.push_back("from " + fmtUnit(c.time, "s") + ": '" +
+                                         p.channels[c.channel].name + "'" +
+                                         (c.inflate >= 0 ? std::string(" inflate ") +
+                                                               (c.inflate ? "open" : "closed")
+                                                         : "") +
+                                         (c.vent >= 0 ? std::string(" vent ") +
+                                                            (c.vent ? "open" : "closed")
+                                                      : ""));
+            }
+            if (period > 0.0) sc.controlText.push_back("repeated every " + fmtUnit(period, "s"));
+            sc.controller = std::make_shared<cosim::ValveSchedule>(cmds, t0, period, nc);
+        } else if (sc.controlKind == "target-mass") {
+            s.checkKeys({"kind", "targets"}, {"at", "k_of_m"});
+            const double at = readAt(s);
+            std::vector<double> km, kk;
+            if (s.has("k_of_m")) {
+                const ScenarioNode t = s.get("k_of_m");
+                const char* example = "must be a list of [gas mass, stiffness] rows, e.g. "
+                                      "[[3.0 g, 0.9 N/mm], [3.5 g, 1.6 N/mm], [4.5 g, 3.2 N/mm]]";
+                if (!t.isSequence() || t.getElements().size() < 2) s.fail("k_of_m", example);
+                for (const ScenarioNode& e : t.getElements()) {
+                    if (!e.isSequence() || e.getElements().size() != 2) e.fail(example);
+                    km.push_back(e.getElements()[0].asQuantity(D::Mass));
+                    kk.push_back(e.getElements()[1].asQuantity(D::Stiffness));
+                }
+                try {
+                    cosim::calcMassForStiffness(km, kk, kk.front());
+                } catch (const std::invalid_argument& err) {
+                    s.fail("k_of_m", err.what());
+                }
+            }
+            const ScenarioNode ts = s.get("targets");
+            if (!ts.isSequence()) s.fail("targets", "must be a list, e.g. - {channel: right, mass: 5 g}");
+            std::vector<cosim::TargetMassController::Target> targets;
+            for (const ScenarioNode& e : ts.getElements()) {
+                e.checkKeys({"channel"}, {"mass", "stiffness", "band"});
+                cosim::TargetMassController::Target t;
+                t.channel = findChannel(e, "channel", p);
+                if (e.has("mass") == e.has("stiffness"))
+                    e.fail("give either 'mass' (per bag) or 'stiffness' (through k_of_m)");
+                if (e.has("mass")) {
+                    t.mass = e.getQuantity("mass", D::Mass);
+                    checkPositive(e, "mass", t.mass, "g");
+                } else {
+                    if (km.empty())
+                        e.fail("stiffness", "needs the bag's k(m) table: control.k_of_m");
+                    const double k = e.getQuantity("stiffness", D::Stiffness);
+                    try {
+                        t.mass = cosim::calcMassForStiffness(km, kk, k);
+                    } catch (const std::invalid_argument& err) {
+                        e.fail("stiffness", err.what());
+                    }
+                }
+                t.band = e.getQuantity("band", D::Mass, 0.02e-3);
+                checkBetween(e, "band", t.band, 0.0, 1e-3, "g");
+                targets.push_back(t);
+                sc.controlText.push_back("'" + p.channels[t.channel].name + "' to " +
+                                         fmtUnit(t.mass, "g") + " a bag (band " +
+                                         fmtUnit(t.band, "g") + ")");
+            }
+            sc.controller = std::make_shared<cosim::TargetMassController>(targets, t0 + at);
+        } else if (sc.controlKind == "target-pressure") {
+            s.checkKeys({"kind", "targets"}, {"at"});
+            const double at = readAt(s);
+            const ScenarioNode ts = s.get("targets");
+            if (!ts.isSequence())
+                s.fail("targets", "must be a list, e.g. - {channel: right, pressure: 30 kPa}");
+            std::vector<cosim::TargetPressureController::Target> targets;
+            for (const ScenarioNode& e : ts.getElements()) {
+                e.checkKeys({"channel", "pressure"}, {"band"});
+                cosim::TargetPressureController::Target t;
+                t.channel = findChannel(e, "channel", p);
+                t.pressure = e.getQuantity("pressure", D::Pressure);
+                checkBetween(e, "pressure", t.pressure, 0.0, 200e3, "kPa", "gauge");
+                t.band = e.getQuantity("band", D::Pressure, 1e3);
+                checkBetween(e, "band", t.band, 0.0, 50e3, "kPa");
+                targets.push_back(t);
+                sc.controlText.push_back("'" + p.channels[t.channel].name + "' to " +
+                                         fmtUnit(t.pressure, "kPa") + " gauge (band " +
+                                         fmtUnit(t.band, "kPa") + ")");
+            }
+            sc.controller = std::make_shared<cosim::TargetPressureController>(targets, t0 + at);
+        } else {
+            s.checkKeys({"kind", "tilt"}, {"at", "inflate", "vent", "hold", "max_turn_time",
+                                           "min_mass", "max_pressure", "band"});
+            cosim::TurnSpec t;
+            t.start = t0 + readAt(s);
+            t.inflate = readChannelList(s, "inflate", p);
+            t.vent = readChannelList(s, "vent", p);
+            t.tilt = s.getQuantity("tilt", D::Angle);
+            checkBetween(s, "tilt", std::abs(t.tilt), 1e-3, 1.4, "deg",
+                         "signed: positive onto his left side");
+            t.hold = s.getQuantity("hold", D::Time, 0.0);
+            checkBetween(s, "hold", t.hold, 0.0, 3600.0, "s");
+            t.maxTurnTime = s.getQuantity("max_turn_time", D::Time, 120.0);
+            checkBetween(s, "max_turn_time", t.maxTurnTime, 1e-3, 3600.0, "s");
+            t.minMass = s.getQuantity("min_mass", D::Mass, 0.0);
+            checkBetween(s, "min_mass", t.minMass, 0.0, 1.0, "g");
+            t.maxPressure = s.getQuantity("max_pressure", D::Pressure, 0.0);
+            checkBetween(s, "max_pressure", t.maxPressure, 0.0, 500e3, "kPa");
+            t.band = s.getQuantity("band", D::Mass, 0.02e-3);
+            checkBetween(s, "band", t.band, 1e-7, 1e-3, "g");
+            sc.targetTilt = t.tilt;
+            sc.controller = std::make_shared<cosim::TurnController>(t, nc);
+            std::string in, out;
+            for (int c : t.inflate) in += (in.empty() ? "'" : ", '") + p.channels[c].name + "'";
+            for (int c : t.vent) out += (out.empty() ? "'" : ", '") + p.channels[c].name + "'";
+            sc.controlText.push_back("turn from " + fmtUnit(t.start - t0, "s") + ": inflate " +
+                                     (in.empty() ? "none" : in) + ", vent " +
+                                     (out.empty() ? "none" : out) + " to a pelvis tilt of " +
+                                     fmtUnit(t.tilt, "deg") + ", hold " + fmtUnit(t.hold, "s") +
+                                     ", then back to the initial masses");
+        }
+    } catch (const std::invalid_argument& err) {
+        s.fail(err.what());
+    }
+}
+
 }  // namespace
 
 PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     const ScenarioNode root = file.getRoot();
     root.checkKeys({"kind", "patient", "array"},
-                   {"name", "description", "bag", "gas", "coupling", "run", "mat", "output"});
+                   {"name", "description", "bag", "gas", "coupling", "run", "mat", "output",
+                    "pneumatics", "control"});
     root.getChoice("kind", {kPatientOnArrayKind});
     PatientOnArrayScenario sc;
     sc.name = root.getString("name", file.getStem());
@@ -355,6 +766,8 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
         failFromCosim(root, e.what());
     }
     readGas(root, sc);
+    readPneumatics(root, sc);
+    readControl(root, sc);
 
     const ScenarioNode mat = root.getSection("mat", false);
     mat.checkKeys({}, {"rows", "columns", "origin", "size"});

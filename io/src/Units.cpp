@@ -81,6 +81,20 @@ const std::vector<UnitInfo>& getUnitTable() {
         {"g/min", D::MassFlow, 1e-3 / 60.0},
         {"mg/s", D::MassFlow, 1e-6},
         {"kg/s", D::MassFlow, 1.0},
+
+        {"mL", D::Volume, 1e-6},
+        {"L", D::Volume, 1e-3},
+        {"cm^3", D::Volume, 1e-6},
+        {"m^3", D::Volume, 1.0},
+
+        {"cm^2", D::Area, 1e-4},
+        {"mm^2", D::Area, 1e-6},
+        {"m^2", D::Area, 1.0},
+
+        // ISO 6358: 1 dm^3/(s bar) = 1e-3 m^3 / (s 1e5 Pa) = 1e-8 m^3/(s Pa).
+        {"dm^3/(s bar)", D::SonicConductance, 1e-8},
+        {"L/(s bar)", D::SonicConductance, 1e-8},
+        {"m^3/(s Pa)", D::SonicConductance, 1.0},
     };
     return table;
 }
@@ -145,6 +159,12 @@ std::string getDimensionName(Dimension d) {
             return "a moment (force times length)";
         case Dimension::MassFlow:
             return "a mass flow";
+        case Dimension::Volume:
+            return "a volume";
+        case Dimension::Area:
+            return "an area";
+        case Dimension::SonicConductance:
+            return "a sonic conductance (ISO 6358)";
     }
     return "a quantity";
 }
@@ -181,6 +201,12 @@ std::string getSiUnit(Dimension d) {
             return "N m";
         case Dimension::MassFlow:
             return "kg/s";
+        case Dimension::Volume:
+            return "m^3";
+        case Dimension::Area:
+            return "m^2";
+        case Dimension::SonicConductance:
+            return "m^3/(s Pa)";
     }
     return "";
 }
@@ -217,6 +243,12 @@ std::string getExample(Dimension d) {
             return "1.7e-4 N m";
         case Dimension::MassFlow:
             return "0.05 g/s";
+        case Dimension::Volume:
+            return "20 mL";
+        case Dimension::Area:
+            return "100 cm^2";
+        case Dimension::SonicConductance:
+            return "0.3 dm^3/(s bar)";
     }
     return "";
 }

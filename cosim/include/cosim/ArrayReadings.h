@@ -62,6 +62,15 @@ double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment);
 double calcSegmentTilt(const body::BodyModel& model, const SimTK::State& state,
                        body::Segment segment);
 
+/// The patient's centre of mass [m] in Ground at the committed state.
+Eigen::Vector3d calcCentreOfMass(const PatientOnArray& poa);
+
+/// Per participant (getBagIndices() order): the lowest height [m] above the bed board (Ground
+/// z = 0, where the bag's base lies) of a node the body presses (contact pressure above
+/// `threshold` [Pa]): the inner height of the bag left under him, the bottom film lying on
+/// the board. Infinity where no node is pressed.
+std::vector<double> calcPressedNodeHeights(const PatientOnArray& poa, double threshold);
+
 /// Clears the mat and adds every coupled bag's nodal contact pressures (all shapes) to it.
 void fillPressureMat(const PatientOnArray& poa, PressureMat& mat);
 

@@ -26,6 +26,7 @@
 /// For the one-pass schemes the step's mismatch |H(x) - x| (x the load the body saw at the
 /// end pose) is reported in the same measure.
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -120,6 +121,12 @@ class Coupling {
     StepSummary stepAdaptive();
     /// Changes the macro step from the next step on (time keeps counting from the last one).
     void setMacroStep(double dt);
+    /// A function called at the start of every attempt of a macro step (a step cut and tried
+    /// again calls it again) with the step's start time t [s] and size dt [s], before any side
+    /// moves: what the participants are given for exactly that step (e.g. the gas flows a
+    /// pneumatic network computed over [t, t + dt]). It may throw bags::NumericalError, which
+    /// fails the attempt like a participant that cannot follow.
+    void setBeforeStep(std::function<void(double t, double dt)> beforeStep);
     double getTime() const;   ///< [s] at the last committed step
     int getNumSteps() const;  ///< macro steps committed
     /// Wrench the participant returned on a link at the last committed step.

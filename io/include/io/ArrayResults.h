@@ -1,6 +1,7 @@
 #pragma once
 /// @file Writing the results of a patient-on-array run into its output folder, streamed as it
-/// goes so an interrupted run keeps what it computed: regions.csv, bags.csv, tilt.csv and
+/// goes so an interrupted run keeps what it computed: regions.csv, bags.csv, tilt.csv,
+/// body.csv, events.csv, pneumatics.csv, verdict.csv (at the end) and
 /// results.h5 (the pressure mat's frames) with results.xdmf (the mat over time in ParaView).
 /// Layout: docs/output-layout.md#patient-on-array. Units: SI in results.h5 (each dataset says
 /// its unit); mmHg, cm^2, N, g, kPa, L, deg in the CSV files, as their column names say.
@@ -21,6 +22,27 @@ namespace io {
 inline constexpr const char* kRegionsCsv = "regions.csv";
 inline constexpr const char* kBagsCsv = "bags.csv";
 inline constexpr const char* kTiltCsv = "tilt.csv";
+inline constexpr const char* kBodyCsv = "body.csv";
+inline constexpr const char* kEventsCsv = "events.csv";
+inline constexpr const char* kPneumaticsCsv = "pneumatics.csv";
+inline constexpr const char* kVerdictCsv = "verdict.csv";
+
+/// One bag's pneumatics at an output time (pneumatics.csv).
+struct PneumaticsReading {
+    int bag = 0;          ///< ArrayBag index
+    double sensor = 0.0;  ///< [Pa] gauge, the bag's sensor reading
+    double inflow = 0.0;  ///< [kg/s] into the bag over the last step
+    double outflow = 0.0; ///< [kg/s] out of the bag over the last step
+};
+
+/// One check of the support verdict (verdict.csv).
+struct VerdictRow {
+    std::string check;   ///< e.g. "target tilt reached"
+    std::string status;  ///< ok, warning, fail or n/a
+    double value = 0.0;  ///< in `unit` (NaN: none)
+    std::string unit;
+    std::string detail;
+};
 
 /// One output time of the run.
 struct ArrayFrame {
@@ -29,6 +51,8 @@ struct ArrayFrame {
     std::vector<cosim::BagReading> bags;      ///< every coupled bag
     double pelvisTilt = 0.0, thoraxTilt = 0.0;  ///< [rad] cosim::calcSegmentTilt()
     const cosim::PressureMat* mat = nullptr;  ///< filled for this time (optional)
+    Eigen::Vector3d centreOfMass = Eigen::Vector3d::Zero();  ///< [m] the patient's, Ground
+    std::vector<PneumaticsReading> pneumatics;  ///< every bag in the network (none: no rows)
 };
 
 class ArrayResultsWriter {
@@ -43,6 +67,10 @@ class ArrayResultsWriter {
 
     /// Appends one output time to every file (flushing them at most every few seconds).
     void addFrame(const ArrayFrame& frame);
+    /// Appends a row to events.csv: what happened at `time` [s] (a controller's change).
+    void addEvent(double time, const std::string& event);
+    /// Writes verdict.csv (replacing one written before) and returns its text as a table.
+    std::string writeVerdict(const std::vector<VerdictRow>& rows);
     /// Status "complete": closes the files, writes results.xdmf and removes the marker.
     void finish(const std::string& message);
     /// Saves what was written, sets the status ("failed", "interrupted") and the message,

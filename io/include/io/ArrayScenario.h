@@ -8,11 +8,14 @@
 /// Keys, units and ranges: docs/scenario-reference.md#patient-on-array.
 
 #include <body/PatientSpec.h>
+#include <cosim/ArrayPneumatics.h>
 #include <cosim/GasSchedule.h>
+#include <cosim/PneumaticControl.h>
 #include <cosim/PatientOnArray.h>
 #include <cosim/PressureMat.h>
 #include <io/Scenario.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,6 +49,15 @@ struct PatientOnArrayScenario {
     double duration = 0.0;                ///< [s] run.duration: after the settle
     double outputInterval = 0.05;         ///< [s] output.every
     cosim::PressureMatOptions mat;        ///< mat section (default: 64 x 32 over the array)
+    /// pneumatics section: the air hardware (absent: the gas list sets the bags' flows).
+    bool hasPneumatics = false;
+    cosim::ArrayPneumaticsSpec pneumatics;
+    /// control section (with pneumatics): the controller, its times from the release; null:
+    /// every valve stays closed. controlText says what it does, for the summary.
+    std::shared_ptr<cosim::PneumaticController> controller;
+    std::string controlKind;  ///< "schedule", "target-mass", "target-pressure", "turn" or ""
+    std::vector<std::string> controlText;
+    double targetTilt = 0.0;  ///< [rad] the turn's target pelvis tilt (0: no turn)
     double getEndTime() const { return settleTime + duration; }  ///< [s] from the release
 };
 

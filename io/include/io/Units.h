@@ -28,6 +28,9 @@ enum class Dimension {
     StiffnessPerArea,  ///< pressure per length, e.g. a contact penalty [Pa/m]
     Moment,            ///< force times length, e.g. a plate's bending stiffness [N m]
     MassFlow,          ///< mass per time, e.g. a bag's gas flow [kg/s]
+    Volume,            ///< [m^3] e.g. a manifold
+    Area,              ///< [m^2]
+    SonicConductance,  ///< ISO 6358 sonic conductance C [m^3/(s Pa)]
 };
 
 /// A unit the parser knows: value_SI = factor * value + offset.

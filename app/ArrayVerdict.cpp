@@ -1,0 +1,176 @@
+#include "ArrayVerdict.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace bagsim::app {
+
+namespace {
+
+constexpr double kMmHg = 133.322387415;        // [Pa]
+constexpr double kCapillary = 32.0 * kMmHg;    // the capillary closing pressure [Pa]
+constexpr double kHandCheck = 0.025;           // [m] the nurses' hand check: 1 inch of air
+constexpr double kCarried = 1.0;               // [N] a bag that carries him
+constexpr double kNothing = 0.1;               // [N] a bag that carries nothing
+constexpr double kDeg = 180.0 / 3.14159265358979323846;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string fmt(const char* f, double v) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+}  // namespace
+
+ArrayVerdict::ArrayVerdict(const cosim::ArrayLayout& layout, const bags::DoubleWedgeParams& bag,
+                           double settleTime, double duration, double targetTilt)
+    : m_bags(cosim::makeArrayBags(layout, bag)),
+      m_columns(layout.columns),
+      m_columnPitch(layout.columnPitch),
+      m_settle(settleTime),
+      m_duration(duration),
+      m_targetTilt(targetTilt),
+      m_reached(kNaN) {
+    // The inner edges of the outer columns' footprints: a centre of mass beyond one lies over
+    // the outermost bags.
+    m_innerEdgeLow = -1e9;
+    m_innerEdgeHigh = 1e9;
+    for (const cosim::ArrayBag& b : m_bags) {
+        if (b.column == 0) m_innerEdgeLow = std::max(m_innerEdgeLow, b.footprintMax.y());
+        if (b.column == m_columns - 1) m_innerEdgeHigh = std::min(m_innerEdgeHigh, b.footprintMin.y());
+    }
+}
+
+void ArrayVerdict::addFrame(const io::ArrayFrame& f, const std::vector<double>& heights) {
+    if (m_duration > 0.0 && f.time < m_settle - 1e-9) return;
+    if (!m_haveRef) {
+        m_haveRef = true;
+        m_refCom = f.centreOfMass;
+        m_firstTime = m_lastTime = f.time;
+        for (const cosim::BagReading& b : f.bags) m_refForce[b.bag] = b.force;
+    }
+    const double dt = f.time - m_lastTime;
+    m_lastTime = f.time;
+    // Travel across the bed.
+    const double dy = f.centreOfMass.y() - m_refCom.y();
+    m_lastY = f.centreOfMass.y();
+    if (std::abs(dy) > std::abs(m_maxTravel)) {
+        m_maxTravel = dy;
+        m_maxTravelTime = f.time;
+    }
+    // Tilt toward the target.
+    if (m_targetTilt != 0.0) {
+        const double s = m_targetTilt > 0.0 ? 1.0 : -1.0;
+        if (s * f.pelvisTilt > s * m_bestTilt) m_bestTilt = f.pelvisTilt;
+    }
+    // The outer column on the side he moved to: a bag that carried him and carries nothing.
+    if (std::abs(dy) > 0.01 && m_columns > 1) {
+        const int column = dy < 0.0 ? 0 : m_columns - 1;
+        for (const cosim::BagReading& b : f.bags) {
+            if (m_bags[b.bag].column != column) continue;
+            const auto ref = m_refForce.find(b.bag);
+            if (ref == m_refForce.end() || ref->second < kCarried || b.force > kNothing) continue;
+            if (!m_edgeLost.count(b.bag)) m_edgeLost[b.bag] = f.time;
+        }
+    }
+    // Bottoming out.
+    for (size_t i = 0; i < f.bags.size() && i < heights.size(); ++i)
+        if (heights[i] < m_minHeight) {
+            m_minHeight = heights[i];
+            m_minHeightTime = f.time;
+            m_minHeightBag = f.bags[i].bag;
+        }
+    // Regions.
+    for (const cosim::RegionLoad& r : f.regions) {
+        if (!(r.peakPressure > 0.0)) continue;
+        if (!m_regions.count(r.name)) m_regionOrder.push_back(r.name);
+        Region& g = m_regions[r.name];
+        if (r.peakPressure > g.peak) {
+            g.peak = r.peakPressure;
+            g.peakTime = f.time;
+        }
+        if (r.peakPressure > kCapillary) g.above += dt;
+    }
+}
+
+void ArrayVerdict::setTurn(double reachedTime, bool backToSupine) {
+    m_reached = reachedTime;
+    m_back = backToSupine;
+    m_turnKnown = true;
+}
+
+std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
+    std::vector<io::VerdictRow> rows;
+    const double span = m_lastTime - m_firstTime;
+    const std::string window = m_duration > 0.0 ? "after the settle" : "over the run";
+    // The turn.
+    if (m_targetTilt == 0.0 || !m_turnKnown) {
+        rows.push_back({"target tilt reached", "n/a", kNaN, "deg", "no turn in this run"});
+        rows.push_back({"back to supine", "n/a", kNaN, "", "no turn in this run"});
+    } else {
+        const std::string target = fmt("target %+.1f deg", m_targetTilt * kDeg);
+        if (std::isfinite(m_reached))
+            rows.push_back({"target tilt reached", "ok", m_bestTilt * kDeg, "deg",
+                            "reached at " + fmt("%.2f s", m_reached) + " (" +
+                                fmt("%.2f s", m_reached - m_settle) + " after the settle; " +
+                                target + "; value: the pelvis tilt furthest toward it)"});
+        else
+            rows.push_back({"target tilt reached", "fail", m_bestTilt * kDeg, "deg",
+                            "not reached (" + target + "; value: the pelvis tilt furthest "
+                            "toward it)"});
+        rows.push_back({"back to supine", m_back ? "ok" : "warning", kNaN, "",
+                        m_back ? "the initial gas masses were restored"
+                               : "the run ended before the initial masses were restored"});
+    }
+    // Travel toward the edge.
+    if (!m_haveRef) {
+        rows.push_back({"slid or rolled toward the edge", "n/a", kNaN, "mm", "no frame judged"});
+    } else {
+        const bool over = m_lastY < m_innerEdgeLow || m_lastY > m_innerEdgeHigh;
+        const bool far = std::abs(m_maxTravel) > m_columnPitch && m_columnPitch > 0.0;
+        rows.push_back(
+            {"slid or rolled toward the edge", over ? "fail" : far ? "warning" : "ok",
+             1e3 * m_maxTravel, "mm",
+             "largest lateral travel of his centre of mass " + window + fmt(" (at %.2f s", m_maxTravelTime) +
+                 "); at the end at y = " + fmt("%.1f mm", 1e3 * m_lastY) +
+                 "; fail when it ends over the outer column (beyond y = " +
+                 fmt("%.0f mm", 1e3 * m_innerEdgeLow) + " or " + fmt("%.0f mm", 1e3 * m_innerEdgeHigh) +
+                 "); warning beyond one column pitch (" + fmt("%.0f mm", 1e3 * m_columnPitch) + ")"});
+        std::string lost;
+        double first = kNaN;
+        for (const auto& [bag, t] : m_edgeLost) {
+            lost += (lost.empty() ? "" : " ") + std::to_string(bag);
+            if (!(first <= t)) first = t;
+        }
+        rows.push_back({"contact lost at the array edge", lost.empty() ? "ok" : "warning",
+                        double(m_edgeLost.size()), "bags",
+                        lost.empty() ? "no outer bag on the side he moved to stopped carrying him"
+                                     : "outer bags " + lost + " on the side he moved to carried "
+                                       "him at the start and nothing (< 0.1 N) from " +
+                                       fmt("%.2f s", first)});
+    }
+    // Bottoming out.
+    if (m_minHeightBag < 0 || !std::isfinite(m_minHeight))
+        rows.push_back({"bag bottomed out", "n/a", kNaN, "mm", "no pressed node judged"});
+    else
+        rows.push_back({"bag bottomed out", m_minHeight < kHandCheck ? "fail" : "ok",
+                        1e3 * m_minHeight, "mm",
+                        "least inner height under a pressed node (its height above the bed "
+                        "board) " + window + ": bag " + std::to_string(m_minHeightBag) +
+                            fmt(" at %.2f s", m_minHeightTime) +
+                            "; fail below 25 mm (the hand check: an inch of air)"});
+    // Regions.
+    for (const std::string& name : m_regionOrder) {
+        const Region& g = m_regions.at(name);
+        rows.push_back({"peak pressure " + name, g.peak > kCapillary ? "warning" : "ok",
+                        g.peak / kMmHg, "mmHg",
+                        fmt("at %.2f s; ", g.peakTime) + fmt("above 32 mmHg for %.2f s", g.above) +
+                            fmt(" of %.2f s ", span) + window});
+    }
+    return rows;
+}
+
+}  // namespace bagsim::app

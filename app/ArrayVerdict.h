@@ -1,0 +1,55 @@
+#pragma once
+/// @file The support verdict of a patient-on-array run (verdict.csv, summary.txt), gathered
+/// at every output frame: target tilt reached and when; slid or rolled toward the edge (the
+/// centre of mass's lateral travel, contact lost by the outer column on the side he moved
+/// to); a bag bottomed out (the inner height left under a pressed node); per region the peak
+/// pressure and the time above 32 mmHg. Criteria and thresholds: docs/output-layout.md.
+
+#include <cosim/ArrayLayout.h>
+#include <io/ArrayResults.h>
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace bagsim::app {
+
+class ArrayVerdict {
+  public:
+    /// @param settleTime [s] frames from it on are judged (all frames if duration is 0)
+    /// @param targetTilt [rad] the turn's signed target (0: no turn, its checks n/a)
+    ArrayVerdict(const cosim::ArrayLayout& layout, const bags::DoubleWedgeParams& bag,
+                 double settleTime, double duration, double targetTilt);
+    /// One output frame with the lowest pressed-node height per bag of frame.bags [m].
+    void addFrame(const io::ArrayFrame& frame, const std::vector<double>& pressedHeights);
+    /// The turn's outcome: when the target tilt was reached (NaN: never) and whether it went
+    /// back to supine.
+    void setTurn(double reachedTime, bool backToSupine);
+    std::vector<io::VerdictRow> makeRows() const;
+
+  private:
+    std::vector<cosim::ArrayBag> m_bags;
+    int m_columns = 0;
+    double m_columnPitch = 0.0, m_innerEdgeLow = 0.0, m_innerEdgeHigh = 0.0;
+    double m_settle = 0.0, m_duration = 0.0, m_targetTilt = 0.0;
+    double m_reached = 0.0;
+    bool m_back = false, m_turnKnown = false;
+    // the judged window
+    bool m_haveRef = false;
+    double m_lastTime = 0.0, m_firstTime = 0.0;
+    Eigen::Vector3d m_refCom = Eigen::Vector3d::Zero();
+    double m_maxTravel = 0.0, m_maxTravelTime = 0.0, m_lastY = 0.0;
+    double m_bestTilt = 0.0;  // pelvis tilt furthest toward the target [rad]
+    std::map<int, double> m_refForce;  // bag -> force at the reference frame [N]
+    std::map<int, double> m_edgeLost;  // outer bag -> first time it carried nothing [s]
+    double m_minHeight = 1e9, m_minHeightTime = 0.0;
+    int m_minHeightBag = -1;
+    struct Region {
+        double peak = 0.0, peakTime = 0.0, above = 0.0;
+    };
+    std::map<std::string, Region> m_regions;
+    std::vector<std::string> m_regionOrder;
+};
+
+}  // namespace bagsim::app

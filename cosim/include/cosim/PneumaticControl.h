@@ -1,0 +1,169 @@
+#pragma once
+/// @file Controllers that command the valves of ArrayPneumatics between macro steps: a timed
+/// schedule of valve states, a target gas mass per channel (or the mass that gives a wanted
+/// stiffness through a k(m) table), a target pressure with hysteresis read from the channel's
+/// (lagged, offset, noisy) sensor, and the turn sequence (inflate one side and vent the other
+/// until the pelvis tilt reaches a target, hold, then restore the initial masses).
+///
+/// Order of use: before each macro step starting at t, update(inputs at t, pneumatics, events)
+/// sets the valves for that step; the time loop ends its step at findNextChange(t) at the
+/// latest, so a timed command starts at its own time. Every change of what a controller does
+/// is appended to `events` (time, text), the events.csv of the run.
+///
+/// The controllers read the gas mass from the network (a device knows it from a flowmeter on
+/// its valves integrated from a known fill) and the pressure from the sensor.
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cosim/ArrayPneumatics.h"
+
+namespace cosim {
+
+struct ControlEvent {
+    double time = 0.0;  ///< [s]
+    std::string text;   ///< e.g. "turn started", "target tilt reached"
+};
+
+/// What a controller sees at the start of a step.
+struct ControlInputs {
+    double time = 0.0;        ///< [s]
+    double pelvisTilt = 0.0;  ///< [rad] the pelvis' roll, positive onto his left side
+};
+
+class PneumaticController {
+  public:
+    virtual ~PneumaticController() = default;
+    /// Commands the valves for the step that starts at in.time; appends what changed.
+    virtual void update(const ControlInputs& in, ArrayPneumatics& p,
+                        std::vector<ControlEvent>& events) = 0;
+    /// The first time [s] strictly after t at which a timed command is due (infinity: none).
+    virtual double findNextChange(double /*t*/) const {
+        return std::numeric_limits<double>::infinity();
+    }
+};
+
+/// A timed valve state of one channel.
+struct ValveCommand {
+    double time = 0.0;  ///< [s] from which it holds (within the period if repeated)
+    int channel = 0;
+    int inflate = -1;   ///< 1 open, 0 closed, -1 as it was
+    int vent = -1;      ///< 1 open, 0 closed, -1 as it was
+};
+
+/// A timed schedule of valve states, optionally repeated every `period` from `start`.
+class ValveSchedule : public PneumaticController {
+  public:
+    /// Times are from `start` [s]; period 0: not repeated, else every command's time < period.
+    /// @throws std::invalid_argument naming the command (time, channel, period).
+    ValveSchedule(std::vector<ValveCommand> commands, double start, double period, int numChannels);
+    void update(const ControlInputs& in, ArrayPneumatics& p,
+                std::vector<ControlEvent>& events) override;
+    double findNextChange(double t) const override;
+
+  private:
+    std::vector<ValveCommand> m_commands;  // sorted by time
+    double m_start = 0.0, m_period = 0.0;
+    long m_applied = 0;  // commands applied so far, counted over the repeats
+};
+
+/// Bang-bang with a dead band, per channel: below target - band it fills until the target is
+/// reached, above target + band it vents until the target is reached, else holds (both closed).
+class BandController {
+  public:
+    enum class State { Holding, Filling, Venting };
+    /// Sets the channel's valves for a measured value; returns true if the state changed.
+    bool update(double measured, double target, double band, int channel, ArrayPneumatics& p);
+    State getState() const { return m_state; }
+
+  private:
+    State m_state = State::Holding;
+};
+
+/// Target gas mass per bag [kg] for each listed channel (mean over its bags), dead band `band`.
+class TargetMassController : public PneumaticController {
+  public:
+    struct Target {
+        int channel = 0;
+        double mass = 0.0;  ///< [kg] per bag
+        double band = 0.0;  ///< [kg] per bag
+    };
+    TargetMassController(std::vector<Target> targets, double start);
+    void update(const ControlInputs& in, ArrayPneumatics& p,
+                std::vector<ControlEvent>& events) override;
+    double findNextChange(double t) const override;
+
+  private:
+    std::vector<Target> m_targets;
+    std::vector<BandController> m_band;
+    double m_start = 0.0;
+};
+
+/// The gas mass [kg] that gives stiffness k [N/m] by linear interpolation in a k(m) table
+/// (masses increasing, stiffness strictly monotone over them).
+/// @throws std::invalid_argument if k lies outside the table or the table is not monotone.
+double calcMassForStiffness(const std::vector<double>& masses,
+                            const std::vector<double>& stiffness, double k);
+
+/// Target gauge pressure per channel from its sensor, with hysteresis: fills below
+/// target - band until the sensor reads the target, vents above target + band likewise.
+class TargetPressureController : public PneumaticController {
+  public:
+    struct Target {
+        int channel = 0;
+        double pressure = 0.0;  ///< [Pa] gauge
+        double band = 0.0;      ///< [Pa]
+    };
+    TargetPressureController(std::vector<Target> targets, double start);
+    void update(const ControlInputs& in, ArrayPneumatics& p,
+                std::vector<ControlEvent>& events) override;
+    double findNextChange(double t) const override;
+
+  private:
+    std::vector<Target> m_targets;
+    std::vector<BandController> m_band;
+    double m_start = 0.0;
+};
+
+/// The turn: from `start`, the `inflate` channels fill and the `vent` channels vent until the
+/// pelvis tilt reaches `tilt` (signed: positive onto his left side), or `maxTurnTime` passes;
+/// all valves close for `hold`; then every turn channel is brought back to the mass per bag
+/// it had at the start (dead band `band`): back to supine.
+struct TurnSpec {
+    double start = 0.0;                ///< [s]
+    std::vector<int> inflate, vent;    ///< channels
+    double tilt = 0.0;                 ///< [rad] signed target pelvis tilt
+    double hold = 0.0;                 ///< [s]
+    double maxTurnTime = 60.0;         ///< [s] the turn gives up after this
+    double minMass = 0.0;              ///< [kg] per bag: venting stops below it (0: none)
+    double maxPressure = 0.0;          ///< [Pa] gauge: filling stops above it (0: none)
+    double band = 0.05e-3;             ///< [kg] per bag, for the return
+    /// @throws std::invalid_argument naming the parameter.
+    void validate(int numChannels) const;
+};
+
+class TurnController : public PneumaticController {
+  public:
+    enum class Phase { Waiting, Turning, Holding, Returning, Done };
+    TurnController(const TurnSpec& spec, int numChannels);
+    void update(const ControlInputs& in, ArrayPneumatics& p,
+                std::vector<ControlEvent>& events) override;
+    double findNextChange(double t) const override;
+    Phase getPhase() const { return m_phase; }
+    /// [s] when the target tilt was reached (NaN: not yet, or never).
+    double getTiltReachedTime() const { return m_reached; }
+
+  private:
+    void closeAll(ArrayPneumatics& p) const;
+    TurnSpec m_spec;
+    Phase m_phase = Phase::Waiting;
+    double m_phaseStart = 0.0;
+    double m_reached = std::numeric_limits<double>::quiet_NaN();
+    std::vector<int> m_channels;         // inflate then vent
+    std::vector<double> m_initialMass;   // per bag, per m_channels entry
+    std::vector<BandController> m_band;  // the return
+};
+
+}  // namespace cosim
