@@ -1,0 +1,158 @@
+// The pneumatics and control sections of the patient-on-array kind: the coarse pneumatic turn
+// read into SI with the documented defaults, and located errors (file, line, key, what is
+// valid) for a gas list beside the pneumatics, unknown channels, wrong units, bad valves and
+// pump curves, and controllers without their keys.
+#include <gtest/gtest.h>
+#include <io/ArrayScenario.h>
+#include <io/InputError.h>
+
+#include <cmath>
+#include <string>
+
+#include "InputErrorTestUtil.h"
+
+using io::test::expectInputError;
+
+namespace {
+
+const std::string kBase =
+    "kind: patient-on-array\n"                                                    // 1
+    "patient: {sex: male, height: 1.75 m, mass: 75 kg, position: [0 m, 0 m]}\n"  // 2
+    "bag: {mesh_size: 30 mm}\n"                                                   // 3
+    "array:\n"                                                                    // 4
+    "  rows: 6\n"                                                                 // 5
+    "  columns: 7\n"                                                              // 6
+    "  row_pitch: 360 mm\n"                                                       // 7
+    "  column_pitch: 105 mm\n"                                                    // 8
+    "  centre: [-30 mm, 0 mm]\n"                                                  // 9
+    "  orientation: [along, along-flipped]\n"                                     // 10
+    "  gas_mass: 4.5 g\n"                                                         // 11
+    "  groups:\n"                                                                 // 12
+    "    - {name: left, columns: [0, 1, 2]}\n"                                    // 13
+    "    - {name: right, columns: [4, 5, 6]}\n"                                   // 14
+    "run: {settle_time: 1 s, duration: 10 s}\n";                                  // 15
+
+io::PatientOnArrayScenario read(const std::string& text) {
+    return io::readPatientOnArrayScenario(io::ScenarioFile::parse(text, "a.yaml"));
+}
+
+io::InputError readError(const std::string& text) {
+    return expectInputError([&] { read(text); });
+}
+
+}  // namespace
+
+TEST(PneumaticsScenario, ReadsTheCoarsePneumaticTurnAndTheDefaults) {
+    const io::PatientOnArrayScenario sc = io::readPatientOnArrayScenario(io::ScenarioFile::load(
+        std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/turn-left-pneumatic-coarse.yaml"));
+    ASSERT_TRUE(sc.hasPneumatics);
+    const cosim::ArrayPneumaticsSpec& p = sc.pneumatics;
+    ASSERT_EQ(p.channels.size(), 2u);
+    EXPECT_EQ(p.channels[0].name, "left");
+    EXPECT_EQ(p.channels[0].bags.size(), 18u);
+    EXPECT_DOUBLE_EQ(p.channels[1].inflate.sonicConductance, 8e-8);
+    EXPECT_DOUBLE_EQ(p.channels[1].vent.criticalPressureRatio, 0.4);
+    EXPECT_DOUBLE_EQ(p.channels[1].inflate.openingTime, 0.02);
+    EXPECT_DOUBLE_EQ(p.channels[0].lineVolume, 50e-6);
+    EXPECT_DOUBLE_EQ(p.channels[0].connector.diameter, 6e-3);
+    EXPECT_DOUBLE_EQ(p.pump.massFlow[0], 8e-3);
+    EXPECT_DOUBLE_EQ(p.pump.pressureRise[2], 120e3);
+    EXPECT_DOUBLE_EQ(p.manifold.volume, 50e-6);
+    EXPECT_DOUBLE_EQ(p.sensor.timeConstant, 0.05);
+    EXPECT_DOUBLE_EQ(p.sensor.noiseStdDev, 50.0);
+    EXPECT_EQ(sc.controlKind, "turn");
+    EXPECT_NEAR(sc.targetTilt, 30.0 * M_PI / 180.0, 1e-12);
+    ASSERT_TRUE(sc.controller);
+
+    // The defaults: one channel per group, the typical hardware.
+    const io::PatientOnArrayScenario d = read(kBase + "pneumatics: {}\n");
+    ASSERT_EQ(d.pneumatics.channels.size(), 2u);
+    EXPECT_DOUBLE_EQ(d.pneumatics.channels[1].inflate.sonicConductance, 0.3e-8);
+    EXPECT_DOUBLE_EQ(d.pneumatics.channels[1].vent.criticalPressureRatio, 0.4);
+    EXPECT_DOUBLE_EQ(d.pneumatics.channels[1].lineVolume, 20e-6);
+    EXPECT_DOUBLE_EQ(d.pneumatics.pump.massFlow[0], 0.16e-3);
+    EXPECT_DOUBLE_EQ(d.pneumatics.pump.pressureRise.back(), 100e3);
+    EXPECT_TRUE(d.pneumatics.manifold.thermal == pneumatics::Thermal::Isothermal);
+    EXPECT_FALSE(d.controller);
+
+    // A channel of its own bags; one bag alone has its valves on the bag.
+    const io::PatientOnArrayScenario c =
+        read(kBase + "pneumatics:\n  channels:\n    - {bags: [3]}\n    - {bags: [10, 17], "
+                     "name: middle}\n  manifold: {volume: 0.1 L, thermal: heat-exchange, "
+                     "heat_transfer: 10, wall_area: 100 cm^2}\n");
+    EXPECT_EQ(c.pneumatics.channels[0].name, "bags 3");
+    EXPECT_DOUBLE_EQ(c.pneumatics.channels[0].lineVolume, 0.0);
+    EXPECT_EQ(c.pneumatics.channels[1].name, "middle");
+    EXPECT_DOUBLE_EQ(c.pneumatics.manifold.volume, 1e-4);
+    EXPECT_DOUBLE_EQ(c.pneumatics.manifold.wallArea, 0.01);
+}
+
+TEST(PneumaticsScenario, ErrorsAreLocatedAtTheirKeys) {
+    const io::InputError gas =
+        readError(kBase + "gas:\n  - {group: right, flow: 0.01 g/s}\npneumatics: {}\n");
+    EXPECT_EQ(gas.getKey(), "gas");
+    EXPECT_NE(gas.getMessage().find("remove the gas list"), std::string::npos) << gas.what();
+
+    const io::InputError unit = readError(
+        kBase + "pneumatics:\n  valves:\n    vent: {conductance: 0.3 L/s}\n");
+    EXPECT_EQ(unit.getLine(), 18);
+    EXPECT_EQ(unit.getKey(), "pneumatics.valves.vent.conductance");
+    EXPECT_NE(unit.getMessage().find("dm^3/(s bar)"), std::string::npos) << unit.what();
+
+    const io::InputError ratio = readError(
+        kBase + "pneumatics:\n  valves:\n    inflate: {critical_ratio: 1.2}\n");
+    EXPECT_EQ(ratio.getKey(), "pneumatics.valves.inflate.critical_ratio");
+
+    const io::InputError curve = readError(
+        kBase + "pneumatics:\n  pump: {curve: [[0 kPa, 0.1 g/s], [50 kPa, 0.2 g/s]]}\n");
+    EXPECT_EQ(curve.getKey(), "pneumatics.pump.curve");
+
+    const io::InputError misspelt = readError(kBase + "pneumatics:\n  manifodl: {}\n");
+    EXPECT_NE(misspelt.getMessage().find("did you mean 'manifold'"), std::string::npos)
+        << misspelt.what();
+
+    const io::InputError twice = readError(
+        kBase + "pneumatics:\n  channels:\n    - {group: left}\n    - {bags: [1]}\n");
+    EXPECT_EQ(twice.getLine(), 19);
+    EXPECT_NE(twice.getMessage().find("bag 1 is already in channel 'left'"), std::string::npos)
+        << twice.what();
+
+    const io::InputError noPneumatics =
+        readError(kBase + "control: {kind: turn, tilt: 30 deg}\n");
+    EXPECT_EQ(noPneumatics.getKey(), "control");
+
+    const io::InputError channel = readError(
+        kBase + "pneumatics: {}\ncontrol: {kind: turn, tilt: 30 deg, inflate: [rihgt]}\n");
+    EXPECT_EQ(channel.getKey(), "control.inflate[0]");
+    EXPECT_NE(channel.getMessage().find("right"), std::string::npos) << channel.what();
+
+    const io::InputError stiffness = readError(
+        kBase + "pneumatics: {}\ncontrol:\n  kind: target-mass\n  targets:\n"
+                "    - {channel: left, stiffness: 2 N/mm}\n");
+    EXPECT_EQ(stiffness.getKey(), "control.targets[0].stiffness");
+    EXPECT_NE(stiffness.getMessage().find("k_of_m"), std::string::npos) << stiffness.what();
+
+    const io::InputError outside = readError(
+        kBase + "pneumatics: {}\ncontrol:\n  kind: target-mass\n"
+                "  k_of_m: [[3 g, 0.9 N/mm], [4.5 g, 3.2 N/mm]]\n  targets:\n"
+                "    - {channel: left, stiffness: 5 N/mm}\n");
+    EXPECT_EQ(outside.getKey(), "control.targets[0].stiffness");
+    EXPECT_NE(outside.getMessage().find("outside the table"), std::string::npos)
+        << outside.what();
+
+    const io::InputError period = readError(
+        kBase + "pneumatics: {}\ncontrol:\n  kind: schedule\n  period: 10 s\n  commands:\n"
+                "    - {at: 12 s, channel: left, inflate: open}\n");
+    EXPECT_EQ(period.getKey(), "control.commands[0].at");
+}
+
+TEST(PneumaticsScenario, ATargetMassFromAStiffnessIsInterpolatedInTheTable) {
+    const io::PatientOnArrayScenario sc = read(
+        kBase + "pneumatics: {}\ncontrol:\n  kind: target-mass\n"
+                "  k_of_m: [[3 g, 1 N/mm], [4 g, 3 N/mm]]\n  targets:\n"
+                "    - {channel: left, stiffness: 2 N/mm}\n    - {channel: right, mass: 5 g}\n");
+    EXPECT_EQ(sc.controlKind, "target-mass");
+    ASSERT_EQ(sc.controlText.size(), 2u);
+    EXPECT_NE(sc.controlText[0].find("'left' to 3.5 g a bag"), std::string::npos)
+        << sc.controlText[0];
+}
