@@ -530,7 +530,11 @@ struct Airbag::Impl {
         int cuts = 0;
         bool solved = false;
         while (!solved || s != s1) {
-            const double next = std::abs(s1 - s) <= std::abs(ds) * (1.0 + 1e-9) ? s1 : s + ds;
+            // The last increment lands on s1 exactly. An increment below s's roundoff (a ramp
+            // over a span of a few ulps: a cluster's masses already at their values but for
+            // roundoff) would leave s where it is for ever: it goes to s1 at once.
+            const bool last = std::abs(s1 - s) <= std::abs(ds) * (1.0 + 1e-9) || s + ds == s;
+            const double next = last ? s1 : s + ds;
             apply(next);
             SolveSummary sum;
             double stab = 0.0;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -107,6 +108,21 @@ TEST(AirbagCluster, EachBagKeepsItsOwnGasAndFlows) {
     EXPECT_NEAR(pair.getGasMass(1), 4.0e-3, 1e-12);
     pair.changeGasMass({4.0e-3, 4.0e-3});
     EXPECT_NEAR(pair.getGasMass(0), 4.0e-3, 1e-12);
+}
+
+TEST(AirbagCluster, AGasMassChangeOfAFewUlpsEnds) {
+    // A cluster ramps its gas in at least 16 increments. Asked for masses that differ from
+    // the bags' own by roundoff only (a load test asks for the masses it inflated to, summed
+    // back from the chambers), the increment is below the mass's roundoff: the ramp must end,
+    // at exactly the masses asked (reference: the masses given, bit for bit), and not step in
+    // place for ever.
+    Airbag pair(pairSpec(0.004));
+    pair.inflate(4.5e-3);
+    const double m0 = pair.getGasMass(0), m1 = pair.getGasMass(1);
+    const double up = std::nextafter(std::nextafter(m0, 1.0), 1.0);
+    pair.changeGasMass({up, m1});
+    EXPECT_EQ(pair.getGasMass(0), up);
+    EXPECT_EQ(pair.getGasMass(1), m1);
 }
 
 TEST(AirbagCluster, BadClustersAndMassesAreRefusedNamingTheOption) {
