@@ -5,85 +5,26 @@
 #include <cstdio>
 #include <sstream>
 
+#include "SvgPlot.h"
+
 namespace io {
 
 namespace {
 
-std::string num(double v, const char* f = "%.4g") {
-    if (!std::isfinite(v)) return "-";
-    char b[64];
-    std::snprintf(b, sizeof b, f, v);
-    return b;
-}
+using svg::num;
+using svg::Series;
 
-std::string esc(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-        if (c == '<') o += "&lt;";
-        else if (c == '>') o += "&gt;";
-        else if (c == '&') o += "&amp;";
-        else o += c;
-    }
-    return o;
-}
+std::string esc(const std::string& s) { return svg::escape(s); }
 
-struct Series {
-    std::string name, colour;
-    std::vector<double> x, y;
-    bool points = false;  ///< markers (measured) instead of a line
-};
-
-// One SVG chart with axes, ticks and a legend.
+// One chart with axes, ticks and a legend (the reports' shared SVG charts).
 std::string plot(const std::string& title, const std::string& xLabel, const std::string& yLabel,
                  const std::vector<Series>& series) {
-    const double W = 460, H = 300, L = 60, R = 10, T = 28, B = 42;
-    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-    for (const Series& s : series)
-        for (size_t i = 0; i < s.x.size(); ++i) {
-            x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
-            y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
-        }
-    if (!(x1 > x0)) x1 = x0 + 1;
-    if (!(y1 > y0)) y1 = y0 + 1;
-    const double py = 0.05 * (y1 - y0);
-    y0 -= py, y1 += py;
-    auto X = [&](double v) { return L + (v - x0) / (x1 - x0) * (W - L - R); };
-    auto Y = [&](double v) { return H - B - (v - y0) / (y1 - y0) * (H - T - B); };
-    std::ostringstream os;
-    os << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H
-       << "' font-family='sans-serif' font-size='11'>"
-       << "<text x='" << L << "' y='16' font-size='13'>" << esc(title) << "</text>"
-       << "<rect x='" << L << "' y='" << T << "' width='" << W - L - R << "' height='"
-       << H - T - B << "' fill='none' stroke='#888'/>";
-    for (int k = 0; k <= 4; ++k) {
-        const double xv = x0 + (x1 - x0) * k / 4, yv = y0 + (y1 - y0) * k / 4;
-        os << "<text x='" << X(xv) << "' y='" << H - B + 14 << "' text-anchor='middle'>"
-           << num(xv, "%.3g") << "</text>"
-           << "<text x='" << L - 4 << "' y='" << Y(yv) + 4 << "' text-anchor='end'>"
-           << num(yv, "%.3g") << "</text>";
-    }
-    os << "<text x='" << (L + W - R) / 2 << "' y='" << H - 8 << "' text-anchor='middle'>"
-       << esc(xLabel) << "</text>"
-       << "<text x='14' y='" << (T + H - B) / 2 << "' transform='rotate(-90 14 "
-       << (T + H - B) / 2 << ")' text-anchor='middle'>" << esc(yLabel) << "</text>";
-    int legend = 0;
-    for (const Series& s : series) {
-        if (s.points) {
-            const size_t step = std::max<size_t>(1, s.x.size() / 400);
-            for (size_t i = 0; i < s.x.size(); i += step)
-                os << "<circle cx='" << num(X(s.x[i]), "%.1f") << "' cy='" << num(Y(s.y[i]), "%.1f")
-                   << "' r='1.5' fill='" << s.colour << "'/>";
-        } else {
-            os << "<polyline fill='none' stroke-width='1.5' stroke='" << s.colour << "' points='";
-            for (size_t i = 0; i < s.x.size(); ++i)
-                os << num(X(s.x[i]), "%.1f") << "," << num(Y(s.y[i]), "%.1f") << " ";
-            os << "'/>";
-        }
-        os << "<text x='" << L + 8 << "' y='" << T + 14 + 13 * legend << "' fill='" << s.colour
-           << "'>" << esc(s.name) << "</text>";
-        ++legend;
-    }
-    return os.str() + "</svg>";
+    svg::PlotOptions o;
+    o.title = title;
+    o.xLabel = xLabel;
+    o.yLabel = yLabel;
+    o.width = 460;
+    return svg::plot(o, series);
 }
 
 // A channel's series in its reporting unit; `x` the displacement [mm] or the time [s].

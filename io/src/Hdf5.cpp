@@ -1,5 +1,7 @@
 #include "Hdf5.h"
 
+#include <algorithm>
+#include <cstring>
 #include <stdexcept>
 
 namespace io::h5 {
@@ -183,6 +185,77 @@ void GrowingDataset::append(const void* data, hsize_t rows) {
     check(H5Dwrite(m_dataset.get(), m_type, memSpace.get(), fileSpace.get(), H5P_DEFAULT, data),
           "cannot write " + m_name);
     m_rows += rows;
+}
+
+Handle openFileReadOnly(const std::string& path) {
+    silenceErrors();
+    if (H5Fis_hdf5(path.c_str()) <= 0)
+        throw std::runtime_error("not an HDF5 file (or it cannot be read)");
+    return Handle(check(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT),
+                        "cannot open it (is a run still writing it?)"));
+}
+
+bool hasLink(hid_t loc, const std::string& name) {
+    return H5Lexists(loc, name.c_str(), H5P_DEFAULT) > 0;
+}
+
+Handle openGroup(hid_t loc, const std::string& name) {
+    return Handle(check(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), "cannot open group " + name));
+}
+
+bool hasAttribute(hid_t obj, const std::string& name) {
+    return H5Aexists(obj, name.c_str()) > 0;
+}
+
+std::string readStringAttribute(hid_t obj, const std::string& name) {
+    Handle attr(check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), "cannot open attribute " + name));
+    Handle type(check(H5Aget_type(attr.get()), "type of attribute " + name));
+    if (H5Tget_class(type.get()) != H5T_STRING)
+        throw std::runtime_error("HDF5: attribute " + name + " is not a string");
+    Handle space(check(H5Aget_space(attr.get()), "dataspace of attribute " + name));
+    const hssize_t n = std::max<hssize_t>(H5Sget_simple_extent_npoints(space.get()), 1);
+    std::string out;
+    if (H5Tis_variable_str(type.get()) > 0) {
+        std::vector<char*> v(n, nullptr);
+        Handle mem(check(H5Tcopy(H5T_C_S1), "string type"));
+        check(H5Tset_size(mem.get(), H5T_VARIABLE), "string size");
+        check(H5Aread(attr.get(), mem.get(), v.data()), "cannot read attribute " + name);
+        for (hssize_t i = 0; i < n; ++i) out += (i ? "\n" : "") + std::string(v[i] ? v[i] : "");
+        H5Dvlen_reclaim(mem.get(), space.get(), H5P_DEFAULT, v.data());
+        return out;
+    }
+    const size_t len = H5Tget_size(type.get());
+    std::vector<char> buf(len * n + 1, '\0');
+    check(H5Aread(attr.get(), type.get(), buf.data()), "cannot read attribute " + name);
+    for (hssize_t i = 0; i < n; ++i) {
+        const char* s = buf.data() + i * len;
+        out += (i ? "\n" : "") + std::string(s, strnlen(s, len));
+    }
+    return out;
+}
+
+std::vector<double> readDoubleAttribute(hid_t obj, const std::string& name) {
+    Handle attr(check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), "cannot open attribute " + name));
+    Handle space(check(H5Aget_space(attr.get()), "dataspace of attribute " + name));
+    const hssize_t n = std::max<hssize_t>(H5Sget_simple_extent_npoints(space.get()), 1);
+    std::vector<double> v(n);
+    check(H5Aread(attr.get(), H5T_NATIVE_DOUBLE, v.data()), "cannot read attribute " + name);
+    return v;
+}
+
+std::vector<double> readDataset(hid_t loc, const std::string& name, std::vector<hsize_t>& dims) {
+    Handle ds(check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), "cannot open dataset " + name));
+    Handle space(check(H5Dget_space(ds.get()), "dataspace of " + name));
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    dims.assign(std::max(rank, 0), 0);
+    if (rank > 0) H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    hsize_t total = 1;
+    for (hsize_t d : dims) total *= d;
+    std::vector<double> v(total);
+    if (total > 0)
+        check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()),
+              "cannot read dataset " + name);
+    return v;
 }
 
 }  // namespace io::h5

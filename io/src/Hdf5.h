@@ -1,6 +1,7 @@
 #pragma once
-// Small RAII helpers over the HDF5 C API (serial HDF5 1.10) for the result writers: owned
-// handles, string and number attributes, and datasets that grow along their first axis.
+// Small RAII helpers over the HDF5 C API (serial HDF5 1.10) for the result writers and readers:
+// owned handles, string and number attributes, datasets that grow along their first axis, and
+// reading them back (bagsim report reads a run's results.h5).
 // Every failure throws std::runtime_error naming the object; HDF5's own error printing is off
 // (libraries print nothing).
 
@@ -55,6 +56,20 @@ void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>
                   const double* data, const std::string& unit);
 void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
                   const int* data, const std::string& unit);
+
+/// Opens a file read-only. @throws std::runtime_error (without the path) if it is not an HDF5
+/// file or is locked.
+Handle openFileReadOnly(const std::string& path);
+/// True if `loc` has a link called `name` (one level; "mat", not "mat/time").
+bool hasLink(hid_t loc, const std::string& name);
+Handle openGroup(hid_t loc, const std::string& name);
+bool hasAttribute(hid_t obj, const std::string& name);
+/// A string attribute (fixed or variable length; the elements of an array joined by "\n").
+std::string readStringAttribute(hid_t obj, const std::string& name);
+/// A numeric attribute as doubles (a scalar gives one value).
+std::vector<double> readDoubleAttribute(hid_t obj, const std::string& name);
+/// A whole numeric dataset as doubles, row-major; `dims` receives its dimensions.
+std::vector<double> readDataset(hid_t loc, const std::string& name, std::vector<hsize_t>& dims);
 
 /// A chunked dataset of rank 1 + inner.size() that grows along its first axis.
 class GrowingDataset {
