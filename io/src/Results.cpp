@@ -36,7 +36,8 @@ namespace {
 // Files a run writes; --force removes them first so no stale result survives a failed rerun.
 const char* const kOwnedFiles[] = {kResultsH5,      kResultsXdmf,      kLoadDisplacementCsv,
                                    kStiffnessCsv,   kRigReadingsCsv,   "results.xdmf.tmp",
-                                   "regions.csv",   "bags.csv",        "tilt.csv"};
+                                   "regions.csv",   "bags.csv",        "tilt.csv",
+                                   "report.html",   "report.html.tmp"};
 
 }  // namespace
 
