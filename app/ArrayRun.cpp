@@ -22,6 +22,8 @@
 
 #include "ArrayVerdict.h"
 #include "Interrupt.h"
+#include "ProgressEstimate.h"
+#include "Report.h"
 
 namespace bagsim::app {
 
@@ -162,6 +164,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         } catch (...) {
         }
         writer->fail(status, msg);
+        writeReportAfterRun(outPath, quiet);
         std::cerr << "bagsim: " << msg << "; results so far kept in " << outPath.string()
                   << "/ (marked INCOMPLETE)\n";
     };
@@ -213,6 +216,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         nextOutput = sc.outputInterval;
         double lastPrint = wall();
         bool settled = !(sc.settleTime > 0.0 && sc.duration > 0.0);
+        ProgressEstimate estimate;  // remaining wall time from the last minute's pace
+        estimate.add(wall(), poa->getTime());
         while (poa->getTime() < end - 1e-9) {
             const double t = poa->getTime() + 1e-9;
             if (!settled && t >= sc.settleTime) {
@@ -250,15 +255,21 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
             if (poa->getTime() >= nextOutput - 1e-9 || poa->getTime() >= end - 1e-9) {
                 const io::ArrayFrame f = record();
                 while (nextOutput <= poa->getTime() + 1e-9) nextOutput += sc.outputInterval;
+                estimate.add(wall(), f.time);
                 if (!quiet && wall() - lastPrint > 5.0) {
                     lastPrint = wall();
-                    std::cerr << "  t " << fmt("%7.3f s", f.time) << "  bags carry "
+                    std::cerr << "  t " << fmt("%7.3f", f.time) << fmt(" of %g s", end)
+                              << "  bags carry "
                               << fmt("%7.1f N", poa->calcBagForce()) << " of "
                               << fmt("%.1f N", poa->getWeight()) << "  tilt pelvis "
                               << fmt("%+5.1f", f.pelvisTilt * kDeg) << " thorax "
                               << fmt("%+5.1f deg", f.thoraxTilt * kDeg) << "  "
                               << fmt("%.1f passes/step", double(totals.passes) / totals.steps)
-                              << "  " << fmt("%.0f s", wall()) << "\n";
+                              << "  elapsed " << ProgressEstimate::formatDuration(wall())
+                              << ", left ~"
+                              << ProgressEstimate::formatDuration(estimate.getRemaining(end))
+                              << fmt(" (%.3g s per simulated s", estimate.getRate())
+                              << fmt(" over the last %.0f s)", estimate.getStretch()) << "\n";
                 }
             }
         }
@@ -337,6 +348,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         stop("failed", e.what());
         return 1;
     }
+    writeReportAfterRun(outPath, quiet);
     std::cout << table.str() << "support verdict:\n" << verdictText << "results in " << outPath.string() << "/:\n"
               << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N\n"
               << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N\n"
@@ -348,7 +360,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
               << "  " << io::kVerdictCsv << "   check,status,value,unit,detail\n"
               << "  " << io::kResultsH5 << "    pressure-mat frames (/mat), " << io::kResultsXdmf
               << " to open them in ParaView\n"
-              << "  summary.txt\n";
+              << "  summary.txt, report.html (open it in a browser)\n";
     return 0;
 }
 

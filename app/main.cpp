@@ -22,6 +22,7 @@ const char* kUsage =
     "                                  measured data from a truth run with an effect on\n"
     "  diagnose --measured DIR         where simulation and measured data disagree, and why\n"
     "  study STUDY.yaml [--out DIR]    run every case of a study into one table\n"
+    "  report RUN_DIR [--out FILE]     (re)write report.html of a patient-on-array run\n"
     "\n"
     "  bagsim <command> --help   says what a command does and its options\n"
     "  bagsim --version          prints the version\n";
@@ -46,7 +47,8 @@ int main(int argc, char** argv) {
         return bagsim::app::runSynthMeasurementCommand(argc - 2, argv + 2);
     if (cmd == "diagnose") return bagsim::app::runDiagnoseCommand(argc - 2, argv + 2);
     if (cmd == "study") return bagsim::app::runStudyCommand(argc - 2, argv + 2);
+    if (cmd == "report") return bagsim::app::runReportCommand(argc - 2, argv + 2);
     std::cerr << "bagsim: unknown command '" << cmd
-              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose, study (see bagsim --help)\n";
+              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose, study, report (see bagsim --help)\n";
     return 2;
 }

@@ -3,6 +3,8 @@
 // complete, and at every output time the regions' forces add up to the bags' (both the
 // vertical force of the bags on him; reference: the coupling's link wrenches).
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "ArrayRunTestUtil.h"
 
@@ -34,6 +36,35 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     // Every bag holds the scenario's 4.5 g (no gas command).
     const int mass = bags.column("mass_g");
     for (const auto& r : bags.rows) EXPECT_NEAR(std::stod(r.at(mass)), 4.5, 1e-6);
+
+    // report.html is written at the end, complete; bagsim report remakes it in place, refuses
+    // to replace another existing file without --force, and refuses a folder that is no result.
+    std::stringstream page;
+    page << std::ifstream(out / "report.html").rdbuf();
+    EXPECT_NE(page.str().find("<h1>supine-on-array-coarse</h1>"), std::string::npos);
+    EXPECT_EQ(page.str().find("INCOMPLETE RESULTS"), std::string::npos);
+    const std::string bagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\" report ";
+    auto run = [&](const std::string& args) {
+        const int rc = std::system((bagsim + args + " > \"" + out.string() + ".report.log\" 2>&1").c_str());
+        std::stringstream log;
+        log << std::ifstream(out.string() + ".report.log").rdbuf();
+        return std::make_pair(WEXITSTATUS(rc), log.str());
+    };
+    EXPECT_EQ(run("\"" + out.string() + "\"").first, 0);
+    const std::filesystem::path other = out.string() + "-mine.html";
+    { std::ofstream(other) << "mine\n"; }
+    const auto refused = run("\"" + out.string() + "\" --out \"" + other.string() + "\"");
+    EXPECT_EQ(refused.first, 2);
+    EXPECT_NE(refused.second.find("mine.html: exists; pass --force to replace it"), std::string::npos)
+        << refused.second;
+    EXPECT_EQ(readCsv(other).header, "mine");
+    EXPECT_EQ(run("\"" + out.string() + "\" --out \"" + other.string() + "\" --force").first, 0);
+    EXPECT_NE(readCsv(other).header.find("<!DOCTYPE html>"), std::string::npos);
+    const auto notResult = run("\"" + std::string(BAGSIM_SOURCE_DIR) + "/scenarios\"");
+    EXPECT_EQ(notResult.first, 2);
+    EXPECT_NE(notResult.second.find("scenarios: no results.h5: not the output folder of a bagsim run"),
+              std::string::npos)
+        << notResult.second;
 }
 
 TEST(ArrayRun, AnExistingOutputFolderIsNeverOverwrittenSilently) {

@@ -1,0 +1,110 @@
+// bagsim report RUN_DIR [--out FILE] [--force]: (re)writes report.html from the results folder
+// of a patient-on-array run (io/ArrayReport.h; docs/reading-the-report.md).
+#include <io/ArrayReport.h>
+#include <io/InputError.h>
+
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+#include "Commands.h"
+#include "Report.h"
+
+namespace bagsim::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kHelp =
+    "usage: bagsim report RUN_DIR [--out FILE] [--force]\n"
+    "\n"
+    "Writes report.html, one self-contained page (no network needed) from the results folder\n"
+    "of a patient-on-array run: the scenario, the verdict, pressure-mat images at key moments\n"
+    "with a colour scale in mmHg, the peak pressure per body region, tilt, bag pressures and\n"
+    "gas over time. bagsim run writes it at the end of such a run (also after a failure or\n"
+    "Ctrl-C, marked incomplete); this command remakes it, e.g. for a folder of an older run.\n"
+    "How to read it: docs/reading-the-report.md.\n"
+    "\n"
+    "options:\n"
+    "  --out FILE   where to write the page (default: RUN_DIR/report.html, which is replaced)\n"
+    "  --force      replace FILE if it exists (RUN_DIR/report.html needs no --force)\n"
+    "  -h, --help   this text\n"
+    "\n"
+    "exit status: 0 written, 1 it could not be written, 2 bad usage, a folder that is not a\n"
+    "patient-on-array result, or an existing FILE without --force.\n";
+
+}  // namespace
+
+int runReportCommand(int argc, char** argv) {
+    std::string dir, out;
+    bool force = false;
+    for (int i = 0; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "-h" || a == "--help") {
+            std::cout << kHelp;
+            return 0;
+        } else if (a == "--force") {
+            force = true;
+        } else if (a == "--out" || a.rfind("--out=", 0) == 0) {
+            if (a == "--out" && i + 1 >= argc) {
+                std::cerr << "bagsim report: --out needs a file name\n";
+                return 2;
+            }
+            out = a == "--out" ? argv[++i] : a.substr(6);
+        } else if (a.rfind("-", 0) == 0 && a.size() > 1) {
+            std::cerr << "bagsim report: unknown option '" << a
+                      << "'; valid: --out FILE, --force, --help\n";
+            return 2;
+        } else if (dir.empty()) {
+            dir = a;
+        } else {
+            std::cerr << "bagsim report: one results folder at a time ('" << dir << "' and '" << a
+                      << "')\n";
+            return 2;
+        }
+    }
+    if (dir.empty()) {
+        std::cerr << "bagsim report: which results folder? e.g. bagsim report out/turn-left\n";
+        return 2;
+    }
+    const fs::path own = fs::path(dir) / io::kReportHtml;
+    const fs::path target = out.empty() ? own : fs::path(out);
+    std::error_code ec;
+    if (fs::is_directory(target, ec)) {
+        std::cerr << "bagsim: error: " << target.string()
+                  << ": is a folder; --out names the page's file, e.g. --out turn.html\n";
+        return 2;
+    }
+    const bool isOwn =
+        fs::exists(target, ec) && fs::exists(own, ec) && fs::equivalent(target, own, ec);
+    if (fs::exists(target, ec) && !isOwn && !force) {
+        std::cerr << "bagsim: error: " << target.string()
+                  << ": exists; pass --force to replace it, or choose another --out\n";
+        return 2;
+    }
+    try {
+        io::writeArrayReport(dir, target);
+    } catch (const io::InputError& e) {
+        std::cerr << "bagsim: error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "bagsim: error: " << e.what() << "\n";
+        return 1;
+    }
+    std::cout << "report: " << target.string() << "\n";
+    return 0;
+}
+
+void writeReportAfterRun(const fs::path& dir, bool quiet) {
+    try {
+        io::writeArrayReport(dir, dir / io::kReportHtml);
+        if (!quiet) std::cerr << "  report: " << (dir / io::kReportHtml).string() << "\n";
+    } catch (const std::exception& e) {
+        // The results are written; the page is a view of them and can be remade.
+        std::cerr << "bagsim: warning: report.html not written (" << e.what()
+                  << "); the results are kept; bagsim report " << dir.string() << " remakes it\n";
+    }
+}
+
+}  // namespace bagsim::app
