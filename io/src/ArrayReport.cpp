@@ -725,7 +725,7 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         os << svg::plot(o, {{"pelvis", svg::getCategoryColour(0), t, pelvis},
                             {"thorax", svg::getCategoryColour(1), t, thorax, false, "6 3"}});
     }
-    if (run.body.present) {
+    if (run.body.present && !run.body.rows.empty()) {
         const Table& b = run.body;
         std::vector<double> bt, y, z;
         for (size_t r = 0; r < b.rows.size(); ++r) {
@@ -745,7 +745,7 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
                     bagSeries(run, collect(run.bags, "bag", "mass_g")));
     os << svg::plot(timePlot(ctx, "Force of each bag on him", "force [N]"),
                     bagSeries(run, collect(run.bags, "bag", "force_N")));
-    if (run.pneumatics.present) {
+    if (run.pneumatics.present && !run.pneumatics.rows.empty()) {
         os << svg::plot(timePlot(ctx, "Pressure sensors", "sensor reading [kPa]"),
                         bagSeries(run, collect(run.pneumatics, "bag", "sensor_kPa")));
         Curves in = collect(run.pneumatics, "bag", "inflow_g_per_s");
