@@ -552,7 +552,8 @@ const char* kCss =
     "padding:0 1em}h1{font-size:1.6em;margin-bottom:0.2em}h2{margin-top:1.6em;border-bottom:1px "
     "solid #ccc}table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;"
     "padding:3px 8px;text-align:left;vertical-align:top}th{background:#f0f0f0}td.n{text-align:"
-    "right;font-variant-numeric:tabular-nums}.banner{border:3px solid #b00;background:#fde8e8;"
+    "right;font-variant-numeric:tabular-nums;white-space:nowrap}td.ok,td.warning,td.fail,td.na{"
+    "white-space:nowrap}.banner{border:3px solid #b00;background:#fde8e8;"
     "padding:0.8em 1em;font-size:1.15em;margin:1em 0}.banner b{color:#b00}.ok{background:"
     "#dff0d8}.warning{background:#fcf0c8}.fail{background:#f6d0d0;font-weight:bold}.na{background:"
     "#eee;color:#555}.mats{display:flex;flex-wrap:wrap;gap:1.2em;align-items:flex-start}"
@@ -560,6 +561,15 @@ const char* kCss =
     "wrap;gap:0.8em}svg{max-width:100%;height:auto}pre{background:#f6f6f6;padding:0.6em;"
     "overflow-x:auto;font-size:0.9em}details{margin:0.5em 0}summary{cursor:pointer;font-weight:"
     "bold}.muted{color:#666}";
+
+/// A verdict value to 4 significant digits when it is a number, as written otherwise.
+std::string formatValue(const std::string& cell) {
+    char* end = nullptr;
+    const double v = std::strtod(cell.c_str(), &end);
+    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(v))
+        return escape(cell);
+    return num(v, "%.4g");
+}
 
 std::string statusCell(const std::string& status) {
     const std::string s = lower(status);
@@ -664,9 +674,18 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
            << (incomplete ? " (on the part of the run that was computed)" : "")
            << ".</p><table id='verdict'><tr><th>check</th><th>status</th><th>value</th>"
               "<th>detail</th></tr>";
-        for (size_t r = 0; r < v.rows.size(); ++r)
+        // Problems first (fail, warning, ok, n/a), each group in the file's order.
+        auto rank = [&](size_t r) {
+            const std::string x = lower(v.text(r, si));
+            return x == "fail" ? 0 : x == "warning" ? 1 : x == "ok" ? 2 : 3;
+        };
+        std::vector<size_t> order(v.rows.size());
+        for (size_t r = 0; r < order.size(); ++r) order[r] = r;
+        std::stable_sort(order.begin(), order.end(),
+                         [&](size_t a, size_t b) { return rank(a) < rank(b); });
+        for (size_t r : order)
             os << "<tr><td>" << escape(v.text(r, ci)) << "</td>" << statusCell(v.text(r, si))
-               << "<td class='n'>" << escape(v.text(r, vi))
+               << "<td class='n'>" << formatValue(v.text(r, vi))
                << (v.text(r, ui).empty() ? "" : " " + escape(v.text(r, ui))) << "</td><td>"
                << escape(v.text(r, di)) << "</td></tr>";
         os << "</table>";
