@@ -81,12 +81,15 @@ std::vector<Eigen::Isometry3d> calcNeighbourPoses(const LoadTestOptions& o) {
         case N::None: return {};
         case N::Pair: at = {Vec3(0, 0, 0), Vec3(0, py, 0)}; break;
         case N::Row3: at = {Vec3(0, 0, 0), Vec3(0, -py, 0), Vec3(0, py, 0)}; break;
-        case N::Block3x3:
+        case N::Block3x3: {
+            // The pressed bag (bag 0) at the origin, the block's other positions around it.
+            const int pi = o.neighbourPressed[0], pj = o.neighbourPressed[1];
             at = {Vec3(0, 0, 0)};
             for (int i = -1; i <= 1; ++i)
                 for (int j = -1; j <= 1; ++j)
-                    if (i != 0 || j != 0) at.push_back(Vec3(i * px, j * py, 0));
+                    if (i != pi || j != pj) at.push_back(Vec3((i - pi) * px, (j - pj) * py, 0));
             break;
+        }
     }
     std::vector<Eigen::Isometry3d> poses;
     for (const Vec3& p : at) {
@@ -161,6 +164,14 @@ void LoadTestOptions::validate() const {
         require(neighbourGasMass >= 0.0 && neighbourGasMass < 1.0, "neighbourGasMass",
                 neighbourGasMass,
                 "use a gas mass > 0 (in kg inside; e.g. 3.0 g), or 0 for the pressed bag's own");
+        for (int k = 0; k < 2; ++k)
+            if (neighbourPressed[k] < -1 || neighbourPressed[k] > 1 ||
+                (neighbours != Neighbours::Block3x3 && neighbourPressed[k] != 0))
+                throw std::invalid_argument(
+                    "load test option 'neighbourPressed' = (" +
+                    std::to_string(neighbourPressed[0]) + ", " +
+                    std::to_string(neighbourPressed[1]) +
+                    "): use -1, 0 or 1 along x and across y, within a block3x3 only");
         if (connection != Connection::Open)
             throw std::invalid_argument(
                 "load test option 'neighbours' needs the open connection (one gas body per "

@@ -219,7 +219,7 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
     // The pressed bag among neighbours of the same bag (docs/array-coupling.md).
     if (s.has("neighbours")) {
         const ScenarioNode nb = s.getSection("neighbours");
-        nb.checkKeys({"layout"}, {"gap", "gas_mass"});
+        nb.checkKeys({"layout"}, {"gap", "gas_mass", "pressed"});
         using N = bags::LoadTestOptions::Neighbours;
         const std::string layout = nb.getChoice("layout", {"none", "pair", "row3", "block3x3"});
         o.neighbours = layout == "pair"       ? N::Pair
@@ -235,6 +235,23 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
             o.neighbourGasMass = nb.getQuantity("gas_mass", D::Mass);
             checkRange(nb, "gas_mass", o.neighbourGasMass, 0, false, 0.1, false, "g",
                        "every neighbour's gas mass; leave it out for the pressed bag's own");
+        }
+        if (nb.has("pressed")) {
+            const ScenarioNode pr = nb.get("pressed");
+            const std::vector<ScenarioNode> e = pr.isSequence() ? pr.getElements()
+                                                                : std::vector<ScenarioNode>();
+            const char* valid =
+                "two whole numbers [along, across], each -1, 0 or 1: where in the 3 x 3 block "
+                "the pressed bag stands ([0, 0] the middle, [1, 1] the corner at +x +y)";
+            if (e.size() != 2) nb.fail("pressed", std::string("must be ") + valid);
+            for (int k = 0; k < 2; ++k) {
+                const int v = e[k].asInteger();
+                if (v < -1 || v > 1) nb.fail("pressed", std::string("must be ") + valid);
+                o.neighbourPressed[k] = v;
+            }
+            if (o.neighbours != N::Block3x3 && o.neighbourPressed != std::array<int, 2>{0, 0})
+                nb.fail("pressed", "needs layout: block3x3 (the other layouts press their "
+                                   "middle bag); use [0, 0] or leave it out");
         }
         if (o.neighbours != N::None && connection == "orifice")
             s.fail("connection", "orifice is not supported with neighbours (one gas body per "

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -354,6 +355,50 @@ TEST(LoadTest, ANeighbourSqueezesThePressedBagAndStiffensIt) {
     double mass = 0.0;
     for (double m : cp.steps.front().gasMass) mass += m;
     EXPECT_NEAR(mass, 4.5e-3, 1e-9);
+}
+
+TEST(LoadTest, ABlockPressedAtEachPositionHasItsEightNeighboursAroundIt) {
+    // Reference: the 3 x 3 block's positions on the pitches (long side + gap along x, width +
+    // gap across y), exact to roundoff of the sums; the pressed bag (bag 0) at the origin.
+    LoadTestOptions o = coarseNeighbourOptions();
+    o.neighbours = LoadTestOptions::Neighbours::Block3x3;
+    const double px = o.geometry.longSide + o.neighbourGap, py = o.geometry.width + o.neighbourGap;
+    for (int pi = -1; pi <= 1; ++pi)
+        for (int pj = -1; pj <= 1; ++pj) {
+            o.neighbourPressed = {pi, pj};
+            const std::vector<Eigen::Isometry3d> poses = calcNeighbourPoses(o);
+            ASSERT_EQ(poses.size(), 9u);
+            EXPECT_EQ(poses[0].translation().norm(), 0.0);
+            // Every block position once, the pressed one being the origin.
+            int found = 0;
+            for (int i = -1; i <= 1; ++i)
+                for (int j = -1; j <= 1; ++j) {
+                    const Vec3 want((i - pi) * px, (j - pj) * py, 0.0);
+                    for (const Eigen::Isometry3d& X : poses)
+                        if ((X.translation() - want).norm() < 1e-12) ++found;
+                }
+            EXPECT_EQ(found, 9) << "pressed at (" << pi << ", " << pj << ")";
+        }
+    // A corner has 3 adjacent bags (one pitch away along, across or both), an edge 5, the
+    // middle 8.
+    auto near = [&](std::array<int, 2> at) {
+        o.neighbourPressed = at;
+        int n = 0;
+        for (const Eigen::Isometry3d& X : calcNeighbourPoses(o)) {
+            const double di = std::abs(X.translation().x()) / px,
+                         dj = std::abs(X.translation().y()) / py;
+            if (di + dj > 0.5 && di < 1.5 && dj < 1.5) ++n;
+        }
+        return n;
+    };
+    EXPECT_EQ(near({0, 0}), 8);
+    EXPECT_EQ(near({1, 1}), 3);
+    EXPECT_EQ(near({0, 1}), 5);
+    o.neighbourPressed = {2, 0};
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+    o.neighbourPressed = {0, 1};
+    o.neighbours = LoadTestOptions::Neighbours::Row3;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
 }
 
 TEST(LoadTest, RejectsImpossibleNeighbourOptions) {

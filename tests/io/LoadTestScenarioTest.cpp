@@ -505,6 +505,22 @@ TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
     EXPECT_EQ(base.options.neighbours, bags::LoadTestOptions::Neighbours::None);
     EXPECT_EQ(base.options.neighbourGasMass, 0.0);  // the pressed bag's own at each curve
 
+    // Where in a 3 x 3 block the pressed bag stands.
+    const io::LoadTestScenario corner = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 6, "  height: 150 mm\n  neighbours: {layout: block3x3, pressed: [1, -1]}"),
+        "c.yaml"));
+    EXPECT_EQ(corner.options.neighbourPressed[0], 1);
+    EXPECT_EQ(corner.options.neighbourPressed[1], -1);
+    EXPECT_EQ(base.options.neighbourPressed[0], 0);
+    const InputError ep = errorFor(replaceLine(
+        kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: block3x3\n    pressed: [2, 0]"));
+    EXPECT_EQ(ep.getKey(), "airbag.neighbours.pressed");
+    EXPECT_EQ(ep.getLine(), 9);
+    EXPECT_NE(std::string(ep.what()).find("-1, 0 or 1"), std::string::npos) << ep.what();
+    const InputError ep2 = errorFor(replaceLine(
+        kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: row3\n    pressed: [0, 1]"));
+    EXPECT_NE(std::string(ep2.what()).find("block3x3"), std::string::npos) << ep2.what();
+
     // Errors name the line, the key and what is valid.
     const InputError e = errorFor(replaceLine(
         kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: pair\n    gap: 120 mm"));

@@ -18,6 +18,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <array>
 #include <vector>
 
 namespace bags {
@@ -56,10 +57,14 @@ struct LoadTestOptions {
     /// on and the connection open). The pressed bag is bag 0 at the origin; across the width
     /// (y) the pitch is width + neighbourGap, along x (Block3x3 only) longSide + neighbourGap.
     /// None: the bag alone (the seed's rig); Pair: one neighbour at +y; Row3: one at -y and
-    /// one at +y; Block3x3: the middle of a 3 x 3 block.
+    /// one at +y; Block3x3: a 3 x 3 block, the pressed bag at neighbourPressed within it.
     /// docs/array-coupling.md.
     enum class Neighbours { None, Pair, Row3, Block3x3 };
     Neighbours neighbours = Neighbours::None;
+    /// Block3x3: where in the block the pressed bag stands, (along x, across y), each -1, 0
+    /// or 1; (0, 0) the middle, (1, 1) the corner at +x +y. The block's other eight bags stand
+    /// around it; pressing each position in turn maps the block's stiffness.
+    std::array<int, 2> neighbourPressed{0, 0};
     double neighbourGap = 5.0e-3;       ///< [m] between facing flat panels (0 < gap < 100 mm)
     /// [kg] every neighbour's gas mass at every curve; 0: the pressed bag's mass of that curve
     double neighbourGasMass = 0.0;
