@@ -321,6 +321,21 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                   << fmt("%.2f kPa\n", 1e-3 * air->readChannelSensor(c));
         }
     }
+    if (const auto* turn = dynamic_cast<const cosim::TurnController*>(sc.controller.get())) {
+        // How much gas the turn took: each turn channel's mass per bag when it ended.
+        const std::vector<double>& m0 = turn->getStartMasses();
+        const std::vector<double>& m1 = turn->getTurnedMasses();
+        if (!m1.empty()) {
+            table << "the turn ended at pelvis tilt "
+                  << fmt("%+.2f deg", turn->getTurnedTilt() * kDeg) << ":";
+            for (size_t i = 0; i < m1.size(); ++i)
+                table << (i ? "," : "") << " '" << air->getChannelName(turn->getChannels()[i])
+                      << "' " << fmt("%.3f g", 1e3 * m1[i]) << " a bag ("
+                      << fmt("%+.3f g", 1e3 * (m1[i] - m0[i])) << " from "
+                      << fmt("%.3f g", 1e3 * m0[i]) << ")";
+            table << "\n";
+        }
+    }
     table << totals.steps << " macro steps (" << totals.cuts << " cuts), "
           << fmt("%.2f", totals.steps ? double(totals.passes) / totals.steps : 0.0)
           << " coupling passes a step; " << fmt("%.1f s", wall()) << " wall-clock\n";

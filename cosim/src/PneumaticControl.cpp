@@ -89,7 +89,7 @@ void ValveSchedule::update(const ControlInputs& in, ArrayPneumatics& p,
         }
         if (c.vent >= 0) {
             p.setVent(c.channel, c.vent == 1);
-            what += std::string(what.empty() ? "" : ", ") + "vent " + (c.vent ? "open" : "closed");
+            what += std::string(what.empty() ? "" : "; ") + "vent " + (c.vent ? "open" : "closed");
         }
         events.push_back({in.time, "schedule: channel '" + p.getChannelName(c.channel) + "' " +
                                        (what.empty() ? "unchanged" : what)});
@@ -294,6 +294,9 @@ void TurnController::update(const ControlInputs& in, ArrayPneumatics& p,
             return;
         }
         closeAll(p);
+        m_turnedMass.clear();
+        m_turnedTilt = in.pelvisTilt;
+        for (int c : m_channels) m_turnedMass.push_back(perBag(c));
         m_phase = Phase::Holding;
         m_phaseStart = t;
         return;

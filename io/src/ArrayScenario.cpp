@@ -598,10 +598,15 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             for (const ScenarioNode& e : cs.getElements()) {
                 e.checkKeys({"channel"}, {"at", "inflate", "vent"});
                 cosim::ValveCommand c;
-                c.time = readAt(e);
-                if (period > 0.0 && !(c.time < period))
-                    e.fail("at", fmtUnit(c.time, "s") + " is not within the period " +
-                                     fmtUnit(period, "s") + "; valid: 0 s up to the period");
+                if (period > 0.0) {  // times within the period, repeated over the run
+                    c.time = e.getQuantity("at", D::Time, 0.0);
+                    if (!(c.time >= 0.0 && c.time < period))
+                        e.fail("at", fmtUnit(c.time, "s") + " is not within the period " +
+                                         fmtUnit(period, "s") +
+                                         "; valid: 0 s up to (not including) the period");
+                } else {
+                    c.time = readAt(e);
+                }
                 c.channel = findChannel(e, "channel", p);
                 c.inflate = readOpenClosed(e, "inflate");
                 c.vent = readOpenClosed(e, "vent");

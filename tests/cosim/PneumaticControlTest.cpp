@@ -165,7 +165,7 @@ TEST(PneumaticControl, AValveScheduleRepeatsWithItsPeriodOddAndEvenAlternating) 
     // 5 switch times (1.0, 1.2, 1.4, 1.6, 1.8), two channels each.
     EXPECT_EQ(events.size(), 10u);
     EXPECT_NEAR(events.front().time, 1.0, 1e-12);
-    EXPECT_NE(events.front().text.find("channel 'a' inflate open, vent closed"), std::string::npos)
+    EXPECT_NE(events.front().text.find("channel 'a' inflate open; vent closed"), std::string::npos)
         << events.front().text;
     EXPECT_NEAR(s.findNextChange(2.0), 2.2, 1e-12);
     // A command beyond the period is refused.

@@ -156,3 +156,20 @@ TEST(PneumaticsScenario, ATargetMassFromAStiffnessIsInterpolatedInTheTable) {
     EXPECT_NE(sc.controlText[0].find("'left' to 3.5 g a bag"), std::string::npos)
         << sc.controlText[0];
 }
+
+TEST(PneumaticsScenario, TheShippedPneumaticScenariosRead) {
+    for (const char* name : {"turn-left-pneumatic", "turn-right-pneumatic", "alternating-pressure",
+                             "turn-left-pneumatic-small-woman", "turn-left-pneumatic-tall-man",
+                             "turn-left-pneumatic-high-bmi"}) {
+        SCOPED_TRACE(name);
+        const io::PatientOnArrayScenario sc = io::readPatientOnArrayScenario(io::ScenarioFile::load(
+            std::string(BAGSIM_SOURCE_DIR) + "/scenarios/" + name + ".yaml"));
+        EXPECT_TRUE(sc.hasPneumatics);
+        EXPECT_TRUE(sc.controller);
+        EXPECT_EQ(sc.pneumatics.channels.size(), 2u);
+        EXPECT_DOUBLE_EQ(sc.options.bag.geometry.meshSize, 0.02);
+    }
+    const io::PatientOnArrayScenario right = io::readPatientOnArrayScenario(io::ScenarioFile::load(
+        std::string(BAGSIM_SOURCE_DIR) + "/scenarios/turn-right-pneumatic.yaml"));
+    EXPECT_NEAR(right.targetTilt, -30.0 * M_PI / 180.0, 1e-12);
+}

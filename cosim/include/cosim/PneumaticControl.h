@@ -154,6 +154,12 @@ class TurnController : public PneumaticController {
     Phase getPhase() const { return m_phase; }
     /// [s] when the target tilt was reached (NaN: not yet, or never).
     double getTiltReachedTime() const { return m_reached; }
+    /// The turn's channels: inflate then vent, with their mass per bag [kg] at the turn's start
+    /// and when the turn ended (target reached or given up; empty before).
+    const std::vector<int>& getChannels() const { return m_channels; }
+    const std::vector<double>& getStartMasses() const { return m_initialMass; }
+    const std::vector<double>& getTurnedMasses() const { return m_turnedMass; }
+    double getTurnedTilt() const { return m_turnedTilt; }  ///< [rad] pelvis, at the turn's end
 
   private:
     void closeAll(ArrayPneumatics& p) const;
@@ -163,6 +169,8 @@ class TurnController : public PneumaticController {
     double m_reached = std::numeric_limits<double>::quiet_NaN();
     std::vector<int> m_channels;         // inflate then vent
     std::vector<double> m_initialMass;   // per bag, per m_channels entry
+    std::vector<double> m_turnedMass;    // per bag, per m_channels entry, at the turn's end
+    double m_turnedTilt = 0.0;
     std::vector<BandController> m_band;  // the return
 };
 

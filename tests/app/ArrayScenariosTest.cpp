@@ -1,0 +1,100 @@
+// The shipped pneumatic scenarios end to end at a coarse setting (30 mm meshes, settled 0.1 s,
+// run 0.1 s; about 15-35 s each on the shared machine): each runs to the end, its controller
+// acts at the end of the settle (events.csv), and the gas moves the way it should: the turn's
+// inflated side gains and its vented side loses, the alternating cycle's odd rows gain while
+// its even rows lose; the three builds are the ones asked for (summary.txt).
+#include <filesystem>
+#include <fstream>
+
+#include "ArrayRunTestUtil.h"
+
+using namespace app::test;
+
+namespace {
+
+struct Case {
+    const char* scenario;
+    const char* firstEvent;  // the controller's first event starts with this
+    const char* patient;     // in summary.txt ("" : not checked)
+    // which bags gain (+1) and lose (-1) by the end, by row and column
+    int (*side)(int row, int column);
+};
+
+int rightGains(int, int c) { return c >= 4 ? 1 : c <= 2 ? -1 : 0; }
+int leftGains(int, int c) { return c <= 2 ? 1 : c >= 4 ? -1 : 0; }
+int oddRowsGain(int r, int) { return r % 2 ? 1 : -1; }
+
+int runShipped(const std::string& scenario, const std::filesystem::path& out) {
+    std::filesystem::remove_all(out);
+    const std::string cmd = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\" run \"" +
+                            BAGSIM_SOURCE_DIR + "/scenarios/" + scenario + ".yaml\" --out \"" +
+                            out.string() +
+                            "\" --quiet --set bag.mesh_size='30 mm' --set run.settle_time='0.1 s' "
+                            "--set run.duration='0.1 s' --set output.every='50 ms' > \"" +
+                            out.string() + ".log\" 2>&1";
+    const int rc = std::system(cmd.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+class ShippedScenario : public testing::TestWithParam<Case> {};
+
+}  // namespace
+
+TEST_P(ShippedScenario, RunsCoarseAndMovesTheGasTheWayItShould) {
+    const Case c = GetParam();
+    const std::filesystem::path out =
+        std::filesystem::path(BAGSIM_BINARY_DIR) / "tests/app/shipped" / c.scenario;
+    std::filesystem::create_directories(out.parent_path());
+    ASSERT_EQ(runShipped(c.scenario, out), 0) << "see " << out.string() << ".log";
+    EXPECT_FALSE(std::filesystem::exists(out / "INCOMPLETE"));
+    const Csv events = readCsv(out / "events.csv");
+    bool acted = false;
+    for (const auto& r : events.rows) acted = acted || r.at(1).rfind(c.firstEvent, 0) == 0;
+    EXPECT_TRUE(acted) << c.firstEvent;
+    if (*c.patient) {
+        std::ifstream summary(out / "summary.txt");
+        std::string text((std::istreambuf_iterator<char>(summary)),
+                         std::istreambuf_iterator<char>());
+        EXPECT_NE(text.find(c.patient), std::string::npos) << text;
+    }
+    // The gas a side holds (its bags share their air through their line, so a pressed bag
+    // may give some to the others of its side): the filled side gains, the vented side loses,
+    // a bag in no channel keeps its 4.5 g.
+    const Csv bags = readCsv(out / "bags.csv");
+    const int mass = bags.column("mass_g"), bag = bags.column("bag");
+    const double tEnd = std::stod(bags.rows.back().at(0));
+    double gained = 0.0, lost = 0.0;
+    int moved = 0;
+    for (const auto& r : bags.rows) {
+        if (std::stod(r.at(0)) < tEnd - 1e-9) continue;
+        const int b = std::stoi(r.at(bag));
+        const int way = c.side(b / 7, b % 7);
+        const double dm = std::stod(r.at(mass)) - 4.5;
+        if (way > 0) gained += dm;
+        if (way < 0) lost -= dm;
+        if (way == 0) EXPECT_NEAR(dm, 0.0, 1e-9) << "bag " << b;
+        moved += way != 0;
+    }
+    EXPECT_GT(gained, 0.01);
+    EXPECT_GT(lost, 0.01);
+    EXPECT_GE(moved, 30);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Pneumatic, ShippedScenario,
+    testing::Values(Case{"turn-left-pneumatic", "turn started", "", rightGains},
+                    Case{"turn-right-pneumatic", "turn started", "", leftGains},
+                    Case{"alternating-pressure", "schedule: channel 'odd-rows' inflate open", "",
+                         oddRowsGain},
+                    Case{"turn-left-pneumatic-small-woman", "turn started",
+                         "small light woman (1.55 m, 50 kg", rightGains},
+                    Case{"turn-left-pneumatic-tall-man", "turn started",
+                         "tall heavy man (1.90 m, 110 kg", rightGains},
+                    Case{"turn-left-pneumatic-high-bmi", "turn started",
+                         "high-BMI patient (1.65 m, 120 kg", rightGains}),
+    [](const testing::TestParamInfo<Case>& i) {
+        std::string n = i.param.scenario;
+        for (char& ch : n)
+            if (ch == '-') ch = '_';
+        return n;
+    });
