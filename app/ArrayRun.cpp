@@ -5,6 +5,7 @@
 #include <bagsim/Version.h>
 #include <cosim/ArrayPneumatics.h>
 #include <cosim/ArrayReadings.h>
+#include <cosim/ArrayShapes.h>
 #include <io/ArrayResults.h>
 #include <io/ArrayScenario.h>
 #include <io/InputError.h>
@@ -128,6 +129,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         for (; eventsWritten < events.size(); ++eventsWritten)
             writer->addEvent(events[eventsWritten].time, events[eventsWritten].text);
     };
+    cosim::BodySurface bodySurface;  // bags and body for ParaView (results.xdmf)
+    Eigen::Matrix3Xd bagNodes, bodyNodes;
     auto record = [&] {
         io::ArrayFrame f;
         f.time = poa->getTime();
@@ -143,6 +146,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
             }
         cosim::fillPressureMat(*poa, mat);
         f.mat = &mat;
+        if (writer->wantsShapes(f.time)) {
+            bagNodes = cosim::calcBagSurfacePositions(*poa);
+            bodyNodes = cosim::calcBodySurfacePositions(poa->getModel(), poa->getBody().getState(),
+                                                        bodySurface);
+            f.bagNodes = &bagNodes;
+            f.bodyNodes = &bodyNodes;
+        }
         writer->addFrame(f);
         verdict.addFrame(f, cosim::calcPressedNodeHeights(*poa, kPressedThreshold));
         return f;
@@ -174,6 +184,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         std::vector<cosim::BagParticipant*> bags(size_t(layout.rows) * layout.columns, nullptr);
         for (size_t i = 0; i < poa->getBagIndices().size(); ++i)
             bags[poa->getBagIndices()[i]] = &poa->updBag(int(i));
+        bodySurface = cosim::makeBodySurface(poa->getModel());
+        writer->setShapes(cosim::makeBagSurfaces(*poa), bodySurface.mesh,
+                          std::max(sc.outputInterval, end / 60.0), end);
         if (!quiet)
             std::cerr << "  built in " << fmt("%.1f s", wall()) << ": "
                       << poa->getBagIndices().size() << " bags under him, "

@@ -35,6 +35,17 @@ struct ArrayResultsWriter::Impl {
     std::ofstream regions, bags, tilt, body, events, pneumatics;
     std::vector<double> frameTimes;
     int frames = 0;
+    // The shapes for ParaView (setShapes()).
+    struct ShapeSet {
+        std::string name;      ///< "bags", "body"
+        std::string group;     ///< the cell attribute's name: "bag", "segment"
+        Eigen::Index nodes = 0, triangles = 0;
+    };
+    std::vector<ShapeSet> shapeSets;
+    h5::Handle shapesGroup;
+    h5::GrowingDataset shapeTime;
+    std::vector<double> shapeTimes;
+    double shapeInterval = 0.0, shapeEnd = 0.0, nextShape = 0.0;
     bool closed = false;
     std::chrono::steady_clock::time_point lastFlush = std::chrono::steady_clock::now();
 
@@ -52,6 +63,8 @@ struct ArrayResultsWriter::Impl {
         matPressure = {};
         matForce = {};
         matOffForce = {};
+        shapeTime = {};
+        shapesGroup.reset();
         matGroup.reset();
         meta.reset();
         file.reset();
@@ -60,8 +73,10 @@ struct ArrayResultsWriter::Impl {
     void writeXdmf() const;
 };
 
-// The mat as a 2-D rectilinear grid per frame: XDMF's slow axis (its "Y") is the bed's y and
-// its fast axis ("X") the bed's x, as /mat/pressure is stored (frames, columns, rows).
+// The mat as one layer of cells per frame, drawn just under the bed board (a 2-D grid stands
+// upright in ParaView's Xdmf3 readers, across the bags): XDMF's axes run slow to fast z, y, x,
+// so its cells (1, columns, rows) are /mat/pressure's frame as stored (columns, rows).
+constexpr double kMatZ = -0.011, kMatThickness = 0.001;  // [m]
 void ArrayResultsWriter::Impl::writeXdmf() const {
     const std::string R = std::to_string(mat.rows), C = std::to_string(mat.columns);
     const std::string N = std::to_string(frameTimes.size());
@@ -74,16 +89,16 @@ void ArrayResultsWriter::Impl::writeXdmf() const {
     for (size_t f = 0; f < frameTimes.size(); ++f) {
         x << "      <Grid Name=\"mat " << f << "\" GridType=\"Uniform\">\n"
           << "        <Time Value=\"" << fmt("%.9g", frameTimes[f]) << "\"/>\n"
-          << "        <Topology TopologyType=\"2DCoRectMesh\" Dimensions=\"" << mat.columns + 1
+          << "        <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"2 " << mat.columns + 1
           << " " << mat.rows + 1 << "\"/>\n"
-          << "        <Geometry GeometryType=\"ORIGIN_DXDY\">\n"
-          << "          <DataItem Dimensions=\"2\" Format=\"XML\">" << fmt("%.9g", mat.origin.y())
-          << " " << fmt("%.9g", mat.origin.x()) << "</DataItem>\n"
-          << "          <DataItem Dimensions=\"2\" Format=\"XML\">" << fmt("%.9g", dy) << " "
-          << fmt("%.9g", dx) << "</DataItem>\n"
+          << "        <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
+          << "          <DataItem Dimensions=\"3\" Format=\"XML\">" << fmt("%.9g", kMatZ) << " "
+          << fmt("%.9g", mat.origin.y()) << " " << fmt("%.9g", mat.origin.x()) << "</DataItem>\n"
+          << "          <DataItem Dimensions=\"3\" Format=\"XML\">" << fmt("%.9g", kMatThickness)
+          << " " << fmt("%.9g", dy) << " " << fmt("%.9g", dx) << "</DataItem>\n"
           << "        </Geometry>\n"
           << "        <Attribute Name=\"pressure_Pa\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-          << "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"" << C << " " << R
+          << "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"1 " << C << " " << R
           << "\" Type=\"HyperSlab\">\n"
           << "            <DataItem Dimensions=\"3 3\" Format=\"XML\">" << f << " 0 0 1 1 1 1 "
           << C << " " << R << "</DataItem>\n"
@@ -94,7 +109,32 @@ void ArrayResultsWriter::Impl::writeXdmf() const {
           << "        </Attribute>\n"
           << "      </Grid>\n";
     }
-    x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
+    x << "    </Grid>\n";
+    for (const ShapeSet& set : shapeSets) {
+        if (shapeTimes.empty()) break;
+        const std::string T = std::to_string(set.triangles), P = std::to_string(set.nodes);
+        const std::string at = std::string(kResultsH5) + ":/shapes/" + set.name;
+        x << "    <Grid Name=\"" << set.name
+          << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+        for (size_t f = 0; f < shapeTimes.size(); ++f)
+            x << "      <Grid Name=\"" << set.name << " " << f << "\" GridType=\"Uniform\">\n"
+              << "        <Time Value=\"" << fmt("%.9g", shapeTimes[f]) << "\"/>\n"
+              << "        <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << T << "\">\n"
+              << "          <DataItem Dimensions=\"" << T << " 3\" NumberType=\"Int\" Format=\"HDF\">"
+              << at << "/triangles</DataItem>\n"
+              << "        </Topology>\n"
+              << "        <Geometry GeometryType=\"XYZ\">\n"
+              << "          <DataItem Dimensions=\"" << P << " 3\" NumberType=\"Float\" Precision=\"4\" "
+              << "Format=\"HDF\">" << at << "/positions/" << f << "</DataItem>\n"
+              << "        </Geometry>\n"
+              << "        <Attribute Name=\"" << set.group << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+              << "          <DataItem Dimensions=\"" << T << "\" NumberType=\"Int\" Format=\"HDF\">"
+              << at << "/" << set.group << "</DataItem>\n"
+              << "        </Attribute>\n"
+              << "      </Grid>\n";
+        x << "    </Grid>\n";
+    }
+    x << "  </Domain>\n</Xdmf>\n";
     const std::filesystem::path tmp = dir.getFile(std::string(kResultsXdmf) + ".tmp");
     {
         std::ofstream out(tmp, std::ios::trunc);
@@ -145,9 +185,65 @@ ArrayResultsWriter::~ArrayResultsWriter() {
     if (!m_impl->closed) fail("failed", "the writer was closed before the run finished");
 }
 
+void ArrayResultsWriter::setShapes(const cosim::SurfaceMesh& bags, const cosim::SurfaceMesh& body,
+                                   double interval, double end) {
+    Impl& d = *m_impl;
+    if (d.closed || d.frames > 0 || !d.shapeSets.empty())
+        throw std::logic_error("ArrayResultsWriter::setShapes: once, before the first frame");
+    d.shapesGroup = h5::createGroup(d.file.get(), "shapes");
+    h5::setAttribute(d.shapesGroup.get(), "interval", interval);
+    h5::setAttribute(d.shapesGroup.get(), "layout",
+                     std::string("per set (bags, body): triangles [T, 3] node indices; a cell "
+                                 "group per triangle (bags: bag, the array index; body: segment, "
+                                 "names in its attribute names); positions/<f> [N, 3] float32 "
+                                 "node positions at time[f], Ground"));
+    d.shapeTime = h5::GrowingDataset(d.shapesGroup.get(), "time", H5T_NATIVE_DOUBLE, {}, 64, "s");
+    auto add = [&](const char* name, const char* group, const cosim::SurfaceMesh& m) {
+        h5::Handle g = h5::createGroup(d.shapesGroup.get(), name);
+        const hsize_t T = hsize_t(m.triangles.cols());
+        // Matrix3Xi is column-major 3 x T: in memory the rows of a [T, 3] array.
+        h5::writeDataset(g.get(), "triangles", {T, 3}, m.triangles.data(), "");
+        h5::writeDataset(g.get(), group, {T}, m.triangleGroup.data(), "");
+        h5::setAttribute(g.get(), "names", m.groupNames);
+        h5::createGroup(g.get(), "positions");
+        Eigen::Index nodes = 0;
+        for (Eigen::Index t = 0; t < m.triangles.cols(); ++t)
+            nodes = std::max<Eigen::Index>(nodes, m.triangles.col(t).maxCoeff() + 1);
+        d.shapeSets.push_back({name, group, nodes, m.triangles.cols()});
+    };
+    add("bags", "bag", bags);
+    add("body", "segment", body);
+    d.shapeInterval = interval;
+    d.shapeEnd = end;
+    d.nextShape = 0.0;
+}
+
+bool ArrayResultsWriter::wantsShapes(double time) const {
+    const Impl& d = *m_impl;
+    return !d.shapeSets.empty() &&
+           (time >= d.nextShape - 1e-9 || time >= d.shapeEnd - 1e-9);
+}
+
 void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
     Impl& d = *m_impl;
     if (d.closed) throw std::logic_error("ArrayResultsWriter::addFrame after finish/fail");
+    if (f.bagNodes && f.bodyNodes && wantsShapes(f.time)) {
+        const int n = int(d.shapeTimes.size());
+        const Eigen::Matrix3Xd* x[2] = {f.bagNodes, f.bodyNodes};
+        for (size_t k = 0; k < d.shapeSets.size(); ++k) {
+            if (x[k]->cols() != d.shapeSets[k].nodes)
+                throw std::invalid_argument("ArrayResultsWriter::addFrame: " +
+                                            d.shapeSets[k].name + " has " +
+                                            std::to_string(x[k]->cols()) + " nodes, its mesh " +
+                                            std::to_string(d.shapeSets[k].nodes));
+            const Eigen::Matrix3Xf xf = x[k]->cast<float>();
+            h5::Handle g = h5::openGroup(d.shapesGroup.get(), d.shapeSets[k].name + "/positions");
+            h5::writeDataset(g.get(), std::to_string(n), {hsize_t(xf.cols()), 3}, xf.data(), "m");
+        }
+        d.shapeTime.append(&f.time);
+        d.shapeTimes.push_back(f.time);
+        while (d.nextShape <= f.time + 1e-9) d.nextShape += d.shapeInterval > 0 ? d.shapeInterval : 1e300;
+    }
     const std::string t = fmt("%.4f", f.time);
     for (const cosim::RegionLoad& r : f.regions) {
         if (!(r.peakPressure > 0.0)) continue;

@@ -142,6 +142,11 @@ void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>
     writeWhole(loc, name, dims, H5T_STD_I32LE, H5T_NATIVE_INT, data, unit);
 }
 
+void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                  const float* data, const std::string& unit) {
+    writeWhole(loc, name, dims, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, data, unit);
+}
+
 GrowingDataset::GrowingDataset(hid_t loc, const std::string& name, hid_t type,
                                std::vector<hsize_t> inner, hsize_t chunkRows,
                                const std::string& unit)

@@ -56,6 +56,9 @@ void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>
                   const double* data, const std::string& unit);
 void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
                   const int* data, const std::string& unit);
+/// float32 in the file (node positions for viewing).
+void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                  const float* data, const std::string& unit);
 
 /// Opens a file read-only. @throws std::runtime_error (without the path) if it is not an HDF5
 /// file or is locked.

@@ -11,6 +11,7 @@
 /// fail() (status "failed" or "interrupted", marker kept).
 
 #include <cosim/ArrayReadings.h>
+#include <cosim/ArrayShapes.h>
 #include <io/Results.h>
 
 #include <memory>
@@ -53,6 +54,11 @@ struct ArrayFrame {
     const cosim::PressureMat* mat = nullptr;  ///< filled for this time (optional)
     Eigen::Vector3d centreOfMass = Eigen::Vector3d::Zero();  ///< [m] the patient's, Ground
     std::vector<PneumaticsReading> pneumatics;  ///< every bag in the network (none: no rows)
+    /// With setShapes(), at the times wantsShapes() says: the node positions [m], Ground, of
+    /// the bags' and the body's meshes (cosim::calcBagSurfacePositions(),
+    /// cosim::calcBodySurfacePositions()).
+    const Eigen::Matrix3Xd* bagNodes = nullptr;
+    const Eigen::Matrix3Xd* bodyNodes = nullptr;
 };
 
 class ArrayResultsWriter {
@@ -65,6 +71,13 @@ class ArrayResultsWriter {
     ArrayResultsWriter(const ArrayResultsWriter&) = delete;
     ArrayResultsWriter& operator=(const ArrayResultsWriter&) = delete;
 
+    /// Saves the bags' and the body's meshes in results.h5 (/shapes) and shows them beside the
+    /// mat in results.xdmf: node positions at the first output, every `interval` [s] and at
+    /// `end` [s], stored as float32 (0.1 um at 2 m). Call before the first addFrame().
+    void setShapes(const cosim::SurfaceMesh& bags, const cosim::SurfaceMesh& body,
+                   double interval, double end);
+    /// True if the frame at `time` [s] should carry the shapes' node positions.
+    bool wantsShapes(double time) const;
     /// Appends one output time to every file (flushing them at most every few seconds).
     void addFrame(const ArrayFrame& frame);
     /// Appends a row to events.csv: what happened at `time` [s] (a controller's change).
