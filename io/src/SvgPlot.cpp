@@ -227,8 +227,21 @@ std::string plot(const PlotOptions& o, const std::vector<Series>& series) {
         flush();
     }
     os << "</g>";
+    // Markers of one row closer than a label's width share one label ("2,3") and hover text.
+    std::vector<Marker> merged;
     for (const Marker& m : o.markers) {
         if (m.x < x0 || m.x > x1) continue;
+        Marker* near = nullptr;
+        for (Marker& k : merged)
+            if (k.row == m.row && std::fabs(X(k.x) - X(m.x)) < 7.0 * (k.label.size() + 1)) near = &k;
+        if (near) {
+            near->label += "," + m.label;
+            near->title += "\n" + m.title;
+        } else {
+            merged.push_back(m);
+        }
+    }
+    for (const Marker& m : merged) {
         const double ly = T - 17 + 12 * std::clamp(m.row, 0, 1);
         os << "<g><title>" << escape(m.title) << "</title><line x1='" << P(X(m.x)) << "' x2='"
            << P(X(m.x)) << "' y1='" << ly + 2 << "' y2='" << T + ph << "' stroke='" << m.colour
