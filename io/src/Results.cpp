@@ -37,7 +37,9 @@ namespace {
 const char* const kOwnedFiles[] = {kResultsH5,      kResultsXdmf,      kLoadDisplacementCsv,
                                    kStiffnessCsv,   kRigReadingsCsv,   "results.xdmf.tmp",
                                    "regions.csv",   "bags.csv",        "tilt.csv",
-                                   "report.html",   "report.html.tmp"};
+                                   "report.html",   "report.html.tmp", "summary.txt",
+                                   "verdict.csv",   "events.csv",      "body.csv",
+                                   "pneumatics.csv"};
 
 }  // namespace
 
