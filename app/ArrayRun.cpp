@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -164,6 +165,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
     auto setTurn = [&] {
         if (const auto* turn = dynamic_cast<const cosim::TurnController*>(sc.controller.get()))
             verdict.setTurn(turn->getTiltReachedTime(),
+                            turn->getTurnedMasses().empty()
+                                ? std::numeric_limits<double>::quiet_NaN()
+                                : turn->getTurnedTilt(),
                             turn->getPhase() == cosim::TurnController::Phase::Done);
     };
     auto stop = [&](const std::string& status, const std::string& msg) {

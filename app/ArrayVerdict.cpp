@@ -33,7 +33,8 @@ ArrayVerdict::ArrayVerdict(const cosim::ArrayLayout& layout, const bags::DoubleW
       m_settle(settleTime),
       m_duration(duration),
       m_targetTilt(targetTilt),
-      m_reached(kNaN) {
+      m_reached(kNaN),
+      m_turnedTilt(kNaN) {
     // The inner edges of the outer columns' footprints: a centre of mass beyond one lies over
     // the outermost bags.
     m_innerEdgeLow = -1e9;
@@ -61,10 +62,9 @@ void ArrayVerdict::addFrame(const io::ArrayFrame& f, const std::vector<double>& 
         m_maxTravel = dy;
         m_maxTravelTime = f.time;
     }
-    // Tilt toward the target.
-    if (m_targetTilt != 0.0) {
-        const double s = m_targetTilt > 0.0 ? 1.0 : -1.0;
-        if (s * f.pelvisTilt > s * m_bestTilt) m_bestTilt = f.pelvisTilt;
+    if (f.centreOfMass.z() < m_lowestCom) {
+        m_lowestCom = f.centreOfMass.z();
+        m_lowestComTime = f.time;
     }
     // The outer column on the side he moved to: a bag that carried him and carries nothing.
     if (std::abs(dy) > 0.01 && m_columns > 1) {
@@ -96,8 +96,9 @@ void ArrayVerdict::addFrame(const io::ArrayFrame& f, const std::vector<double>& 
     }
 }
 
-void ArrayVerdict::setTurn(double reachedTime, bool backToSupine) {
+void ArrayVerdict::setTurn(double reachedTime, double turnedTilt, bool backToSupine) {
     m_reached = reachedTime;
+    m_turnedTilt = turnedTilt;
     m_back = backToSupine;
     m_turnKnown = true;
 }
@@ -113,14 +114,17 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
     } else {
         const std::string target = fmt("target %+.1f deg", m_targetTilt * kDeg);
         if (std::isfinite(m_reached))
-            rows.push_back({"target tilt reached", "ok", m_bestTilt * kDeg, "deg",
+            rows.push_back({"target tilt reached", "ok", m_turnedTilt * kDeg, "deg",
                             "reached at " + fmt("%.2f s", m_reached) + " (" +
                                 fmt("%.2f s", m_reached - m_settle) + " after the settle; " +
-                                target + "; value: the pelvis tilt furthest toward it)"});
+                                target + "; value: the pelvis tilt then)"});
+        else if (std::isfinite(m_turnedTilt))
+            rows.push_back({"target tilt reached", "fail", m_turnedTilt * kDeg, "deg",
+                            "not reached in the longest turn time (" + target +
+                                "; value: the pelvis tilt when the turn gave up)"});
         else
-            rows.push_back({"target tilt reached", "fail", m_bestTilt * kDeg, "deg",
-                            "not reached (" + target + "; value: the pelvis tilt furthest "
-                            "toward it)"});
+            rows.push_back({"target tilt reached", "warning", kNaN, "deg",
+                            "not reached yet: the run ended during the turn (" + target + ")"});
         rows.push_back({"back to supine", m_back ? "ok" : "warning", kNaN, "",
                         m_back ? "the initial gas masses were restored"
                                : "the run ended before the initial masses were restored"});
@@ -152,6 +156,14 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
                                        "him at the start and nothing (< 0.1 N) from " +
                                        fmt("%.2f s", first)});
     }
+    // Fell through or off the bags: his centre of mass below the bed board (the model has no
+    // floor and no board under the body: only the bags carry him).
+    if (m_haveRef)
+        rows.push_back({"fell through or off the bags", m_lowestCom < 0.0 ? "fail" : "ok",
+                        1e3 * m_lowestCom, "mm",
+                        "lowest height of his centre of mass above the bed board " + window +
+                            fmt(" (at %.2f s)", m_lowestComTime) +
+                            "; fail below 0 mm: nothing under him any more"});
     // Bottoming out.
     if (m_minHeightBag < 0 || !std::isfinite(m_minHeight))
         rows.push_back({"bag bottomed out", "n/a", kNaN, "mm", "no pressed node judged"});

@@ -23,9 +23,9 @@ class ArrayVerdict {
                  double settleTime, double duration, double targetTilt);
     /// One output frame with the lowest pressed-node height per bag of frame.bags [m].
     void addFrame(const io::ArrayFrame& frame, const std::vector<double>& pressedHeights);
-    /// The turn's outcome: when the target tilt was reached (NaN: never) and whether it went
-    /// back to supine.
-    void setTurn(double reachedTime, bool backToSupine);
+    /// The turn's outcome: when the target tilt was reached (NaN: never), the pelvis tilt
+    /// when the turn ended [rad] (NaN: it had not) and whether it went back to supine.
+    void setTurn(double reachedTime, double turnedTilt, bool backToSupine);
     std::vector<io::VerdictRow> makeRows() const;
 
   private:
@@ -33,14 +33,14 @@ class ArrayVerdict {
     int m_columns = 0;
     double m_columnPitch = 0.0, m_innerEdgeLow = 0.0, m_innerEdgeHigh = 0.0;
     double m_settle = 0.0, m_duration = 0.0, m_targetTilt = 0.0;
-    double m_reached = 0.0;
+    double m_reached = 0.0, m_turnedTilt = 0.0;
     bool m_back = false, m_turnKnown = false;
     // the judged window
     bool m_haveRef = false;
     double m_lastTime = 0.0, m_firstTime = 0.0;
     Eigen::Vector3d m_refCom = Eigen::Vector3d::Zero();
     double m_maxTravel = 0.0, m_maxTravelTime = 0.0, m_lastY = 0.0;
-    double m_bestTilt = 0.0;  // pelvis tilt furthest toward the target [rad]
+    double m_lowestCom = 1e9, m_lowestComTime = 0.0;
     std::map<int, double> m_refForce;  // bag -> force at the reference frame [N]
     std::map<int, double> m_edgeLost;  // outer bag -> first time it carried nothing [s]
     double m_minHeight = 1e9, m_minHeightTime = 0.0;

@@ -86,6 +86,7 @@ TEST(ArrayPneumaticsRun, AShortTurnMovesGasThroughTheValvesAndWritesTheNewFiles)
         checks.insert(r.at(0));
     }
     for (const char* c : {"target tilt reached", "back to supine", "slid or rolled toward the edge",
-                          "contact lost at the array edge", "bag bottomed out"})
+                          "contact lost at the array edge", "bag bottomed out",
+                          "fell through or off the bags"})
         EXPECT_EQ(checks.count(c), 1u) << c;
 }
