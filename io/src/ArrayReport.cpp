@@ -566,8 +566,7 @@ const char* kCss =
 std::string formatValue(const std::string& cell) {
     char* end = nullptr;
     const double v = std::strtod(cell.c_str(), &end);
-    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(v))
-        return escape(cell);
+    if (cell.empty() || end != cell.c_str() + cell.size() || !std::isfinite(v)) return escape(cell);
     return num(v, "%.4g");
 }
 
@@ -599,11 +598,16 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         }
     }
     const int frames = run.getFrames();
-    std::vector<double> matPeak(size_t(frames), 0.0);  // [mmHg]
+    std::vector<double> matPeak(size_t(frames), 0.0);   // [mmHg]
+    std::vector<double> matAbove(size_t(frames), 0.0);  // [cm^2] of sensels above 32 mmHg
+    const double sensel = frames ? run.sizeX / run.matRows * run.sizeY / run.matColumns : 0.0;
     for (int f = 0; f < frames; ++f)
         for (int c = 0; c < run.matColumns; ++c)
-            for (int r = 0; r < run.matRows; ++r)
-                matPeak[size_t(f)] = std::max(matPeak[size_t(f)], run.at(f, r, c) / kMmHg);
+            for (int r = 0; r < run.matRows; ++r) {
+                const double p = run.at(f, r, c) / kMmHg;
+                matPeak[size_t(f)] = std::max(matPeak[size_t(f)], p);
+                if (p > kThresholdMmHg) matAbove[size_t(f)] += sensel * 1e4;
+            }
     std::vector<Moment> moments = pickMoments(run, events, t, tiltMean, matPeak);
     if (t.empty() && frames > 0)  // no tilt rows yet: the last frame alone
         moments.push_back(
@@ -634,10 +638,13 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         os << "<div class='banner' id='incomplete'><b>INCOMPLETE RESULTS</b>: this run did not "
               "finish (status <b>"
            << escape(run.status.empty() ? "unknown" : run.status) << "</b>). "
-           << escape(run.message.empty() ? "" : run.message + ". ") << "Everything below stops at "
-           << formatTime(ctx.tEnd);
+           << escape(run.message.empty() ? "" : run.message + ". ")
+           << (std::isfinite(ctx.tEnd)
+                   ? "Everything below stops at " + formatTime(ctx.tEnd)
+                   : std::string("The run wrote nothing before it stopped, at"));
         if (std::isfinite(run.settle) && std::isfinite(run.duration))
-            os << " of the " << formatTime(run.settle + run.duration) << " planned";
+            os << (std::isfinite(ctx.tEnd) ? " of the " : " the start of the ")
+               << formatTime(run.settle + run.duration) << " planned";
         os << "; do not read it as the outcome of the whole scenario.</div>";
     }
 
@@ -743,6 +750,16 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         o.refLines.push_back({0.0, "", "#999"});
         os << svg::plot(o, {{"pelvis", svg::getCategoryColour(0), t, pelvis},
                             {"thorax", svg::getCategoryColour(1), t, thorax, false, "6 3"}});
+    }
+    if (frames > 0) {
+        const std::vector<double> mt(run.matTime.begin(), run.matTime.begin() + frames);
+        svg::PlotOptions o = timePlot(ctx, "Pressure mat: highest sensel", "pressure [mmHg]");
+        o.yMin = 0.0;
+        o.refLines.push_back({kThresholdMmHg, "32 mmHg", "#b00"});
+        os << svg::plot(o, {{"highest sensel", svg::getCategoryColour(0), mt, matPeak}});
+        svg::PlotOptions a = timePlot(ctx, "Pressure mat: area above 32 mmHg", "area [cm\u00b2]");
+        a.yMin = 0.0;
+        os << svg::plot(a, {{"sensels above 32 mmHg", svg::getCategoryColour(1), mt, matAbove}});
     }
     if (run.body.present && !run.body.rows.empty()) {
         const Table& b = run.body;

@@ -83,6 +83,12 @@ TEST(ArrayReport, ShowsTheScenarioVerdictKeyMomentsAndCurvesOfACompleteRun) {
           "sacrum: highest", "heel_l: highest", "target tilt reached"})
         EXPECT_NE(html.find(title), std::string::npos) << title;
     EXPECT_NE(html.find("column 0 (his left)"), std::string::npos);
+    // The charts are drawn on their data's range: the centre of mass moves 37.5 mm to his left.
+    const size_t com = html.find("<title>Centre of mass across the bed");
+    ASSERT_NE(com, std::string::npos);
+    const std::string comChart = html.substr(com, html.find("</svg>", com) - com);
+    EXPECT_NE(comChart.find(">-40</text>"), std::string::npos);
+    EXPECT_NE(comChart.find(">0</text>"), std::string::npos);
     EXPECT_NE(html.find("synthetic summary"), std::string::npos);
     // Self-contained: nothing to fetch.
     EXPECT_FALSE(std::regex_search(html, std::regex(R"((src|href)\s*=\s*['"]?\s*(https?:)?//)")));
@@ -181,4 +187,16 @@ TEST(ArrayReport, AFolderThatIsNotAPatientOnArrayResultGetsALocatedError) {
     EXPECT_NE(errorOf(run).find("tilt.csv:3: column 2 'pelvis_tilt_deg': 'x' is not a number"),
               std::string::npos)
         << errorOf(run);
+}
+
+TEST(ArrayReport, ARunStoppedBeforeItsFirstOutputStillGetsAPageThatSaysSo) {
+    const fs::path dir = makeDir("report-empty");
+    io::test::writeSyntheticRun(dir, false, -1.0);  // interrupted before the first frame
+    const std::string html = io::formatArrayReportHtml(dir);
+    EXPECT_NE(html.find("INCOMPLETE RESULTS"), std::string::npos);
+    EXPECT_NE(
+        html.find("The run wrote nothing before it stopped, at the start of the 6.00 s planned"),
+        std::string::npos);
+    EXPECT_NE(html.find("No pressure-mat frames in results.h5."), std::string::npos);
+    EXPECT_EQ(count(html, "class='mat'"), 0);
 }

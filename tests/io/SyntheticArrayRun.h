@@ -14,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -118,34 +119,30 @@ inline SyntheticRun writeSyntheticRun(const std::filesystem::path& dir, bool opt
                               120.0 * load});
         }
         f.mat = &mat;
+        if (optionalFiles) {  // what a run with pneumatics writes besides
+            f.centreOfMass << 0.01, -1.5e-3 * tilt, 0.18 - 0.2e-3 * tilt;
+            for (int b = 0; b < 6; ++b)
+                f.pneumatics.push_back({b, (2.0 + 0.03 * tilt * (b % 3 == 0 ? 1 : -1)) * 1e3,
+                                        b % 3 == 2 && tilt > 0 ? 0.25e-3 : 0.0,
+                                        b % 3 == 0 && tilt > 0 ? 0.25e-3 : 0.0});
+            for (const auto& [at, text] : std::vector<std::pair<double, std::string>>{
+                     {1.5, "settle ended; turn to the left starts"},
+                     {3.5, "target tilt reached"},
+                     {4.5, "back to supine starts"}})
+                if (std::fabs(t - at) < 1e-9) writer.addEvent(t, text);
+        }
         writer.addFrame(f);
         out.times.push_back(t);
         out.tilt.push_back(tilt);
         out.matPeak.push_back(matPeak);
     }
-    if (optionalFiles) {
-        std::ofstream(dir / "verdict.csv")
-            << "check,status,value,unit,detail\n"
-            << "target tilt reached,ok,25.0,deg,at 3.50 s (target 25 deg)\n"
-            << "centre of mass travel,warning,42,mm,towards the left edge\n"
-            << "bag bottomed out,fail,1,bags,\"bag 0 under the sacrum, 2.1 s to 3.4 s\"\n"
-            << "sacrum time above 32 mmHg,n/a,,s,not measured\n";
-        std::ofstream(dir / "events.csv")
-            << "time_s,event\n1.5,settle ended; turn to the left starts\n"
-            << "3.5,target tilt reached\n4.5,back to supine starts\n";
-        std::ofstream body(dir / "body.csv");
-        body << "time_s,com_x_mm,com_y_mm,com_z_mm\n";
-        std::ofstream pn(dir / "pneumatics.csv");
-        pn << "time_s,bag,sensor_kPa,inflow_g_per_s,outflow_g_per_s\n";
-        for (size_t i = 0; i < out.times.size(); ++i) {
-            body << out.times[i] << ",10," << -1.5 * out.tilt[i] << "," << 180 - 0.2 * out.tilt[i]
-                 << "\n";
-            for (int b = 0; b < 6; ++b)
-                pn << out.times[i] << "," << b << ","
-                   << 2.0 + 0.03 * out.tilt[i] * (b % 3 == 0 ? 1 : -1) << ","
-                   << (b % 3 == 2 && out.tilt[i] > 0 ? 0.25 : 0.0) << ","
-                   << (b % 3 == 0 && out.tilt[i] > 0 ? 0.25 : 0.0) << "\n";
-        }
+    if (optionalFiles) {  // the verdict, as a run writes it at its end
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        writer.writeVerdict(
+            {{"target tilt reached", "ok", 25.0, "deg", "at 3.50 s (target 25 deg)"},
+             {"centre of mass travel", "warning", 42, "mm", "towards the left edge"},
+             {"bag bottomed out", "fail", 1, "bags", "bag 0 under the sacrum, 2.1 s to 3.4 s"},
+             {"sacrum time above 32 mmHg", "n/a", nan, "s", "not measured"}});
     }
     if (stopAt < 6.0) {
         writer.fail("interrupted",
