@@ -126,37 +126,51 @@ bool BandController::update(double measured, double target, double band, int cha
     return m_state != before;
 }
 
-// ----------------------------------------------------------------------- TargetMassController
+// --------------------------------------------------------------------------- TargetController
 
-TargetMassController::TargetMassController(std::vector<Target> targets, double start)
-    : m_targets(std::move(targets)), m_band(m_targets.size()), m_start(start) {
-    for (const Target& t : m_targets)
-        if (!(t.mass > 0.0) || !(t.band >= 0.0))
-            throw std::invalid_argument("target mass: channel " + std::to_string(t.channel) +
-                                        " needs a mass > 0 g and a band >= 0 g");
-}
-
-void TargetMassController::update(const ControlInputs& in, ArrayPneumatics& p,
-                                  std::vector<ControlEvent>& events) {
-    if (in.time < m_start - kEps) return;
-    for (size_t i = 0; i < m_targets.size(); ++i) {
-        const Target& t = m_targets[i];
-        const size_t n = p.getChannelBags(t.channel).size();
-        if (n == 0) continue;
-        const double m = p.getChannelBagMass(t.channel) / double(n);
-        const BandController::State before = m_band[i].getState();
-        if (m_band[i].update(m, t.mass, t.band, t.channel, p))
-            events.push_back({in.time, "target mass: channel '" + p.getChannelName(t.channel) +
-                                           "' " + stateText(m_band[i].getState()) + " at " +
-                                           fmt("%.4f g", 1e3 * m) + " a bag (target " +
-                                           fmt("%.4f g", 1e3 * t.mass) + ")" +
-                                           (before != BandController::State::Holding
-                                                ? std::string(": target reached")
-                                                : std::string())});
+TargetController::TargetController(Quantity quantity, std::vector<Target> targets, double start)
+    : m_quantity(quantity), m_targets(std::move(targets)), m_band(m_targets.size()), m_start(start) {
+    for (const Target& t : m_targets) {
+        const bool mass = quantity == Quantity::MassPerBag;
+        if ((mass ? !(t.value > 0.0) : !std::isfinite(t.value)) || !(t.band >= 0.0))
+            throw std::invalid_argument(
+                std::string(mass ? "target mass" : "target pressure") + ": channel " +
+                std::to_string(t.channel) +
+                (mass ? " needs a mass > 0 g" : " needs a finite pressure") + " and a band >= 0");
     }
 }
 
-double TargetMassController::findNextChange(double t) const {
+double TargetController::measure(const ArrayPneumatics& p, int channel) const {
+    if (m_quantity == Quantity::Pressure) return p.readChannelSensor(channel);
+    const size_t n = p.getChannelBags(channel).size();
+    return n ? p.getChannelBagMass(channel) / double(n) : 0.0;
+}
+
+void TargetController::update(const ControlInputs& in, ArrayPneumatics& p,
+                              std::vector<ControlEvent>& events) {
+    if (in.time < m_start - kEps) return;
+    const bool mass = m_quantity == Quantity::MassPerBag;
+    auto text = [&](double v) {
+        return mass ? fmt("%.4f g a bag", 1e3 * v) : fmt("%.3f kPa", 1e-3 * v);
+    };
+    for (size_t i = 0; i < m_targets.size(); ++i) {
+        const Target& t = m_targets[i];
+        if (p.getChannelBags(t.channel).empty()) continue;
+        const double v = measure(p, t.channel);
+        const BandController::State before = m_band[i].getState();
+        if (m_band[i].update(v, t.value, t.band, t.channel, p))
+            events.push_back(
+                {in.time, std::string(mass ? "target mass" : "target pressure") + ": channel '" +
+                              p.getChannelName(t.channel) + "' " +
+                              stateText(m_band[i].getState()) + " at " +
+                              (mass ? "" : "sensor ") + text(v) + " (target " + text(t.value) +
+                              ")" +
+                              (before != BandController::State::Holding ? ": target reached"
+                                                                        : "")});
+    }
+}
+
+double TargetController::findNextChange(double t) const {
     return t < m_start - kEps ? m_start : kInf;
 }
 
@@ -181,35 +195,6 @@ double calcMassForStiffness(const std::vector<double>& m, const std::vector<doub
             return a == b ? m[i - 1] : m[i - 1] + (want - a) / (b - a) * (m[i] - m[i - 1]);
     }
     return m.back();
-}
-
-// ------------------------------------------------------------------- TargetPressureController
-
-TargetPressureController::TargetPressureController(std::vector<Target> targets, double start)
-    : m_targets(std::move(targets)), m_band(m_targets.size()), m_start(start) {
-    for (const Target& t : m_targets)
-        if (!(t.band >= 0.0) || !std::isfinite(t.pressure))
-            throw std::invalid_argument("target pressure: channel " + std::to_string(t.channel) +
-                                        " needs a finite pressure and a band >= 0 kPa");
-}
-
-void TargetPressureController::update(const ControlInputs& in, ArrayPneumatics& p,
-                                      std::vector<ControlEvent>& events) {
-    if (in.time < m_start - kEps) return;
-    for (size_t i = 0; i < m_targets.size(); ++i) {
-        const Target& t = m_targets[i];
-        const double r = p.readChannelSensor(t.channel);
-        if (m_band[i].update(r, t.pressure, t.band, t.channel, p))
-            events.push_back({in.time, "target pressure: channel '" +
-                                           p.getChannelName(t.channel) + "' " +
-                                           stateText(m_band[i].getState()) + " at sensor " +
-                                           fmt("%.3f kPa", 1e-3 * r) + " (target " +
-                                           fmt("%.3f kPa", 1e-3 * t.pressure) + ")"});
-    }
-}
-
-double TargetPressureController::findNextChange(double t) const {
-    return t < m_start - kEps ? m_start : kInf;
 }
 
 // ----------------------------------------------------------------------------- TurnController

@@ -646,22 +646,22 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             }
             const ScenarioNode ts = s.get("targets");
             if (!ts.isSequence()) s.fail("targets", "must be a list, e.g. - {channel: right, mass: 5 g}");
-            std::vector<cosim::TargetMassController::Target> targets;
+            std::vector<cosim::TargetController::Target> targets;
             for (const ScenarioNode& e : ts.getElements()) {
                 e.checkKeys({"channel"}, {"mass", "stiffness", "band"});
-                cosim::TargetMassController::Target t;
+                cosim::TargetController::Target t;
                 t.channel = findChannel(e, "channel", p);
                 if (e.has("mass") == e.has("stiffness"))
                     e.fail("give either 'mass' (per bag) or 'stiffness' (through k_of_m)");
                 if (e.has("mass")) {
-                    t.mass = e.getQuantity("mass", D::Mass);
-                    checkPositive(e, "mass", t.mass, "g");
+                    t.value = e.getQuantity("mass", D::Mass);
+                    checkPositive(e, "mass", t.value, "g");
                 } else {
                     if (km.empty())
                         e.fail("stiffness", "needs the bag's k(m) table: control.k_of_m");
                     const double k = e.getQuantity("stiffness", D::Stiffness);
                     try {
-                        t.mass = cosim::calcMassForStiffness(km, kk, k);
+                        t.value = cosim::calcMassForStiffness(km, kk, k);
                     } catch (const std::invalid_argument& err) {
                         e.fail("stiffness", err.what());
                     }
@@ -670,31 +670,33 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
                 checkBetween(e, "band", t.band, 0.0, 1e-3, "g");
                 targets.push_back(t);
                 sc.controlText.push_back("'" + p.channels[t.channel].name + "' to " +
-                                         fmtUnit(t.mass, "g") + " a bag (band " +
+                                         fmtUnit(t.value, "g") + " a bag (band " +
                                          fmtUnit(t.band, "g") + ")");
             }
-            sc.controller = std::make_shared<cosim::TargetMassController>(targets, t0 + at);
+            sc.controller = std::make_shared<cosim::TargetController>(
+                cosim::TargetController::Quantity::MassPerBag, targets, t0 + at);
         } else if (sc.controlKind == "target-pressure") {
             s.checkKeys({"kind", "targets"}, {"at"});
             const double at = readAt(s);
             const ScenarioNode ts = s.get("targets");
             if (!ts.isSequence())
                 s.fail("targets", "must be a list, e.g. - {channel: right, pressure: 30 kPa}");
-            std::vector<cosim::TargetPressureController::Target> targets;
+            std::vector<cosim::TargetController::Target> targets;
             for (const ScenarioNode& e : ts.getElements()) {
                 e.checkKeys({"channel", "pressure"}, {"band"});
-                cosim::TargetPressureController::Target t;
+                cosim::TargetController::Target t;
                 t.channel = findChannel(e, "channel", p);
-                t.pressure = e.getQuantity("pressure", D::Pressure);
-                checkBetween(e, "pressure", t.pressure, 0.0, 200e3, "kPa", "gauge");
+                t.value = e.getQuantity("pressure", D::Pressure);
+                checkBetween(e, "pressure", t.value, 0.0, 200e3, "kPa", "gauge");
                 t.band = e.getQuantity("band", D::Pressure, 1e3);
                 checkBetween(e, "band", t.band, 0.0, 50e3, "kPa");
                 targets.push_back(t);
                 sc.controlText.push_back("'" + p.channels[t.channel].name + "' to " +
-                                         fmtUnit(t.pressure, "kPa") + " gauge (band " +
+                                         fmtUnit(t.value, "kPa") + " gauge (band " +
                                          fmtUnit(t.band, "kPa") + ")");
             }
-            sc.controller = std::make_shared<cosim::TargetPressureController>(targets, t0 + at);
+            sc.controller = std::make_shared<cosim::TargetController>(
+                cosim::TargetController::Quantity::Pressure, targets, t0 + at);
         } else {
             s.checkKeys({"kind", "tilt"}, {"at", "inflate", "vent", "hold", "max_turn_time",
                                            "min_mass", "max_pressure", "band"});

@@ -177,7 +177,8 @@ TEST(PneumaticControl, ATargetMassIsReachedAndHeldWithinItsBand) {
     const cosim::ArrayPneumaticsSpec spec = makeSpec();
     cosim::ArrayPneumatics p = makeNetwork(spec);
     // 'a' up to 5.0 g a bag, 'b' down to 4.0 g, bands 0.02 g.
-    cosim::TargetMassController c({{0, 5.0e-3, 0.02e-3}, {1, 4.0e-3, 0.02e-3}}, 0.5);
+    cosim::TargetController c(cosim::TargetController::Quantity::MassPerBag,
+                             {{0, 5.0e-3, 0.02e-3}, {1, 4.0e-3, 0.02e-3}}, 0.5);
     std::vector<cosim::ControlEvent> events;
     double reachedA = -1.0;
     run(c, p, 0.0, 6.0, events, [] { return 0.0; }, [&](double t) {
@@ -215,7 +216,8 @@ TEST(PneumaticControl, ATargetPressureIsHeldWithHysteresisFromALaggedNoisySensor
     cosim::ArrayPneumatics p = makeNetwork(spec);
     p.setVent(1, true);
     const double target = 30e3, band = 1e3;
-    cosim::TargetPressureController c({{0, target, band}}, 0.0);
+    cosim::TargetController c(cosim::TargetController::Quantity::Pressure, {{0, target, band}},
+                             0.0);
     std::vector<cosim::ControlEvent> events;
     std::vector<double> readings;
     int opened = 0;

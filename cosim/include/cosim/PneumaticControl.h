@@ -82,20 +82,29 @@ class BandController {
     State m_state = State::Holding;
 };
 
-/// Target gas mass per bag [kg] for each listed channel (mean over its bags), dead band `band`.
-class TargetMassController : public PneumaticController {
+/// A target per channel for what it measures, held by a BandController from `start`: the gas
+/// mass per bag (the mean over the channel's bags) or the gauge pressure its sensor reads.
+class TargetController : public PneumaticController {
   public:
+    enum class Quantity {
+        MassPerBag,  ///< [kg] the network's mass (a flowmeter integrated from a known fill)
+        Pressure,    ///< [Pa] gauge, the channel's (lagged, offset, noisy) sensor reading
+    };
     struct Target {
         int channel = 0;
-        double mass = 0.0;  ///< [kg] per bag
-        double band = 0.0;  ///< [kg] per bag
+        double value = 0.0;  ///< [kg] per bag or [Pa] gauge
+        double band = 0.0;   ///< the dead band, same unit
     };
-    TargetMassController(std::vector<Target> targets, double start);
+    /// @throws std::invalid_argument naming the channel: a mass not > 0, a pressure not finite,
+    /// a band < 0.
+    TargetController(Quantity quantity, std::vector<Target> targets, double start);
     void update(const ControlInputs& in, ArrayPneumatics& p,
                 std::vector<ControlEvent>& events) override;
     double findNextChange(double t) const override;
 
   private:
+    double measure(const ArrayPneumatics& p, int channel) const;
+    Quantity m_quantity;
     std::vector<Target> m_targets;
     std::vector<BandController> m_band;
     double m_start = 0.0;
@@ -106,26 +115,6 @@ class TargetMassController : public PneumaticController {
 /// @throws std::invalid_argument if k lies outside the table or the table is not monotone.
 double calcMassForStiffness(const std::vector<double>& masses,
                             const std::vector<double>& stiffness, double k);
-
-/// Target gauge pressure per channel from its sensor, with hysteresis: fills below
-/// target - band until the sensor reads the target, vents above target + band likewise.
-class TargetPressureController : public PneumaticController {
-  public:
-    struct Target {
-        int channel = 0;
-        double pressure = 0.0;  ///< [Pa] gauge
-        double band = 0.0;      ///< [Pa]
-    };
-    TargetPressureController(std::vector<Target> targets, double start);
-    void update(const ControlInputs& in, ArrayPneumatics& p,
-                std::vector<ControlEvent>& events) override;
-    double findNextChange(double t) const override;
-
-  private:
-    std::vector<Target> m_targets;
-    std::vector<BandController> m_band;
-    double m_start = 0.0;
-};
 
 /// The turn: from `start`, the `inflate` channels fill and the `vent` channels vent until the
 /// pelvis tilt reaches `tilt` (signed: positive onto his left side), or `maxTurnTime` passes;
