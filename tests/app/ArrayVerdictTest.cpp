@@ -1,0 +1,110 @@
+// The support verdict (app/ArrayVerdict.cpp) on synthetic frames, each check against its stated
+// criterion: time above 32 mmHg summed over the output intervals; a centre of mass that ends
+// over the outer column fails, one that travels more than a column pitch warns; an outer bag
+// on the side he moved to that carried him and then carries nothing warns; a pressed node less
+// than 25 mm above the board fails; a centre of mass below the board fails; the turn's
+// outcome. Frames before the end of the settle are not judged.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ArrayVerdict.h"
+
+namespace {
+
+constexpr double kMmHg = 133.322387415;
+
+cosim::ArrayLayout makeLayout() {  // the shipped 6 x 7 array, wedges along the bed
+    cosim::ArrayLayout a;
+    a.rows = 6;
+    a.columns = 7;
+    a.rowPitch = 0.36;
+    a.columnPitch = 0.105;
+    a.centre = Eigen::Vector2d(-0.03, 0.0);
+    a.rowOrientation = {cosim::BagOrientation::Along, cosim::BagOrientation::AlongFlipped};
+    a.gasMass = 4.5e-3;
+    return a;
+}
+
+io::ArrayFrame frame(double t, double y, double z, double ppi, double edgeForce) {
+    io::ArrayFrame f;
+    f.time = t;
+    f.centreOfMass = Eigen::Vector3d(0.08, y, z);
+    cosim::RegionLoad r;
+    r.name = "sacrum";
+    r.peakPressure = ppi * kMmHg;
+    f.regions = {r};
+    for (int b : {0, 3, 6}) {  // row 0: columns 0 (his left edge), 3, 6 (his right edge)
+        cosim::BagReading g;
+        g.bag = b;
+        g.force = b == 0 ? edgeForce : 100.0;
+        f.bags.push_back(g);
+    }
+    return f;
+}
+
+const io::VerdictRow& row(const std::vector<io::VerdictRow>& rows, const std::string& check) {
+    for (const io::VerdictRow& r : rows)
+        if (r.check == check) return r;
+    static io::VerdictRow none;
+    ADD_FAILURE() << "no row " << check;
+    return none;
+}
+
+}  // namespace
+
+TEST(ArrayVerdict, EachCheckFollowsItsCriterion) {
+    const cosim::ArrayLayout layout = makeLayout();
+    bagsim::app::ArrayVerdict v(layout, bags::DoubleWedgeParams(), 1.0, 3.0, 30.0 * M_PI / 180);
+    // Before the settle's end: not judged (a landing's 500 mmHg and a pressed node at 5 mm).
+    v.addFrame(frame(0.5, 0.0, 0.2, 500.0, 10.0), {0.005, 0.1, 0.1});
+    // From 1 s every 0.5 s: 40 mmHg for two intervals, then 20 mmHg; he drifts to his left
+    // (-y) by 300 mm, the left edge bag (column 0) loses him, the least inner height 30 mm.
+    v.addFrame(frame(1.0, 0.0, 0.20, 40.0, 10.0), {0.10, 0.10, 0.10});
+    v.addFrame(frame(1.5, -0.05, 0.19, 40.0, 10.0), {0.08, 0.03, 0.10});
+    v.addFrame(frame(2.0, -0.15, 0.18, 20.0, 0.05), {0.08, 0.08, 0.10});
+    v.addFrame(frame(2.5, -0.30, 0.17, 20.0, 0.0), {0.08, 0.08, 0.10});
+    v.setTurn(2.0, 0.5, true);
+    std::vector<io::VerdictRow> rows = v.makeRows();
+    EXPECT_EQ(row(rows, "target tilt reached").status, "ok");
+    EXPECT_NEAR(row(rows, "target tilt reached").value, 0.5 * 180 / M_PI, 1e-9);
+    EXPECT_EQ(row(rows, "back to supine").status, "ok");
+    // Ends at y = -300 mm: column 0's bags stand at y = -315 mm, 100 mm wide, so their inner
+    // edge is at -265 mm and he lies over the outer column.
+    EXPECT_EQ(row(rows, "slid or rolled toward the edge").status, "fail");
+    EXPECT_NEAR(row(rows, "slid or rolled toward the edge").value, -300.0, 1e-9);
+    EXPECT_EQ(row(rows, "contact lost at the array edge").status, "warning");
+    EXPECT_NE(row(rows, "contact lost at the array edge").detail.find("from 2.00 s"),
+              std::string::npos)
+        << row(rows, "contact lost at the array edge").detail;
+    EXPECT_EQ(row(rows, "bag bottomed out").status, "ok");  // 30 mm >= 25 mm
+    EXPECT_NEAR(row(rows, "bag bottomed out").value, 30.0, 1e-9);
+    EXPECT_EQ(row(rows, "fell through or off the bags").status, "ok");
+    const io::VerdictRow& sacrum = row(rows, "peak pressure sacrum");
+    EXPECT_EQ(sacrum.status, "warning");
+    EXPECT_NEAR(sacrum.value, 40.0, 1e-9);
+    EXPECT_NE(sacrum.detail.find("above 32 mmHg for 0.50 s of 1.50 s"), std::string::npos)
+        << sacrum.detail;  // the 1.0 s frame opens the window; 1.5 s adds its interval
+
+    // A warning for travel beyond one column pitch that ends over the middle; a pressed node
+    // 20 mm up fails; his centre of mass under the board fails; a turn that gave up fails.
+    bagsim::app::ArrayVerdict w(layout, bags::DoubleWedgeParams(), 1.0, 3.0, 30.0 * M_PI / 180);
+    w.addFrame(frame(1.0, 0.0, 0.2, 10.0, 10.0), {0.1});
+    w.addFrame(frame(1.5, 0.12, 0.1, 10.0, 10.0), {0.02});
+    w.addFrame(frame(2.0, 0.0, -0.01, 10.0, 10.0), {0.1});
+    w.setTurn(std::nan(""), 0.2, false);
+    rows = w.makeRows();
+    EXPECT_EQ(row(rows, "slid or rolled toward the edge").status, "warning");
+    EXPECT_EQ(row(rows, "bag bottomed out").status, "fail");
+    EXPECT_EQ(row(rows, "fell through or off the bags").status, "fail");
+    EXPECT_EQ(row(rows, "target tilt reached").status, "fail");
+    EXPECT_EQ(row(rows, "back to supine").status, "warning");
+    EXPECT_EQ(row(rows, "peak pressure sacrum").status, "ok");
+
+    // No turn: its checks are n/a.
+    bagsim::app::ArrayVerdict n(layout, bags::DoubleWedgeParams(), 1.0, 3.0, 0.0);
+    n.addFrame(frame(1.0, 0.0, 0.2, 10.0, 10.0), {0.1});
+    rows = n.makeRows();
+    EXPECT_EQ(row(rows, "target tilt reached").status, "n/a");
+    EXPECT_EQ(row(rows, "back to supine").status, "n/a");
+}
