@@ -5,6 +5,7 @@
 // its even rows lose; the three builds are the ones asked for (summary.txt).
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 
 #include "ArrayRunTestUtil.h"
 
@@ -19,6 +20,9 @@ struct Case {
     // which bags gain (+1) and lose (-1) by the end, by row and column
     int (*side)(int row, int column);
 };
+
+// gtest names the case by its scenario (not its bytes).
+void PrintTo(const Case& c, std::ostream* os) { *os << c.scenario; }
 
 int rightGains(int, int c) { return c >= 4 ? 1 : c <= 2 ? -1 : 0; }
 int leftGains(int, int c) { return c <= 2 ? 1 : c >= 4 ? -1 : 0; }
