@@ -51,7 +51,6 @@ void ArrayVerdict::addFrame(const io::ArrayFrame& f, const std::vector<double>& 
         m_haveRef = true;
         m_refCom = f.centreOfMass;
         m_firstTime = m_lastTime = f.time;
-        for (const cosim::BagReading& b : f.bags) m_refForce[b.bag] = b.force;
     }
     const double dt = f.time - m_lastTime;
     m_lastTime = f.time;
@@ -66,16 +65,21 @@ void ArrayVerdict::addFrame(const io::ArrayFrame& f, const std::vector<double>& 
         m_lowestCom = f.centreOfMass.z();
         m_lowestComTime = f.time;
     }
-    // The outer column on the side he moved to: a bag that carried him and carries nothing.
-    if (std::abs(dy) > 0.01 && m_columns > 1) {
-        const int column = dy < 0.0 ? 0 : m_columns - 1;
+    // An outer bag that carried him and carries nothing after he moved on past it (10 mm or
+    // more further toward its edge since it last carried him): he rolled or slid off it.
+    if (m_columns > 1)
         for (const cosim::BagReading& b : f.bags) {
-            if (m_bags[b.bag].column != column) continue;
-            const auto ref = m_refForce.find(b.bag);
-            if (ref == m_refForce.end() || ref->second < kCarried || b.force > kNothing) continue;
-            if (!m_edgeLost.count(b.bag)) m_edgeLost[b.bag] = f.time;
+            const int column = m_bags[b.bag].column;
+            if (column != 0 && column != m_columns - 1) continue;
+            const double outward = column == 0 ? -1.0 : 1.0;
+            if (b.force >= kCarried) {
+                m_lastCarriedY[b.bag] = f.centreOfMass.y();
+            } else if (b.force < kNothing && m_lastCarriedY.count(b.bag) &&
+                       outward * (f.centreOfMass.y() - m_lastCarriedY[b.bag]) > 0.01 &&
+                       !m_edgeLost.count(b.bag)) {
+                m_edgeLost[b.bag] = f.time;
+            }
         }
-    }
     // Bottoming out.
     for (size_t i = 0; i < f.bags.size() && i < heights.size(); ++i)
         if (heights[i] < m_minHeight) {
@@ -151,9 +155,10 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
         }
         rows.push_back({"contact lost at the array edge", lost.empty() ? "ok" : "warning",
                         double(m_edgeLost.size()), "bags",
-                        lost.empty() ? "no outer bag on the side he moved to stopped carrying him"
-                                     : "outer bags " + lost + " on the side he moved to carried "
-                                       "him at the start and nothing (< 0.1 N) from " +
+                        lost.empty() ? "no outer bag lost him as he moved toward its edge"
+                                     : "outer bags " + lost + " carried him (1 N or more) and "
+                                       "nothing (< 0.1 N) once he had moved 10 mm or more "
+                                       "further toward their edge; the first from " +
                                        fmt("%.2f s", first)});
     }
     // Fell through or off the bags: his centre of mass below the bed board (the model has no

@@ -1,8 +1,8 @@
 #pragma once
 /// @file The support verdict of a patient-on-array run (verdict.csv, summary.txt), gathered
 /// at every output frame: target tilt reached and when; slid or rolled toward the edge (the
-/// centre of mass's lateral travel, contact lost by the outer column on the side he moved
-/// to); a bag bottomed out (the inner height left under a pressed node); per region the peak
+/// centre of mass's lateral travel, an outer bag that carried him and lost him as he moved
+/// further out); a bag bottomed out (the inner height left under a pressed node); per region the peak
 /// pressure and the time above 32 mmHg. Criteria and thresholds: docs/output-layout.md.
 
 #include <cosim/ArrayLayout.h>
@@ -41,8 +41,8 @@ class ArrayVerdict {
     Eigen::Vector3d m_refCom = Eigen::Vector3d::Zero();
     double m_maxTravel = 0.0, m_maxTravelTime = 0.0, m_lastY = 0.0;
     double m_lowestCom = 1e9, m_lowestComTime = 0.0;
-    std::map<int, double> m_refForce;  // bag -> force at the reference frame [N]
-    std::map<int, double> m_edgeLost;  // outer bag -> first time it carried nothing [s]
+    std::map<int, double> m_lastCarriedY;  // outer bag -> his centre's y when it last carried him
+    std::map<int, double> m_edgeLost;      // outer bag -> first time it lost him [s]
     double m_minHeight = 1e9, m_minHeightTime = 0.0;
     int m_minHeightBag = -1;
     struct Region {

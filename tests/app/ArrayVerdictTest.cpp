@@ -1,7 +1,7 @@
 // The support verdict (app/ArrayVerdict.cpp) on synthetic frames, each check against its stated
 // criterion: time above 32 mmHg summed over the output intervals; a centre of mass that ends
 // over the outer column fails, one that travels more than a column pitch warns; an outer bag
-// on the side he moved to that carried him and then carries nothing warns; a pressed node less
+// that carried him and carries nothing once he moved on toward its edge warns; a pressed node less
 // than 25 mm above the board fails; a centre of mass below the board fails; the turn's
 // outcome. Frames before the end of the settle are not judged.
 #include <gtest/gtest.h>
