@@ -148,17 +148,28 @@ struct Run {
     // The pressure mat.
     int matRows = 0, matColumns = 0;
     double originX = 0, originY = 0, sizeX = 0, sizeY = 0;
-    std::vector<double> matTime, matPressure;  ///< [s]; [Pa] frames x columns x rows
+    std::vector<double> matTime;  ///< [s] per frame
+    int matFrames = 0;            ///< frames with both a time and a pressure
+    /// Per frame: the highest sensel [mmHg] and the area of sensels above 32 mmHg [cm^2]
+    /// (read in blocks of frames, so a long run's mat is never in memory at once).
+    std::vector<double> matPeak, matAbove;
+    std::map<int, std::vector<double>> keyFrames;  ///< frame -> [Pa] columns x rows
     Table regions, bags, tilt, verdict, events, body, pneumatics;
     std::string summary;
 
-    int getFrames() const {
-        const size_t per = size_t(matRows) * size_t(matColumns);
-        return per ? int(std::min(matTime.size(), matPressure.size() / per)) : 0;
-    }
-    /// Sensel (r, c) of frame f [Pa].
+    int getFrames() const { return matFrames; }
+    /// Sensel (r, c) of a frame loaded by loadFrames() [Pa].
     double at(int f, int r, int c) const {
-        return matPressure[(size_t(f) * matColumns + c) * matRows + r];
+        return keyFrames.at(f)[size_t(c) * size_t(matRows) + size_t(r)];
+    }
+    /// Reads these frames' sensels from results.h5 /mat/pressure.
+    void loadFrames(const std::vector<int>& frames) {
+        h5::Handle file = h5::openFileReadOnly((dir / kResultsH5).string());
+        h5::Handle mat = h5::openGroup(file.get(), "mat");
+        std::vector<hsize_t> dims;
+        for (int f : frames)
+            if (!keyFrames.count(f))
+                keyFrames[f] = h5::readDatasetRows(mat.get(), "pressure", hsize_t(f), 1, dims);
     }
 };
 
@@ -212,13 +223,31 @@ void readMeta(Run& run) {
             run.sizeX = size.at(0), run.sizeY = size.at(1);
             std::vector<hsize_t> dims;
             run.matTime = h5::readDataset(mat.get(), "time", dims);
-            run.matPressure = h5::readDataset(mat.get(), "pressure", dims);
+            h5::readDatasetRows(mat.get(), "pressure", 0, 0, dims);
             if (dims.size() != 3 || dims[1] != hsize_t(run.matColumns) ||
                 dims[2] != hsize_t(run.matRows))
                 throw InputError(h5path.string(), 0, "",
                                  "/mat/pressure is not frames x columns x rows of the mat's " +
                                      std::to_string(run.matRows) + " x " +
                                      std::to_string(run.matColumns) + " sensels");
+            run.matFrames = int(std::min<hsize_t>(run.matTime.size(), dims[0]));
+            const size_t per = size_t(run.matRows) * size_t(run.matColumns);
+            const double sensel = run.sizeX / run.matRows * run.sizeY / run.matColumns;  // [m^2]
+            constexpr int kBlock = 256;  // frames read at once (4 MB of a 64 x 32 mat)
+            for (int first = 0; first < run.matFrames; first += kBlock) {
+                const std::vector<double> p =
+                    h5::readDatasetRows(mat.get(), "pressure", hsize_t(first), kBlock, dims);
+                for (int f = first; f < run.matFrames && f < first + kBlock; ++f) {
+                    double peak = 0.0, above = 0.0;
+                    for (size_t k = 0; k < per; ++k) {
+                        const double v = p[size_t(f - first) * per + k] / kMmHg;
+                        peak = std::max(peak, v);
+                        if (v > kThresholdMmHg) above += sensel * 1e4;
+                    }
+                    run.matPeak.push_back(peak);
+                    run.matAbove.push_back(above);
+                }
+            }
         }
     } catch (const InputError&) {
         throw;
@@ -307,11 +336,13 @@ struct Moment {
     int frame = -1;  ///< mat frame (-1: none)
 };
 
+/// The index of the value nearest v in ascending times t (-1 if empty).
 int findNearest(const std::vector<double>& t, double v) {
-    int best = -1;
-    for (size_t i = 0; i < t.size(); ++i)
-        if (best < 0 || std::fabs(t[i] - v) < std::fabs(t[size_t(best)] - v)) best = int(i);
-    return best;
+    if (t.empty()) return -1;
+    const size_t i = size_t(std::lower_bound(t.begin(), t.end(), v) - t.begin());
+    if (i == 0) return 0;
+    if (i == t.size()) return int(t.size()) - 1;
+    return std::fabs(t[i] - v) < std::fabs(t[i - 1] - v) ? int(i) : int(i) - 1;
 }
 
 struct Event {
@@ -581,7 +612,7 @@ std::string statusCell(const std::string& status) {
 }  // namespace
 
 std::string formatArrayReportHtml(const fs::path& runDir) {
-    const Run run = readRun(runDir);
+    Run run = readRun(runDir);
     const std::vector<Event> events = getEvents(run);
     const bool incomplete = !run.marker.empty() || run.status != "complete";
 
@@ -598,21 +629,23 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         }
     }
     const int frames = run.getFrames();
-    std::vector<double> matPeak(size_t(frames), 0.0);   // [mmHg]
-    std::vector<double> matAbove(size_t(frames), 0.0);  // [cm^2] of sensels above 32 mmHg
-    const double sensel = frames ? run.sizeX / run.matRows * run.sizeY / run.matColumns : 0.0;
-    for (int f = 0; f < frames; ++f)
-        for (int c = 0; c < run.matColumns; ++c)
-            for (int r = 0; r < run.matRows; ++r) {
-                const double p = run.at(f, r, c) / kMmHg;
-                matPeak[size_t(f)] = std::max(matPeak[size_t(f)], p);
-                if (p > kThresholdMmHg) matAbove[size_t(f)] += sensel * 1e4;
-            }
+    const std::vector<double>& matPeak = run.matPeak;    // [mmHg]
+    const std::vector<double>& matAbove = run.matAbove;  // [cm^2] of sensels above 32 mmHg
     std::vector<Moment> moments = pickMoments(run, events, t, tiltMean, matPeak);
     if (t.empty() && frames > 0)  // no tilt rows yet: the last frame alone
         moments.push_back(
             {"A", "end", "the last output", run.matTime[size_t(frames - 1)], frames - 1});
 
+    {
+        std::vector<int> keys;
+        for (const Moment& m : moments)
+            if (m.frame >= 0) keys.push_back(m.frame);
+        try {
+            run.loadFrames(keys);
+        } catch (const std::exception& e) {
+            throw InputError((run.dir / kResultsH5).string(), 0, "", e.what());
+        }
+    }
     PageContext ctx;
     ctx.tEnd = t.empty() ? (frames ? run.matTime[size_t(frames - 1)] : kNaN) : t.back();
     for (const Moment& m : moments)

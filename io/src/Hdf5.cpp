@@ -208,9 +208,7 @@ Handle openGroup(hid_t loc, const std::string& name) {
     return Handle(check(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), "cannot open group " + name));
 }
 
-bool hasAttribute(hid_t obj, const std::string& name) {
-    return H5Aexists(obj, name.c_str()) > 0;
-}
+bool hasAttribute(hid_t obj, const std::string& name) { return H5Aexists(obj, name.c_str()) > 0; }
 
 std::string readStringAttribute(hid_t obj, const std::string& name) {
     Handle attr(check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), "cannot open attribute " + name));
@@ -260,6 +258,31 @@ std::vector<double> readDataset(hid_t loc, const std::string& name, std::vector<
     if (total > 0)
         check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()),
               "cannot read dataset " + name);
+    return v;
+}
+
+std::vector<double> readDatasetRows(hid_t loc, const std::string& name, hsize_t first,
+                                    hsize_t count, std::vector<hsize_t>& dims) {
+    Handle ds(check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), "cannot open dataset " + name));
+    Handle space(check(H5Dget_space(ds.get()), "dataspace of " + name));
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    if (rank < 1) throw std::runtime_error("HDF5: dataset " + name + " has no rows");
+    dims.assign(size_t(rank), 0);
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    if (first >= dims[0]) return {};
+    std::vector<hsize_t> start(size_t(rank), 0), n = dims;
+    start[0] = first;
+    n[0] = std::min(count, dims[0] - first);
+    hsize_t total = 1;
+    for (hsize_t d : n) total *= d;
+    std::vector<double> v(total);
+    if (total == 0) return v;
+    check(
+        H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, n.data(), nullptr),
+        "selection in " + name);
+    Handle mem(check(H5Screate_simple(rank, n.data(), nullptr), "memory space"));
+    check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, v.data()),
+          "cannot read dataset " + name);
     return v;
 }
 

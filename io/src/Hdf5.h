@@ -73,6 +73,10 @@ std::string readStringAttribute(hid_t obj, const std::string& name);
 std::vector<double> readDoubleAttribute(hid_t obj, const std::string& name);
 /// A whole numeric dataset as doubles, row-major; `dims` receives its dimensions.
 std::vector<double> readDataset(hid_t loc, const std::string& name, std::vector<hsize_t>& dims);
+/// Rows [first, first + count) (along the first axis) of a numeric dataset as doubles,
+/// row-major; `dims` receives the whole dataset's dimensions. Count is cut at the last row.
+std::vector<double> readDatasetRows(hid_t loc, const std::string& name, hsize_t first,
+                                    hsize_t count, std::vector<hsize_t>& dims);
 
 /// A chunked dataset of rank 1 + inner.size() that grows along its first axis.
 class GrowingDataset {

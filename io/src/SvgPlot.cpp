@@ -101,6 +101,9 @@ std::string getViridis(double t) {
     return b;
 }
 
+// Points of a line drawn at most (about): a chart is 500 px wide, so more add no detail.
+constexpr size_t kMaxLinePoints = 1200;
+
 std::string plot(const PlotOptions& o, const std::vector<Series>& series) {
     const double W = o.width, H = o.height, L = 64, R = 14, T = o.markers.empty() ? 30 : 48, B = 44;
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
@@ -217,12 +220,29 @@ std::string plot(const PlotOptions& o, const std::vector<Series>& series) {
                    << pts << "'/>";
             pts.clear();
         };
-        for (size_t i = 0; i < n; ++i) {
-            if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
-                flush();
-                continue;
+        // A long line keeps, per bucket of points, its lowest and highest (in order): about
+        // kMaxLinePoints drawn, and no peak lost to the thinning.
+        const size_t bucket =
+            n > kMaxLinePoints ? (2 * n + kMaxLinePoints - 1) / kMaxLinePoints : 1;
+        auto emit = [&](size_t lo, size_t hi) {
+            if (lo == n) return;
+            const size_t a = std::min(lo, hi), b = std::max(lo, hi);
+            pts += P(X(s.x[a])) + "," + P(Y(s.y[a])) + " ";
+            if (b != a) pts += P(X(s.x[b])) + "," + P(Y(s.y[b])) + " ";
+        };
+        for (size_t b0 = 0; b0 < n; b0 += bucket) {
+            size_t lo = n, hi = n;
+            for (size_t i = b0; i < std::min(n, b0 + bucket); ++i) {
+                if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+                    emit(lo, hi);
+                    lo = hi = n;
+                    flush();
+                    continue;
+                }
+                if (lo == n || s.y[i] < s.y[lo]) lo = i;
+                if (hi == n || s.y[i] > s.y[hi]) hi = i;
             }
-            pts += P(X(s.x[i])) + "," + P(Y(s.y[i])) + " ";
+            emit(lo, hi);
         }
         flush();
     }
@@ -233,7 +253,8 @@ std::string plot(const PlotOptions& o, const std::vector<Series>& series) {
         if (m.x < x0 || m.x > x1) continue;
         Marker* near = nullptr;
         for (Marker& k : merged)
-            if (k.row == m.row && std::fabs(X(k.x) - X(m.x)) < 7.0 * (k.label.size() + 1)) near = &k;
+            if (k.row == m.row && std::fabs(X(k.x) - X(m.x)) < 7.0 * (k.label.size() + 1))
+                near = &k;
         if (near) {
             near->label += "," + m.label;
             near->title += "\n" + m.title;

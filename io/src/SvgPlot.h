@@ -22,7 +22,8 @@ std::string num(double v, const char* format = "%.4g");
 struct Series {
     std::string name;          ///< legend text ("" leaves it out of the legend)
     std::string colour;        ///< CSS colour
-    std::vector<double> x, y;  ///< NaN in y breaks the line
+    std::vector<double> x, y;  ///< NaN in y breaks the line; a line of more than ~1200
+                               ///< points is thinned to each bucket's lowest and highest
     bool points = false;       ///< markers instead of a line (at most ~400 drawn)
     std::string dash;          ///< stroke-dasharray ("" solid)
     double width = 1.6;        ///< line width [px]
