@@ -8,9 +8,11 @@
 #include <cmath>
 #include <string>
 
-#include "InputErrorTestUtil.h"
+#include "ArrayScenarioTestUtil.h"
 
 using io::test::expectInputError;
+using io::test::read;
+using io::test::readError;
 
 namespace {
 
@@ -30,14 +32,6 @@ const std::string kBase =
     "    - {name: left, columns: [0]}\n"                                          // 13
     "    - {name: right, columns: [1], gas_mass: 5 g}\n"                          // 14
     "run: {settle_time: 1 s, duration: 10 s}\n";                                  // 15
-
-io::PatientOnArrayScenario read(const std::string& text) {
-    return io::readPatientOnArrayScenario(io::ScenarioFile::parse(text, "a.yaml"));
-}
-
-io::InputError readError(const std::string& text) {
-    return expectInputError([&] { read(text); });
-}
 
 }  // namespace
 

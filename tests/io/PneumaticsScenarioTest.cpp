@@ -9,9 +9,11 @@
 #include <cmath>
 #include <string>
 
-#include "InputErrorTestUtil.h"
+#include "ArrayScenarioTestUtil.h"
 
 using io::test::expectInputError;
+using io::test::read;
+using io::test::readError;
 
 namespace {
 
@@ -31,14 +33,6 @@ const std::string kBase =
     "    - {name: left, columns: [0, 1, 2]}\n"                                    // 13
     "    - {name: right, columns: [4, 5, 6]}\n"                                   // 14
     "run: {settle_time: 1 s, duration: 10 s}\n";                                  // 15
-
-io::PatientOnArrayScenario read(const std::string& text) {
-    return io::readPatientOnArrayScenario(io::ScenarioFile::parse(text, "a.yaml"));
-}
-
-io::InputError readError(const std::string& text) {
-    return expectInputError([&] { read(text); });
-}
 
 }  // namespace
 
