@@ -195,6 +195,10 @@ struct Airbag::Impl {
     // The last committed step: node increment and the shapes' translations (predictor).
     Eigen::Matrix3Xd lastIncrement;
     Eigen::VectorXd lastShapeDelta;
+    // Where the last converged advance() since the commit ended (empty: none); a repeated
+    // advance of the same step starts from it (AirbagSpec::warmStart).
+    Eigen::Matrix3Xd lastAdvanced;
+    bool wholeStep = false;  // the sub-step being solved is the whole of advance()'s step
 
     Eigen::VectorXd shapeTranslations(const std::vector<Eigen::Isometry3d>& poses) const {
         Eigen::VectorXd t(3 * poses.size());
@@ -209,6 +213,21 @@ struct Airbag::Impl {
     void forgetIncrement() {
         lastIncrement.resize(3, 0);
         lastShapeDelta.resize(0);
+        lastAdvanced.resize(3, 0);
+    }
+    // Starts Newton from where the last converged advance of this step ended, if that has
+    // the smaller force residual at the loads now set. True if taken.
+    bool warmStart() {
+        if (!spec.warmStart || !wholeStep || lastAdvanced.cols() != x.cols()) return false;
+        double rWarm = std::numeric_limits<double>::infinity();
+        try {
+            rWarm = calcFreeResidual(lastAdvanced);
+        } catch (const NumericalError&) {
+            return false;
+        }
+        if (!(std::isfinite(rWarm) && rWarm < calcFreeResidual(x))) return false;
+        x = lastAdvanced;
+        return true;
     }
     // A start for Newton: the last committed step's node increment, scaled by how far the
     // shapes move now along the way they moved then (a secant predictor on a smooth path).
@@ -256,6 +275,11 @@ struct Airbag::Impl {
         for (int b = 0; b < numBags; ++b)
             if (massFlow[b] != 0.0 && !(hasTarget[b] && targetMass[b] == bagMass(b))) return false;
         return true;
+    }
+    // ... and none passes an orifice between chambers over a step of dt.
+    bool isGasStill(double dt) const {
+        return isGasStill() && (spec.connection != AirbagSpec::Connection::Orifice ||
+                                model->getNumGases() < 2 || dt <= 0.0);
     }
     std::shared_ptr<Snapshot> snapshot() const {
         auto s = std::make_shared<Snapshot>();
@@ -579,9 +603,7 @@ struct Airbag::Impl {
         // neither before nor after: the energy of the state is unchanged, so is the state.
         // A bag nothing touches costs next to nothing, and a released bag that was accepted
         // with stabilisation springs is not re-solved just because a shape moved away.
-        const bool gasStill = isGasStill() &&
-                              (spec.connection != AirbagSpec::Connection::Orifice ||
-                               model->getNumGases() < 2 || dt <= 0.0);
+        const bool gasStill = isGasStill(dt);
         bool untouched = gasStill;
         for (size_t i = 0; i < shapes.size() && untouched; ++i)
             untouched = shapes[i].contact->getNumActive(x) == 0;
@@ -617,7 +639,7 @@ struct Airbag::Impl {
                 }
                 addBagGasMass(b, dm);
             }
-            if (!predicted) predict(before->poses);
+            if (!predicted && !warmStart()) predict(before->poses);
             predicted = true;
             if (self) self->updateCandidates(x);
             ok = solveWithFlow(copyGases(), dt, &sum, &stab);
@@ -734,6 +756,7 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     }
     m.x = mesh.X;
     m.committed = m.snapshot();
+    m.lastAdvanced.resize(3, 0);
 }
 
 Airbag::~Airbag() = default;
@@ -918,6 +941,7 @@ AdvanceSummary Airbag::advance(double dt, int maxCuts) {
     int cuts = 0;
     while (s < 1.0) {
         const double s1 = (ds >= 1.0 - s - 1e-12) ? 1.0 : s + ds;
+        m.wholeStep = s == 0.0 && s1 == 1.0;
         if (m.solveSubstep(from, s1, dt * (s1 - s), &out)) {
             s = s1;
             if (cuts > 0) ds = std::min(2.0 * ds, 1.0);
@@ -931,6 +955,7 @@ AdvanceSummary Airbag::advance(double dt, int maxCuts) {
         }
     }
     out.converged = true;
+    m.lastAdvanced = m.x;
     return out;
 }
 
@@ -969,14 +994,25 @@ Wrench Airbag::calcShapeWrench(int shape) const {
 }
 
 Eigen::Matrix<double, 6, 6> Airbag::calcShapeWrenchTangent(int shape) const {
+    return calcShapeWrenchTangents({shape}).front();
+}
+
+std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
+    const std::vector<int>& shapes) const {
     const Impl& m = *m_impl;
-    m.shapes.at(shape);
     // W = -dE_c/dq at fixed x, so dW/dx = -B^T with B = d(grad E)/dq; the bag re-equilibrates,
-    // dx/dq = -K^-1 B, hence dW/dq = dW/dq|_x + B^T K^-1 B.
-    Eigen::Matrix<double, 6, 6> T;
-    const Eigen::MatrixXd B = m.calcContactPoseDerivative(shape, &T);
+    // dx/dq = -K^-1 B, hence dW/dq = dW/dq|_x + B^T K^-1 B. One K for every shape's B.
+    std::vector<Eigen::Matrix<double, 6, 6>> T(shapes.size(), Eigen::Matrix<double, 6, 6>::Zero());
+    std::vector<int> pressing;  // indices into `shapes`
+    for (size_t k = 0; k < shapes.size(); ++k)
+        if (m.shapes.at(shapes[k]).contact->getNumActive(m.x) > 0) pressing.push_back(int(k));
+    if (pressing.empty()) return T;
+    Eigen::MatrixXd B(3 * m.mesh.getNumNodes(), 6 * pressing.size());
+    for (size_t j = 0; j < pressing.size(); ++j)
+        B.middleCols<6>(6 * j) = m.calcContactPoseDerivative(shapes[pressing[j]], &T[pressing[j]]);
     const Eigen::MatrixXd Y = solveTangent(*m.model, m.x, B);
-    T += B.transpose() * Y;
+    for (size_t j = 0; j < pressing.size(); ++j)
+        T[pressing[j]] += B.middleCols<6>(6 * j).transpose() * Y.middleCols<6>(6 * j);
     return T;
 }
 
@@ -989,6 +1025,8 @@ Vec3 Airbag::calcBedForce() const {
     if (m_impl->bedContact) m_impl->bedContact->calcWrenchOnShape(m_impl->x, &f, &t);
     return f;
 }
+
+bool Airbag::isGasStill() const { return m_impl->isGasStill(1.0); }
 
 int Airbag::getNumChambers() const { return static_cast<int>(m_impl->mesh.chambers.size()); }
 

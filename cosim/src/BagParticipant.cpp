@@ -42,8 +42,14 @@ Mat6 BagParticipant::calcWrenchTangent(int shape) const {
     return m_bag->calcShapeWrenchTangent(shape);
 }
 
+std::vector<Mat6> BagParticipant::calcWrenchTangents(const std::vector<int>& shapes) const {
+    return m_bag->calcShapeWrenchTangents(shapes);
+}
+
 Eigen::VectorXd BagParticipant::calcContactPressure(int shape) const {
     return m_bag->calcShapeContactPressure(shape);
 }
+
+bool BagParticipant::isSteady() const { return m_bag->isGasStill(); }
 
 }  // namespace cosim

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <sstream>
@@ -13,6 +14,10 @@
 namespace cosim {
 
 namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 [[noreturn]] void invalid(const std::string& key, double value, const std::string& valid) {
     std::ostringstream s;
@@ -26,8 +31,9 @@ Scheme parseScheme(const std::string& name) {
     if (name == "explicit") return Scheme::Explicit;
     if (name == "implicit") return Scheme::Implicit;
     if (name == "tangent") return Scheme::Tangent;
+    if (name == "tangent-implicit") return Scheme::TangentImplicit;
     throw std::invalid_argument("coupling scheme '" + name +
-                                "'; valid: explicit, implicit, tangent");
+                                "'; valid: explicit, implicit, tangent, tangent-implicit");
 }
 
 std::string toString(Scheme scheme) {
@@ -38,6 +44,8 @@ std::string toString(Scheme scheme) {
             return "implicit";
         case Scheme::Tangent:
             return "tangent";
+        case Scheme::TangentImplicit:
+            return "tangent-implicit";
     }
     return "?";
 }
@@ -84,6 +92,10 @@ void CouplingOptions::validate() const {
         invalid("minMacroStep", minMacroStep, "a positive step no larger than macroStep");
     if (growAfter < 1) invalid("growAfter", growAfter, "1 or more");
     if (threads < 0) invalid("threads", threads, "0 (one per core) or more");
+    if (!(skipTravel >= 0.0) || !std::isfinite(skipTravel))
+        invalid("skipTravel", skipTravel, "0 (never skip) or a positive length [m]");
+    if (!(tangentTolerance >= 0.0) || !std::isfinite(tangentTolerance))
+        invalid("tangentTolerance", tangentTolerance, "0 (every step) or a positive force [N]");
 }
 
 struct Coupling::Impl {
@@ -103,6 +115,7 @@ struct Coupling::Impl {
     int goodInARow = 0;        // stepAdaptive(): successes at the current step
     int steps = 0;
     bool initialized = false;
+    CouplingProfile profile;
 
     Impl(BodyParticipant& b, std::vector<Participant*> p, std::vector<Link> l,
          const CouplingOptions& o)
@@ -116,6 +129,12 @@ struct Coupling::Impl {
         }
         return x;
     }
+    // |a - b| in the implicit residual's measure (torques divided by torqueLength).
+    double scaledNorm(const ShapeWrench& a, const ShapeWrench& b) const {
+        Vec6 d;
+        d << (a.torque - b.torque) / options.torqueLength, a.force - b.force;
+        return d.norm();
+    }
     ShapeWrench unpack(const Eigen::VectorXd& x, int i) const {
         ShapeWrench w;
         w.torque = x.segment<3>(6 * i) * options.torqueLength;
@@ -123,37 +142,11 @@ struct Coupling::Impl {
         return w;
     }
 
-    // Every participant to the body's current end poses over dt; wrenches (and tangents) per
-    // link into w (and t). Returns the Newton iterations; throws with everything rolled back
-    // if a participant fails.
-    int advanceParticipants(double dt, bool wantTangent, std::vector<ShapeWrench>& w,
-                            std::vector<Mat6>& t) {
-        std::vector<ShapeState> states(links.size());
-        for (size_t i = 0; i < links.size(); ++i)
-            states[i] = body.getShapeState(links[i].bodyShape);
+    // Runs work(p) for every participant on the threads the options give (one participant
+    // per thread at a time); returns the number of threads.
+    template <class Work>
+    int runParticipants(const Work& work) const {
         const int np = int(participants.size());
-        std::vector<std::exception_ptr> errors(np);
-        std::vector<int> failed(np, 0), iterations(np, 0);
-        w.assign(links.size(), ShapeWrench());
-        t.assign(links.size(), Mat6::Zero());
-        auto work = [&](int p) {
-            try {
-                Participant& part = *participants[p];
-                for (int i : linksOf[p]) part.setShapeState(links[i].shape, states[i]);
-                const ParticipantStep s = part.advance(dt);
-                iterations[p] = s.solverIterations;
-                if (!s.converged) {
-                    failed[p] = 1;
-                    return;
-                }
-                for (int i : linksOf[p]) {
-                    w[i] = part.calcWrench(links[i].shape);
-                    if (wantTangent) t[i] = part.calcWrenchTangent(links[i].shape);
-                }
-            } catch (...) {
-                errors[p] = std::current_exception();
-            }
-        };
         const int nt = std::min(np, options.parallel ? calcThreads() : 1);
         if (nt <= 1) {
             for (int p = 0; p < np; ++p) work(p);
@@ -171,9 +164,13 @@ struct Coupling::Impl {
             loop();
             for (std::thread& th : team) th.join();
         }
-        int total = 0;
-        for (int p = 0; p < np; ++p) total += iterations[p];
-        for (int p = 0; p < np; ++p)
+        return std::max(1, nt);
+    }
+
+    // Rolls every side back and throws for the first participant that failed.
+    void throwIfFailed(const std::vector<std::exception_ptr>& errors, const std::vector<int>& failed,
+                       double dt) {
+        for (size_t p = 0; p < errors.size(); ++p)
             if (errors[p] || failed[p]) {
                 rollbackAll();
                 if (errors[p]) std::rethrow_exception(errors[p]);
@@ -184,7 +181,123 @@ struct Coupling::Impl {
                 throw bags::NumericalError(m.str(), baseTime + stepsSinceBase * options.macroStep,
                                            steps);
             }
+    }
+
+    // Every participant not skipped to the body's current end poses over dt; the wrench per
+    // link into w (a skipped participant's links keep W). Returns the Newton iterations;
+    // throws with everything rolled back if a participant fails.
+    int advanceParticipants(double dt, std::vector<ShapeWrench>& w,
+                            const std::vector<char>* skip = nullptr) {
+        std::vector<ShapeState> states(links.size());
+        for (size_t i = 0; i < links.size(); ++i)
+            states[i] = body.getShapeState(links[i].bodyShape);
+        const int np = int(participants.size());
+        std::vector<std::exception_ptr> errors(np);
+        std::vector<int> failed(np, 0), iterations(np, 0);
+        std::vector<double> busy(np, 0.0);
+        w.assign(links.size(), ShapeWrench());
+        const auto start = std::chrono::steady_clock::now();
+        auto skipped = [&](int p) { return skip && (*skip)[p]; };
+        const int nt = runParticipants([&](int p) {
+            if (skipped(p)) {
+                for (int i : linksOf[p]) w[i] = W[i];
+                return;
+            }
+            const auto t0 = std::chrono::steady_clock::now();
+            try {
+                Participant& part = *participants[p];
+                for (int i : linksOf[p]) part.setShapeState(links[i].shape, states[i]);
+                const ParticipantStep s = part.advance(dt);
+                iterations[p] = s.solverIterations;
+                if (s.converged)
+                    for (int i : linksOf[p]) w[i] = part.calcWrench(links[i].shape);
+                else
+                    failed[p] = 1;
+            } catch (...) {
+                errors[p] = std::current_exception();
+            }
+            busy[p] = secondsSince(t0);
+        });
+        int total = 0;
+        CouplingProfile& pr = profile;
+        pr.bagsSeconds += secondsSince(start);
+        pr.threads = nt;
+        pr.participantSeconds.resize(np, 0.0);
+        pr.participantIterations.resize(np, 0);
+        for (int p = 0; p < np; ++p) {
+            if (skipped(p)) {
+                ++pr.skipped;
+                continue;
+            }
+            total += iterations[p];
+            pr.bagBusySeconds += busy[p];
+            pr.participantSeconds[p] += busy[p];
+            pr.participantIterations[p] += iterations[p];
+            pr.solverIterations += iterations[p];
+            ++pr.advances;
+            if (iterations[p] == 0) ++pr.idleAdvances;
+        }
+        throwIfFailed(errors, failed, dt);
         return total;
+    }
+
+    // The tangents of the participants marked in `which`, at their current states, into t
+    // (per link); the others' entries are left as they are. Throws with everything rolled
+    // back if one fails.
+    void refreshTangents(const std::vector<char>& which, std::vector<Mat6>& t) {
+        const int np = int(participants.size());
+        std::vector<std::exception_ptr> errors(np);
+        std::vector<double> busy(np, 0.0);
+        const auto start = std::chrono::steady_clock::now();
+        runParticipants([&](int p) {
+            if (!which[p] || linksOf[p].empty()) return;
+            const auto t0 = std::chrono::steady_clock::now();
+            try {
+                std::vector<int> shapes;
+                for (int i : linksOf[p]) shapes.push_back(links[i].shape);
+                const std::vector<Mat6> tp = participants[p]->calcWrenchTangents(shapes);
+                for (size_t k = 0; k < shapes.size(); ++k) t[linksOf[p][k]] = tp.at(k);
+            } catch (...) {
+                errors[p] = std::current_exception();
+            }
+            busy[p] = secondsSince(t0);
+        });
+        CouplingProfile& pr = profile;
+        pr.bagsSeconds += secondsSince(start);
+        pr.participantSeconds.resize(np, 0.0);
+        pr.participantIterations.resize(np, 0);
+        for (int p = 0; p < np; ++p) {
+            if (!which[p]) continue;
+            pr.bagBusySeconds += busy[p];
+            pr.tangentSeconds += busy[p];
+            pr.participantSeconds[p] += busy[p];
+            ++pr.tangentRefreshes;
+        }
+        throwIfFailed(errors, std::vector<int>(np, 0), 0.0);
+    }
+
+    // The participants left standing this step (CouplingOptions::skipTravel), the body at
+    // its end poses.
+    std::vector<char> findSkipped() const {
+        std::vector<char> skip(participants.size(), 0);
+        if (!isLinearised() || !(options.skipTravel > 0.0)) return skip;
+        for (size_t p = 0; p < participants.size(); ++p) {
+            if (!participants[p]->isSteady()) continue;
+            bool near = true;
+            for (int i : linksOf[p]) {
+                const Eigen::Isometry3d X = body.getShapeState(links[i].bodyShape).X_GS;
+                const Eigen::AngleAxisd turn(Eigen::Matrix3d(X.linear() * X0[i].linear().transpose()));
+                const double travel = (X.translation() - X0[i].translation()).norm() +
+                                      std::abs(turn.angle()) * links[i].reach;
+                near = near && travel <= options.skipTravel;
+            }
+            skip[p] = near;
+        }
+        return skip;
+    }
+
+    bool isLinearised() const {
+        return options.scheme == Scheme::Tangent || options.scheme == Scheme::TangentImplicit;
     }
 
     int calcThreads() const {
@@ -251,7 +364,9 @@ Coupling::~Coupling() = default;
 void Coupling::initialize() {
     Impl& m = *m_impl;
     m.body.rollback();
-    m.advanceParticipants(0.0, m.options.scheme == Scheme::Tangent, m.W, m.T);
+    m.advanceParticipants(0.0, m.W);
+    m.T.assign(m.links.size(), Mat6::Zero());
+    if (m.isLinearised()) m.refreshTangents(std::vector<char>(m.participants.size(), 1), m.T);
     for (Participant* p : m.participants) p->commit();
     m.X0.resize(m.links.size());
     for (size_t i = 0; i < m.links.size(); ++i)
@@ -268,25 +383,38 @@ StepSummary Coupling::step() {
     const double dt = o.macroStep;
     const double tEnd = m.baseTime + (m.stepsSinceBase + 1) * dt;
     if (m.beforeStep) m.beforeStep(getTime(), dt);
-    const bool tangent = o.scheme == Scheme::Tangent;
+    const bool linearised = m.isLinearised();
+    const size_t nl = m.links.size(), np = m.participants.size();
     StepSummary sum;
     sum.step = m.steps;
     sum.time = tEnd;
-    Eigen::VectorXd x = m.pack(m.W);
-    std::vector<ShapeWrench> w;
-    std::vector<Mat6> t;
+    ++m.profile.steps;
+    // Implicit: x is the held load; tangent-implicit: x is the correction added to the
+    // linearised load (zero: the tangent scheme's prediction).
+    Eigen::VectorXd x = linearised ? Eigen::VectorXd::Zero(6 * nl) : m.pack(m.W);
+    std::vector<ShapeWrench> w, seen(nl);
+    std::vector<char> skip;          // participants left standing (skipTravel)
+    std::vector<double> firstMiss;   // per participant: the linearisation's miss, first pass
     m.accelerator->beginStep();
     for (int k = 0;; ++k) {
         m.body.rollback();
-        for (size_t i = 0; i < m.links.size(); ++i) {
-            if (tangent)
-                m.body.setShapeLoad(m.links[i].bodyShape, m.W[i], m.T[i], m.X0[i]);
-            else
-                m.body.setShapeLoad(m.links[i].bodyShape, m.unpack(x, int(i)));
+        for (size_t i = 0; i < nl; ++i) {
+            const ShapeWrench xi = m.unpack(x, int(i));
+            if (linearised) {
+                ShapeWrench w0 = m.W[i];
+                w0.torque += xi.torque;
+                w0.force += xi.force;
+                m.body.setShapeLoad(m.links[i].bodyShape, w0, m.T[i], m.X0[i]);
+            } else {
+                m.body.setShapeLoad(m.links[i].bodyShape, xi);
+            }
         }
+        const auto bodyStart = std::chrono::steady_clock::now();
         m.body.advanceTo(tEnd);
+        m.profile.bodySeconds += secondsSince(bodyStart);
+        ++m.profile.passes;
         sum.shapeTravel = 0.0;
-        for (size_t i = 0; i < m.links.size(); ++i)
+        for (size_t i = 0; i < nl; ++i)
             sum.shapeTravel = std::max(
                 sum.shapeTravel, (m.body.getShapeState(m.links[i].bodyShape).X_GS.translation() -
                                   m.X0[i].translation())
@@ -300,16 +428,26 @@ StepSummary Coupling::step() {
             throw bags::NumericalError(s.str(), tEnd - dt, m.steps);
         }
         // What the body saw at its end poses (x itself unless linearised).
-        std::vector<ShapeWrench> seen(m.links.size());
-        for (size_t i = 0; i < m.links.size(); ++i)
-            seen[i] = m.body.calcShapeLoad(m.links[i].bodyShape);
-        sum.bagIterations += m.advanceParticipants(dt, tangent, w, t);
+        for (size_t i = 0; i < nl; ++i) seen[i] = m.body.calcShapeLoad(m.links[i].bodyShape);
+        skip = m.findSkipped();
+        sum.bagIterations += m.advanceParticipants(dt, w, &skip);
         sum.iterations = k + 1;
-        const Eigen::VectorXd Hx = m.pack(w);
-        const Eigen::VectorXd xSeen = m.pack(seen);
-        sum.residual = (Hx - xSeen).norm();
+        // A skipped participant's links: the body felt their linearised load, which stands.
+        std::vector<ShapeWrench> returned = w;
+        for (size_t i = 0; i < nl; ++i)
+            if (skip[m.links[i].participant]) returned[i] = seen[i];
+        if (k == 0 && linearised) {
+            firstMiss.assign(np, 0.0);
+            for (size_t i = 0; i < nl; ++i) {
+                double& f = firstMiss[m.links[i].participant];
+                f = std::max(f, m.scaledNorm(returned[i], seen[i]));
+            }
+        }
+        const Eigen::VectorXd Hx = m.pack(returned);
+        const Eigen::VectorXd r = Hx - m.pack(seen);
+        sum.residual = r.norm();
         sum.wrenchNorm = Hx.norm();
-        if (o.scheme != Scheme::Implicit) break;
+        if (o.scheme == Scheme::Explicit || o.scheme == Scheme::Tangent) break;
         if (sum.residual <= o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance) break;
         if (k + 1 >= o.maxIterations) {
             m.rollbackAll();
@@ -321,15 +459,27 @@ StepSummary Coupling::step() {
               << " N; cut the macro step or raise maxIterations";
             throw bags::NumericalError(s.str(), tEnd - dt, m.steps);
         }
-        x = m.accelerator->next(x, Hx);
+        x = m.accelerator->next(x, linearised ? Eigen::VectorXd(x + r) : Hx);
     }
     m.accelerator->endStep();
+    // The tangents at the new state, of the participants whose linearisation missed (all of
+    // those advanced when tangentTolerance is 0).
+    std::vector<Mat6> t = m.T;
+    if (linearised) {
+        std::vector<char> which(np, 0);
+        for (size_t p = 0; p < np; ++p)
+            which[p] = !skip[p] && (!(o.tangentTolerance > 0.0) || firstMiss[p] > o.tangentTolerance);
+        m.refreshTangents(which, t);
+    }
     m.body.commit();
-    for (Participant* p : m.participants) p->commit();
+    for (size_t p = 0; p < np; ++p)
+        if (!skip[p]) m.participants[p]->commit();
     m.W = w;
     m.T = t;
-    for (size_t i = 0; i < m.links.size(); ++i)
-        m.X0[i] = m.body.getShapeState(m.links[i].bodyShape).X_GS;
+    // A skipped participant's links keep their linearisation about its last poses.
+    for (size_t i = 0; i < nl; ++i)
+        if (!skip[m.links[i].participant])
+            m.X0[i] = m.body.getShapeState(m.links[i].bodyShape).X_GS;
     ++m.steps;
     ++m.stepsSinceBase;
     sum.macroStep = dt;
@@ -379,5 +529,7 @@ int Coupling::getNumSteps() const { return m_impl->steps; }
 ShapeWrench Coupling::getLinkWrench(int link) const { return m_impl->W.at(link); }
 const Mat6& Coupling::getLinkTangent(int link) const { return m_impl->T.at(link); }
 const CouplingOptions& Coupling::getOptions() const { return m_impl->options; }
+const CouplingProfile& Coupling::getProfile() const { return m_impl->profile; }
+void Coupling::resetProfile() { m_impl->profile = CouplingProfile(); }
 
 }  // namespace cosim

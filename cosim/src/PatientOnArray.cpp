@@ -134,7 +134,9 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         const int part = participantOf[p.bag];
         const int local = airbags[part]->addShape(b.shape, options.contact);
         const int bodyShape = m.body->addShape(model.getMobilizedBodyIndex(seg), b.X_BS);
-        links.push_back(Link{bodyShape, part, local});
+        const body::ContactShape& cs = model.getContactShape(seg);
+        const double reach = (cs.getBoundingCentre() - b.X_BS.p()).norm() + cs.getBoundingRadius();
+        links.push_back(Link{bodyShape, part, local, reach});
         m.linkParticipant.push_back(part);
         probes.push_back(makeBagShape(model.getContactShape(seg)).shape);
         X_BS.push_back(b.X_BS);

@@ -284,9 +284,9 @@ void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
 void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step",
                      "relative_tolerance", "absolute_tolerance", "max_iterations", "threads",
-                     "body_accuracy"});
+                     "body_accuracy", "tangent_tolerance", "skip_travel"});
     cosim::CouplingOptions& c = o.coupling;
-    c.scheme = cosim::parseScheme(s.getChoice("scheme", {"explicit", "implicit", "tangent"},
+    c.scheme = cosim::parseScheme(s.getChoice("scheme", {"explicit", "implicit", "tangent", "tangent-implicit"},
                                               "implicit"));
     c.acceleration = cosim::parseAcceleration(
         s.getChoice("acceleration", {"constant", "aitken", "iqn-ils"}, "iqn-ils"));
@@ -311,6 +311,11 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     c.threads = s.getInteger("threads", 0);
     if (c.threads < 0 || c.threads > 256)
         s.fail("threads", std::to_string(c.threads) + "; valid: 0 (one per core) to 256");
+    c.tangentTolerance = s.getQuantity("tangent_tolerance", D::Force, 0.0);
+    checkBetween(s, "tangent_tolerance", c.tangentTolerance, 0.0, 10.0, "N",
+                 "0: recomputed every step");
+    c.skipTravel = s.getQuantity("skip_travel", D::Length, 0.0);
+    checkBetween(s, "skip_travel", c.skipTravel, 0.0, 0.01, "mm", "0: every bag every step");
     o.integrator.accuracy = s.getNumber("body_accuracy", 1e-6);
     if (!(o.integrator.accuracy > 0.0 && o.integrator.accuracy < 1e-2))
         s.fail("body_accuracy", "must lie between 0 and 0.01, e.g. 1e-6");

@@ -272,3 +272,78 @@ TEST(Airbag, DampedStepsRelaxOnTautFilmAndReportTheDampersWorkOnSlackFilm) {
     EXPECT_GT(slackDamped.stabilizationEnergy, 0.0);
     EXPECT_LE(slackDamped.residual, b2->getSpec().forceTolerance);
 }
+
+TEST(Airbag, TheTangentsOfSeveralShapesAtOnceAreEachShapesOwn) {
+    // calcShapeWrenchTangents() factors the bag's tangent once for every pressing shape; each
+    // block must equal the shape's tangent computed alone (itself checked against finite
+    // differences above), to roundoff (1e-9 of the block's largest entry). A second
+    // ellipsoid presses 35 mm beside the first; a third hangs clear of the bag and gets zero.
+    AirbagSpec spec = coarseSpec();
+    spec.selfContact = false;
+    PressedBag p(spec);
+    Airbag& bag = *p.bag;
+    std::shared_ptr<RigidShape> e2(makeEllipsoid(p.semi)), e3(makeEllipsoid(p.semi));
+    e2->setPose(translation(p.centre + Vec3(0.0, 0.0, 0.3)));
+    e3->setPose(translation(p.centre + Vec3(0.0, 0.0, 0.3)));
+    const int s2 = bag.addShape(e2, RigidContact::Options());
+    const int s3 = bag.addShape(e3, RigidContact::Options());
+    bag.setShapePose(p.shape, p.pose(0.010));
+    Eigen::Isometry3d X2 = p.pose(0.015);
+    X2.translation().y() += 0.035;
+    bag.setShapePose(s2, X2);
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    bag.commit();
+    ASSERT_GT(bag.calcShapeWrench(s2).force.z(), 1.0);  // both press (measured 10.3, 37.1 N)
+    const auto all = bag.calcShapeWrenchTangents({p.shape, s2, s3});
+    ASSERT_EQ(all.size(), 3u);
+    for (int k = 0; k < 2; ++k) {
+        const Eigen::Matrix<double, 6, 6> alone = bag.calcShapeWrenchTangent(k == 0 ? p.shape : s2);
+        const double scale = alone.cwiseAbs().maxCoeff();
+        ASSERT_GT(scale, 0.0);
+        EXPECT_LT((all[k] - alone).cwiseAbs().maxCoeff(), 1e-9 * scale) << "shape " << k;
+    }
+    EXPECT_EQ(all[2].cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(bag.calcShapeWrenchTangent(s3).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(Airbag, ARepeatedAdvanceStartsWhereTheLastEndedAndFindsTheSameEquilibrium) {
+    // An implicit coupling advances a bag again from the same commit to poses that differ by
+    // its correction. With the warm start the second solve starts where the first ended: at
+    // most as many Newton iterations as from the commit, and the same equilibrium (the
+    // wrench within 1e-3 of itself; both solves are converged to the force tolerance).
+    double force[2];
+    int iterations[2];
+    for (int warm = 0; warm < 2; ++warm) {
+        AirbagSpec spec = coarseSpec();
+        spec.warmStart = warm == 1;
+        PressedBag p(spec);
+        Airbag& bag = *p.bag;
+        bag.setShapePose(p.shape, p.pose(0.010));
+        ASSERT_TRUE(bag.advance(0.01).converged);
+        bag.commit();
+        bag.setShapePose(p.shape, p.pose(0.012));
+        ASSERT_TRUE(bag.advance(0.01).converged);
+        bag.setShapePose(p.shape, p.pose(0.01205));  // the next pass: 50 um further
+        const AdvanceSummary again = bag.advance(0.01);
+        ASSERT_TRUE(again.converged);
+        iterations[warm] = again.newtonIterations;
+        force[warm] = bag.calcShapeWrench(p.shape).force.z();
+    }
+    std::printf("second pass: %d Newton iterations from the commit, %d warm; force %.6f / %.6f N\n",
+                iterations[0], iterations[1], force[0], force[1]);
+    EXPECT_LE(iterations[1], iterations[0]);
+    EXPECT_LT(iterations[1], iterations[0]);
+    EXPECT_NEAR(force[1], force[0], 1e-3 * std::abs(force[0]));
+}
+
+TEST(Airbag, TheGasIsStillUnlessAFlowIsSetOrATargetIsNotReached) {
+    PressedBag p(coarseSpec(0.03));
+    Airbag& bag = *p.bag;
+    EXPECT_TRUE(bag.isGasStill());
+    bag.setMassFlow(1e-5);
+    EXPECT_FALSE(bag.isGasStill());
+    bag.setTargetMass(bag.getTotalGasMass(), 1e-5);  // already there
+    EXPECT_TRUE(bag.isGasStill());
+    bag.setTargetMass(bag.getTotalGasMass() + 1e-4, 1e-5);
+    EXPECT_FALSE(bag.isGasStill());
+}

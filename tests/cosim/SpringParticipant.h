@@ -1,7 +1,8 @@
 #pragma once
 // A test double for a bag: each shape is held by a linear spring-like law,
 // W(X) = W_ref + K d(X_ref, X) (d: rotation vector and translation from X_ref, Ground), with
-// the exact tangent K. It counts its advances and can be told to fail one.
+// the exact tangent K (or K scaled by tangentScale, a stand-in for a bag whose tangent is off).
+// It counts its advances and tangents, can be told to fail one, and to say it is steady.
 #include <cosim/Participant.h>
 
 #include <vector>
@@ -40,11 +41,18 @@ class SpringParticipant : public Participant {
         d << aa.angle() * aa.axis(), X.translation() - s.X_ref.translation();
         return ShapeWrench::fromVector(s.W_ref + s.K * d);
     }
-    Mat6 calcWrenchTangent(int shape) const override { return m_springs.at(shape).K; }
+    Mat6 calcWrenchTangent(int shape) const override {
+        ++tangents;
+        return tangentScale * m_springs.at(shape).K;
+    }
+    bool isSteady() const override { return steady; }
     Eigen::VectorXd calcContactPressure(int) const override { return Eigen::VectorXd(); }
 
     int advances = 0;
     int failAt = -1;  // the advance (1-based count) that fails
+    mutable int tangents = 0;   // calcWrenchTangent() calls
+    double tangentScale = 1.0;  // the tangent reported, as a multiple of the true one
+    bool steady = false;        // isSteady()
 
   private:
     std::vector<Spring> m_springs;

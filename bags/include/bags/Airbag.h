@@ -109,6 +109,11 @@ struct AirbagSpec {
     /// far the shapes move now along the way they moved then, when that start has the smaller
     /// force residual (a secant predictor; smooth paths then take fewer iterations).
     bool predictor = true;
+    /// A repeated advance() from the same commit (an implicit coupling's next pass) starts its
+    /// Newton solve from where the last converged advance ended, when that start has the
+    /// smaller force residual: the poses differ from the last pass's by the coupling's
+    /// correction only. The equilibrium is the same to the force tolerance.
+    bool warmStart = true;
     /// Threads for the bag's element loops: 0 the OpenMP default, 1 single-threaded (for many
     /// bags in parallel). The result is bit-identical for any value.
     int threads = 0;
@@ -176,6 +181,10 @@ public:
     void setTargetMass(int bag, double mass, double rate);  ///< one bag of a cluster
     double getTotalGasMass() const;       ///< [kg] summed over the module's bags
     double getGasMass(int bag) const;     ///< [kg] of one bag
+    /// No gas enters or leaves any bag, nor passes an orifice between chambers, over the
+    /// following advance() calls (no flow set, or every target reached): only the shapes'
+    /// poses can change what advance() finds.
+    bool isGasStill() const;
 
     // --- the bags of a module (one unless AirbagSpec::cluster)
     int getNumBags() const;
@@ -210,6 +219,11 @@ public:
     /// stiffness, gas included, solved once). Units N m/rad, N m/m, N/rad, N/m.
     /// @throws NumericalError if the bag's tangent is not positive definite.
     Eigen::Matrix<double, 6, 6> calcShapeWrenchTangent(int shape) const;
+    /// calcShapeWrenchTangent() of several shapes at once, in their order: the bag's tangent
+    /// is assembled and factored once for all of them. A shape that presses no node gets
+    /// zero without a solve (if none does, nothing is factored).
+    std::vector<Eigen::Matrix<double, 6, 6>> calcShapeWrenchTangents(
+        const std::vector<int>& shapes) const;
     /// Contact pressure [Pa] per mesh node from this shape.
     Eigen::VectorXd calcShapeContactPressure(int shape) const;
     /// Force [N] on the bed board (Ground).

@@ -26,7 +26,11 @@ class BagParticipant : public Participant {
     void rollback() override;
     ShapeWrench calcWrench(int shape) const override;
     Mat6 calcWrenchTangent(int shape) const override;
+    /// The airbag's calcShapeWrenchTangents(): one factorisation for all the shapes.
+    std::vector<Mat6> calcWrenchTangents(const std::vector<int>& shapes) const override;
     Eigen::VectorXd calcContactPressure(int shape) const override;
+    /// The airbag's gas is still (bags::Airbag::isGasStill()).
+    bool isSteady() const override;
 
     const bags::Airbag& getAirbag() const { return *m_bag; }  ///< the wrapped airbag
     bags::Airbag& updAirbag() { return *m_bag; }              ///< the wrapped airbag

@@ -23,6 +23,12 @@
 ///    in the shape's pose by its tangent, inside the body's own step through a
 ///    Force::Custom); the bags then advance to the end poses and return W and T there. One
 ///    pass.
+///  - Tangent-implicit: the tangent scheme's pass repeated from the checkpoint while the bags'
+///    wrench at the end poses misses the linearised load: the unknown x is a correction c
+///    added to it (W(t) + c + T(t) d), iterated by the accelerator to the implicit scheme's
+///    tolerance. One pass where the tangent predicts well, more at contact changes.
+///    With tangentTolerance a bag's tangents are kept while they predict well; with
+///    skipTravel a bag with no gas flowing whose shapes hardly moved is not solved.
 /// For the one-pass schemes the step's mismatch |H(x) - x| (x the load the body saw at the
 /// end pose) is reported in the same measure.
 
@@ -37,11 +43,12 @@
 
 namespace cosim {
 
-enum class Scheme { Explicit, Implicit, Tangent };
+enum class Scheme { Explicit, Implicit, Tangent, TangentImplicit };
 enum class AccelerationKind { Constant, Aitken, IQNILS };
 enum class Threading { PerCall, OpenMP };
 
-/// Parses "explicit", "implicit", "tangent" (throws std::invalid_argument listing them).
+/// Parses "explicit", "implicit", "tangent", "tangent-implicit" (throws
+/// std::invalid_argument listing them).
 Scheme parseScheme(const std::string& name);
 std::string toString(Scheme scheme);
 /// Parses "constant", "aitken", "iqn-ils".
@@ -72,6 +79,20 @@ struct CouplingOptions {
     /// more than its half-thickness in one step can come out on the wrong side of the
     /// membrane (docs/cosim.md), so a step that moves a shape further is refused.
     double maxShapeTravel = 0.0;
+    /// [N] Tangent scheme: a participant's tangents are recomputed only after a step in which
+    /// one of its links' wrench missed the linearised load the body felt by more than this
+    /// (measured as the implicit residual, torques divided by torqueLength); otherwise the
+    /// last ones are kept (they only shape the load inside the step: the wrench at each
+    /// step's end is the participant's own). 0: recomputed every step.
+    double tangentTolerance = 0.0;
+    /// [m] Tangent scheme: a participant that is steady (Participant::isSteady(), no gas
+    /// flowing) and whose linked shapes have all moved less than this since it was last
+    /// advanced (translation of the origin plus rotation angle times Link::reach) is not
+    /// advanced: its links keep their linearised load W0 + T d about the poses of its last
+    /// advance, and it is advanced again once a shape moves further or its gas flows. An
+    /// untouched bag of a patient at rest then costs nothing. 0: every participant is
+    /// advanced every step.
+    double skipTravel = 0.0;
     /// stepAdaptive(): the smallest step a failing step is halved to [s].
     double minMacroStep = 1e-6;
     /// stepAdaptive(): steps in a row that must succeed before the step is doubled again
@@ -85,6 +106,9 @@ struct Link {
     int bodyShape = 0;
     int participant = 0;
     int shape = 0;
+    /// [m] how far the shape reaches from its frame's origin: CouplingOptions::skipTravel
+    /// counts a rotation by the angle times this (0: rotations not counted).
+    double reach = 0.0;
 };
 
 /// What one macro step did.
@@ -99,6 +123,27 @@ struct StepSummary {
     double macroStep = 0.0;    ///< [s] the step taken
     int cuts = 0;              ///< stepAdaptive(): halvings before this step succeeded
     double shapeTravel = 0.0;  ///< [m] the largest travel of a linked shape's origin
+};
+
+/// Where a coupling's wall time went, summed over the steps since the last resetProfile()
+/// (failed and cut steps included). Read by bench/CosimBench.cpp (docs/performance.md).
+struct CouplingProfile {
+    int steps = 0;              ///< step() calls (cut ones included)
+    int passes = 0;             ///< body-then-bags passes
+    double bodySeconds = 0.0;   ///< [s] wall in the body's advanceTo()
+    double bagsSeconds = 0.0;   ///< [s] wall of the participants' sections (all threads at once)
+    /// [s] the participants' own wall time summed over participants (advance and read-back):
+    /// threads x bagsSeconds - bagBusySeconds is the time threads waited for one another.
+    double bagBusySeconds = 0.0;
+    double tangentSeconds = 0.0;  ///< [s] of bagBusySeconds in calcWrenchTangents()
+    int threads = 1;              ///< threads the participants ran on
+    long tangentRefreshes = 0;    ///< participants' tangents computed (tangent scheme)
+    long skipped = 0;             ///< participant steps skipped (skipTravel)
+    long advances = 0;            ///< participant advance() calls
+    long idleAdvances = 0;        ///< of which returned with no solver iteration (stood)
+    long solverIterations = 0;    ///< over every advance
+    std::vector<double> participantSeconds;  ///< per participant [s]
+    std::vector<long> participantIterations; ///< per participant
 };
 
 class Coupling {
@@ -134,6 +179,9 @@ class Coupling {
     /// Its tangent (Tangent scheme only; zero otherwise).
     const Mat6& getLinkTangent(int link) const;
     const CouplingOptions& getOptions() const;
+    /// Where the time went since construction or the last resetProfile().
+    const CouplingProfile& getProfile() const;
+    void resetProfile();
 
   private:
     struct Impl;

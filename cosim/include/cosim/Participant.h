@@ -26,6 +26,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <vector>
 
 namespace cosim {
 
@@ -84,6 +85,17 @@ class Participant {
     /// rotation of the shape about Ground axes through its origin [rad], then a translation
     /// [m]; rows as ShapeWrench. The participant re-equilibrates (its own stiffness counted).
     virtual Mat6 calcWrenchTangent(int shape) const = 0;
+    /// calcWrenchTangent() of several shapes, in their order. The default calls it per shape;
+    /// a participant that shares work between its shapes (one factorisation) overrides it.
+    virtual std::vector<Mat6> calcWrenchTangents(const std::vector<int>& shapes) const {
+        std::vector<Mat6> t;
+        for (int s : shapes) t.push_back(calcWrenchTangent(s));
+        return t;
+    }
+    /// True when nothing but the shapes' poses changes what advance() finds (no gas flows
+    /// in the coming steps): the coupling may then leave the participant standing while its
+    /// shapes stay near where it last solved (CouplingOptions::skipTravel). Default: false.
+    virtual bool isSteady() const { return false; }
     /// Contact pressure [Pa] per node of the participant's mesh from this shape (empty for
     /// a participant without a mesh).
     virtual Eigen::VectorXd calcContactPressure(int shape) const = 0;
