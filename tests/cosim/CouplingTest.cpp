@@ -35,14 +35,23 @@ struct SpringRun {
     int iterations = 0;
 };
 
-// The block released at rest from z = 0 (spring unloaded) under gravity.
-SpringRun simulate(CouplingOptions o, double duration, double zeta = kZeta) {
+// The block released at rest from z = 0 on a spring that reports `tangentScale` times its
+// true tangent and says it is `steady`; the run's profile and tangent count come back too.
+struct StandInRun : SpringRun {
+    CouplingProfile profile;
+    int tangents = 0;
+};
+
+StandInRun simulateStandIn(CouplingOptions o, double duration, double zeta, double tangentScale,
+                           bool steady) {
     BlockSystem block(kMass, 2.0 * zeta * std::sqrt(kStiffness * kMass), kGravity);
     SpringParticipant spring = makeSpring();
+    spring.tangentScale = tangentScale;
+    spring.steady = steady;
     block.start(0.0);
     Coupling c(*block.body, {&spring}, {Link{block.shape, 0, 0}}, o);
     c.initialize();
-    SpringRun r;
+    StandInRun r;
     const int n = int(std::lround(duration / o.macroStep));
     for (int i = 0; i < n; ++i) {
         try {
@@ -54,7 +63,14 @@ SpringRun simulate(CouplingOptions o, double duration, double zeta = kZeta) {
         r.t.push_back(c.getTime());
         r.z.push_back(block.getZ());
     }
+    r.profile = c.getProfile();
+    r.tangents = spring.tangents;
     return r;
+}
+
+// The block released at rest from z = 0 (spring unloaded) under gravity.
+SpringRun simulate(CouplingOptions o, double duration, double zeta = kZeta) {
+    return simulateStandIn(o, duration, zeta, 1.0, false);
 }
 
 // Closed form of m z'' + c z' + k z = -m g, z(0) = 0, z'(0) = 0.
@@ -364,39 +380,6 @@ TEST(Coupling, AShapeIsNeverMovedFurtherThanTheTravelLimitInOneStep) {
 }
 
 namespace {
-
-// The block released at rest from z = 0 on a spring that reports `tangentScale` times its
-// true tangent and says it is `steady`; the run's profile and tangent count come back too.
-struct StandInRun : SpringRun {
-    CouplingProfile profile;
-    int tangents = 0;
-};
-
-StandInRun simulateStandIn(CouplingOptions o, double duration, double zeta, double tangentScale,
-                           bool steady) {
-    BlockSystem block(kMass, 2.0 * zeta * std::sqrt(kStiffness * kMass), kGravity);
-    SpringParticipant spring = makeSpring();
-    spring.tangentScale = tangentScale;
-    spring.steady = steady;
-    block.start(0.0);
-    Coupling c(*block.body, {&spring}, {Link{block.shape, 0, 0}}, o);
-    c.initialize();
-    StandInRun r;
-    const int n = int(std::lround(duration / o.macroStep));
-    for (int i = 0; i < n; ++i) {
-        try {
-            r.iterations += c.step().iterations;
-        } catch (const std::exception&) {
-            r.failed = true;
-            break;
-        }
-        r.t.push_back(c.getTime());
-        r.z.push_back(block.getZ());
-    }
-    r.profile = c.getProfile();
-    r.tangents = spring.tangents;
-    return r;
-}
 
 double largestError(const SpringRun& r) {
     double worst = 0.0;
