@@ -33,16 +33,16 @@ std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaTh
     for (size_t i = 0; i < pairs.size(); ++i) {
         const Link& link = links[i];
         const auto seg = static_cast<body::Segment>(pairs[i].shape);
-        const bags::Airbag& bag = poa.getBag(link.participant).getAirbag();
-        const Eigen::VectorXd p = poa.getBag(link.participant).calcContactPressure(link.shape);
-        if (!(p.maxCoeff() > 0.0)) continue;
+        const Bag& bag = poa.getBag(link.participant);
+        const Eigen::VectorXd p = bag.calcContactPressure(link.shape);
+        if (p.size() == 0 || !(p.maxCoeff() > 0.0)) continue;
         Eigen::VectorXd& area = nodalAreas[link.participant];
-        if (area.size() == 0) area = bag.getMesh().calcNodalAreas();
+        if (area.size() == 0) area = bag.getPressureAreas();
         std::shared_ptr<bags::RigidShape>& probe = probes[pairs[i].shape];
         if (!probe) probe = makeBagShape(model.getContactShape(seg)).shape;
         probe->setPose(poa.getBody().getShapeState(link.bodyShape).X_GS);
         const SimTK::Transform X_GB = model.getMobilizedBody(seg).getBodyTransform(state);
-        const Eigen::Matrix3Xd& x = bag.getPositions();
+        const Eigen::Matrix3Xd& x = bag.getPressurePoints();
         for (int n = 0; n < int(p.size()); ++n) {
             if (!(p[n] > 0.0)) continue;
             const SimTK::Vec3 p_B = ~X_GB * SimTK::Vec3(x(0, n), x(1, n), x(2, n));
@@ -69,10 +69,10 @@ std::vector<BagReading> calcBagReadings(const PatientOnArray& poa) {
     const std::vector<double> forces = poa.calcBagForces();
     std::vector<BagReading> out;
     for (size_t i = 0; i < poa.getBagIndices().size(); ++i) {
-        const bags::Airbag& a = poa.getBag(int(i)).getAirbag();
+        const Bag& a = poa.getBag(int(i));
         BagReading r;
         r.bag = poa.getBagIndices()[i];
-        r.gasMass = a.getTotalGasMass();
+        r.gasMass = a.getGasMass();
         double pv = 0.0;
         for (int c = 0; c < a.getNumChambers(); ++c) {
             const bags::ChamberState s = a.getChamberState(c);
@@ -122,14 +122,13 @@ std::vector<double> calcPressedNodeHeights(const PatientOnArray& poa, double thr
 void fillPressureMat(const PatientOnArray& poa, PressureMat& mat) {
     mat.clear();
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
-        const BagParticipant& bag = poa.getBag(int(b));
+        const Bag& bag = poa.getBag(int(b));
         const int shapes = bag.getNumShapes();
         if (shapes == 0) continue;
         Eigen::VectorXd p = bag.calcContactPressure(0);
         for (int s = 1; s < shapes; ++s) p += bag.calcContactPressure(s);
-        if (!(p.maxCoeff() > 0.0)) continue;
-        const bags::Airbag& a = bag.getAirbag();
-        mat.addNodalPressures(a.getPositions(), p, a.getMesh().calcNodalAreas());
+        if (p.size() == 0 || !(p.maxCoeff() > 0.0)) continue;
+        mat.addNodalPressures(bag.getPressurePoints(), p, bag.getPressureAreas());
     }
 }
 

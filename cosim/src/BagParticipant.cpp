@@ -51,5 +51,26 @@ Eigen::VectorXd BagParticipant::calcContactPressure(int shape) const {
 }
 
 bool BagParticipant::isSteady() const { return m_bag->isGasStill(); }
+void BagParticipant::setMassFlow(double massFlow) { m_bag->setMassFlow(massFlow); }
+void BagParticipant::setTargetMass(double mass, double rate) { m_bag->setTargetMass(mass, rate); }
+double BagParticipant::getGasMass() const { return m_bag->getTotalGasMass(); }
+int BagParticipant::getNumChambers() const { return m_bag->getNumChambers(); }
+bags::ChamberState BagParticipant::getChamberState(int chamber) const {
+    return m_bag->getChamberState(chamber);
+}
+const Eigen::Matrix3Xd& BagParticipant::getPressurePoints() const {
+    return m_bag->getPositions();
+}
+Eigen::VectorXd BagParticipant::getPressureAreas() const {
+    if (m_areas.size() == 0) m_areas = m_bag->getMesh().calcNodalAreas();
+    return m_areas;
+}
+double BagParticipant::calcPotentialEnergy() const {
+    bags::EnergyAccumulator acc(m_bag->getMesh().getNumNodes());
+    acc.wantGradient = false;
+    acc.wantHessian = false;
+    m_bag->getModel().addEnergy(m_bag->getPositions(), acc);
+    return acc.energy;
+}
 
 }  // namespace cosim

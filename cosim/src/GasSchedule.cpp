@@ -70,11 +70,11 @@ double GasSchedule::findNextChange(double t) const {
     return next;
 }
 
-void GasSchedule::apply(double t, const std::vector<BagParticipant*>& bags) const {
+void GasSchedule::apply(double t, const std::vector<Bag*>& bags) const {
     for (int b = 0; b < int(bags.size()); ++b) {
         const GasCommand* c = bags[b] ? findCommand(b, t) : nullptr;
         if (!c) continue;
-        bags::Airbag& bag = bags[b]->updAirbag();
+        Bag& bag = *bags[b];
         if (c->kind == GasCommand::Kind::Flow)
             bag.setMassFlow(c->massFlow);
         else

@@ -15,6 +15,18 @@ void PatientOnArrayOptions::validate() const {
         throw std::invalid_argument("pairMargin must be finite and >= 0 [m]");
     if (!(dropHeight >= 0.0) || !std::isfinite(dropHeight))
         throw std::invalid_argument("dropHeight must be finite and >= 0 [m]");
+    if (model == BagModel::Reduced) {
+        if (!reduced) throw std::invalid_argument("bag.calibration: the reduced model needs one");
+        reduced->validate();
+        const bags::DoubleWedgeParams& c = reduced->geometry;
+        const bags::DoubleWedgeParams& g = bag.geometry;
+        if (std::abs(c.longSide - g.longSide) > 1e-6 || std::abs(c.shortSide - g.shortSide) > 1e-6 ||
+            std::abs(c.width - g.width) > 1e-6 || std::abs(c.height - g.height) > 1e-6 ||
+            c.diaphragm != g.diaphragm)
+            throw std::invalid_argument(
+                "bag.calibration: made for another bag (sizes or diaphragm differ from the "
+                "scenario's bag reading); valid: a calibration of this bag");
+    }
     body.validate();
     integrator.validate();
     coupling.validate();
@@ -23,7 +35,7 @@ void PatientOnArrayOptions::validate() const {
 struct PatientOnArray::Impl {
     std::unique_ptr<body::BodyModel> model;
     std::unique_ptr<BodyParticipant> body;
-    std::vector<std::unique_ptr<BagParticipant>> bags;
+    std::vector<std::unique_ptr<Bag>> bags;
     std::vector<int> bagIndices;       // ArrayBag index per participant
     std::vector<ShapeBagPair> pairs;   // shape = segment
     std::vector<int> linkParticipant;  // per link
@@ -118,11 +130,15 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
     const double parked = options.bag.geometry.height + 0.5;
     model.setPosture(state, parked);
     model.getSystem().realize(state, SimTK::Stage::Position);
-    std::vector<std::unique_ptr<bags::Airbag>> airbags;
+    const bool reduced = options.model == PatientOnArrayOptions::BagModel::Reduced;
     for (int b : m.bagIndices) {
-        bags::AirbagSpec bs = options.bag;
-        bs.X_GB = cells[b].X_GB;
-        airbags.push_back(std::make_unique<bags::Airbag>(bs));
+        if (reduced) {
+            m.bags.push_back(std::make_unique<ReducedBag>(options.reduced, cells[b].X_GB));
+        } else {
+            bags::AirbagSpec bs = options.bag;
+            bs.X_GB = cells[b].X_GB;
+            m.bags.push_back(std::make_unique<BagParticipant>(std::make_unique<bags::Airbag>(bs)));
+        }
     }
     std::vector<Link> links;
     std::vector<std::shared_ptr<bags::RigidShape>> probes;  // per pair, for the touch search
@@ -132,7 +148,10 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         BagShapeOfBody b = makeBagShape(model.getContactShape(seg));
         b.shape->setPose(shapePose(model, state, p.shape, b.X_BS));
         const int part = participantOf[p.bag];
-        const int local = airbags[part]->addShape(b.shape, options.contact);
+        const int local =
+            reduced ? static_cast<ReducedBag&>(*m.bags[part]).addShape(b.shape)
+                    : static_cast<BagParticipant&>(*m.bags[part]).updAirbag().addShape(
+                          b.shape, options.contact);
         const int bodyShape = m.body->addShape(model.getMobilizedBodyIndex(seg), b.X_BS);
         const body::ContactShape& cs = model.getContactShape(seg);
         const double reach = (cs.getBoundingCentre() - b.X_BS.p()).norm() + cs.getBoundingRadius();
@@ -141,8 +160,13 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         probes.push_back(makeBagShape(model.getContactShape(seg)).shape);
         X_BS.push_back(b.X_BS);
     }
-    for (size_t i = 0; i < airbags.size(); ++i)
-        airbags[i]->inflate(cells[m.bagIndices[i]].gasMass);
+    for (size_t i = 0; i < m.bags.size(); ++i) {
+        const double mass = cells[m.bagIndices[i]].gasMass;
+        if (reduced)
+            static_cast<ReducedBag&>(*m.bags[i]).setGasMass(mass);
+        else
+            static_cast<BagParticipant&>(*m.bags[i]).updAirbag().inflate(mass);
+    }
 
     // The lowest clearance at which no node of a paired bag lies inside a shape (bisection to
     // 1e-6 m over [0, parked]).
@@ -152,7 +176,7 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         for (size_t i = 0; i < m.pairs.size(); ++i) {
             bags::RigidShape& s = *probes[i];
             s.setPose(shapePose(model, state, m.pairs[i].shape, X_BS[i]));
-            const Eigen::Matrix3Xd& x = airbags[m.linkParticipant[i]]->getPositions();
+            const Eigen::Matrix3Xd& x = m.bags[m.linkParticipant[i]]->getPressurePoints();
             for (int n = 0; n < x.cols(); ++n)
                 if (s.calcSignedDistance(x.col(n), nullptr, nullptr) < 0.0) return true;
         }
@@ -165,7 +189,6 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
     model.setPosture(state, m.clearance);
     m.body->initialize(state);
 
-    for (auto& a : airbags) m.bags.push_back(std::make_unique<BagParticipant>(std::move(a)));
     std::vector<Participant*> ps;
     for (auto& b : m.bags) ps.push_back(b.get());
     m.links = links;
@@ -210,14 +233,7 @@ double PatientOnArray::calcEnergy() const {
     SimTK::State s = m.body->getState();
     m.model->getSystem().realize(s, SimTK::Stage::Dynamics);
     double e = m.model->getSystem().calcEnergy(s);
-    for (const auto& b : m.bags) {
-        const bags::Airbag& a = b->getAirbag();
-        bags::EnergyAccumulator acc(a.getMesh().getNumNodes());
-        acc.wantGradient = false;
-        acc.wantHessian = false;
-        a.getModel().addEnergy(a.getPositions(), acc);
-        e += acc.energy;
-    }
+    for (const auto& b : m.bags) e += b->calcPotentialEnergy();
     return e;
 }
 
@@ -232,15 +248,30 @@ double PatientOnArray::calcMaxSpeed() const {
 }
 
 double PatientOnArray::getReleaseClearance() const { return m_impl->clearance; }
+EnvelopeCounts PatientOnArray::getEnvelopeCounts() const {
+    EnvelopeCounts sum;
+    for (const auto& b : m_impl->bags)
+        if (const auto* r = dynamic_cast<const ReducedBag*>(b.get())) {
+            const EnvelopeCounts& e = r->getEnvelopeCounts();
+            sum.mass += e.mass, sum.depth += e.depth, sum.radius += e.radius, sum.tilt += e.tilt;
+            sum.steps += e.steps;
+            if (e.mass) sum.worstMass = e.worstMass;
+            sum.worstDepth = std::max(sum.worstDepth, e.worstDepth);
+            if (e.radius) sum.worstRadius = e.worstRadius;
+            sum.worstTilt = std::max(sum.worstTilt, e.worstTilt);
+        }
+    return sum;
+}
+
 const std::vector<ShapeBagPair>& PatientOnArray::getPairs() const { return m_impl->pairs; }
 const std::vector<int>& PatientOnArray::getBagIndices() const { return m_impl->bagIndices; }
 const body::BodyModel& PatientOnArray::getModel() const { return *m_impl->model; }
 const BodyParticipant& PatientOnArray::getBody() const { return *m_impl->body; }
-const BagParticipant& PatientOnArray::getBag(int participant) const {
+const Bag& PatientOnArray::getBag(int participant) const {
     return *m_impl->bags.at(participant);
 }
 const std::vector<Link>& PatientOnArray::getLinks() const { return m_impl->links; }
-BagParticipant& PatientOnArray::updBag(int participant) { return *m_impl->bags.at(participant); }
+Bag& PatientOnArray::updBag(int participant) { return *m_impl->bags.at(participant); }
 Coupling& PatientOnArray::updCoupling() { return *m_impl->coupling; }
 
 }  // namespace cosim

@@ -1,6 +1,7 @@
 // Gas over time for the bags of an array: which command holds when, and a bag driven by it.
 #include <bags/Airbag.h>
 #include <bags/MaterialFit.h>
+#include <cosim/BagParticipant.h>
 #include <cosim/GasSchedule.h>
 #include <gtest/gtest.h>
 

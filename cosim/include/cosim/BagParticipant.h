@@ -11,11 +11,11 @@
 
 #include <memory>
 
-#include "cosim/Participant.h"
+#include "cosim/Bag.h"
 
 namespace cosim {
 
-class BagParticipant : public Participant {
+class BagParticipant : public Bag {
   public:
     /// Takes the airbag (its shapes added, inflated). @throws std::invalid_argument if null.
     explicit BagParticipant(std::unique_ptr<bags::Airbag> bag, int maxCuts = 6);
@@ -31,6 +31,15 @@ class BagParticipant : public Participant {
     Eigen::VectorXd calcContactPressure(int shape) const override;
     /// The airbag's gas is still (bags::Airbag::isGasStill()).
     bool isSteady() const override;
+    // Bag: the airbag's own gas, chambers, nodes and nodal areas.
+    void setMassFlow(double massFlow) override;
+    void setTargetMass(double mass, double rate) override;
+    double getGasMass() const override;
+    int getNumChambers() const override;
+    bags::ChamberState getChamberState(int chamber) const override;
+    const Eigen::Matrix3Xd& getPressurePoints() const override;
+    Eigen::VectorXd getPressureAreas() const override;
+    double calcPotentialEnergy() const override;
 
     const bags::Airbag& getAirbag() const { return *m_bag; }  ///< the wrapped airbag
     bags::Airbag& updAirbag() { return *m_bag; }              ///< the wrapped airbag
@@ -41,6 +50,7 @@ class BagParticipant : public Participant {
     std::unique_ptr<bags::Airbag> m_bag;
     int m_maxCuts;
     bags::AdvanceSummary m_last;
+    mutable Eigen::VectorXd m_areas;  // the mesh's nodal areas, made on first use
 };
 
 }  // namespace cosim

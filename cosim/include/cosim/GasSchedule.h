@@ -4,14 +4,14 @@
 /// bag (negative: out), or a target mass [kg] reached at a stated rate [kg/s].
 ///
 /// Order of use: add() the commands; validate(numBags); in the time loop, before the step that
-/// starts at t, apply(t, bags) sets each bag's flow (bags::Airbag::setMassFlow/setTargetMass),
+/// starts at t, apply(t, bags) sets each bag's flow (Bag::setMassFlow/setTargetMass),
 /// and the loop ends its step at findNextChange(t) at the latest, so a command takes effect at
 /// its own time, not at the next step's start.
 
 #include <string>
 #include <vector>
 
-#include "cosim/BagParticipant.h"
+#include "cosim/Bag.h"
 
 namespace cosim {
 
@@ -41,7 +41,7 @@ class GasSchedule {
     /// Sets each bag's flow for a step starting at t (bags without a command are left alone).
     /// `bags` is indexed by the array's bag index; null entries (bags not simulated, e.g. no
     /// shape over them) are skipped.
-    void apply(double t, const std::vector<BagParticipant*>& bags) const;
+    void apply(double t, const std::vector<Bag*>& bags) const;
 
   private:
     struct Entry {

@@ -24,6 +24,7 @@
 #include "cosim/BagParticipant.h"
 #include "cosim/BodyParticipant.h"
 #include "cosim/Coupling.h"
+#include "cosim/ReducedBag.h"
 #include "cosim/ShapeBagPairs.h"
 
 namespace cosim {
@@ -32,6 +33,11 @@ struct PatientOnArrayOptions {
     ArrayLayout layout;  ///< the array (validated against bag.geometry)
     /// Every bag's spec: geometry, material, tolerances (X_GB is set per bag from the layout).
     bags::AirbagSpec bag;
+    /// The bags' model: the finite-element bags::Airbag (BagParticipant), or the reduced
+    /// model (ReducedBag) from `reduced`, a calibration of that same bag.
+    enum class BagModel { FiniteElement, Reduced };
+    BagModel model = BagModel::FiniteElement;
+    std::shared_ptr<const ReducedBagCalibration> reduced;  ///< Reduced: required
     bags::RigidContact::Options contact;  ///< contact of the body's shapes with the membranes
     double pairMargin = 0.03;  ///< [m] findShapeBagPairs() margin around each flat footprint
     double dropHeight = 0.0;   ///< [m] released this far above the touching height
@@ -88,6 +94,10 @@ class PatientOnArray {
     /// touching height found by bisection (equal unless dropHeight > 0).
     double getReleaseClearance() const;
 
+    /// Reduced bags: their committed steps outside the calibration's validity envelope,
+    /// summed over the bags (a step with k bags outside counts k); zero for finite elements.
+    EnvelopeCounts getEnvelopeCounts() const;
+
     const std::vector<ShapeBagPair>& getPairs() const;  ///< shape = segment, bag = ArrayBag index
     const std::vector<int>& getBagIndices() const;      ///< ArrayBag index per participant
     /// The coupling's links, one per pair (link i is pair i): body shape, participant, and the
@@ -95,9 +105,11 @@ class PatientOnArray {
     const std::vector<Link>& getLinks() const;
     const body::BodyModel& getModel() const;
     const BodyParticipant& getBody() const;
-    const BagParticipant& getBag(int participant) const;
+    /// Participant i's bag: a BagParticipant (finite elements) or a ReducedBag, as
+    /// PatientOnArrayOptions::model says.
+    const Bag& getBag(int participant) const;
     /// The participant's bag, to set its gas flow between steps (GasSchedule::apply()).
-    BagParticipant& updBag(int participant);
+    Bag& updBag(int participant);
     Coupling& updCoupling();
 
   private:

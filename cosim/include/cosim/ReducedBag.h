@@ -1,0 +1,170 @@
+#pragma once
+/// @file A reduced model of one seed bag (the double wedge) as a co-simulation bag, in place of
+/// the finite-element bags::Airbag where many fast runs are wanted (controller design).
+/// Equations, calibration and validity: docs/reduced-bag.md.
+///
+/// The model: the bag's gas (mass m, isothermal, one gas body: the chambers share their air
+/// through the open connection) and its unloaded top surface h(x, y; m) as a grid of points in
+/// the bag frame. A shape pressing the bag overlaps the unloaded top; at grid point i (area a,
+/// projected) its depth is delta_i = -(signed distance of the top point to the shape), its
+/// column depth delta_i / (-n_z) (n the shape's outward normal there). Per shape s: the
+/// overlap volume V_s = sum a delta_i / (-n_z), its deepest depth d_s. The gas:
+///   (P + p_amb) (V_free(P) - V_d) = m R T,   V_d = sum_s beta(m, d_s) V_s,   P >= 0,
+/// with V_free(P) the unloaded bag's volume at gauge pressure P (from the calibration's
+/// unloaded states) and beta the calibrated share of displaced volume. The contact pressure at
+/// a point in contact: q_i = kappa(m, d_s) P w(delta_i) + k_b max(0, -z_i) (w a smoothstep
+/// from -skirt d_s to the rim width: the film wraps the shape a little beyond where it cut
+/// the unloaded top; the second term the film pressed on the bed board, z_i the contact
+/// point's height above it); it acts on the shape's surface over the area a / (-n_z), along
+/// the shape's inward normal -n, so the force on the shape is sum_i q_i a / (-n_z) (-n) and its
+/// vertical part sum_i q_i a. kappa is the calibrated ratio of contact pressure to gas pressure
+/// (it holds the membrane's own share). The tangent is exact for this model (analytic).
+///
+/// Call protocol: Participant's (cosim/Participant.h) and Bag's (cosim/Bag.h); addShape() and
+/// setGasMass() before the coupling starts. Each committed step is checked against the
+/// calibration's validity envelope (gas mass, depth, shape curvature radius, tilt); the steps
+/// outside it are counted (getEnvelopeCounts()).
+
+#include <bags/Contact.h>
+#include <bags/Geometry.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cosim/Bag.h"
+
+namespace cosim {
+
+/// What a reduced bag is made from: written by the calibration (bench_reduced_bag calibrate),
+/// read by io::readReducedBagCalibration().
+struct ReducedBagCalibration {
+    std::string source;                ///< commit, command and settings that made it (text)
+    bags::DoubleWedgeParams geometry;  ///< the bag it describes (sizes, the FE mesh size)
+    double gasConstant = 287.0;        ///< specific gas constant R [J/(kg K)]
+    double temperature = 296.15;       ///< [K]
+    double ambientPressure = 1.0e5;    ///< [Pa] absolute
+    double boardPenalty = 1e8;         ///< [Pa/m] the pressed film on the bed board
+    double rimWidth = 2e-3;            ///< [m] depth over which the rim pressure rises (w)
+    /// The skirt: points of the unloaded top outside a shape but within skirt x (its depth)
+    /// of it touch it too (the film wraps the shape beyond where it cut the unloaded top).
+    double skirt = 0.0;
+    /// The unloaded bag per gas mass (masses ascending) [kg], gauge pressure [Pa], volume [m^3].
+    std::vector<double> masses, gaugePressures, volumes;
+    /// The top grid in the bag frame: point (ix, iy) at (x0 + ix pitch, y0 + iy pitch).
+    int nx = 0, ny = 0;
+    double x0 = 0.0, y0 = 0.0, pitch = 0.01;
+    /// Per mass: the unloaded top height [m] (nx x ny), NaN where there is no bag.
+    std::vector<Eigen::MatrixXd> top;
+    /// Depth nodes [m] (ascending, first 0) of the factor tables (masses x depths).
+    std::vector<double> depths;
+    Eigen::MatrixXd pressureFactor;  ///< kappa: contact pressure / gas pressure
+    Eigen::MatrixXd volumeFactor;    ///< beta: displaced volume / overlap volume
+    /// The validity envelope: masses [masses.front(), masses.back()], and:
+    double depthMax = 0.05;   ///< [m] deepest calibrated depth
+    double radiusMin = 0.05;  ///< [m] least curvature radius of the calibration's shapes
+    double radiusMax = 0.2;   ///< [m] largest
+    double tiltMax = 0.5;     ///< [rad] largest angle of the contact normal from vertical
+    /// @throws std::invalid_argument naming the member if sizes or values do not fit.
+    void validate() const;
+};
+
+/// Steps (committed) outside the envelope, per reason.
+struct EnvelopeCounts {
+    int mass = 0, depth = 0, radius = 0, tilt = 0;
+    int steps = 0;  ///< committed steps checked
+    double worstMass = 0.0, worstDepth = 0.0, worstRadius = 0.0, worstTilt = 0.0;  ///< SI
+    int total() const { return mass + depth + radius + tilt; }
+};
+
+/// The reasons counted in `now` and not in `before`, as one warning sentence naming the worst
+/// value and the calibrated range ("" if none): for a run's first exit of each kind.
+std::string describeNewEnvelopeExits(const EnvelopeCounts& now, const EnvelopeCounts& before,
+                                     const ReducedBagCalibration& c);
+/// A summary line: how many bag-steps left the envelope, per reason.
+std::string describeEnvelopeCounts(const EnvelopeCounts& e, const ReducedBagCalibration& c);
+
+class ReducedBag : public Bag {
+  public:
+    /// @throws std::invalid_argument if the calibration is invalid.
+    ReducedBag(std::shared_ptr<const ReducedBagCalibration> calibration,
+               const Eigen::Isometry3d& X_GB);
+    /// Adds a shape that may press the bag (shared; moved through setShapeState()).
+    int addShape(std::shared_ptr<bags::RigidShape> shape);
+    /// Sets the gas mass [kg] now, shapes where they are; commits.
+    void setGasMass(double mass);
+
+    // Participant
+    int getNumShapes() const override { return int(m_shapes.size()); }
+    void setShapeState(int shape, const ShapeState& state) override;
+    ParticipantStep advance(double dt) override;
+    void commit() override;
+    void rollback() override;
+    ShapeWrench calcWrench(int shape) const override;
+    Mat6 calcWrenchTangent(int shape) const override;
+    Eigen::VectorXd calcContactPressure(int shape) const override;
+
+    // Bag
+    void setMassFlow(double massFlow) override;
+    void setTargetMass(double mass, double rate) override;
+    double getGasMass() const override { return m_cur.mass; }
+    int getNumChambers() const override { return 1; }
+    bags::ChamberState getChamberState(int chamber) const override;
+    const Eigen::Matrix3Xd& getPressurePoints() const override { return m_points; }
+    Eigen::VectorXd getPressureAreas() const override { return m_areas; }
+    double calcPotentialEnergy() const override;
+
+    double getGaugePressure() const { return m_cur.pressure; }  ///< [Pa]
+    /// The overlap volume V_s [m^3] and the deepest depth d_s [m] of a shape (current state).
+    double getOverlapVolume(int shape) const;
+    double getDepth(int shape) const;
+    /// The shape's projected contact area sum a w_i [m^2] (current state).
+    double getContactArea(int shape) const;
+    const EnvelopeCounts& getEnvelopeCounts() const { return m_envelope; }
+    const ReducedBagCalibration& getCalibration() const { return *m_cal; }
+
+  private:
+    struct Sample {  // one grid point inside one shape
+        int point;
+        double delta;
+        Vec3 t, c, n;
+        Eigen::Matrix3d dndp;
+    };
+    struct ShapeResult {
+        std::vector<Sample> samples;
+        double volume = 0.0, depth = 0.0, area = 0.0;
+        int deepest = -1;  // sample index
+        ShapeWrench wrench;
+    };
+    struct State {
+        double mass = 0.0, pressure = 0.0, time = 0.0;
+        double flow = 0.0, target = -1.0, rate = 0.0;  // target < 0: flow
+    };
+    double interpolateTop(int point, double mass) const;
+    /// The contact weight of a sample at depth delta of a shape whose deepest depth is
+    /// `depth`, and its derivatives.
+    double calcWeight(double delta, double depth, double* dDelta, double* dDepth) const;
+    void evaluate();  // m_cur.mass and the shapes' poses -> everything
+    double calcFreeVolume(double P, double* dVdP) const;
+    double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
+    double solvePressure(double displaced, double* dPdV) const;
+    void checkEnvelope();
+
+    std::shared_ptr<const ReducedBagCalibration> m_cal;
+    Eigen::Isometry3d m_X_GB;
+    std::vector<int> m_gridIndex;  // point -> ix + nx iy
+    std::vector<std::shared_ptr<bags::RigidShape>> m_shapes;
+    std::vector<Eigen::Isometry3d> m_poses, m_committedPoses;
+    std::vector<ShapeResult> m_results;
+    State m_cur, m_committed;
+    double m_displaced = 0.0, m_dPdV = 0.0;
+    Eigen::Matrix3Xd m_points;  // per point: contact point or the top
+    Eigen::VectorXd m_areas;
+    std::vector<double> m_pVfree, m_Vfree;  // taut unloaded states, ascending pressure
+    EnvelopeCounts m_envelope;
+};
+
+}  // namespace cosim

@@ -1,0 +1,571 @@
+#include "cosim/ReducedBag.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace cosim {
+
+namespace {
+
+constexpr double kMinSlope = 0.3;  // least -n_z a contact's area is divided by
+
+double smoothstep(double u, double* du) {
+    if (u <= 0.0 || u >= 1.0) {
+        if (du) *du = 0.0;
+        return u <= 0.0 ? 0.0 : 1.0;
+    }
+    if (du) *du = 6.0 * u * (1.0 - u);
+    return u * u * (3.0 - 2.0 * u);
+}
+
+Eigen::Matrix3d cross(const Vec3& v) {
+    Eigen::Matrix3d m;
+    m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+    return m;
+}
+
+void fail(const std::string& what) {
+    throw std::invalid_argument("reduced bag calibration: " + what);
+}
+
+}  // namespace
+
+void ReducedBagCalibration::validate() const {
+    geometry.validate();
+    const size_t n = masses.size();
+    if (n < 2) fail("needs at least 2 gas masses, has " + std::to_string(n));
+    if (gaugePressures.size() != n || volumes.size() != n || top.size() != n)
+        fail("the unloaded states and top heights need one entry per mass");
+    for (size_t i = 0; i < n; ++i) {
+        if (!(masses[i] > 0.0) || (i && !(masses[i] > masses[i - 1])))
+            fail("masses must be positive and ascending");
+        if (!(volumes[i] > 0.0) || !std::isfinite(gaugePressures[i]))
+            fail("unloaded volume and pressure must be finite, volume positive");
+        if (top[i].rows() != nx || top[i].cols() != ny)
+            fail("top height " + std::to_string(i) + " is not nx x ny");
+    }
+    if (nx < 2 || ny < 2 || !(pitch > 0.0)) fail("the grid needs nx, ny >= 2 and pitch > 0");
+    if (depths.size() < 2 || depths.front() != 0.0) fail("depths must start at 0, at least 2");
+    for (size_t j = 1; j < depths.size(); ++j)
+        if (!(depths[j] > depths[j - 1])) fail("depths must be ascending");
+    for (const Eigen::MatrixXd* t : {&pressureFactor, &volumeFactor})
+        if (t->rows() != int(n) || t->cols() != int(depths.size()) || !t->allFinite() ||
+            !(t->minCoeff() > 0.0))
+            fail("factor tables must be masses x depths, finite and positive");
+    if (!(gasConstant > 0.0) || !(temperature > 0.0) || !(ambientPressure > 0.0))
+        fail("gas constant, temperature and ambient pressure must be positive");
+    if (!(boardPenalty > 0.0) || !(rimWidth > 0.0) || !(skirt >= 0.0) || !(skirt <= 10.0))
+        fail("board penalty and rim width must be > 0, skirt in [0, 10]");
+    if (!(depthMax > 0.0) || !(radiusMin > 0.0) || !(radiusMax >= radiusMin) || !(tiltMax > 0.0))
+        fail("envelope: depth, radii and tilt must be positive, radii ordered");
+}
+
+ReducedBag::ReducedBag(std::shared_ptr<const ReducedBagCalibration> calibration,
+                       const Eigen::Isometry3d& X_GB)
+    : m_cal(std::move(calibration)), m_X_GB(X_GB) {
+    if (!m_cal) throw std::invalid_argument("ReducedBag: no calibration");
+    m_cal->validate();
+    const ReducedBagCalibration& c = *m_cal;
+    for (int iy = 0; iy < c.ny; ++iy)
+        for (int ix = 0; ix < c.nx; ++ix) {
+            bool ok = true;
+            for (const Eigen::MatrixXd& t : c.top) ok = ok && std::isfinite(t(ix, iy));
+            if (ok) m_gridIndex.push_back(ix + c.nx * iy);
+        }
+    // The taut unloaded states give V_free(P) (the slack ones carry no pressure).
+    for (size_t i = 0; i < c.masses.size(); ++i)
+        if (c.gaugePressures[i] > 200.0 &&
+            (m_pVfree.empty() || c.gaugePressures[i] > m_pVfree.back())) {
+            m_pVfree.push_back(c.gaugePressures[i]);
+            m_Vfree.push_back(c.volumes[i]);
+        }
+    if (m_pVfree.size() < 2)
+        throw std::invalid_argument(
+            "reduced bag calibration: needs at least 2 taut unloaded states (above 200 Pa)");
+    m_points.resize(3, int(m_gridIndex.size()));
+    m_areas = Eigen::VectorXd::Constant(int(m_gridIndex.size()), c.pitch * c.pitch);
+    setGasMass(c.masses.front());
+}
+
+int ReducedBag::addShape(std::shared_ptr<bags::RigidShape> shape) {
+    if (!shape) throw std::invalid_argument("ReducedBag::addShape: null shape");
+    m_poses.push_back(shape->getPose());
+    m_committedPoses.push_back(shape->getPose());
+    m_shapes.push_back(std::move(shape));
+    m_results.emplace_back();
+    evaluate();
+    return int(m_shapes.size()) - 1;
+}
+
+void ReducedBag::setGasMass(double mass) {
+    if (!(mass > 0.0)) throw std::invalid_argument("ReducedBag::setGasMass: mass must be > 0");
+    m_cur.mass = mass;
+    m_cur.flow = 0.0;
+    m_cur.target = -1.0;
+    evaluate();
+    commit();
+}
+
+void ReducedBag::setShapeState(int shape, const ShapeState& state) {
+    m_poses.at(shape) = state.X_GS;
+}
+
+ParticipantStep ReducedBag::advance(double dt) {
+    State s = m_committed;
+    if (s.target >= 0.0) {
+        const double step = std::abs(s.rate) * dt;
+        s.mass = s.mass < s.target ? std::min(s.target, s.mass + step)
+                                   : std::max(s.target, s.mass - step);
+    } else {
+        s.mass = std::max(1e-9, s.mass + s.flow * dt);
+    }
+    s.time += dt;
+    m_cur = s;
+    evaluate();
+    ParticipantStep r;
+    r.converged = std::isfinite(m_cur.pressure);
+    r.solverIterations = 1;
+    if (!r.converged) rollback();
+    return r;
+}
+
+void ReducedBag::commit() {
+    m_committed = m_cur;
+    m_committedPoses = m_poses;
+    checkEnvelope();
+}
+
+void ReducedBag::rollback() {
+    m_cur = m_committed;
+    m_poses = m_committedPoses;
+    evaluate();
+}
+
+void ReducedBag::setMassFlow(double massFlow) {
+    m_committed.flow = m_cur.flow = massFlow;
+    m_committed.target = m_cur.target = -1.0;
+}
+
+void ReducedBag::setTargetMass(double mass, double rate) {
+    m_committed.target = m_cur.target = mass;
+    m_committed.rate = m_cur.rate = rate;
+}
+
+double ReducedBag::calcWeight(double delta, double depth, double* dDelta, double* dDepth) const {
+    // w = smoothstep(u), u = (delta + s) / (s + eps), s = skirt x depth: 0 at the skirt's
+    // edge, 1 from eps inside the shape.
+    const double eps = m_cal->rimWidth, lambda = m_cal->skirt, s = lambda * depth;
+    const double u = (delta + s) / (s + eps);
+    double dw = 0.0;
+    const double w = smoothstep(u, &dw);
+    if (dDelta) *dDelta = dw / (s + eps);
+    if (dDepth)
+        *dDepth = dw * (lambda / (s + eps) - (delta + s) * lambda / ((s + eps) * (s + eps)));
+    return w;
+}
+
+double ReducedBag::interpolateTop(int point, double mass) const {
+    const ReducedBagCalibration& c = *m_cal;
+    const int g = m_gridIndex[point], ix = g % c.nx, iy = g / c.nx;
+    const std::vector<double>& m = c.masses;
+    if (mass <= m.front()) return c.top.front()(ix, iy);
+    if (mass >= m.back()) return c.top.back()(ix, iy);
+    const size_t k = size_t(std::upper_bound(m.begin(), m.end(), mass) - m.begin()) - 1;
+    const double u = (mass - m[k]) / (m[k + 1] - m[k]);
+    return (1.0 - u) * c.top[k](ix, iy) + u * c.top[k + 1](ix, iy);
+}
+
+double ReducedBag::calcFreeVolume(double P, double* dVdP) const {
+    const std::vector<double>& p = m_pVfree;
+    size_t k = 0;
+    if (P >= p.back())
+        k = p.size() - 2;
+    else if (P > p.front())
+        k = size_t(std::upper_bound(p.begin(), p.end(), P) - p.begin()) - 1;
+    const double slope = (m_Vfree[k + 1] - m_Vfree[k]) / (p[k + 1] - p[k]);
+    if (dVdP) *dVdP = slope;
+    return m_Vfree[k] + slope * (P - p[k]);
+}
+
+double ReducedBag::lookup(const Eigen::MatrixXd& table, double mass, double depth,
+                          double* dDepth) const {
+    const ReducedBagCalibration& c = *m_cal;
+    auto bracket = [](const std::vector<double>& v, double x, size_t& k, double& u) {
+        if (x <= v.front()) {
+            k = 0, u = 0.0;
+        } else if (x >= v.back()) {
+            k = v.size() - 2, u = 1.0;
+        } else {
+            k = size_t(std::upper_bound(v.begin(), v.end(), x) - v.begin()) - 1;
+            u = (x - v[k]) / (v[k + 1] - v[k]);
+        }
+    };
+    size_t i, j;
+    double um, ud;
+    bracket(c.masses, mass, i, um);
+    bracket(c.depths, depth, j, ud);
+    auto row = [&](size_t r) {
+        return std::pair<double, double>{(1 - ud) * table(r, j) + ud * table(r, j + 1),
+                                         table(r, j + 1) - table(r, j)};
+    };
+    const auto a = row(i), b = row(i + 1);
+    const bool inside = depth > c.depths.front() && depth < c.depths.back();
+    if (dDepth)
+        *dDepth =
+            inside ? ((1 - um) * a.second + um * b.second) / (c.depths[j + 1] - c.depths[j]) : 0.0;
+    return (1 - um) * a.first + um * b.first;
+}
+
+double ReducedBag::solvePressure(double displaced, double* dPdV) const {
+    const ReducedBagCalibration& c = *m_cal;
+    const double pa = c.ambientPressure, mrt = m_cur.mass * c.gasConstant * c.temperature;
+    auto f = [&](double P, double* dfdP) {
+        double dV = 0.0;
+        const double V = calcFreeVolume(P, &dV) - displaced;
+        if (dfdP) *dfdP = V + (P + pa) * dV;
+        return (P + pa) * V - mrt;
+    };
+    if (f(0.0, nullptr) >= 0.0) {  // slack: the gas fits at ambient pressure
+        if (dPdV) *dPdV = 0.0;
+        return 0.0;
+    }
+    // f is increasing in P where V_free(P) > displaced: Newton from above the root, bracketed.
+    double lo = 0.0, hi = std::max(1e3, m_committed.pressure);
+    while (f(hi, nullptr) < 0.0) {
+        lo = hi;
+        hi *= 2.0;
+        if (hi > 1e8) return std::numeric_limits<double>::quiet_NaN();
+    }
+    double P = hi;
+    for (int it = 0; it < 100; ++it) {
+        double d = 0.0;
+        const double v = f(P, &d);
+        if (v > 0.0)
+            hi = P;
+        else
+            lo = P;
+        double next = d > 0.0 ? P - v / d : 0.5 * (lo + hi);
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (std::abs(next - P) < 1e-10 * (P + pa)) {
+            P = next;
+            break;
+        }
+        P = next;
+    }
+    double d = 0.0;
+    f(P, &d);
+    if (dPdV) *dPdV = (P + pa) / d;
+    return P;
+}
+
+void ReducedBag::evaluate() {
+    const ReducedBagCalibration& c = *m_cal;
+    const int n = int(m_gridIndex.size());
+    const double a = c.pitch * c.pitch;
+    // The unloaded top at this mass, in Ground.
+    Eigen::Matrix3Xd top(3, n);
+    for (int i = 0; i < n; ++i) {
+        const int g = m_gridIndex[i];
+        top.col(i) = m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
+                                   interpolateTop(i, m_cur.mass));
+    }
+    m_points = top;
+    m_areas.setConstant(a);
+    std::vector<double> owner(n, 0.0);  // deepest contact so far per point
+    m_displaced = 0.0;
+    for (size_t s = 0; s < m_shapes.size(); ++s) {
+        bags::RigidShape& shape = *m_shapes[s];
+        shape.setPose(m_poses[s]);
+        ShapeResult& r = m_results[s];
+        r = ShapeResult{};
+        const double reach = c.skirt * c.depthMax;  // the widest skirt looked for
+        for (int i = 0; i < n; ++i) {
+            if (shape.calcDistanceLowerBound(top.col(i)) > reach) continue;
+            Sample smp;
+            double phi = 0.0;
+            smp.t = top.col(i);
+            shape.calcContactGeometry(smp.t, &phi, &smp.c, &smp.n, &smp.dndp);
+            if (!(phi < reach)) continue;
+            if (phi < 0.0 && smp.n.z() > -kMinSlope) {
+                // The shape lies below the unloaded top here (its closest surface faces up or
+                // sideways): the film meets its underside. Down the column to where it leaves
+                // the shape, and the point that far inside along the normal there.
+                Vec3 p = smp.t;
+                double d = phi;
+                for (int it = 0; it < 40 && d < -1e-7; ++it) {
+                    p.z() += d;
+                    d = shape.calcSignedDistance(p, nullptr, nullptr);
+                }
+                Vec3 n;
+                shape.calcSignedDistance(p, nullptr, &n);
+                const double column = smp.t.z() - p.z();
+                smp.t = p - column * std::max(-n.z(), kMinSlope) * n;
+                shape.calcContactGeometry(smp.t, &phi, &smp.c, &smp.n, &smp.dndp);
+            }
+            smp.point = i;
+            smp.delta = -phi;
+            if (smp.delta > 0.0) r.volume += a * smp.delta / std::max(-smp.n.z(), kMinSlope);
+            if (smp.delta > r.depth) {
+                r.depth = smp.delta;
+                r.deepest = int(r.samples.size());
+            }
+            r.samples.push_back(smp);
+        }
+        // The skirt: points outside the shape, within skirt x depth of it, touch it too.
+        const double skirt = c.skirt * r.depth;
+        std::vector<Sample> kept;
+        for (const Sample& smp : r.samples)
+            if (smp.delta > -skirt && r.depth > 0.0) {
+                if (int(&smp - r.samples.data()) == r.deepest) r.deepest = int(kept.size());
+                kept.push_back(smp);
+            }
+        r.samples.swap(kept);
+        if (r.samples.empty()) r.deepest = -1, r.depth = 0.0, r.volume = 0.0;
+        for (const Sample& smp : r.samples)
+            r.area += a * calcWeight(smp.delta, r.depth, nullptr, nullptr);
+        m_displaced += lookup(c.volumeFactor, m_cur.mass, r.depth, nullptr) * r.volume;
+    }
+    m_cur.pressure = solvePressure(m_displaced, &m_dPdV);
+    const double P = m_cur.pressure;
+    for (size_t s = 0; s < m_shapes.size(); ++s) {
+        ShapeResult& r = m_results[s];
+        const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr);
+        const Vec3 o = m_poses[s].translation();
+        ShapeWrench w;
+        for (const Sample& smp : r.samples) {
+            const double q = kappa * P * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
+                             c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
+            const double g = std::max(-smp.n.z(), kMinSlope);
+            const Vec3 f = a * q / g * -smp.n;
+            w.force += f;
+            w.torque += (smp.c - o).cross(f);
+            if (q > owner[smp.point]) {
+                owner[smp.point] = q;
+                m_points.col(smp.point) = smp.c;
+                m_areas[smp.point] = a / g;
+            }
+        }
+        r.wrench = w;
+    }
+}
+
+ShapeWrench ReducedBag::calcWrench(int shape) const { return m_results.at(shape).wrench; }
+
+Eigen::VectorXd ReducedBag::calcContactPressure(int shape) const {
+    const ReducedBagCalibration& c = *m_cal;
+    const ShapeResult& r = m_results.at(shape);
+    Eigen::VectorXd p = Eigen::VectorXd::Zero(int(m_gridIndex.size()));
+    const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr);
+    for (const Sample& smp : r.samples)
+        p[smp.point] += kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
+                        c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
+    return p;
+}
+
+Mat6 ReducedBag::calcWrenchTangent(int shape) const {
+    // Analytic derivative of calcWrench() (docs/reduced-bag.md#the-tangent): a pose change
+    // xi = (theta, u) moves the shape's material at a fixed Ground point t by
+    // v = u + theta x r (r = t - o), so d delta = n.v, dn = theta x n - (dn/dp) v, and the gas
+    // pressure follows the displaced volume, dP = dP/dV_d d V_d.
+    const ReducedBagCalibration& c = *m_cal;
+    const ShapeResult& r = m_results.at(shape);
+    const Vec3 o = m_poses.at(shape).translation();
+    const double a = c.pitch * c.pitch, P = m_cur.pressure;
+    const Eigen::Matrix3d R_BG = m_X_GB.linear().transpose();
+    using Row6 = Eigen::Matrix<double, 1, 6>;
+    using Mat36 = Eigen::Matrix<double, 3, 6>;
+    auto jacobian = [&](const Vec3& t) {  // v = J xi
+        Mat36 J;
+        J << -cross(t - o), Eigen::Matrix3d::Identity();
+        return J;
+    };
+    Mat36 Jtheta = Mat36::Zero(), Ju = Mat36::Zero();
+    Jtheta.leftCols<3>().setIdentity();
+    Ju.rightCols<3>().setIdentity();
+
+    double dKappa = 0.0, dBeta = 0.0;
+    const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, &dKappa);
+    const double beta = lookup(c.volumeFactor, m_cur.mass, r.depth, &dBeta);
+    Row6 dDepth = Row6::Zero(), dVolume = Row6::Zero();
+    for (const Sample& smp : r.samples) {  // V_s = sum a delta / g over delta > 0
+        if (!(smp.delta > 0.0)) continue;
+        const Mat36 J = jacobian(smp.t);
+        const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
+        const double g = -smp.n.z();
+        if (g < kMinSlope)
+            dVolume += a / kMinSlope * smp.n.transpose() * J;
+        else
+            dVolume += a * (smp.n.transpose() * J / g + smp.delta / (g * g) * dn.row(2));
+    }
+    if (r.deepest >= 0) {
+        const Sample& d = r.samples[r.deepest];
+        dDepth = d.n.transpose() * jacobian(d.t);
+    }
+    const Row6 dP = m_dPdV * (beta * dVolume + r.volume * dBeta * dDepth);
+    const Row6 dK = dKappa * dDepth;
+
+    Mat6 T = Mat6::Zero();
+    for (const Sample& smp : r.samples) {
+        const Mat36 J = jacobian(smp.t);
+        const Row6 dDelta = smp.n.transpose() * J;
+        const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
+        const Mat36 dc = smp.n * dDelta + smp.delta * dn;
+        double dwDelta = 0.0, dwDepth = 0.0;
+        const double w = calcWeight(smp.delta, r.depth, &dwDelta, &dwDepth);
+        Row6 dq = kappa * w * dP + P * w * dK + kappa * P * (dwDelta * dDelta + dwDepth * dDepth);
+        double q = kappa * P * w;
+        const Vec3 cB = R_BG * (smp.c - m_X_GB.translation());
+        if (cB.z() < 0.0) {
+            q += -c.boardPenalty * cB.z();
+            dq += -c.boardPenalty * (R_BG.row(2) * dc);
+        }
+        double g = -smp.n.z();
+        Row6 dg = -dn.row(2);
+        if (g < kMinSlope) {
+            g = kMinSlope;
+            dg.setZero();
+        }
+        const Vec3 f = a * q / g * -smp.n;
+        const Mat36 df = -a * (smp.n * (dq / g - q / (g * g) * dg) + q / g * dn);
+        T.bottomRows<3>() += df;
+        T.topRows<3>() += -cross(f) * (dc - Ju) + cross(smp.c - o) * df;
+    }
+    return T;
+}
+
+bags::ChamberState ReducedBag::getChamberState(int chamber) const {
+    if (chamber != 0) throw std::out_of_range("ReducedBag: one chamber (0)");
+    const ReducedBagCalibration& c = *m_cal;
+    bags::ChamberState s;
+    s.gaugePressure = m_cur.pressure;
+    s.mass = m_cur.mass;
+    s.volume = m_cur.mass * c.gasConstant * c.temperature / (m_cur.pressure + c.ambientPressure);
+    return s;
+}
+
+double ReducedBag::calcPotentialEnergy() const {
+    // The isothermal gas's work potential -G(V), G = m R T ln V - p_amb V, and the board's
+    // penalty energy under the pressed film.
+    const ReducedBagCalibration& c = *m_cal;
+    const double mrt = m_cur.mass * c.gasConstant * c.temperature;
+    const double V = mrt / (m_cur.pressure + c.ambientPressure);
+    double e = -(mrt * std::log(V) - c.ambientPressure * V);
+    const double a = c.pitch * c.pitch;
+    for (const ShapeResult& r : m_results)
+        for (const Sample& smp : r.samples) {
+            const double z = (m_X_GB.inverse() * smp.c).z();
+            if (z < 0.0) e += 0.5 * c.boardPenalty * a * z * z;
+        }
+    return e;
+}
+
+double ReducedBag::getOverlapVolume(int shape) const { return m_results.at(shape).volume; }
+double ReducedBag::getDepth(int shape) const { return m_results.at(shape).depth; }
+double ReducedBag::getContactArea(int shape) const { return m_results.at(shape).area; }
+
+void ReducedBag::checkEnvelope() {
+    const ReducedBagCalibration& c = *m_cal;
+    EnvelopeCounts& e = m_envelope;
+    ++e.steps;
+    const double m = m_cur.mass;
+    const double tol = 1e-9;
+    if (m < c.masses.front() * (1 - tol) || m > c.masses.back() * (1 + tol)) {
+        ++e.mass;
+        const double mid = 0.5 * (c.masses.front() + c.masses.back());
+        if (e.worstMass == 0.0 || std::abs(m - mid) > std::abs(e.worstMass - mid)) e.worstMass = m;
+    }
+    bool depth = false, radius = false, tilt = false;
+    for (const ShapeResult& r : m_results) {
+        if (r.deepest < 0) continue;
+        const Sample& d = r.samples[r.deepest];
+        if (r.depth > c.depthMax) {
+            depth = true;
+            e.worstDepth = std::max(e.worstDepth, r.depth);
+        }
+        // The shape's least curvature radius at its deepest point: 1 / the largest
+        // eigenvalue of dn/dp (symmetric part) at the point delta inside, plus delta.
+        const Eigen::Matrix3d D = 0.5 * (d.dndp + d.dndp.transpose());
+        const double kmax =
+            Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(D).eigenvalues().maxCoeff();
+        const double rad =
+            kmax > 1e-9 ? 1.0 / kmax + d.delta : std::numeric_limits<double>::infinity();
+        if (rad < c.radiusMin * 0.999 || rad > c.radiusMax * 1.001) {
+            radius = true;
+            if (e.worstRadius == 0.0 || std::abs(std::log(rad / c.radiusMin)) >
+                                            std::abs(std::log(e.worstRadius / c.radiusMin)))
+                e.worstRadius = rad;
+        }
+        const Vec3 nB = m_X_GB.linear().transpose() * d.n;
+        const double angle = std::acos(std::clamp(-nB.z(), -1.0, 1.0));
+        if (angle > c.tiltMax) {
+            tilt = true;
+            e.worstTilt = std::max(e.worstTilt, angle);
+        }
+    }
+    e.depth += depth;
+    e.radius += radius;
+    e.tilt += tilt;
+}
+
+namespace {
+
+std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, f, a, b, c);
+    return buf;
+}
+
+std::string describeReason(int reason, const EnvelopeCounts& e, const ReducedBagCalibration& c) {
+    const double deg = 180.0 / 3.14159265358979323846;
+    switch (reason) {
+        case 0:
+            return fmt("gas mass %.2f g (calibrated %.2f to %.2f g)", e.worstMass * 1e3,
+                       c.masses.front() * 1e3, c.masses.back() * 1e3);
+        case 1:
+            return fmt("depth %.1f mm (calibrated to %.1f mm)", e.worstDepth * 1e3,
+                       c.depthMax * 1e3);
+        case 2:
+            return fmt("shape curvature radius %.0f mm (calibrated %.0f to %.0f mm)",
+                       e.worstRadius * 1e3, c.radiusMin * 1e3, c.radiusMax * 1e3);
+        default:
+            return fmt("contact normal %.0f deg from vertical (calibrated to %.0f deg)",
+                       e.worstTilt * deg, c.tiltMax * deg);
+    }
+}
+
+}  // namespace
+
+std::string describeNewEnvelopeExits(const EnvelopeCounts& now, const EnvelopeCounts& before,
+                                     const ReducedBagCalibration& c) {
+    const int n[4] = {now.mass, now.depth, now.radius, now.tilt};
+    const int b[4] = {before.mass, before.depth, before.radius, before.tilt};
+    std::string s;
+    for (int k = 0; k < 4; ++k)
+        if (n[k] > 0 && b[k] == 0) s += (s.empty() ? "" : "; ") + describeReason(k, now, c);
+    return s.empty() ? s
+                     : "a reduced bag left its calibration's validity envelope: " + s +
+                           " (counted in the summary; docs/reduced-bag.md#validity)";
+}
+
+std::string describeEnvelopeCounts(const EnvelopeCounts& e, const ReducedBagCalibration& c) {
+    if (e.total() == 0)
+        return "reduced bags: all " + std::to_string(e.steps) +
+               " bag-steps inside the calibration's validity envelope";
+    std::string s = "reduced bags: outside the calibration's validity envelope in";
+    const int n[4] = {e.mass, e.depth, e.radius, e.tilt};
+    bool first = true;
+    for (int k = 0; k < 4; ++k)
+        if (n[k] > 0) {
+            s += (first ? " " : ", ") + std::to_string(n[k]) + " of " + std::to_string(e.steps) +
+                 " bag-steps by " + describeReason(k, e, c);
+            first = false;
+        }
+    return s;
+}
+
+}  // namespace cosim

@@ -1,0 +1,233 @@
+// The reduced bag (cosim::ReducedBag): the membrane-free limit against the closed form of a
+// sphere pressed into a flat-topped gas bag, its analytic tangent against finite differences
+// of its wrench, its pressure footprint against its force, gas flows, rollback and the
+// envelope counter. The calibration here is synthetic (stated in each test); the shipped
+// calibrations from FE runs are validated by bench_reduced_bag (docs/reduced-bag.md).
+#include <cosim/PressureMat.h>
+#include <cosim/ReducedBag.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace cosim;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Three masses: 3 g slack (gauge 0), 4 g at 10 kPa, 5 g at 20 kPa, volumes by the gas law; a
+// top grid of `pitch` over 200 x 100 mm centred on the bag origin, height from top(x, y, m).
+template <class Top>
+std::shared_ptr<ReducedBagCalibration> makeCalibration(double pitch, Top top) {
+    auto c = std::make_shared<ReducedBagCalibration>();
+    c->masses = {3e-3, 4e-3, 5e-3};
+    c->gaugePressures = {0.0, 10e3, 20e3};
+    for (size_t i = 0; i < 3; ++i)
+        c->volumes.push_back(c->masses[i] * c->gasConstant * c->temperature /
+                             (c->gaugePressures[i] + c->ambientPressure));
+    c->pitch = pitch;
+    c->nx = int(std::lround(0.2 / pitch)) + 1;
+    c->ny = int(std::lround(0.1 / pitch)) + 1;
+    c->x0 = -0.1;
+    c->y0 = -0.05;
+    for (double m : c->masses) {
+        Eigen::MatrixXd t(c->nx, c->ny);
+        for (int ix = 0; ix < c->nx; ++ix)
+            for (int iy = 0; iy < c->ny; ++iy)
+                t(ix, iy) = top(c->x0 + ix * pitch, c->y0 + iy * pitch, m);
+        c->top.push_back(t);
+    }
+    c->depths = {0.0, 0.01, 0.02, 0.04};
+    c->pressureFactor = Eigen::MatrixXd::Ones(3, 4);
+    c->volumeFactor = Eigen::MatrixXd::Ones(3, 4);
+    return c;
+}
+
+ShapeState at(const Eigen::Vector3d& p, const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
+    ShapeState s;
+    s.X_GS.linear() = R;
+    s.X_GS.translation() = p;
+    return s;
+}
+
+Eigen::Matrix3d rotation(const Eigen::Vector3d& v) {
+    return v.norm() > 0 ? Eigen::AngleAxisd(v.norm(), v.normalized()).toRotationMatrix()
+                        : Eigen::Matrix3d::Identity();
+}
+
+}  // namespace
+
+TEST(ReducedBag, ASpherePressedIntoAFlatTopCarriesGasPressureTimesItsContactArea) {
+    // Reference (membrane-free limit, kappa = beta = 1): a sphere of radius R pressed delta
+    // into a flat top displaces the cap volume pi delta^2 (3R - delta) / 3 and carries
+    // P pi (2 R delta - delta^2), P from (P + p_amb)(V_free(P) - V_cap) = m R T. Tolerance 3 %
+    // (a 1 mm grid, a normal depth in place of a vertical one, a 0.1 mm rim).
+    auto cal = makeCalibration(1e-3, [](double, double, double) { return 0.1; });
+    cal->rimWidth = 1e-4;
+    ReducedBag bag(cal, Eigen::Isometry3d::Identity());
+    const double R = 0.05, delta = 0.01;
+    bag.addShape(bags::makeEllipsoid(Eigen::Vector3d::Constant(R)));
+    bag.setGasMass(4.5e-3);
+    const double p0 = bag.getGaugePressure();
+    bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, 0.1 + R - delta)));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    const double cap = kPi * delta * delta * (3 * R - delta) / 3;
+    EXPECT_NEAR(bag.getOverlapVolume(0), cap, 0.03 * cap);
+    const double P = bag.getGaugePressure();
+    EXPECT_GT(P, p0);
+    // The gas law with the model's own V_free (linear through the two taut states).
+    const ReducedBagCalibration& c = *cal;
+    const double slope =
+        (c.volumes[2] - c.volumes[1]) / (c.gaugePressures[2] - c.gaugePressures[1]);
+    const double vfree = c.volumes[1] + slope * (P - c.gaugePressures[1]);
+    EXPECT_NEAR((P + c.ambientPressure) * (vfree - bag.getOverlapVolume(0)),
+                4.5e-3 * c.gasConstant * c.temperature, 1e-9 * 382.5);
+    const double F = P * kPi * (2 * R * delta - delta * delta);
+    EXPECT_NEAR(bag.calcWrench(0).force.z(), F, 0.03 * F);
+    EXPECT_NEAR(bag.calcWrench(0).force.x(), 0.0, 1e-3 * F);
+    EXPECT_NEAR(bag.calcWrench(0).torque.norm(), 0.0, 1e-3 * F * R);
+}
+
+TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
+    // Reference: central differences (rotation 1e-6 rad about Ground axes through the shape's
+    // origin, translation 1e-7 m) of the wrench re-evaluated by advance(), the gas pressure
+    // following. Tolerance 1e-4 of the largest entry. A curved top that sinks with mass,
+    // factors that vary with depth and mass, a skirt, a tilted ellipsoid off centre 12 mm
+    // deep; a second case, a lower top, presses it 45 mm, through the bed board (the film's
+    // penalty).
+    for (double depth : {0.012, 0.045}) {
+        const double h = depth < 0.02 ? 0.06 : 0.03;
+        auto cal = makeCalibration(2e-3, [h](double x, double y, double m) {
+            return h + 4.0 * (m - 3e-3) - 0.8 * x * x - 2.0 * y * y + 0.05 * x;
+        });
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 4; ++j) {
+                cal->pressureFactor(i, j) = 1.0 + 0.3 * j + 0.1 * i;
+                cal->volumeFactor(i, j) = 1.2 - 0.1 * j + 0.05 * i;
+            }
+        cal->boardPenalty = 1e6;
+        cal->skirt = 0.5;
+        ReducedBag bag(cal, Eigen::Isometry3d(Eigen::Translation3d(0.01, 0.0, 0.0)));
+        const Eigen::Vector3d semi =
+            depth < 0.02 ? Eigen::Vector3d(0.08, 0.05, 0.04) : Eigen::Vector3d(0.15, 0.10, 0.08);
+        bag.addShape(bags::makeEllipsoid(semi));
+        bag.addShape(bags::makeEllipsoid(Eigen::Vector3d::Constant(0.03)));  // another, fixed
+        bag.setGasMass(4.4e-3);
+        const Eigen::Matrix3d R0 = rotation(depth < 0.02 ? Eigen::Vector3d(0.3, -0.2, 0.4)
+                                                         : Eigen::Vector3d(0.1, -0.05, 0.4));
+        // Its height for that depth (bisection).
+        Eigen::Vector3d p(0.02, -0.01, 0.0);
+        bag.setShapeState(1, at(Eigen::Vector3d(-0.06, 0.02, h + 0.025)));
+        double lo = h, hi = h + 0.3;  // the centre at the top: deep in
+        for (int it = 0; it < 50; ++it) {
+            p.z() = 0.5 * (lo + hi);
+            bag.setShapeState(0, at(p, R0));
+            bag.advance(0.0);
+            (bag.getDepth(0) > depth ? lo : hi) = p.z();
+        }
+        ASSERT_NEAR(bag.getDepth(0), depth, 1e-6);
+        if (depth > 0.02)  // its underside is below the board: the penalty acts
+            ASSERT_LT(bag.getPressurePoints().row(2).minCoeff(), -1e-3);
+        bag.commit();
+        const Mat6 T = bag.calcWrenchTangent(0);
+        Mat6 fd;
+        for (int k = 0; k < 6; ++k) {
+            const double h = k < 3 ? 1e-6 : 1e-7;
+            Vec6 w[2];
+            for (int sgn = 0; sgn < 2; ++sgn) {
+                Eigen::Vector3d dth = Eigen::Vector3d::Zero(), du = Eigen::Vector3d::Zero();
+                (k < 3 ? dth : du)[k % 3] = sgn ? -h : h;
+                bag.setShapeState(0, at(p + du, rotation(dth) * R0));
+                ASSERT_TRUE(bag.advance(0.0).converged);
+                w[sgn] = bag.calcWrench(0).asVector();
+            }
+            fd.col(k) = (w[0] - w[1]) / (2 * h);
+        }
+        bag.rollback();
+        const double scale = fd.cwiseAbs().maxCoeff();
+        EXPECT_GT(scale, 1.0);
+        EXPECT_LT((T - fd).cwiseAbs().maxCoeff(), 1e-4 * scale)
+            << "depth " << depth << "\nanalytic\n"
+            << T << "\nfinite differences\n"
+            << fd;
+    }
+}
+
+TEST(ReducedBag, ThePressureFootprintCarriesTheContactForce) {
+    // Reference: the wrench. Sum over the footprint of p A along the shape's inward normal is
+    // the force (1e-12 relative), its vertical part the region loads' force. A pressure mat
+    // over the bag reads sum p A (1e-12): the normal forces, which add up to more than |F|
+    // on a curved patch (they partly cancel), and to |F| under a flat face (1e-9).
+    auto cal = makeCalibration(
+        2e-3, [](double x, double y, double) { return 0.08 - 0.5 * x * x - 1.0 * y * y; });
+    ReducedBag bag(cal, Eigen::Isometry3d(Eigen::Translation3d(0.3, -0.2, 0.0)));
+    std::shared_ptr<bags::RigidShape> shape = bags::makeEllipsoid(Eigen::Vector3d(0.2, 0.12, 0.1));
+    bag.addShape(shape);
+    bag.setGasMass(4.0e-3);
+    bag.setShapeState(0, at(Eigen::Vector3d(0.31, -0.2, 0.08 + 0.1 - 0.01),
+                            rotation(Eigen::Vector3d(0.1, 0.05, 0.3))));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    const Eigen::VectorXd p = bag.calcContactPressure(0);
+    const Eigen::VectorXd A = bag.getPressureAreas();
+    const Eigen::Matrix3Xd& x = bag.getPressurePoints();
+    Eigen::Vector3d F = Eigen::Vector3d::Zero();
+    for (int i = 0; i < p.size(); ++i) {
+        if (!(p[i] > 0.0)) continue;
+        Eigen::Vector3d n;
+        EXPECT_NEAR(shape->calcSignedDistance(x.col(i), nullptr, &n), 0.0, 1e-9);
+        F += p[i] * A[i] * -n;
+    }
+    const Eigen::Vector3d W = bag.calcWrench(0).force;
+    ASSERT_GT(W.z(), 50.0);
+    EXPECT_NEAR((F - W).norm(), 0.0, 1e-12 * W.norm());
+    PressureMatOptions o;
+    o.rows = 20, o.columns = 10;
+    o.origin = Eigen::Vector2d(0.15, -0.3);
+    o.size = Eigen::Vector2d(0.3, 0.2);
+    PressureMat mat(o);
+    mat.addNodalPressures(x, p, A);
+    EXPECT_NEAR(mat.getOffMatForce(), 0.0, 1e-12);
+    EXPECT_NEAR(mat.calcTotalForce(), p.dot(A), 1e-12 * p.dot(A));
+    EXPECT_GT(mat.calcTotalForce(), W.norm());
+    // A box's flat face, level, 0.5 mm into a flat top: every point's force is vertical (its
+    // sides lie 1 mm from the nearest grid points, so the face is their closest surface).
+    auto flatTop = makeCalibration(2e-3, [](double, double, double) { return 0.08; });
+    ReducedBag flat(flatTop, Eigen::Isometry3d(Eigen::Translation3d(0.3, -0.2, 0.0)));
+    flat.addShape(bags::makeBox(Eigen::Vector3d(0.051, 0.031, 0.02), 1e-4));
+    flat.setGasMass(4.0e-3);
+    flat.setShapeState(0, at(Eigen::Vector3d(0.3, -0.2, 0.08 + 0.02 - 0.0005)));
+    ASSERT_TRUE(flat.advance(0.0).converged);
+    const Eigen::VectorXd pf = flat.calcContactPressure(0);
+    mat.clear();
+    mat.addNodalPressures(flat.getPressurePoints(), pf, flat.getPressureAreas());
+    const Eigen::Vector3d Wf = flat.calcWrench(0).force;
+    ASSERT_GT(Wf.z(), 5.0);
+    EXPECT_NEAR(mat.calcTotalForce(), Wf.z(), 1e-9 * Wf.z());
+}
+
+TEST(ReducedBag, GasFlowsReachTheirTargetRollBackAndTheEnvelopeCountsExits) {
+    // Reference: m(t) of the stated flow and target (exact); a rollback restores the
+    // committed mass; a mass beyond the calibration's 3-5 g is counted.
+    auto cal = makeCalibration(5e-3, [](double, double, double) { return 0.1; });
+    ReducedBag bag(cal, Eigen::Isometry3d::Identity());
+    bag.setGasMass(4.0e-3);
+    bag.setTargetMass(4.6e-3, 1e-3);
+    ASSERT_TRUE(bag.advance(0.5).converged);
+    EXPECT_NEAR(bag.getGasMass(), 4.5e-3, 1e-15);
+    EXPECT_NEAR(bag.getChamberState(0).volume * (bag.getGaugePressure() + cal->ambientPressure),
+                4.5e-3 * cal->gasConstant * cal->temperature, 1e-9);
+    bag.rollback();
+    EXPECT_NEAR(bag.getGasMass(), 4.0e-3, 1e-15);
+    ASSERT_TRUE(bag.advance(1.0).converged);
+    EXPECT_NEAR(bag.getGasMass(), 4.6e-3, 1e-15);
+    bag.commit();
+    EXPECT_EQ(bag.getEnvelopeCounts().total(), 0);
+    bag.setMassFlow(1e-3);
+    ASSERT_TRUE(bag.advance(1.0).converged);  // 5.6 g: beyond 5 g
+    bag.commit();
+    EXPECT_EQ(bag.getEnvelopeCounts().mass, 1);
+    EXPECT_NEAR(bag.getEnvelopeCounts().worstMass, 5.6e-3, 1e-15);
+    // Slack below the fill mass: no gauge pressure.
+    bag.setGasMass(3.0e-3);
+    EXPECT_EQ(bag.getGaugePressure(), 0.0);
+}
