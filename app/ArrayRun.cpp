@@ -40,7 +40,7 @@ std::string fmt(const char* f, double v) {
 constexpr double kDeg = 180.0 / 3.14159265358979323846;
 constexpr double kPressedThreshold = 5.0 * 133.322387415;  // [Pa] 5 mmHg, as regions.csv
 
-double calcBagVolume(const bags::Airbag& a) {
+double calcBagVolume(const cosim::Bag& a) {
     double v = 0.0;
     for (int c = 0; c < a.getNumChambers(); ++c) v += a.getChamberState(c).volume;
     return v;
@@ -97,6 +97,10 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
             std::cerr << "; control " << (sc.controlKind.empty() ? "none" : sc.controlKind) << "\n";
             for (const std::string& t : sc.controlText) std::cerr << "    " << t << "\n";
         }
+        if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced)
+            std::cerr << "  bags: the reduced model (docs/reduced-bag.md), calibrated by "
+                      << sc.options.reduced->source.substr(0, sc.options.reduced->source.find('\n'))
+                      << "\n";
         std::cerr << "  writing to " << outPath.string()
                   << "/ (Ctrl-C stops and keeps what was computed, marked INCOMPLETE)\n";
     }
@@ -114,6 +118,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
     std::unique_ptr<cosim::PatientOnArray> poa;
     cosim::PressureMat mat(sc.mat);
     Totals totals;
+    cosim::EnvelopeCounts envelope;
     const double end = sc.getEndTime();
     double nextOutput = 0.0;
     ArrayVerdict verdict(layout, sc.options.bag.geometry, sc.settleTime, sc.duration,
@@ -185,7 +190,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
     try {
         outDir->setStatus("running", "building the patient and inflating the bags");
         poa = std::make_unique<cosim::PatientOnArray>(sc.patient, sc.options);
-        std::vector<cosim::BagParticipant*> bags(size_t(layout.rows) * layout.columns, nullptr);
+        std::vector<cosim::Bag*> bags(size_t(layout.rows) * layout.columns, nullptr);
         for (size_t i = 0; i < poa->getBagIndices().size(); ++i)
             bags[poa->getBagIndices()[i]] = &poa->updBag(int(i));
         bodySurface = cosim::makeBodySurface(poa->getModel());
@@ -201,8 +206,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
             const int n = layout.rows * layout.columns;
             std::vector<double> masses(n, -1.0), volumes(n, 0.0);
             for (size_t i = 0; i < poa->getBagIndices().size(); ++i) {
-                const bags::Airbag& a = poa->getBag(int(i)).getAirbag();
-                masses[poa->getBagIndices()[i]] = a.getTotalGasMass();
+                const cosim::Bag& a = poa->getBag(int(i));
+                masses[poa->getBagIndices()[i]] = a.getGasMass();
                 volumes[poa->getBagIndices()[i]] = calcBagVolume(a);
             }
             air = std::make_unique<cosim::ArrayPneumatics>(sc.pneumatics, sc.options.bag.gas,
@@ -221,7 +226,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                 for (size_t k = 0; k < v.size(); ++k) v[k] = {airVolume[k], airRate[k]};
                 const std::vector<double> q = air->step(t, dt, v);
                 for (size_t k = 0; k < q.size(); ++k)
-                    poa->updBag(airParticipant[k]).updAirbag().setMassFlow(q[k]);
+                    poa->updBag(airParticipant[k]).setMassFlow(q[k]);
             });
             if (!quiet)
                 std::cerr << "  pneumatics: " << air->getBags().size() << " bags in the network\n";
@@ -260,15 +265,24 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                 // The committed step: each bag's volume now and its rate over the step; the
                 // bag's and the network's masses (one owner: they must agree to roundoff).
                 for (size_t k = 0; k < airVolume.size(); ++k) {
-                    const bags::Airbag& a = poa->getBag(airParticipant[k]).getAirbag();
+                    const cosim::Bag& a = poa->getBag(airParticipant[k]);
                     const double v = calcBagVolume(a);
                     airRate[k] = (v - airVolume[k]) / s.macroStep;
                     airVolume[k] = v;
-                    const double mb = a.getTotalGasMass(), mn = air->getBagMass(air->getBags()[k]);
+                    const double mb = a.getGasMass(), mn = air->getBagMass(air->getBags()[k]);
                     massMismatch = std::max(massMismatch, std::abs(mb - mn) / mn);
                 }
             }
             throwIfInterrupted();
+            if (sc.options.reduced) {  // the reduced bags' first exit of each kind
+                const cosim::EnvelopeCounts e = poa->getEnvelopeCounts();
+                const std::string w =
+                    cosim::describeNewEnvelopeExits(e, envelope, *sc.options.reduced);
+                if (!w.empty())
+                    std::cerr << "bagsim: warning: " << w << fmt(" at %.3f s", poa->getTime())
+                              << "\n";
+                envelope = e;
+            }
             if (poa->getTime() >= nextOutput - 1e-9 || poa->getTime() >= end - 1e-9) {
                 const io::ArrayFrame f = record();
                 while (nextOutput <= poa->getTime() + 1e-9) nextOutput += sc.outputInterval;
@@ -366,6 +380,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         stop("failed", e.what());
         return 1;
     }
+    if (sc.options.reduced)
+        table << cosim::describeEnvelopeCounts(poa->getEnvelopeCounts(), *sc.options.reduced)
+              << "\n";
     try {
         std::ofstream s(outDir->getFile("summary.txt"));
         s << "bagsim " << bagsim::kVersion << " patient-on-array: " << file.getFileName() << " ("

@@ -106,9 +106,9 @@ Eigen::Vector3d calcCentreOfMass(const PatientOnArray& poa) {
 std::vector<double> calcPressedNodeHeights(const PatientOnArray& poa, double threshold) {
     std::vector<double> out;
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
-        const BagParticipant& bag = poa.getBag(int(b));
+        const Bag& bag = poa.getBag(int(b));
         double lowest = std::numeric_limits<double>::infinity();
-        const Eigen::Matrix3Xd& x = bag.getAirbag().getPositions();
+        const Eigen::Matrix3Xd& x = bag.getPressurePoints();
         for (int s = 0; s < bag.getNumShapes(); ++s) {
             const Eigen::VectorXd p = bag.calcContactPressure(s);
             for (Eigen::Index i = 0; i < p.size(); ++i)

@@ -9,17 +9,29 @@
 
 namespace cosim {
 
+namespace {
+
+// The FE bag's airbag, or null for a bag without a mesh (a ReducedBag: no surface is drawn).
+const bags::Airbag* findAirbag(const PatientOnArray& poa, int participant) {
+    const auto* fe = dynamic_cast<const BagParticipant*>(&poa.getBag(participant));
+    return fe ? &fe->getAirbag() : nullptr;
+}
+
+}  // namespace
+
 SurfaceMesh makeBagSurfaces(const PatientOnArray& poa) {
     SurfaceMesh m;
     const std::vector<int>& indices = poa.getBagIndices();
     int nodes = 0, tris = 0;
     for (size_t b = 0; b < indices.size(); ++b)
-        tris += poa.getBag(int(b)).getAirbag().getMesh().getNumTris();
+        if (const bags::Airbag* a = findAirbag(poa, int(b))) tris += a->getMesh().getNumTris();
     m.triangles.resize(3, tris);
     m.triangleGroup.reserve(size_t(tris));
     int t = 0;
     for (size_t b = 0; b < indices.size(); ++b) {
-        const bags::Mesh& mesh = poa.getBag(int(b)).getAirbag().getMesh();
+        const bags::Airbag* a = findAirbag(poa, int(b));
+        if (!a) continue;
+        const bags::Mesh& mesh = a->getMesh();
         for (int k = 0; k < mesh.getNumTris(); ++k, ++t) {
             m.triangles.col(t) = mesh.tris.col(k).array() + nodes;
             m.triangleGroup.push_back(indices[b]);
@@ -35,11 +47,13 @@ SurfaceMesh makeBagSurfaces(const PatientOnArray& poa) {
 Eigen::Matrix3Xd calcBagSurfacePositions(const PatientOnArray& poa) {
     int nodes = 0;
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b)
-        nodes += int(poa.getBag(int(b)).getAirbag().getPositions().cols());
+        if (const bags::Airbag* a = findAirbag(poa, int(b))) nodes += int(a->getPositions().cols());
     Eigen::Matrix3Xd x(3, nodes);
     int at = 0;
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
-        const Eigen::Matrix3Xd& p = poa.getBag(int(b)).getAirbag().getPositions();
+        const bags::Airbag* a = findAirbag(poa, int(b));
+        if (!a) continue;
+        const Eigen::Matrix3Xd& p = a->getPositions();
         x.middleCols(at, p.cols()) = p;
         at += int(p.cols());
     }

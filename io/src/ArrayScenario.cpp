@@ -1,9 +1,9 @@
 // Reading the patient-on-array scenario kind.
-#include <io/ArrayScenario.h>
-#include <io/PatientScenario.h>
-
 #include <bags/MaterialFit.h>
 #include <cosim/ArrayReadings.h>
+#include <io/ArrayScenario.h>
+#include <io/PatientScenario.h>
+#include <io/ReducedBagFile.h>
 
 #include <algorithm>
 #include <cmath>
@@ -109,9 +109,9 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 
 // ---------------------------------------------------------------------------------------- bag
 
-void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc) {
+void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
-                     "contact_penalty"});
+                     "contact_penalty", "model", "calibration"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -135,6 +135,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     // The seed's Yeoh fit of its tensile test, 0.2 mm film (scenarios/seed-load-test.yaml).
     b.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     b.threads = 1;  // bags run in parallel, one per thread
+    readReducedBagKeys(s, sc.options, fileName);
 }
 
 // -------------------------------------------------------------------------------------- array
@@ -752,7 +753,7 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     sc.description = root.getString("description", "");
     sc.patient = readPatientSection(root.getSection("patient"));
 
-    readBag(root.getSection("bag", false), sc);
+    readBag(root.getSection("bag", false), sc, file.getFileName());
     readArray(root.getSection("array"), sc);
     readCoupling(root.getSection("coupling", false), sc.options);
 

@@ -25,7 +25,8 @@ struct SurfaceMesh {
 };
 
 /// Every coupled bag's membrane, nodes stacked in PatientOnArray::getBagIndices() order; the
-/// group of a triangle is its bag's array index (ArrayBag::index).
+/// group of a triangle is its bag's array index (ArrayBag::index). Reduced bags have no
+/// membrane and add nothing.
 SurfaceMesh makeBagSurfaces(const PatientOnArray& poa);
 /// The coupled bags' node positions [m], Ground, in makeBagSurfaces()' order.
 Eigen::Matrix3Xd calcBagSurfacePositions(const PatientOnArray& poa);

@@ -1,0 +1,131 @@
+// The reduced bag's calibration file (io/ReducedBagFile.h) and the scenario keys bag.model and
+// bag.calibration: a calibration written and read back is the same; bad records, bad
+// numbers and a calibration of another bag or mesh are located errors.
+#include <gtest/gtest.h>
+#include <io/ArrayScenario.h>
+#include <io/InputError.h>
+#include <io/ReducedBagFile.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "InputErrorTestUtil.h"
+
+using io::test::expectInputError;
+
+namespace {
+
+cosim::ReducedBagCalibration small() {
+    cosim::ReducedBagCalibration c;
+    c.source = "made by hand\nfor a test";
+    c.masses = {3e-3, 4e-3, 5e-3};
+    c.gaugePressures = {0.0, 1e4, 2e4};
+    c.volumes = {2.5e-3, 3.0e-3, 3.4e-3};
+    c.nx = 3, c.ny = 2, c.x0 = 0.01, c.y0 = -0.02, c.pitch = 0.01;
+    for (int i = 0; i < 3; ++i) {
+        Eigen::MatrixXd t(3, 2);
+        t << 0.1 + i * 0.01, 0.11, 0.12, std::nan(""), 0.09, 0.08;
+        c.top.push_back(t);
+    }
+    c.depths = {0.0, 0.01, 0.03};
+    c.pressureFactor = Eigen::MatrixXd::Constant(3, 3, 1.25);
+    c.volumeFactor = Eigen::MatrixXd::Constant(3, 3, 0.75);
+    c.pressureFactor(2, 1) = 1.5;
+    c.skirt = 0.5;
+    return c;
+}
+
+std::string tempFile(const std::string& name) { return testing::TempDir() + name; }
+
+const std::string kScenario =
+    "kind: patient-on-array\n"                                                   // 1
+    "patient: {sex: male, height: 1.75 m, mass: 75 kg, position: [0 m, 0 m]}\n"  // 2
+    "bag: {mesh_size: MESH, model: MODEL CAL}\n"                                 // 3
+    "array: {rows: 6, columns: 7, row_pitch: 360 mm, column_pitch: 105 mm,\n"    // 4
+    "        centre: [-30 mm, 0 mm], orientation: [along, along-flipped], gas_mass: 4.5 g}\n"
+    "run: {settle_time: 1 s, duration: 1 s}\n";
+
+io::PatientOnArrayScenario readWith(const std::string& mesh, const std::string& model,
+                                    const std::string& cal) {
+    std::string t = kScenario;
+    t.replace(t.find("MESH"), 4, mesh);
+    t.replace(t.find("MODEL"), 5, model);
+    t.replace(t.find("CAL"), 3, cal.empty() ? "" : ", calibration: " + cal);
+    // As if the file lay in scenarios/tests/, for the relative calibration path.
+    return io::readPatientOnArrayScenario(
+        io::ScenarioFile::parse(t, std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/r.yaml"));
+}
+
+}  // namespace
+
+TEST(ReducedBagFile, AWrittenCalibrationReadsBackTheSame) {
+    const cosim::ReducedBagCalibration c = small();
+    const std::string path = tempFile("reduced-roundtrip.txt");
+    io::writeReducedBagCalibration(path, c);
+    const auto r = io::readReducedBagCalibration(path);
+    EXPECT_EQ(r->source, c.source);
+    EXPECT_EQ(r->masses, c.masses);
+    EXPECT_EQ(r->depths, c.depths);
+    EXPECT_EQ(r->nx, 3);
+    EXPECT_DOUBLE_EQ(r->skirt, 0.5);
+    EXPECT_DOUBLE_EQ(r->pressureFactor(2, 1), 1.5);
+    EXPECT_TRUE(std::isnan(r->top[1](1, 1)));
+    EXPECT_NEAR(r->top[2](0, 0), 0.12, 1e-6);
+    std::remove(path.c_str());
+}
+
+TEST(ReducedBagFile, BadRecordsAndNumbersAreLocated) {
+    const std::string path = tempFile("reduced-bad.txt");
+    io::writeReducedBagCalibration(path, small());
+    std::string text;
+    {
+        std::ifstream f(path);
+        text.assign(std::istreambuf_iterator<char>(f), {});
+    }
+    auto withLine = [&](const std::string& from, const std::string& to) {
+        std::string t = text;
+        t.replace(t.find(from), from.size(), to);
+        std::ofstream(path) << t;
+        return expectInputError([&] { io::readReducedBagCalibration(path); });
+    };
+    const io::InputError e1 = withLine("skirt 0.5", "skrit 0.5");
+    EXPECT_EQ(e1.getWhere(), path);
+    EXPECT_EQ(e1.getKey(), "skrit");
+    EXPECT_EQ(e1.getLine(),
+              9);  // after the magic, comment, 2 source lines, geometry, gas, board, rim
+    EXPECT_NE(std::string(e1.what()).find("valid: source"), std::string::npos);
+    const io::InputError e2 = withLine("skirt 0.5", "skirt 0.5x");
+    EXPECT_EQ(e2.getKey(), "skirt");
+    EXPECT_NE(std::string(e2.what()).find("\"0.5x\" is not a number"), std::string::npos);
+    const io::InputError e3 = withLine("depths 0 0.01 0.03", "depths 0 0.03 0.01");
+    EXPECT_NE(std::string(e3.what()).find("ascending"), std::string::npos);
+    const io::InputError e4 =
+        expectInputError([] { io::readReducedBagCalibration("/nonexistent/c.txt"); });
+    EXPECT_NE(std::string(e4.what()).find("cannot open"), std::string::npos);
+    std::remove(path.c_str());
+}
+
+TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
+    const std::string shipped = "../../data/reduced-bag/literal-30mm.txt";
+    EXPECT_EQ(readWith("30 mm", "finite-element", "").options.model,
+              cosim::PatientOnArrayOptions::BagModel::FiniteElement);
+    const io::PatientOnArrayScenario r = readWith("30 mm", "reduced", shipped);
+    EXPECT_EQ(r.options.model, cosim::PatientOnArrayOptions::BagModel::Reduced);
+    ASSERT_TRUE(r.options.reduced);
+    EXPECT_DOUBLE_EQ(r.options.reduced->geometry.meshSize, 0.03);
+    const io::InputError e1 = expectInputError([] { readWith("30 mm", "reduced", ""); });
+    EXPECT_EQ(e1.getKey(), "bag.calibration");
+    EXPECT_EQ(e1.getLine(), 3);
+    const io::InputError e2 = expectInputError([] { readWith("30 mm", "fe", ""); });
+    EXPECT_EQ(e2.getKey(), "bag.model");
+    EXPECT_NE(std::string(e2.what()).find("finite-element"), std::string::npos);
+    const io::InputError e3 = expectInputError([&] { readWith("20 mm", "reduced", shipped); });
+    EXPECT_EQ(e3.getKey(), "bag.calibration");
+    EXPECT_NE(std::string(e3.what()).find("bag.mesh_size"), std::string::npos);
+    const io::InputError e4 = expectInputError([] { readWith("30 mm", "reduced", "none.txt"); });
+    EXPECT_NE(std::string(e4.what()).find("no such file"), std::string::npos);
+    const io::InputError e5 =
+        expectInputError([&] { readWith("30 mm", "finite-element", shipped); });
+    EXPECT_EQ(e5.getKey(), "bag.calibration");
+}
