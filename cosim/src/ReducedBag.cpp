@@ -12,7 +12,20 @@ namespace cosim {
 
 namespace {
 
-constexpr double kMinSlope = 0.3;  // least -n_z a contact's area is divided by
+constexpr double kMinSlope = 0.3;      // least -n_z a contact's area is divided by
+constexpr double kColumnOnset = 0.01;  // [m] depth over which the column is blended in
+constexpr double kSlackWidth = 100.0;  // [Pa] width of the smooth turn from slack to taut
+
+// A point nearing a shape's medial axis (deep inside a limb) has a closest surface point that
+// jumps from side to side; its share fades out within kAxisFade of the axis, 1 / |dn/dp|.
+constexpr double kAxisFade = 0.005;  // [m]
+
+double smoothstep(double u, double* du);
+
+double calcAxisFade(const Eigen::Matrix3d& dndp) {
+    const double k = dndp.norm();
+    return k * kAxisFade < 1e-12 ? 1.0 : smoothstep(1.0 / (k * kAxisFade) - 1.0, nullptr);
+}
 
 double smoothstep(double u, double* du) {
     if (u <= 0.0 || u >= 1.0) {
@@ -230,12 +243,12 @@ double ReducedBag::solvePressure(double displaced, double* dPdV) const {
         if (dfdP) *dfdP = V + (P + pa) * dV;
         return (P + pa) * V - mrt;
     };
-    if (f(0.0, nullptr) >= 0.0) {  // slack: the gas fits at ambient pressure
-        if (dPdV) *dPdV = 0.0;
-        return 0.0;
-    }
-    // f is increasing in P where V_free(P) > displaced: Newton from above the root, bracketed.
-    double lo = 0.0, hi = std::max(1e3, m_committed.pressure);
+    // The root P_raw of f (negative where the gas fits slack at ambient pressure, V_free then
+    // extended below its first taut state), bracketed, then the gauge pressure
+    // P = w ln(1 + exp(P_raw / w)): 0 in the slack bag, P_raw in the taut one, smooth
+    // between (w = kSlackWidth).
+    double lo = -0.5 * pa, hi = std::max(1e3, m_committed.pressure);
+    while (f(lo, nullptr) > 0.0 && lo > -0.99 * pa) lo = 0.5 * (lo - pa);
     while (f(hi, nullptr) < 0.0) {
         lo = hi;
         hi *= 2.0;
@@ -251,7 +264,7 @@ double ReducedBag::solvePressure(double displaced, double* dPdV) const {
             lo = P;
         double next = d > 0.0 ? P - v / d : 0.5 * (lo + hi);
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        if (std::abs(next - P) < 1e-10 * (P + pa)) {
+        if (std::abs(next - P) < 1e-10 * pa) {
             P = next;
             break;
         }
@@ -259,8 +272,10 @@ double ReducedBag::solvePressure(double displaced, double* dPdV) const {
     }
     double d = 0.0;
     f(P, &d);
-    if (dPdV) *dPdV = (P + pa) / d;
-    return P;
+    const double u = P / kSlackWidth;
+    const double sig = u > 0.0 ? 1.0 / (1.0 + std::exp(-u)) : std::exp(u) / (1.0 + std::exp(u));
+    if (dPdV) *dPdV = sig * (P + pa) / d;
+    return u > 30.0 ? P : kSlackWidth * std::log1p(std::exp(u));
 }
 
 void ReducedBag::evaluate() {
@@ -284,50 +299,65 @@ void ReducedBag::evaluate() {
         ShapeResult& r = m_results[s];
         r = ShapeResult{};
         const double reach = c.skirt * c.depthMax;  // the widest skirt looked for
+        std::vector<Sample> found;
         for (int i = 0; i < n; ++i) {
             if (shape.calcDistanceLowerBound(top.col(i)) > reach) continue;
             Sample smp;
             double phi = 0.0;
+            smp.point = i;
             smp.t = top.col(i);
             shape.calcContactGeometry(smp.t, &phi, &smp.c, &smp.n, &smp.dndp);
             if (!(phi < reach)) continue;
-            if (phi < 0.0 && smp.n.z() > -kMinSlope) {
-                // The shape lies below the unloaded top here (its closest surface faces up or
-                // sideways): the film meets its underside. Down the column to where it leaves
-                // the shape, and the point that far inside along the normal there.
+            smp.delta = -phi;
+            // Where the shape's closest surface faces sideways or up (it lies below the
+            // unloaded top), the film meets its underside: down the column to where it
+            // leaves the shape, and the point that far inside along the normal there. Blended
+            // in over -n_z from 0.45 to 0.15 and over the first kColumnOnset of depth
+            // (continuous in the pose).
+            const double b = smoothstep((smp.n.z() + 0.45) / 0.3, nullptr) *
+                             smoothstep(-phi / kColumnOnset, nullptr);
+            if (b > 0.0) {
+                Sample col = smp;
                 Vec3 p = smp.t;
                 double d = phi;
                 for (int it = 0; it < 40 && d < -1e-7; ++it) {
                     p.z() += d;
                     d = shape.calcSignedDistance(p, nullptr, nullptr);
                 }
-                Vec3 n;
-                shape.calcSignedDistance(p, nullptr, &n);
+                Vec3 nrm;
+                shape.calcSignedDistance(p, nullptr, &nrm);
                 const double column = smp.t.z() - p.z();
-                smp.t = p - column * std::max(-n.z(), kMinSlope) * n;
-                shape.calcContactGeometry(smp.t, &phi, &smp.c, &smp.n, &smp.dndp);
+                col.t = p - column * std::max(-nrm.z(), kMinSlope) * nrm;
+                shape.calcContactGeometry(col.t, &phi, &col.c, &col.n, &col.dndp);
+                col.delta = -phi;
+                col.blend = b * calcAxisFade(col.dndp);
+                if (col.blend > 0.0) found.push_back(col);
+                smp.blend = 1.0 - b;
             }
-            smp.point = i;
-            smp.delta = -phi;
-            if (smp.delta > 0.0) r.volume += a * smp.delta / std::max(-smp.n.z(), kMinSlope);
-            if (smp.delta > r.depth) {
-                r.depth = smp.delta;
-                r.deepest = int(r.samples.size());
-            }
-            r.samples.push_back(smp);
+            smp.blend *= calcAxisFade(smp.dndp);
+            if (smp.blend > 0.0) found.push_back(smp);
         }
+        // The depth: the mean of delta weighted by a delta over the overlap (smooth in the
+        // pose), and the overlap volume.
+        double s1 = 0.0, s2 = 0.0;
+        for (const Sample& smp : found)
+            if (smp.delta > 0.0) {
+                s1 += a * smp.blend * smp.delta;
+                s2 += a * smp.blend * smp.delta * smp.delta;
+                r.volume += a * smp.blend * smp.delta / std::max(-smp.n.z(), kMinSlope);
+            }
+        r.depthSum1 = s1, r.depthSum2 = s2;
+        r.depth = s1 > 0.0 ? s2 / s1 : 0.0;
         // The skirt: points outside the shape, within skirt x depth of it, touch it too.
         const double skirt = c.skirt * r.depth;
-        std::vector<Sample> kept;
-        for (const Sample& smp : r.samples)
-            if (smp.delta > -skirt && r.depth > 0.0) {
-                if (int(&smp - r.samples.data()) == r.deepest) r.deepest = int(kept.size());
-                kept.push_back(smp);
-            }
-        r.samples.swap(kept);
-        if (r.samples.empty()) r.deepest = -1, r.depth = 0.0, r.volume = 0.0;
-        for (const Sample& smp : r.samples)
-            r.area += a * calcWeight(smp.delta, r.depth, nullptr, nullptr);
+        if (r.depth > 0.0)
+            for (const Sample& smp : found)
+                if (smp.delta > -skirt) r.samples.push_back(smp);
+        for (size_t k = 0; k < r.samples.size(); ++k) {
+            const Sample& smp = r.samples[k];
+            if (r.deepest < 0 || smp.delta > r.samples[r.deepest].delta) r.deepest = int(k);
+            r.area += a * smp.blend * calcWeight(smp.delta, r.depth, nullptr, nullptr);
+        }
         m_displaced += lookup(c.volumeFactor, m_cur.mass, r.depth, nullptr) * r.volume;
     }
     m_cur.pressure = solvePressure(m_displaced, &m_dPdV);
@@ -341,7 +371,7 @@ void ReducedBag::evaluate() {
             const double q = kappa * P * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
                              c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
             const double g = std::max(-smp.n.z(), kMinSlope);
-            const Vec3 f = a * q / g * -smp.n;
+            const Vec3 f = smp.blend * a * q / g * -smp.n;
             w.force += f;
             w.torque += (smp.c - o).cross(f);
             if (q > owner[smp.point]) {
@@ -362,8 +392,9 @@ Eigen::VectorXd ReducedBag::calcContactPressure(int shape) const {
     Eigen::VectorXd p = Eigen::VectorXd::Zero(int(m_gridIndex.size()));
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr);
     for (const Sample& smp : r.samples)
-        p[smp.point] += kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
-                        c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
+        p[smp.point] +=
+            smp.blend * kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
+            c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
     return p;
 }
 
@@ -392,19 +423,19 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, &dKappa);
     const double beta = lookup(c.volumeFactor, m_cur.mass, r.depth, &dBeta);
     Row6 dDepth = Row6::Zero(), dVolume = Row6::Zero();
-    for (const Sample& smp : r.samples) {  // V_s = sum a delta / g over delta > 0
+    // V_s = sum a b delta / g and the depth s2 / s1 over delta > 0 (the blend b held).
+    const double s1 = r.depthSum1, s2 = r.depthSum2;
+    for (const Sample& smp : r.samples) {
         if (!(smp.delta > 0.0)) continue;
         const Mat36 J = jacobian(smp.t);
+        const Row6 dDelta = smp.n.transpose() * J;
         const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
-        const double g = -smp.n.z();
+        const double g = -smp.n.z(), ab = a * smp.blend;
         if (g < kMinSlope)
-            dVolume += a / kMinSlope * smp.n.transpose() * J;
+            dVolume += ab / kMinSlope * dDelta;
         else
-            dVolume += a * (smp.n.transpose() * J / g + smp.delta / (g * g) * dn.row(2));
-    }
-    if (r.deepest >= 0) {
-        const Sample& d = r.samples[r.deepest];
-        dDepth = d.n.transpose() * jacobian(d.t);
+            dVolume += ab * (dDelta / g + smp.delta / (g * g) * dn.row(2));
+        dDepth += ab * (2.0 * smp.delta * s1 - s2) / (s1 * s1) * dDelta;
     }
     const Row6 dP = m_dPdV * (beta * dVolume + r.volume * dBeta * dDepth);
     const Row6 dK = dKappa * dDepth;
@@ -430,8 +461,9 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
             g = kMinSlope;
             dg.setZero();
         }
-        const Vec3 f = a * q / g * -smp.n;
-        const Mat36 df = -a * (smp.n * (dq / g - q / (g * g) * dg) + q / g * dn);
+        const double ab = a * smp.blend;
+        const Vec3 f = ab * q / g * -smp.n;
+        const Mat36 df = -ab * (smp.n * (dq / g - q / (g * g) * dg) + q / g * dn);
         T.bottomRows<3>() += df;
         T.topRows<3>() += -cross(f) * (dc - Ju) + cross(smp.c - o) * df;
     }

@@ -227,7 +227,7 @@ TEST(ReducedBag, GasFlowsReachTheirTargetRollBackAndTheEnvelopeCountsExits) {
     bag.commit();
     EXPECT_EQ(bag.getEnvelopeCounts().mass, 1);
     EXPECT_NEAR(bag.getEnvelopeCounts().worstMass, 5.6e-3, 1e-15);
-    // Slack below the fill mass: no gauge pressure.
+    // Slack below the fill mass: no gauge pressure (the smooth turn to taut is 100 Pa wide).
     bag.setGasMass(3.0e-3);
-    EXPECT_EQ(bag.getGaugePressure(), 0.0);
+    EXPECT_LT(bag.getGaugePressure(), 1.0);
 }

@@ -8,7 +8,8 @@
 /// the bag frame. A shape pressing the bag overlaps the unloaded top; at grid point i (area a,
 /// projected) its depth is delta_i = -(signed distance of the top point to the shape), its
 /// column depth delta_i / (-n_z) (n the shape's outward normal there). Per shape s: the
-/// overlap volume V_s = sum a delta_i / (-n_z), its deepest depth d_s. The gas:
+/// overlap volume V_s = sum a delta_i / (-n_z), its depth d_s = sum a delta_i^2 / sum a
+/// delta_i (over delta_i > 0: the overlap's mean depth weighted by depth). The gas:
 ///   (P + p_amb) (V_free(P) - V_d) = m R T,   V_d = sum_s beta(m, d_s) V_s,   P >= 0,
 /// with V_free(P) the unloaded bag's volume at gauge pressure P (from the calibration's
 /// unloaded states) and beta the calibrated share of displaced volume. The contact pressure at
@@ -118,7 +119,7 @@ class ReducedBag : public Bag {
     double calcPotentialEnergy() const override;
 
     double getGaugePressure() const { return m_cur.pressure; }  ///< [Pa]
-    /// The overlap volume V_s [m^3] and the deepest depth d_s [m] of a shape (current state).
+    /// The overlap volume V_s [m^3] and the depth d_s [m] of a shape (current state).
     double getOverlapVolume(int shape) const;
     double getDepth(int shape) const;
     /// The shape's projected contact area sum a w_i [m^2] (current state).
@@ -132,10 +133,12 @@ class ReducedBag : public Bag {
         double delta;
         Vec3 t, c, n;
         Eigen::Matrix3d dndp;
+        double blend = 1.0;  // share of the point (closest surface or down the column)
     };
     struct ShapeResult {
         std::vector<Sample> samples;
         double volume = 0.0, depth = 0.0, area = 0.0;
+        double depthSum1 = 0.0, depthSum2 = 0.0;  // sum a b delta, sum a b delta^2
         int deepest = -1;  // sample index
         ShapeWrench wrench;
     };

@@ -1,0 +1,623 @@
+// The reduced bag (cosim::ReducedBag, docs/reduced-bag.md) against the finite-element bag it
+// stands for: calibration, validation on other cases, and its cost.
+//
+//   bench_reduced_bag calibrate SCENARIO OUT     FE runs of one bag of the scenario's `bag`
+//                                                section pressed by spheres; writes OUT
+//   bench_reduced_bag validate SCENARIO CAL      FE against reduced on cases not calibrated on
+//   bench_reduced_bag speed CAL                  cost of an advance and a tangent
+//
+// SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
+// tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
+#include <bags/Airbag.h>
+#include <cosim/ReducedBag.h>
+#include <io/ArrayScenario.h>
+#include <io/InputError.h>
+#include <io/ReducedBagFile.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kMmHg = 133.322387415;
+
+std::string shell(const char* cmd) {
+    std::string out;
+    if (FILE* p = popen(cmd, "r")) {
+        char buf[256];
+        while (fgets(buf, sizeof buf, p)) out += buf;
+        pclose(p);
+    }
+    while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+    return out;
+}
+
+// One pressing case: a shape, where it presses (bag frame x, y of its lowest point's
+// column), its tilt about the bag's x axis, the gas mass.
+struct Case {
+    std::string name;
+    std::string kind;  // sphere, ellipsoid, capsule
+    Vec3 size;         // sphere: r; ellipsoid: semi-axes; capsule: r, half length
+    double x = 0.0, y = 0.0, tilt = 0.0, mass = 0.0;
+    double maxDepth = 0.04;
+};
+
+std::shared_ptr<bags::RigidShape> makeShape(const Case& c) {
+    if (c.kind == "sphere") return bags::makeEllipsoid(Vec3::Constant(c.size.x()));
+    if (c.kind == "ellipsoid") return bags::makeEllipsoid(c.size);
+    return bags::makeCapsule(c.size.x(), c.size.y());  // along frame z
+}
+
+// The shape's pose with its frame origin at (x, y, z): capsules lie along the bag's y
+// (across the bag), the others as made; then tilted about x.
+Eigen::Isometry3d pose(const Case& c, double z) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translate(Vec3(c.x, c.y, z));
+    X.rotate(Eigen::AngleAxisd(c.tilt, Vec3::UnitX()));
+    if (c.kind == "capsule") X.rotate(Eigen::AngleAxisd(kPi / 2, Vec3::UnitX()));
+    return X;
+}
+
+struct Row {
+    double depth = 0.0;                                // shape travel from touching [m]
+    double forceFE = 0.0, forceRed = 0.0;              // vertical [N]
+    double pFE = 0.0, pRed = 0.0;                      // gauge [Pa]
+    double vFE = 0.0;                                  // [m^3]
+    double peakFE = 0.0, peakRed = 0.0;                // contact pressure [Pa]
+    double overlap = 0.0, area = 0.0, redDepth = 0.0;  // reduced geometry
+    double matFE = 0.0, matRed = 0.0;                  // sum p A (normal force) [N]
+    double z = 0.0;                                    // the shape's height [m]
+    double areaFE = 0.0;                               // nodes in contact [m^2]
+};
+
+// The height of the shape's origin at which it first touches the FE bag's nodes (bisection).
+double touchHeight(const Case& c, const bags::Airbag& bag) {
+    auto probe = makeShape(c);
+    auto inside = [&](double z) {
+        probe->setPose(pose(c, z));
+        const Eigen::Matrix3Xd& x = bag.getPositions();
+        for (int n = 0; n < x.cols(); ++n)
+            if (probe->calcSignedDistance(x.col(n), nullptr, nullptr) < 0.0) return true;
+        return false;
+    };
+    double lo = -0.2, hi = 0.8;
+    while (hi - lo > 1e-6) (inside(0.5 * (lo + hi)) ? lo : hi) = 0.5 * (lo + hi);
+    return hi;
+}
+
+// Presses the case into the FE bag in 2 mm steps (to maxDepth, 400 N or a failed step);
+// each row keeps the shape's height (Row::z).
+std::vector<Row> pressFE(const Case& c, const bags::AirbagSpec& spec,
+                         const bags::RigidContact::Options& contact) {
+    bags::Airbag bag(spec);
+    auto shape = makeShape(c);
+    shape->setPose(pose(c, 1.0));
+    const int s = bag.addShape(shape, contact);
+    bag.inflate(c.mass);
+    const double z0 = touchHeight(c, bag);
+    const Eigen::VectorXd areas = bag.getMesh().calcNodalAreas();
+    std::vector<Row> rows;
+    for (double d = 0.002; d <= c.maxDepth + 1e-9; d += 0.002) {
+        bag.setShapePose(s, pose(c, z0 - d));
+        if (!bag.advance(1.0).converged) break;
+        bag.commit();
+        Row r;
+        r.depth = d;
+        r.z = z0 - d;
+        r.forceFE = bag.calcShapeWrench(s).force.z();
+        double pv = 0.0;
+        for (int k = 0; k < bag.getNumChambers(); ++k) {
+            const bags::ChamberState cs = bag.getChamberState(k);
+            r.vFE += cs.volume;
+            pv += cs.gaugePressure * cs.volume;
+        }
+        r.pFE = pv / r.vFE;
+        const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
+        r.peakFE = p.maxCoeff();
+        r.matFE = p.dot(areas);
+        for (int n = 0; n < p.size(); ++n)
+            if (p[n] > 0.0) r.areaFE += areas[n];
+        rows.push_back(r);
+        if (r.forceFE > 400.0) break;
+    }
+    return rows;
+}
+
+// The reduced bag along the same poses: fills the rows' reduced fields.
+void replay(const Case& c, std::vector<Row>& rows,
+            std::shared_ptr<const cosim::ReducedBagCalibration> cal) {
+    cosim::ReducedBag red(cal, Eigen::Isometry3d::Identity());
+    auto rs = makeShape(c);
+    rs->setPose(pose(c, 1.0));
+    red.addShape(rs);
+    red.setGasMass(c.mass);
+    for (Row& r : rows) {
+        cosim::ShapeState st;
+        st.X_GS = pose(c, r.z);
+        red.setShapeState(0, st);
+        red.advance(1.0);
+        red.commit();
+        r.forceRed = red.calcWrench(0).force.z();
+        r.pRed = red.getGaugePressure();
+        const Eigen::VectorXd q = red.calcContactPressure(0);
+        r.peakRed = q.maxCoeff();
+        r.matRed = q.dot(red.getPressureAreas());
+        r.overlap = red.getOverlapVolume(0);
+        r.area = red.getContactArea(0);
+        r.redDepth = red.getDepth(0);
+    }
+}
+
+std::vector<Row> press(const Case& c, const bags::AirbagSpec& spec,
+                       const bags::RigidContact::Options& contact,
+                       std::shared_ptr<const cosim::ReducedBagCalibration> cal) {
+    std::vector<Row> rows = pressFE(c, spec, contact);
+    replay(c, rows, cal);
+    return rows;
+}
+
+struct Loaded {
+    io::PatientOnArrayScenario sc;
+};
+
+io::PatientOnArrayScenario readScenario(const std::string& path) {
+    return io::readPatientOnArrayScenario(io::ScenarioFile::load(path));
+}
+
+// The unloaded bag at a mass: gauge pressure, volume, its top heights on the grid.
+void unloaded(const bags::AirbagSpec& spec, double mass, cosim::ReducedBagCalibration& c,
+              bool setGrid) {
+    bags::Airbag bag(spec);
+    bag.inflate(mass);
+    const Eigen::Matrix3Xd& x = bag.getPositions();
+    if (setGrid) {
+        const Vec3 lo = x.rowwise().minCoeff(), hi = x.rowwise().maxCoeff();
+        // Grid a little wider than this (the fullest) bag: nodes of the top at each column.
+        c.pitch = 0.01;
+        c.x0 = std::floor(lo.x() / c.pitch) * c.pitch + 0.5 * c.pitch;
+        c.y0 = std::floor(lo.y() / c.pitch) * c.pitch + 0.5 * c.pitch;
+        c.nx = int(std::ceil((hi.x() - c.x0) / c.pitch)) + 1;
+        c.ny = int(std::ceil((hi.y() - c.y0) / c.pitch)) + 1;
+    }
+    double pv = 0.0, v = 0.0;
+    for (int k = 0; k < bag.getNumChambers(); ++k) {
+        const bags::ChamberState cs = bag.getChamberState(k);
+        v += cs.volume;
+        pv += cs.gaugePressure * cs.volume;
+    }
+    c.gaugePressures.push_back(pv / v);
+    c.volumes.push_back(v);
+    // The highest point of the bag's surface over each grid column (ray against triangles).
+    const Eigen::Matrix3Xi& tris = bag.getMesh().tris;
+    Eigen::MatrixXd top = Eigen::MatrixXd::Constant(c.nx, c.ny, std::nan(""));
+    for (int t = 0; t < tris.cols(); ++t) {
+        const Vec3 a = x.col(tris(0, t)), b = x.col(tris(1, t)), d = x.col(tris(2, t));
+        const double det = (b.x() - a.x()) * (d.y() - a.y()) - (d.x() - a.x()) * (b.y() - a.y());
+        if (std::abs(det) < 1e-14) continue;
+        const double xmin = std::min({a.x(), b.x(), d.x()}), xmax = std::max({a.x(), b.x(), d.x()});
+        const double ymin = std::min({a.y(), b.y(), d.y()}), ymax = std::max({a.y(), b.y(), d.y()});
+        for (int ix = std::max(0, int(std::ceil((xmin - c.x0) / c.pitch)));
+             ix < c.nx && c.x0 + ix * c.pitch <= xmax; ++ix)
+            for (int iy = std::max(0, int(std::ceil((ymin - c.y0) / c.pitch)));
+                 iy < c.ny && c.y0 + iy * c.pitch <= ymax; ++iy) {
+                const double px = c.x0 + ix * c.pitch, py = c.y0 + iy * c.pitch;
+                const double u =
+                    ((px - a.x()) * (d.y() - a.y()) - (d.x() - a.x()) * (py - a.y())) / det;
+                const double w =
+                    ((b.x() - a.x()) * (py - a.y()) - (px - a.x()) * (b.y() - a.y())) / det;
+                if (u < -1e-12 || w < -1e-12 || u + w > 1 + 1e-12) continue;
+                const double z = a.z() + u * (b.z() - a.z()) + w * (d.z() - a.z());
+                if (!(top(ix, iy) >= z)) top(ix, iy) = z;
+            }
+    }
+    // Columns whose top is the flat bottom panel are not bag top.
+    for (int i = 0; i < top.size(); ++i)
+        if (top(i) < 2e-3) top(i) = std::nan("");
+    c.top.push_back(top);
+}
+
+std::vector<double> kMasses = {2.5e-3, 3.0e-3, 3.5e-3, 4.0e-3, 4.5e-3,
+                               5.0e-3, 5.5e-3, 6.0e-3, 6.5e-3};
+
+// Calibration cases: spheres of 70 and 150 mm at the apex ridge and on the gentle slope.
+std::vector<Case> calibrationCases(const bags::DoubleWedgeParams& g, double mass) {
+    const double apex = g.calcApexX(), gentle = apex + 0.5 * (g.longSide - apex);
+    std::vector<Case> cs;
+    for (double r : {0.04, 0.10, 0.22})
+        for (double x : {apex, gentle}) {
+            Case c;
+            c.kind = "sphere";
+            c.size = Vec3::Constant(r);
+            c.x = x;
+            c.mass = mass;
+            c.maxDepth = 0.08;
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "sphere %.0f mm at x %.0f mm", r * 1e3, x * 1e3);
+            c.name = buf;
+            cs.push_back(c);
+        }
+    return cs;
+}
+
+// kappa = F / (P A) and beta = (V_free(P) - V) / V_overlap of a run's taut rows (P > 300 Pa),
+// against the reduced depth, interpolated onto the depth nodes (NaN where not reached).
+void sampleFactors(const std::vector<Row>& rows, const cosim::ReducedBagCalibration& c,
+                   Eigen::VectorXd& kappa, Eigen::VectorXd& beta) {
+    std::vector<std::pair<double, double>> pv;  // the taut unloaded states, as the model
+    for (size_t k = 0; k < c.masses.size(); ++k)
+        if (c.gaugePressures[k] > 200.0) pv.emplace_back(c.gaugePressures[k], c.volumes[k]);
+    auto vfree = [&](double P) {
+        size_t k = 0;
+        while (k + 2 < pv.size() && P > pv[k + 1].first) ++k;
+        const double sl = (pv[k + 1].second - pv[k].second) / (pv[k + 1].first - pv[k].first);
+        return pv[k].second + sl * (P - pv[k].first);
+    };
+    std::vector<std::array<double, 3>> smp;
+    for (const Row& r : rows)
+        if (r.pFE > 300.0 && r.area > 0.0 && r.overlap > 0.0 && r.redDepth >= 0.002)
+            smp.push_back(
+                {r.redDepth, r.forceFE / (r.pFE * r.area), (vfree(r.pFE) - r.vFE) / r.overlap});
+    const int n = int(c.depths.size());
+    kappa = beta = Eigen::VectorXd::Constant(n, std::nan(""));
+    for (int j = 0; j < n; ++j)
+        for (size_t k = 0; k + 1 < smp.size(); ++k)
+            if (smp[k][0] <= c.depths[j] && c.depths[j] <= smp[k + 1][0] &&
+                smp[k + 1][0] > smp[k][0]) {
+                const double u = (c.depths[j] - smp[k][0]) / (smp[k + 1][0] - smp[k][0]);
+                kappa[j] = (1 - u) * smp[k][1] + u * smp[k + 1][1];
+                beta[j] = (1 - u) * smp[k][2] + u * smp[k + 1][2];
+                break;
+            }
+}
+
+int calibrate(const std::string& scenario, const std::string& out) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const auto start = std::chrono::steady_clock::now();
+    auto cal = std::make_shared<cosim::ReducedBagCalibration>();
+    cosim::ReducedBagCalibration& c = *cal;
+    c.geometry = spec.geometry;
+    c.gasConstant = spec.gas.getSpecificGasConstant();
+    c.temperature = spec.gas.temperature;
+    c.ambientPressure = spec.gas.ambientPressure;
+    c.boardPenalty = spec.bedContact.pressurePenalty;
+    c.masses = kMasses;
+    // The grid from the fullest bag, then every mass's unloaded state.
+    {
+        cosim::ReducedBagCalibration tmp;
+        unloaded(spec, kMasses.back(), tmp, true);
+        c.nx = tmp.nx, c.ny = tmp.ny, c.x0 = tmp.x0, c.y0 = tmp.y0, c.pitch = tmp.pitch;
+    }
+    for (double m : kMasses) unloaded(spec, m, c, false);
+    c.depths = {0.0, 0.004, 0.008, 0.012, 0.016, 0.02, 0.025, 0.03, 0.04, 0.05, 0.06, 0.08};
+    const int nm = int(kMasses.size()), nd = int(c.depths.size());
+    c.pressureFactor = Eigen::MatrixXd::Ones(nm, nd);
+    c.volumeFactor = c.pressureFactor;
+    c.depthMax = 0.08;
+    c.radiusMin = 0.04;
+    c.radiusMax = 0.22;
+    c.tiltMax = 40.0 * kPi / 180.0;
+    std::printf("unloaded: mass [g], gauge pressure [kPa], volume [L]\n");
+    for (int i = 0; i < nm; ++i)
+        std::printf("  %.2f %8.3f %7.4f\n", kMasses[i] * 1e3, c.gaugePressures[i] * 1e-3,
+                    c.volumes[i] * 1e3);
+    // The FE runs, once.
+    std::vector<Case> cases;
+    std::vector<std::vector<Row>> runs;
+    for (int i = 0; i < nm; ++i)
+        for (const Case& cs : calibrationCases(spec.geometry, kMasses[i])) {
+            cases.push_back(cs);
+            runs.push_back(pressFE(cs, spec, sc.options.contact));
+        }
+    // The skirt: the one whose contact area matches the FE's (the nodes in contact) best,
+    // least mean |ln(A_reduced / A_FE)| over the taut steps above 5 N. Also shown: the spread
+    // of kappa (standard deviation over mean over the runs at a mass and depth).
+    double bestMiss = 1e300, bestSkirt = 0.0, bestSpread = 0.0;
+    std::vector<std::vector<Eigen::VectorXd>> bestK, bestB;
+    std::printf(
+        "skirt: mean |ln(A_reduced / A_FE)|, mean spread of kappa over the runs at a "
+        "mass and depth\n");
+    for (double skirt : {0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0}) {
+        c.skirt = skirt;
+        std::vector<std::vector<Eigen::VectorXd>> K(nm), B(nm);
+        for (size_t r = 0; r < runs.size(); ++r) {
+            replay(cases[r], runs[r], cal);
+            Eigen::VectorXd k, b;
+            sampleFactors(runs[r], c, k, b);
+            const int i =
+                int(std::find(kMasses.begin(), kMasses.end(), cases[r].mass) - kMasses.begin());
+            K[i].push_back(k);
+            B[i].push_back(b);
+        }
+        double spread = 0.0;
+        int count = 0;
+        for (int i = 0; i < nm; ++i)
+            for (int j = 0; j < nd; ++j) {
+                double s1 = 0, s2 = 0;
+                int n = 0;
+                for (const Eigen::VectorXd& k : K[i])
+                    if (std::isfinite(k[j])) s1 += k[j], s2 += k[j] * k[j], ++n;
+                if (n < 2) continue;
+                const double mean = s1 / n;
+                spread += std::sqrt(std::max(0.0, s2 / n - mean * mean)) / mean;
+                ++count;
+            }
+        spread /= std::max(1, count);
+        double miss = 0.0;
+        int steps = 0;
+        for (const std::vector<Row>& rows : runs)
+            for (const Row& r : rows)
+                if (r.pFE > 300.0 && r.forceFE > 5.0 && r.area > 0.0 && r.areaFE > 0.0)
+                    miss += std::abs(std::log(r.area / r.areaFE)), ++steps;
+        miss /= std::max(1, steps);
+        std::printf("  %.2f: %.3f, %.3f (%d steps, %d mass-depth cells)\n", skirt, miss, spread,
+                    steps, count);
+        if (miss < bestMiss)
+            bestMiss = miss, bestSpread = spread, bestSkirt = skirt, bestK = K, bestB = B;
+    }
+    c.skirt = bestSkirt;
+    // The envelope's depth: the deepest (mean) depth any calibration run reached.
+    c.depthMax = 0.0;
+    for (const std::vector<Row>& rows : runs)
+        for (const Row& r : rows) c.depthMax = std::max(c.depthMax, r.redDepth);
+    // Averages over the runs; nodes without samples take the nearest node of their row,
+    // rows without any the nearest row.
+    std::vector<bool> rowOk(nm, false);
+    Eigen::MatrixXi count = Eigen::MatrixXi::Zero(nm, nd);
+    for (int i = 0; i < nm; ++i)
+        for (int j = 0; j < nd; ++j) {
+            double sk = 0, sb = 0;
+            for (size_t r = 0; r < bestK[i].size(); ++r)
+                if (std::isfinite(bestK[i][r][j]))
+                    sk += bestK[i][r][j], sb += bestB[i][r][j], ++count(i, j);
+            if (count(i, j) > 0) {
+                c.pressureFactor(i, j) = sk / count(i, j);
+                c.volumeFactor(i, j) = std::max(0.05, sb / count(i, j));
+                rowOk[i] = true;
+            }
+        }
+    for (int i = 0; i < nm; ++i)
+        for (int j = 0; j < nd; ++j)
+            if (count(i, j) == 0 && rowOk[i]) {
+                int best = -1;
+                for (int k = 0; k < nd; ++k)
+                    if (count(i, k) > 0 && (best < 0 || std::abs(k - j) < std::abs(best - j)))
+                        best = k;
+                c.pressureFactor(i, j) = c.pressureFactor(i, best);
+                c.volumeFactor(i, j) = c.volumeFactor(i, best);
+            }
+    for (int i = 0; i < nm; ++i)
+        if (!rowOk[i]) {
+            int best = -1;
+            for (int k = 0; k < nm; ++k)
+                if (rowOk[k] && (best < 0 || std::abs(k - i) < std::abs(best - i))) best = k;
+            if (best < 0) throw std::runtime_error("no taut samples at any mass");
+            c.pressureFactor.row(i) = c.pressureFactor.row(best);
+            c.volumeFactor.row(i) = c.volumeFactor.row(best);
+        }
+    std::printf("skirt %.2f; kappa (rows mass, columns depth [mm]; runs averaged):\n       ",
+                c.skirt);
+    for (double d : c.depths) std::printf(" %6.0f", d * 1e3);
+    for (int i = 0; i < nm; ++i) {
+        std::printf("\n  %.2f g", kMasses[i] * 1e3);
+        for (int j = 0; j < nd; ++j) std::printf(" %6.3f", c.pressureFactor(i, j));
+    }
+    std::printf("\nbeta:\n");
+    for (int i = 0; i < nm; ++i) {
+        std::printf("  %.2f g", kMasses[i] * 1e3);
+        for (int j = 0; j < nd; ++j) std::printf(" %6.3f", c.volumeFactor(i, j));
+        std::printf("\n");
+    }
+    std::printf("runs per cell:\n%s\n",
+                [&] {
+                    std::ostringstream o;
+                    o << count;
+                    return o.str();
+                }()
+                    .c_str());
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::string commit = shell("git rev-parse --short HEAD 2>/dev/null");
+    if (!shell("git status --porcelain --untracked-files=no 2>/dev/null").empty())
+        commit += "+changes";
+    std::ostringstream src;
+    src << "bench_reduced_bag calibrate " << scenario << " " << out << "\n"
+        << "commit " << (commit.empty() ? "unknown" : commit) << ", " << secs << " s\n"
+        << "bag: reading " << sc.bagReading << ", mesh " << spec.geometry.meshSize
+        << " m, self-contact " << (spec.selfContact ? "on" : "off") << ", contact penalty "
+        << sc.options.contact.pressurePenalty << " Pa/m, force tolerance " << spec.forceTolerance
+        << " N, bending " << spec.bendingStiffness << " N m\n"
+        << "calibration shapes: spheres 40, 100 and 220 mm at the apex ridge and the gentle "
+           "slope's middle, pressed vertically in 2 mm steps to 80 mm or 400 N; masses 2.5 to "
+           "6.5 g; skirt chosen from 0 to 3 by the contact area (mean |ln(A/A_FE)| "
+        << bestMiss << ", spread of kappa " << bestSpread << ")";
+    c.source = src.str();
+    io::writeReducedBagCalibration(out, c);
+    std::printf("wrote %s (%.1f s)\n", out.c_str(), secs);
+    return 0;
+}
+
+// Validation cases: shapes, positions, tilts and masses not used for the calibration.
+std::vector<Case> validationCases(const bags::DoubleWedgeParams& g) {
+    const double apex = g.calcApexX();
+    std::vector<Case> cs;
+    auto add = [&](const std::string& name, const std::string& kind, Vec3 size, double x, double y,
+                   double tiltDeg, double mass) {
+        Case c;
+        c.name = name, c.kind = kind, c.size = size, c.x = x, c.y = y;
+        c.tilt = tiltDeg * kPi / 180.0, c.mass = mass;
+        c.maxDepth = 0.08;
+        cs.push_back(c);
+    };
+    for (double m : {2.75e-3, 3.25e-3, 4.25e-3, 5.25e-3, 6.25e-3}) {
+        add("sphere 70 mm, x 0.30 y +20 mm", "sphere", Vec3::Constant(0.07), 0.30, 0.02, 0, m);
+        add("ellipsoid 160x110x90, apex", "ellipsoid", Vec3(0.16, 0.11, 0.09), apex, 0.0, 0, m);
+        add("capsule r 60 mm across, x 0.06", "capsule", Vec3(0.06, 0.10, 0), 0.06, 0.0, 0, m);
+        add("ellipsoid 120x90x80 tilted 25 deg", "ellipsoid", Vec3(0.12, 0.09, 0.08), apex + 0.05,
+            -0.01, 25, m);
+    }
+    return cs;
+}
+
+int validate(const std::string& scenario, const std::string& calPath) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const auto cal = io::readReducedBagCalibration(calPath);
+    // Fill mass: where the unloaded gauge pressure passes 200 Pa (interpolated).
+    double fill = cal->masses.front();
+    for (size_t i = 0; i + 1 < cal->masses.size(); ++i)
+        if (cal->gaugePressures[i] <= 200.0 && cal->gaugePressures[i + 1] > 200.0) {
+            const double u = (200.0 - cal->gaugePressures[i]) /
+                             (cal->gaugePressures[i + 1] - cal->gaugePressures[i]);
+            fill = cal->masses[i] + u * (cal->masses[i + 1] - cal->masses[i]);
+        }
+    std::printf("calibration %s; fill mass (200 Pa unloaded) %.2f g\n", calPath.c_str(),
+                fill * 1e3);
+    std::printf(
+        "per case, steps with an FE force above 5 N: force error rms / worst [%%], gas "
+        "pressure error rms [kPa] and [%%], peak contact pressure reduced/FE at the "
+        "deepest step, sum p A / force (reduced)\n");
+    struct Acc {
+        double f2 = 0, fmax = 0, p2 = 0, pr2 = 0, peak = 0;
+        int n = 0, cases = 0;
+    };
+    std::map<std::string, Acc> regimes;
+    for (const Case& c : validationCases(spec.geometry)) {
+        const std::vector<Row> rows = press(c, spec, sc.options.contact, cal);
+        Acc a;
+        double consistency = 0.0, lastPeak = 0.0;
+        for (const Row& r : rows) {
+            if (r.forceFE < 5.0) continue;
+            const double e = (r.forceRed - r.forceFE) / r.forceFE;
+            a.f2 += e * e;
+            a.fmax = std::max(a.fmax, std::abs(e));
+            a.p2 += (r.pRed - r.pFE) * (r.pRed - r.pFE);
+            const double ep = r.pFE > 200.0 ? (r.pRed - r.pFE) / r.pFE : 0.0;
+            a.pr2 += ep * ep;
+            ++a.n;
+            lastPeak = r.peakFE > 0 ? r.peakRed / r.peakFE : 0.0;
+            if (r.forceRed > 1.0)
+                consistency = std::max(consistency, std::abs(r.matRed - 0.0) > 0
+                                                        ? std::abs(r.matRed / r.forceRed - 1.0)
+                                                        : 0.0);
+        }
+        const std::string regime = c.mass >= fill ? "taut" : "slack";
+        std::printf(
+            "  %-36s %.2f g %-5s %2d steps, to %5.1f N: force %5.1f / %5.1f %%, P %6.2f "
+            "kPa %5.1f %%, peak %.2f, sum pA/F-1 %.3f\n",
+            c.name.c_str(), c.mass * 1e3, regime.c_str(), a.n,
+            rows.empty() ? 0.0 : rows.back().forceFE, a.n ? 100 * std::sqrt(a.f2 / a.n) : 0.0,
+            100 * a.fmax, a.n ? 1e-3 * std::sqrt(a.p2 / a.n) : 0.0,
+            a.n ? 100 * std::sqrt(a.pr2 / a.n) : 0.0, lastPeak, consistency);
+        Acc& g = regimes[regime];
+        g.f2 += a.f2, g.p2 += a.p2, g.pr2 += a.pr2, g.n += a.n, g.fmax = std::max(g.fmax, a.fmax);
+        g.peak += lastPeak;
+        ++g.cases;
+    }
+    std::printf("per regime (all steps above 5 N):\n");
+    for (const auto& [name, g] : regimes)
+        std::printf(
+            "  %-5s %2d cases %3d steps: force rms %.1f %% worst %.1f %%; gas pressure "
+            "rms %.2f kPa (%.1f %%); peak contact pressure reduced/FE %.2f on average\n",
+            name.c_str(), g.cases, g.n, g.n ? 100 * std::sqrt(g.f2 / g.n) : 0.0, 100 * g.fmax,
+            g.n ? 1e-3 * std::sqrt(g.p2 / g.n) : 0.0, g.n ? 100 * std::sqrt(g.pr2 / g.n) : 0.0,
+            g.cases ? g.peak / g.cases : 0.0);
+    return 0;
+}
+
+// One case step by step: FE against reduced.
+int trace(const std::string& scenario, const std::string& calPath, char** a) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const auto cal = io::readReducedBagCalibration(calPath);
+    Case c;
+    c.kind = a[0];
+    c.size = Vec3(std::stod(a[1]), std::stod(a[2]), std::stod(a[3]));
+    c.x = std::stod(a[4]), c.y = std::stod(a[5]), c.tilt = std::stod(a[6]) * kPi / 180;
+    c.mass = std::stod(a[7]) * 1e-3;
+    c.maxDepth = 0.08;
+    std::printf(
+        "travel_mm F_FE F_red P_FE_kPa P_red_kPa V_FE_L overlap_L area_cm2 depth_mm "
+        "peak_FE_kPa peak_red_kPa sumpA_FE sumpA_red\n");
+    for (const Row& r : press(c, spec, sc.options.contact, cal))
+        std::printf(
+            "%5.1f %7.2f %7.2f %7.3f %7.3f %7.4f %7.4f %7.1f %6.1f %7.2f %7.2f %7.2f %7.2f\n",
+            r.depth * 1e3, r.forceFE, r.forceRed, r.pFE * 1e-3, r.pRed * 1e-3, r.vFE * 1e3,
+            r.overlap * 1e3, r.area * 1e4, r.redDepth * 1e3, r.peakFE * 1e-3, r.peakRed * 1e-3,
+            r.matFE, r.matRed);
+    return 0;
+}
+
+int speed(const std::string& calPath) {
+    const auto cal = io::readReducedBagCalibration(calPath);
+    cosim::ReducedBag bag(cal, Eigen::Isometry3d::Identity());
+    Case c;
+    c.kind = "ellipsoid";
+    c.size = Vec3(0.16, 0.11, 0.09);
+    c.x = cal->geometry.calcApexX();
+    bag.addShape(makeShape(c));
+    bag.setGasMass(4.5e-3);
+    // The top under the shape: touch, then 15 mm in.
+    double z = 0.5;
+    cosim::ShapeState st;
+    for (; z > 0.0; z -= 1e-4) {
+        st.X_GS = pose(c, z);
+        bag.setShapeState(0, st);
+        bag.advance(0.0);
+        if (bag.getDepth(0) > 0.015) break;
+    }
+    const int n = 2000;
+    auto t0 = std::chrono::steady_clock::now();
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) {
+        st.X_GS = pose(c, z + 1e-5 * (i % 7));
+        bag.setShapeState(0, st);
+        bag.advance(0.01);
+        sum += bag.calcWrench(0).force.z();
+    }
+    auto t1 = std::chrono::steady_clock::now();
+    for (int i = 0; i < n; ++i) sum += bag.calcWrenchTangent(0)(5, 5);
+    auto t2 = std::chrono::steady_clock::now();
+    const double adv = std::chrono::duration<double>(t1 - t0).count() / n;
+    const double tan = std::chrono::duration<double>(t2 - t1).count() / n;
+    std::printf(
+        "one ellipsoid 15 mm into a 4.5 g bag (%d grid points): advance + wrench %.1f us, "
+        "tangent %.1f us (checksum %.3g)\n",
+        int(bag.getPressurePoints().cols()), adv * 1e6, tan * 1e6, sum);
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        const std::string mode = argc > 1 ? argv[1] : "";
+        if (mode == "calibrate" && argc == 4) return calibrate(argv[2], argv[3]);
+        if (mode == "validate" && argc == 4) return validate(argv[2], argv[3]);
+        if (mode == "speed" && argc == 3) return speed(argv[2]);
+        if (mode == "trace" && argc == 12) return trace(argv[2], argv[3], argv + 4);
+        std::cerr << "usage: bench_reduced_bag calibrate SCENARIO OUT | validate SCENARIO CAL | "
+                     "speed CAL\n";
+        return 2;
+    } catch (const io::InputError& e) {
+        std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "bench_reduced_bag: " << e.what() << "\n";
+        return 1;
+    }
+}
