@@ -328,8 +328,11 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
           << " of his " << fmt("%.2f N", weight) << " ("
           << fmt("%+.3f %%", 100.0 * (carried - weight) / weight) << "); the mat reads "
           << fmt("%.2f N", mat.calcTotalForce()) << " (normal force, "
-          << fmt("%.2f N", mat.getOffMatForce()) << " off the mat)\n"
-          << "tilt: pelvis " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk) * kDeg)
+          << fmt("%.2f N", mat.getOffMatForce()) << " off the mat)\n";
+    if (const double board = poa->calcBoardForce(); board > 0.0)
+        table << "the bed board carries " << fmt("%.2f N", board)
+              << " of him directly (pressed through slack bags or beside the array)\n";
+    table << "tilt: pelvis " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk) * kDeg)
           << ", thorax " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk) * kDeg)
           << " (positive: turned onto his left side)\n"
           << "  region           PPI [mmHg]  mean [mmHg]  area [cm^2]  force [N]\n";

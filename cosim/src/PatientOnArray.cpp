@@ -28,6 +28,7 @@ void PatientOnArrayOptions::validate() const {
                 "scenario's bag reading); valid: a calibration of this bag");
     }
     body.validate();
+    if (boardContact) board.validate();
     integrator.validate();
     coupling.validate();
 }
@@ -41,6 +42,7 @@ struct PatientOnArray::Impl {
     std::vector<int> linkParticipant;  // per link
     std::vector<Link> links;           // per pair
     std::unique_ptr<Coupling> coupling;
+    const body::PlaneSupport* board = nullptr;  // the body's bed board (owned by the model)
     double clearance = 0.0;
     double gravity = 0.0;
 };
@@ -103,6 +105,8 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
     body::BodyModel& model = *m.model;
     m.body = std::make_unique<BodyParticipant>(model.updSystem(), model.updForces(),
                                                options.integrator);
+
+    if (options.boardContact) m.board = &body::addPlaneSupport(model, options.board);
 
     // Where the shapes lie in the posture (lowest point on the bed board) picks the pairs.
     model.updSystem().realizeTopology();
@@ -216,6 +220,14 @@ std::vector<double> PatientOnArray::calcBagForces() const {
     for (size_t i = 0; i < m_impl->linkParticipant.size(); ++i)
         f[m_impl->linkParticipant[i]] += m_impl->coupling->getLinkWrench(int(i)).force.z();
     return f;
+}
+
+double PatientOnArray::calcBoardForce() const {
+    const Impl& m = *m_impl;
+    if (!m.board) return 0.0;
+    const SimTK::State& s = m.body->getState();
+    m.model->getSystem().realize(s, SimTK::Stage::Velocity);
+    return m.board->calcSupportLoad(s).force[2];
 }
 
 double PatientOnArray::calcBagForce() const {

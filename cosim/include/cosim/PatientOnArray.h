@@ -16,6 +16,7 @@
 
 #include <bags/Airbag.h>
 #include <body/BodyModel.h>
+#include <body/SupportContact.h>
 
 #include <memory>
 #include <vector>
@@ -42,6 +43,21 @@ struct PatientOnArrayOptions {
     double pairMargin = 0.03;  ///< [m] findShapeBagPairs() margin around each flat footprint
     double dropHeight = 0.0;   ///< [m] released this far above the touching height
     body::BodyModelOptions body;
+    /// The bed board under the bags as the body feels it where it presses through a bag (a
+    /// slack or bottomed bag, or the body beside the array): body::PlaneSupport at z = 0,
+    /// stiffer than the default support (1e7 Pa/m: 2 mm under 20 kPa) so that a body on the
+    /// board is on a hard surface. The bags rest on the board on their own (their base
+    /// nodes); this is only the body's side. boardContact false: no board for the body (it
+    /// may then sink through slack bags and below the board).
+    bool boardContact = true;
+    body::PlaneSupportOptions board = makeBoardOptions();
+    static body::PlaneSupportOptions makeBoardOptions() {
+        body::PlaneSupportOptions o;
+        o.height = 0.0;
+        o.stiffness = 1.0e7;
+        o.damping = 2.0e5;
+        return o;
+    }
     BodyIntegratorOptions integrator;
     CouplingOptions coupling;
     /// @throws std::invalid_argument naming the option (the layout's errors name their keys).
@@ -82,6 +98,9 @@ class PatientOnArray {
     double calcBagForce() const;
     /// The same per bag of getBagIndices() [N].
     std::vector<double> calcBagForces() const;
+    /// Vertical force [N] the bed board exerts on the body directly (pressed through a bag,
+    /// or beside the array) at the current state; 0 without boardContact.
+    double calcBoardForce() const;
     /// The body's weight m g [N] with the model's gravity.
     double getWeight() const;
     /// Mechanical energy [J]: the body's kinetic and potential energy (gravity, joint springs
