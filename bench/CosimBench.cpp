@@ -180,10 +180,10 @@ int main(int argc, char** argv) {
     const double buildWall = now() - tBuild;
     const int np = int(poa.getBagIndices().size());
     int nodes = 0;
-    for (int i = 0; i < np; ++i) nodes += poa.getBag(i).getAirbag().getMesh().getNumNodes();
+    for (int i = 0; i < np; ++i) nodes += int(poa.getBag(i).getPressurePoints().cols());
     std::printf("  built in %.2f s: %d bags under him (%d nodes each on average), %zu pairs\n",
                 buildWall, np, np ? nodes / np : 0, poa.getPairs().size());
-    std::vector<cosim::BagParticipant*> bags(size_t(o.layout.rows) * o.layout.columns, nullptr);
+    std::vector<cosim::Bag*> bags(size_t(o.layout.rows) * o.layout.columns, nullptr);
     for (int i = 0; i < np; ++i) bags[poa.getBagIndices()[i]] = &poa.updBag(i);
 
     cosim::Coupling& coupling = poa.updCoupling();
