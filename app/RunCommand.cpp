@@ -467,6 +467,9 @@ int runRunCommand(int argc, char** argv) {
     if (!sc.rig.isNone())
         std::cout << "  " << io::kRigReadingsCsv
                   << "       the instruments' readings with the scenario's rig effects\n";
+    if (io::findInvertibleKOfM(result).size() >= 2)
+        std::cout << "  " << io::kKOfMYaml
+                  << "            k(m) and its inverse for a target-mass controller\n";
     if (status == "partial") {
         // Every gas mass was run, but a curve's branch ends where a step could not be solved:
         // its stiffness and the k(m) fit may rest on part of a curve.

@@ -2,6 +2,7 @@
 #include <io/InputError.h>
 #include <io/Results.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -29,6 +30,22 @@ std::string getUtcTimestamp() {
     return buf;
 }
 
+std::vector<std::pair<double, double>> findInvertibleKOfM(const bags::LoadTestResult& result) {
+    std::vector<const bags::LoadCurve*> curves;
+    for (const bags::LoadCurve& c : result.curves) curves.push_back(&c);
+    std::sort(curves.begin(), curves.end(),
+              [](const bags::LoadCurve* a, const bags::LoadCurve* b) { return a->gasMass > b->gasMass; });
+    std::vector<std::pair<double, double>> km;
+    for (const bags::LoadCurve* c : curves) {
+        if (!c->reachedPeak || !std::isfinite(c->stiffness) || !(c->stiffness > 0.0)) break;
+        if (!km.empty() && !(c->stiffness < km.back().second && c->gasMass < km.back().first)) break;
+        km.emplace_back(c->gasMass, c->stiffness);
+    }
+    if (km.size() < 2) return {};
+    std::reverse(km.begin(), km.end());
+    return km;
+}
+
 // ----------------------------------------------------------------------------------- OutputDir
 
 namespace {
@@ -39,7 +56,7 @@ const char* const kOwnedFiles[] = {kResultsH5,      kResultsXdmf,      kLoadDisp
                                    "regions.csv",   "bags.csv",        "tilt.csv",
                                    "report.html",   "report.html.tmp", "summary.txt",
                                    "verdict.csv",   "events.csv",      "body.csv",
-                                   "pneumatics.csv"};
+                                   "pneumatics.csv", kKOfMYaml};
 
 }  // namespace
 
@@ -554,6 +571,29 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
                 << fmtG(r.curves[i].stiffnessMin * 1e-3) << ','
                 << fmtG(r.curves[i].stiffnessMax * 1e-3) << ',' << fmtG(r2[i], 6) << ',' << stage[i] << ',' << getCurveEnd(r.curves[i]) << '\n';
         if (!out) throw std::runtime_error("cannot write " + d.dir.getFile(kStiffnessCsv).string());
+    }
+
+    // The controllers' table: k(m) on its invertible branch, and the inverse.
+    const std::vector<std::pair<double, double>> km = findInvertibleKOfM(r);
+    if (km.size() >= 2) {
+        std::ofstream out(d.dir.getFile(kKOfMYaml), std::ios::trunc);
+        out << "# k(m) of this run's bag, the stiffness of stiffness.csv on its taut branch: from the\n"
+               "# highest gas mass down while the stiffness falls, curves that reached their peak. Paste\n"
+               "# under 'control:' of a patient-on-array scenario with kind target-mass, whose targets\n"
+               "# may then give a stiffness (docs/scenario-reference.md).\n"
+               "k_of_m: [";
+        for (size_t i = 0; i < km.size(); ++i)
+            out << (i ? ", " : "") << '[' << fmtG(km[i].first * 1e3, 6) << " g, "
+                << fmtG(km[i].second * 1e-3, 6) << " N/mm]";
+        out << "]\n# The inverse, the gas mass for a wanted stiffness (linear between the rows;\n"
+               "# outside them the controller refuses the target):\n"
+               "#   stiffness [N/mm]   gas mass [g]\n";
+        for (const auto& [m, k] : km) {
+            char line[80];
+            std::snprintf(line, sizeof line, "#   %17.4f   %12.4f\n", k * 1e-3, m * 1e3);
+            out << line;
+        }
+        if (!out) throw std::runtime_error("cannot write " + d.dir.getFile(kKOfMYaml).string());
     }
 
     const double wall =

@@ -7,7 +7,10 @@
 #include <hdf5.h>
 #include <io/InputError.h>
 #include <io/Results.h>
+#include <io/Scenario.h>
+#include <io/Units.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -354,6 +357,55 @@ TEST(ResultsWriter, WritesExactCsvHeadersAndRowsInBoundaryUnits) {
     EXPECT_EQ(st[0], "gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end");
     EXPECT_EQ(st[1], "3.5,6,5.8,6.1,0.99,1,peak");  // 6000 N/m = 6 N/mm
     EXPECT_EQ(st[2], "2,4.5,4.5,4.5,0.89,2,bottomed-out");
+}
+
+TEST(ResultsWriter, KOfMForTheControllersIsTheTautBranchAndReadsBackAsTheirTable) {
+    // Reference: the seed sweep's shape, k falling from 3.5 g to 2.75 g and rising again below
+    // (docs/seed-load-test.md): the invertible branch is 2.75-3.5 g, increasing in mass; a
+    // curve that did not reach its peak ends the branch.
+    bags::LoadTestResult r;
+    const double m[] = {3.5e-3, 3.25e-3, 3.0e-3, 2.75e-3, 2.5e-3};
+    const double k[] = {5000, 3900, 1700, 1600, 2600};
+    for (int i = 0; i < 5; ++i) {
+        bags::LoadCurve c;
+        c.gasMass = m[i];
+        c.stiffness = k[i];
+        c.reachedPeak = true;
+        r.curves.push_back(c);
+    }
+    const auto km = io::findInvertibleKOfM(r);
+    ASSERT_EQ(km.size(), 4u);
+    EXPECT_EQ(km.front(), std::make_pair(2.75e-3, 1600.0));
+    EXPECT_EQ(km.back(), std::make_pair(3.5e-3, 5000.0));
+    bags::LoadTestResult cut = r;
+    cut.curves[2].reachedPeak = false;  // 3.0 g stopped before its peak
+    EXPECT_EQ(io::findInvertibleKOfM(cut).size(), 2u);
+    cut.curves[1].stiffness = std::nan("");
+    EXPECT_TRUE(io::findInvertibleKOfM(cut).empty());  // one row cannot be inverted
+
+    // The file reads back as a k_of_m list in boundary units.
+    const fs::path dir = makeTestDir("k-of-m");
+    const FakeRun run = makeRun();
+    const bags::Mesh mesh = makeTetMesh();
+    io::OutputDir out(dir, false);
+    io::LoadTestWriter w(out, {}, run.options, {});
+    for (const bags::LoadStep& s : run.steps) w.addStep(s, mesh, makePositions(mesh, s));
+    bags::LoadTestResult both = run.result;
+    both.curves[1].reachedPeak = true;  // 2 g at 4.5 N/mm, 3.5 g at 6 N/mm
+    w.finish(both);
+    const io::ScenarioFile f = io::ScenarioFile::load((dir / io::kKOfMYaml).string());
+    const std::vector<io::ScenarioNode> rows = f.getRoot().get("k_of_m").getElements();
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_NEAR(rows[0].getElements()[0].asQuantity(io::Dimension::Mass), 2e-3, 1e-12);
+    EXPECT_NEAR(rows[0].getElements()[1].asQuantity(io::Dimension::Stiffness), 4500, 1e-9);
+    EXPECT_NEAR(rows[1].getElements()[1].asQuantity(io::Dimension::Stiffness), 6000, 1e-9);
+
+    // The fake run as it is (2 g bottomed out): one row, no file.
+    const fs::path none = makeTestDir("k-of-m-none");
+    io::OutputDir out2(none, false);
+    io::LoadTestWriter w2(out2, {}, run.options, {});
+    w2.finish(run.result);
+    EXPECT_FALSE(fs::exists(none / io::kKOfMYaml));
 }
 
 TEST(ResultsWriter, CurveStoppedByNoConvergenceMarksTheRunPartial) {

@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace io {
@@ -118,6 +119,14 @@ inline constexpr const char* kLoadDisplacementCsv = "load_displacement.csv";
 inline constexpr const char* kStiffnessCsv = "stiffness.csv";
 /// The instruments' readings of the curves, written when the scenario has a `rig` section.
 inline constexpr const char* kRigReadingsCsv = "rig_readings.csv";
+/// The bag's k(m) for the controllers (`control.k_of_m` of a patient-on-array scenario) and its
+/// inverse, the gas mass for a wanted stiffness: written when at least two curves form a branch.
+inline constexpr const char* kKOfMYaml = "k_of_m.yaml";
+
+/// The rows of the load test's k(m) that a controller can invert: the taut branch, from the
+/// highest gas mass down while the stiffness strictly falls, over curves that reached their
+/// peak with a finite stiffness, in increasing mass ([kg], [N/m]). Empty if fewer than two.
+std::vector<std::pair<double, double>> findInvertibleKOfM(const bags::LoadTestResult& result);
 
 /// Current UTC time as ISO 8601 ("2026-11-22T05:43:49Z").
 std::string getUtcTimestamp();
