@@ -1,4 +1,4 @@
-// bagsim run of the coarse pneumatic turn in full (label long: about 25-30 minutes on the
+// bagsim run of the coarse pneumatic turn in full (label manual: about 25-30 minutes on the
 // shared machine): settled 1.5 s, turned by the valves toward a pelvis tilt of 30 deg onto his
 // left side, held 0.5 s, and brought back to the initial masses. Bag and network masses agree
 // to roundoff over the whole run; the events run through the whole sequence; the verdict's
