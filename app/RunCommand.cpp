@@ -467,7 +467,7 @@ int runRunCommand(int argc, char** argv) {
     if (!sc.rig.isNone())
         std::cout << "  " << io::kRigReadingsCsv
                   << "       the instruments' readings with the scenario's rig effects\n";
-    if (io::findInvertibleKOfM(result).size() >= 2)
+    if (std::filesystem::exists(outPath / io::kKOfMYaml))  // written by finish() when it has a branch
         std::cout << "  " << io::kKOfMYaml
                   << "            k(m) and its inverse for a target-mass controller\n";
     if (status == "partial") {
