@@ -11,6 +11,6 @@ int runFitMaterialCommand(int argc, char** argv);  ///< bagsim fit-material TENS
 int runSynthMeasurementCommand(int argc, char** argv);  ///< bagsim synth-measurement --scenario ...
 int runDiagnoseCommand(int argc, char** argv);  ///< bagsim diagnose --measured DIR
 int runStudyCommand(int argc, char** argv);     ///< bagsim study STUDY.yaml [--out DIR]
-int runReportCommand(int argc, char** argv);    ///< bagsim report RUN_DIR [--out FILE]
+int runReportCommand(int argc, char** argv);    ///< bagsim report DIR [--out FILE]
 
 }  // namespace bagsim::app

@@ -1,7 +1,9 @@
-// bagsim report RUN_DIR [--out FILE] [--force]: (re)writes report.html from the results folder
-// of a patient-on-array run (io/ArrayReport.h; docs/reading-the-report.md).
+// bagsim report DIR [--out FILE] [--force]: (re)writes report.html from the results folder
+// of a patient-on-array run (io/ArrayReport.h; docs/reading-the-report.md) or from a study's
+// folder (io/StudyReport.h; docs/studies.md#the-report).
 #include <io/ArrayReport.h>
 #include <io/InputError.h>
+#include <io/StudyReport.h>
 
 #include <filesystem>
 #include <iostream>
@@ -17,22 +19,25 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* kHelp =
-    "usage: bagsim report RUN_DIR [--out FILE] [--force]\n"
+    "usage: bagsim report DIR [--out FILE] [--force]\n"
     "\n"
-    "Writes report.html, one self-contained page (no network needed) from the results folder\n"
-    "of a patient-on-array run: the scenario, the verdict, pressure-mat images at key moments\n"
-    "with a colour scale in mmHg, the peak pressure per body region, tilt, bag pressures and\n"
-    "gas over time. bagsim run writes it at the end of such a run (also after a failure or\n"
-    "Ctrl-C, marked incomplete); this command remakes it, e.g. for a folder of an older run.\n"
-    "How to read it: docs/reading-the-report.md.\n"
+    "Writes report.html, one self-contained page (no network needed), from DIR:\n"
+    "- the results folder of a patient-on-array run: the scenario, the verdict, pressure-mat\n"
+    "  images at key moments with a colour scale in mmHg, the peak pressure per body region,\n"
+    "  tilt, bag pressures and gas over time (docs/reading-the-report.md);\n"
+    "- a study's folder (bagsim study --out DIR, it holds study.csv): the study, the table of\n"
+    "  cases, the outputs against each parameter, the map of a block's pressed positions, the\n"
+    "  cases' load-displacement curves, the cases missing or failed (docs/studies.md).\n"
+    "bagsim run and bagsim study write it at their end (also after a failure or Ctrl-C, marked\n"
+    "incomplete); this command remakes it, e.g. for the folder of an older run.\n"
     "\n"
     "options:\n"
     "  --out FILE   where to write the page (default: RUN_DIR/report.html, which is replaced)\n"
     "  --force      replace FILE if it exists (RUN_DIR/report.html needs no --force)\n"
     "  -h, --help   this text\n"
     "\n"
-    "exit status: 0 written, 1 it could not be written, 2 bad usage, a folder that is not a\n"
-    "patient-on-array result, or an existing FILE without --force.\n";
+    "exit status: 0 written, 1 it could not be written, 2 bad usage, a folder that is neither\n"
+    "a patient-on-array result nor a study's, or an existing FILE without --force.\n";
 
 }  // namespace
 
@@ -65,7 +70,8 @@ int runReportCommand(int argc, char** argv) {
         }
     }
     if (dir.empty()) {
-        std::cerr << "bagsim report: which results folder? e.g. bagsim report out/turn-left\n";
+        std::cerr << "bagsim report: which folder? e.g. bagsim report out/turn-left (a run) or "
+                     "bagsim report out/array-stiffness-map (a study)\n";
         return 2;
     }
     const fs::path own = fs::path(dir) / io::kReportHtml;
@@ -84,7 +90,10 @@ int runReportCommand(int argc, char** argv) {
         return 2;
     }
     try {
-        io::writeArrayReport(dir, target);
+        if (io::isStudyFolder(dir))
+            io::writeStudyReport(dir, target);
+        else
+            io::writeArrayReport(dir, target);
     } catch (const io::InputError& e) {
         std::cerr << "bagsim: error: " << e.what() << "\n";
         return 2;
@@ -94,6 +103,17 @@ int runReportCommand(int argc, char** argv) {
     }
     std::cout << "report: " << target.string() << "\n";
     return 0;
+}
+
+bool writeStudyReportAfterRun(const fs::path& dir) {
+    try {
+        io::writeStudyReport(dir, dir / io::kReportHtml);
+        return true;
+    } catch (const std::exception& e) {
+        std::cerr << "bagsim: warning: report.html not written (" << e.what()
+                  << "); the table is kept; bagsim report " << dir.string() << " remakes it\n";
+        return false;
+    }
 }
 
 void writeReportAfterRun(const fs::path& dir, bool quiet) {

@@ -19,6 +19,7 @@
 
 #include "Commands.h"
 #include "Interrupt.h"
+#include "Report.h"
 
 namespace bagsim::app {
 
@@ -44,7 +45,8 @@ const char* kHelp =
     "  --quiet          no progress line, only the summary\n"
     "  -h, --help       this text\n"
     "\n"
-    "outputs: DIR/study.csv (rewritten after every case), DIR/study.h5 (at the end),\n"
+    "outputs: DIR/study.csv (rewritten after every case), DIR/study.h5 and DIR/report.html\n"
+    "(the curves and maps as pictures, docs/studies.md#the-report) at the end,\n"
     "DIR/cases/<key>/ (each case's run), DIR/cases/<key>.log (what it printed). While cases are\n"
     "missing from the table, DIR/INCOMPLETE says so. Ctrl-C (SIGINT) or SIGTERM stops the\n"
     "running cases, keeps every case done and writes the table marked interrupted.\n"
@@ -211,12 +213,15 @@ int runStudyCommand(int argc, char** argv) {
     if (!sum.isRoot) return sum.interrupted ? getInterruptExitCode(getInterruptSignal()) : 0;
     if (!args.quiet && tty) std::cerr << "\n";
     const std::string dir = o.outDir.string();
+    // The page is a view of the table: made from the folder, also when cases are missing.
+    const bool report = writeStudyReportAfterRun(o.outDir);
     std::cout << "study " << sc.name << ": " << sum.total << " cases: " << sum.ok << " ok, "
               << sum.partial << " partial, " << sum.failed << " failed, " << sum.notRun
               << " not run (" << sum.skipped << " done before this run); "
               << formatDuration(sum.seconds) << " elapsed\n"
               << "table: " << dir << "/study.csv and " << dir << "/study.h5 (status "
               << sum.table.status << ")\n";
+    if (report) std::cout << "report: " << dir << "/report.html\n";
     if (sum.interrupted) {
         const int sig = getInterruptSignal();
         std::cerr << "bagsim: study " << Interrupted(sig).what()

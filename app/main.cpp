@@ -22,7 +22,7 @@ const char* kUsage =
     "                                  measured data from a truth run with an effect on\n"
     "  diagnose --measured DIR         where simulation and measured data disagree, and why\n"
     "  study STUDY.yaml [--out DIR]    run every case of a study into one table\n"
-    "  report RUN_DIR [--out FILE]     (re)write report.html of a patient-on-array run\n"
+    "  report DIR [--out FILE]         (re)write report.html of a patient-on-array run or a study\n"
     "\n"
     "  bagsim <command> --help   says what a command does and its options\n"
     "  bagsim --version          prints the version\n";

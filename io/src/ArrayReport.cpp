@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "Hdf5.h"
+#include "ReportPage.h"
 #include "SvgPlot.h"
 
 namespace io {
@@ -32,106 +33,21 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 using svg::escape;
 using svg::num;
 
-std::string lower(std::string s) {
-    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
+using report::lower;
 
 // ------------------------------------------------------------------------------- the files
 
-/// A CSV file of the folder: its header and rows, with the line of each row for messages.
-struct Table {
-    std::string path;
-    bool present = false;
-    std::vector<std::string> header;
-    std::vector<std::vector<std::string>> rows;
-    std::vector<int> lines;
+using Table = report::CsvTable;
 
-    int find(const std::string& name) const {
-        for (size_t i = 0; i < header.size(); ++i)
-            if (header[i] == name) return int(i);
-        return -1;
-    }
-    double number(size_t row, int column) const {
-        const std::string& cell = rows[row].at(size_t(column));
-        char* end = nullptr;
-        const double v = std::strtod(cell.c_str(), &end);
-        if (cell.empty() || end != cell.c_str() + cell.size())
-            throw InputError(path, lines[row], "",
-                             "column " + std::to_string(column + 1) + " '" +
-                                 header[size_t(column)] + "': '" + cell + "' is not a number");
-        return v;
-    }
-    const std::string& text(size_t row, int column) const { return rows[row].at(size_t(column)); }
-};
-
-/// A results file's whole text (results files are the program's own, read without
-/// readInputFile's fixed-size buffer: a long run's regions.csv is tens of MB).
-std::string readWhole(const fs::path& p) {
-    std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) throw InputError(p.string(), 0, "", "is not a regular file");
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    if (!in && !in.eof()) throw InputError(p.string(), 0, "", "cannot be read");
-    return s.str();
-}
-
-std::string join(const std::vector<std::string>& v, const char* sep = ",") {
-    std::string s;
-    for (size_t i = 0; i < v.size(); ++i) s += (i ? sep : "") + v[i];
-    return s;
-}
-
-/// Reads a CSV file whose header holds `columns` (others may follow: newer files keep
-/// working). Absent and optional: present = false. A last line without its line break (a run
-/// killed while writing it) is skipped; any other row must have the header's number of cells.
+/// Reads a CSV file of the run's folder (report::readCsvTable()).
 Table readTable(const fs::path& dir, const std::string& name,
                 const std::vector<std::string>& columns, bool optional) {
-    Table t;
-    t.path = (dir / name).string();
-    std::error_code ec;
-    if (!fs::exists(dir / name, ec)) {
-        if (optional) return t;
-        throw InputError(t.path, 0, "",
-                         "missing: a patient-on-array results folder holds regions.csv, bags.csv, "
-                         "tilt.csv and results.h5 (docs/output-layout.md#patient-on-array)");
-    }
-    const std::string text = readWhole(dir / name);
-    t.present = true;
-    std::istringstream in(text);
-    std::string line;
-    if (!std::getline(in, line))
-        throw InputError(t.path, 1, "", "empty; expected the header " + join(columns));
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    t.header = splitCsvLine(line);
-    for (const std::string& c : columns)
-        if (t.find(c) < 0)
-            throw InputError(t.path, 1, "",
-                             "the header '" + line + "' has no column '" + c + "'; expected " +
-                                 join(columns) + " (docs/output-layout.md)");
-    const bool endsWithBreak = !text.empty() && text.back() == '\n';
-    for (int n = 2; std::getline(in, line); ++n) {
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        if (line.empty()) continue;
-        std::vector<std::string> cells = splitCsvLine(line);
-        if (cells.size() != t.header.size()) {
-            if (in.peek() == EOF && !endsWithBreak) break;  // cut short by a killed run
-            throw InputError(t.path, n, "",
-                             std::to_string(cells.size()) + " cells; the header has " +
-                                 std::to_string(t.header.size()) + " (" + join(t.header) + ")");
-        }
-        t.rows.push_back(std::move(cells));
-        t.lines.push_back(n);
-    }
-    return t;
+    return report::readCsvTable(dir / name, columns, optional,
+                                "a patient-on-array results folder holds regions.csv, bags.csv, "
+                                "tilt.csv and results.h5 (docs/output-layout.md#patient-on-array)");
 }
 
-std::string readText(const fs::path& p) {
-    std::error_code ec;
-    if (!fs::exists(p, ec)) return "";
-    return readWhole(p);
-}
+std::string readText(const fs::path& p) { return report::readTextIfPresent(p); }
 
 /// What the page is made of.
 struct Run {
@@ -178,9 +94,10 @@ void readMeta(Run& run) {
     std::error_code ec;
     if (!fs::exists(h5path, ec))
         throw InputError(run.dir.string(), 0, "",
-                         "no results.h5: not the output folder of a bagsim run; give the folder "
-                         "a patient-on-array run wrote (it holds results.h5, regions.csv, "
-                         "bags.csv, tilt.csv)");
+                         "no results.h5: not the output folder of a bagsim run, nor a study's "
+                         "folder (no study.csv); give the folder a patient-on-array run wrote "
+                         "(it holds results.h5, regions.csv, bags.csv, tilt.csv) or one that "
+                         "bagsim study wrote (it holds study.csv)");
     h5::Handle file;
     try {
         file = h5::openFileReadOnly(h5path.string());
@@ -471,40 +388,17 @@ std::string drawMat(const Run& run, int f, double scaleMax, const std::string& c
 
 /// The colour scale of the mat images [mmHg], with the 32 mmHg reference.
 std::string drawColourBar(double scaleMax, bool saturated) {
-    const double h = 300, top = 24, x = 8, w = 22;
-    std::ostringstream os;
-    os << "<svg xmlns='http://www.w3.org/2000/svg' role='img' class='colourbar' width='120' "
-          "height='"
-       << h + top + 50 << "' viewBox='0 0 120 " << h + top + 50
-       << "' font-family='sans-serif' font-size='11'><title>colour scale: contact pressure in "
-          "mmHg</title><text x='0' y='14' font-weight='bold'>pressure [mmHg]</text>";
-    const int n = 60;
-    for (int i = 0; i < n; ++i)
-        os << "<rect x='" << x << "' y='" << num(top + h - (i + 1) * h / n, "%.1f") << "' width='"
-           << w << "' height='" << num(h / n + 0.5, "%.1f") << "' fill='"
-           << svg::getViridis((i + 0.5) / n) << "'/>";
-    os << "<rect x='" << x << "' y='" << top << "' width='" << w << "' height='" << h
-       << "' fill='none' stroke='#888'/>";
-    const std::vector<double> ticks = svg::calcTicks(0, scaleMax, 6);
-    const double step = ticks.size() > 1 ? ticks[1] - ticks[0] : 1.0;
-    for (double v : ticks) {
-        const double y = top + h - v / scaleMax * h;
-        os << "<line x1='" << x + w << "' x2='" << x + w + 5 << "' y1='" << num(y, "%.1f")
-           << "' y2='" << num(y, "%.1f") << "' stroke='#333'/><text x='" << x + w + 8 << "' y='"
-           << num(y + 4, "%.1f") << "'>" << (saturated && v >= scaleMax - 1e-9 ? "&#8805; " : "")
-           << svg::formatTick(v, step) << "</text>";
-    }
-    if (kThresholdMmHg < scaleMax) {
-        const double y = top + h - kThresholdMmHg / scaleMax * h;
-        os << "<line x1='" << x - 4 << "' x2='" << x + w + 4 << "' y1='" << num(y, "%.1f")
-           << "' y2='" << num(y, "%.1f") << "' stroke='#000' stroke-width='2'/><text x='"
-           << x + w + 8 << "' y='" << num(y + 4, "%.1f") << "' font-weight='bold'>32</text>";
-    }
-    os << "<rect x='" << x << "' y='" << top + h + 14 << "' width='" << w
-       << "' height='12' fill='#fff' stroke='#888'/><text x='" << x + w + 6 << "' y='"
-       << top + h + 24 << "'>below 0.5</text><text x='0' y='" << top + h + 44
-       << "' font-size='10'>ring: the peak sensel</text></svg>";
-    return os.str();
+    report::ColourBar b;
+    b.lo = 0.0;
+    b.hi = scaleMax;
+    b.label = "pressure [mmHg]";
+    b.title = "colour scale: contact pressure in mmHg";
+    b.saturatedTop = saturated;
+    b.ref = kThresholdMmHg;
+    b.refLabel = "32";
+    b.swatches = {{"#fff", "below 0.5"}};
+    b.note = "ring: the peak sensel";
+    return report::drawColourBar(b);
 }
 
 /// Per time, the values of a column for each key (region, bag) of a long-format table.
@@ -578,20 +472,7 @@ std::vector<svg::Series> bagSeries(const Run& run, Curves c) {
     return out;
 }
 
-const char* kCss =
-    "body{font-family:sans-serif;margin:1.5em auto;max-width:1250px;color:#222;line-height:1.4;"
-    "padding:0 1em}h1{font-size:1.6em;margin-bottom:0.2em}h2{margin-top:1.6em;border-bottom:1px "
-    "solid #ccc}table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;"
-    "padding:3px 8px;text-align:left;vertical-align:top}th{background:#f0f0f0}td.n{text-align:"
-    "right;font-variant-numeric:tabular-nums;white-space:nowrap}td.ok,td.warning,td.fail,td.na{"
-    "white-space:nowrap}.banner{border:3px solid #b00;background:#fde8e8;"
-    "padding:0.8em 1em;font-size:1.15em;margin:1em 0}.banner b{color:#b00}.ok{background:"
-    "#dff0d8}.warning{background:#fcf0c8}.fail{background:#f6d0d0;font-weight:bold}.na{background:"
-    "#eee;color:#555}.mats{display:flex;flex-wrap:wrap;gap:1.2em;align-items:flex-start}"
-    "figure{margin:0}figcaption{font-size:0.92em;max-width:220px}.plots{display:flex;flex-wrap:"
-    "wrap;gap:0.8em}svg{max-width:100%;height:auto}pre{background:#f6f6f6;padding:0.6em;"
-    "overflow-x:auto;font-size:0.9em}details{margin:0.5em 0}summary{cursor:pointer;font-weight:"
-    "bold}.muted{color:#666}";
+using report::kCss;
 
 /// A verdict value to 4 significant digits when it is a number, as written otherwise.
 std::string formatValue(const std::string& cell) {
@@ -601,13 +482,7 @@ std::string formatValue(const std::string& cell) {
     return num(v, "%.4g");
 }
 
-std::string statusCell(const std::string& status) {
-    const std::string s = lower(status);
-    if (s == "ok") return "<td class='ok'>&#10004; ok</td>";
-    if (s == "warning") return "<td class='warning'>&#9888; warning</td>";
-    if (s == "fail") return "<td class='fail'>&#10008; fail</td>";
-    return "<td class='na'>" + escape(status.empty() ? "n/a" : status) + "</td>";
-}
+std::string statusCell(const std::string& status) { return report::formatStatusCell(status); }
 
 }  // namespace
 
@@ -908,19 +783,7 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
 }
 
 void writeArrayReport(const fs::path& runDir, const fs::path& out) {
-    const std::string html = formatArrayReportHtml(runDir);
-    const fs::path tmp = out.string() + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::trunc | std::ios::binary);
-        f << html;
-        if (!f.flush()) throw std::runtime_error("cannot write " + tmp.string());
-    }
-    std::error_code ec;
-    fs::rename(tmp, out, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw std::runtime_error("cannot write " + out.string() + ": " + ec.message());
-    }
+    report::writePageFile(formatArrayReportHtml(runDir), out);
 }
 
 }  // namespace io

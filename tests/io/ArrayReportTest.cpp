@@ -144,7 +144,8 @@ TEST(ArrayReport, AFolderThatIsNotAPatientOnArrayResultGetsALocatedError) {
     EXPECT_NE(errorOf(dir).find("is not a folder"), std::string::npos) << errorOf(dir);
     fs::create_directories(dir);
     EXPECT_NE(errorOf(dir).find(
-                  "report-not-a-result: no results.h5: not the output folder of a bagsim run"),
+                  "report-not-a-result: no results.h5: not the output folder of a bagsim run, nor a "
+                  "study's folder (no study.csv)"),
               std::string::npos)
         << errorOf(dir);
     // results.h5 of another kind of run.

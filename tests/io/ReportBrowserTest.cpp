@@ -1,7 +1,7 @@
 // report.html in a real browser: headless Chromium (Debian's `chromium`) opens the report of a
-// synthetic run with a checking script added at its end. The script measures every SVG and
+// synthetic run, and of a synthetic study, with a checking script added at its end. The script measures every SVG and
 // image as laid out (non-zero size), draws each SVG onto a canvas and counts its inked pixels
-// (and the colours of the pressure-mat pictures), and lists the resources the page fetched
+// (and the colours of the pressure-mat and block-map pictures), and lists the resources the page fetched
 // over http(s); it writes the counts into the DOM, which --dump-dom prints. The same script on
 // a page with a zero-size SVG, a blank SVG and a broken image must report all three, so the
 // check can fail. Name resolution is disabled, so the page must work offline.
@@ -10,6 +10,7 @@
 // (scripts/setup --tests does).
 #include <gtest/gtest.h>
 #include <io/ArrayReport.h>
+#include <io/StudyReport.h>
 
 #include <cstdlib>
 #include <map>
@@ -17,6 +18,7 @@
 #include <sstream>
 
 #include "SyntheticArrayRun.h"
+#include "SyntheticStudy.h"
 
 namespace fs = std::filesystem;
 
@@ -27,8 +29,9 @@ const char* kCheckScript = R"(<script>
   var svgs = Array.prototype.filter.call(document.querySelectorAll('svg'),
       function (s) { return !s.parentElement.closest('svg'); });
   var imgs = Array.prototype.slice.call(document.images);
-  var zero = 0, broken = 0, blank = 0, drawn = 0, matColours = 1e9;
+  var zero = 0, broken = 0, blank = 0, drawn = 0, matColours = 1e9, mapColours = 1e9;
   var mats = document.querySelectorAll('svg.mat').length;
+  var maps = document.querySelectorAll('svg.map').length;
   svgs.concat(imgs).forEach(function (e) {
     var r = e.getBoundingClientRect();
     if (!(r.width > 0 && r.height > 0)) zero++;
@@ -41,7 +44,8 @@ const char* kCheckScript = R"(<script>
     var out = document.createElement('pre');
     out.textContent = 'BAGSIM-' + 'CHECK svgs=' + svgs.length + ' imgs=' + imgs.length + ' zero=' + zero +
       ' broken=' + broken + ' blank=' + blank + ' drawn=' + drawn + ' mats=' + mats +
-      ' matcolours=' + (mats ? matColours : 0) + ' http=' + http + ' END';
+      ' matcolours=' + (mats ? matColours : 0) + ' maps=' + maps +
+      ' mapcolours=' + (maps ? mapColours : 0) + ' http=' + http + ' END';
     document.body.appendChild(out);
   }
   if (!pending) finish();
@@ -62,6 +66,7 @@ const char* kCheckScript = R"(<script>
       }
       if (r.width > 0 && r.height > 0 && ink >= 0.005 * w * h) drawn++; else blank++;
       if (s.classList.contains('mat')) matColours = Math.min(matColours, Object.keys(colours).length);
+      if (s.classList.contains('map')) mapColours = Math.min(mapColours, Object.keys(colours).length);
       if (--pending === 0) finish();
     };
     img.onerror = function () { broken++; if (--pending === 0) finish(); };
@@ -167,4 +172,31 @@ TEST(ReportBrowser, ChromiumRendersEveryImageOfTheReportOffline) {
     EXPECT_EQ(c["blank"], 2);
     EXPECT_EQ(c["broken"], 1);
     EXPECT_EQ(c["drawn"], 0);
+}
+
+TEST(ReportBrowser, ChromiumRendersEveryImageOfAStudyReportOffline) {
+    const std::string chromium = findChromium();
+    ASSERT_FALSE(chromium.empty())
+        << "Chromium is not installed, and this test opens report.html in a real browser. "
+           "Install it with `sudo apt-get install chromium` (Debian; scripts/setup --tests "
+           "installs it), or set BAGSIM_CHROMIUM to a Chromium or Chrome binary.";
+    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "test-output" / "io" / "report-browser-study";
+    fs::create_directories(dir.parent_path());
+    io::test::writeSyntheticMapStudy(dir, true);
+    io::writeStudyReport(dir, dir / "report.html");
+    const std::string html = readFile(dir / "report.html");
+    const int svgs = count(html, "<svg ");
+    ASSERT_GE(svgs, 15);
+
+    const std::map<std::string, int> c = checkInChromium(chromium, dir / "report.html");
+    EXPECT_EQ(c.at("svgs"), svgs);
+    EXPECT_EQ(c.at("zero"), 0) << "SVGs or images laid out at zero size";
+    EXPECT_EQ(c.at("broken"), 0) << "images that did not load";
+    EXPECT_EQ(c.at("blank"), 0) << "SVGs that drew (next to) nothing";
+    EXPECT_EQ(c.at("drawn"), svgs);
+    EXPECT_EQ(c.at("mats"), 0);
+    EXPECT_EQ(c.at("maps"), 6);
+    // Two values (middle and edge column), grey cells, white borders, text: at least 4.
+    EXPECT_GE(c.at("mapcolours"), 4) << "a block map shows fewer than 4 colours";
+    EXPECT_EQ(c.at("http"), 0) << "the page fetched something over the network";
 }
