@@ -95,6 +95,18 @@ std::string shortKey(const std::string& key) {
     return dot == std::string::npos ? key : key.substr(dot + 1);
 }
 
+/// A number to 4 significant digits as a study file writes it ("3.5", "1e7", "2.5e-3").
+std::string formatNumber(double v) {
+    std::string t = num(v, "%.4g");
+    const auto e = t.find('e');
+    if (e == std::string::npos) return t;
+    std::string mant = t.substr(0, e), exp = t.substr(e + 1);
+    const bool negative = !exp.empty() && exp[0] == '-';
+    if (!exp.empty() && (exp[0] == '+' || exp[0] == '-')) exp.erase(0, 1);
+    while (exp.size() > 1 && exp[0] == '0') exp.erase(0, 1);
+    return mant + "e" + (negative ? "-" : "") + exp;
+}
+
 bool endsWith(const std::string& s, const std::string& tail) {
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
@@ -142,7 +154,7 @@ struct Study {
     /// A parameter's value in a row, with its unit ("3.5 g", "pair", "[-1, 0]").
     std::string formatValue(size_t p, size_t r) const {
         const Parameter& q = parameters[p];
-        if (q.numeric) return num(q.values[r], "%.4g") + (q.unit.empty() ? "" : " " + q.unit);
+        if (q.numeric) return formatNumber(q.values[r]) + (q.unit.empty() ? "" : " " + q.unit);
         return table.text(r, q.column);
     }
     /// "gas mass=3.5 g, layout=pair" over the parameters not in `skip`.
@@ -394,15 +406,27 @@ std::string drawAgainst(const Study& s, size_t p, const std::vector<double>& y,
         }
     }
     if (series.empty()) return "";
-    svg::PlotOptions o;
-    o.title = title;
-    o.xLabel = describeKey(q.key) + (q.unit.empty() ? "" : " [" + q.unit + "]");
-    o.yLabel = yAxis;
-    o.refLines = refLines;
-    // A little room either side of the first and last value, so their points show whole.
     double lo = INFINITY, hi = -INFINITY;
     for (double v : q.values)
         if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    // Values of 1e5 and more (a contact penalty) in units of a power of ten: readable ticks.
+    const double top = std::max(std::fabs(lo), std::fabs(hi));
+    double scale = 1.0;
+    if (top >= 1e5) {
+        // The smallest value's power where all are positive (1e7 and 1e8: ticks 2, 4, ... 10).
+        const double ref = lo > 0.0 ? lo : top;
+        scale = std::pow(10.0, std::floor(std::log10(ref)));
+        for (svg::Series& x : series)
+            for (double& v : x.x) v /= scale;
+        lo /= scale, hi /= scale;
+    }
+    svg::PlotOptions o;
+    o.title = title;
+    const std::string unit = (scale != 1.0 ? formatNumber(scale) + (q.unit.empty() ? "" : " ") : "") + q.unit;
+    o.xLabel = describeKey(q.key) + (unit.empty() ? "" : " [" + unit + "]");
+    o.yLabel = yAxis;
+    o.refLines = refLines;
+    // A little room either side of the first and last value, so their points show whole.
     const double pad = hi > lo ? 0.04 * (hi - lo) : std::max(std::fabs(lo) * 0.05, 1e-6);
     o.xMin = lo - pad;
     o.xMax = hi + pad;
@@ -536,8 +560,9 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
           "content='width=device-width, initial-scale=1'><title>bagsim study report: "
        << escape(s.name) << "</title><style>" << report::kCss
        << ".maps{display:flex;flex-wrap:wrap;gap:1.2em;align-items:flex-start}"
-          ".maps figure{display:flex;gap:0.4em;align-items:flex-start;flex-wrap:wrap}"
-          ".maps figcaption{max-width:330px}</style></head><body>";
+          ".maps figure{display:flex;gap:0.4em;align-items:flex-start;flex-wrap:wrap;"
+          "max-width:470px}.maps figcaption{flex-basis:100%;max-width:440px}"
+          "</style></head><body>";
     os << "<h1>" << escape(s.name) << "</h1><p class='muted'>A study of " << n << " case"
        << (n == 1 ? "" : "s") << (s.baseScenario.empty() ? "" : " of " + escape(s.baseScenario))
        << ", run by bagsim" << (s.version.empty() ? "" : " " + escape(s.version))
@@ -596,7 +621,7 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
         for (const std::string& v : p.distinct) {
             double x = 0.0;
             values += (values.empty() ? "" : ", ") +
-                      (parseNumber(v, &x) ? num(x, "%.4g") + (p.unit.empty() ? "" : " " + p.unit)
+                      (parseNumber(v, &x) ? formatNumber(x) + (p.unit.empty() ? "" : " " + p.unit)
                                           : v);
         }
         row("swept: " + escape(p.key),

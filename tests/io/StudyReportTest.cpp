@@ -184,6 +184,8 @@ TEST(StudyReport, WriteReplacesThePageThroughATemporaryFile) {
     std::ifstream in(dir / "report.html");
     std::stringstream s;
     s << in.rdbuf();
-    EXPECT_EQ(s.str(), io::formatStudyReportHtml(dir));
+    EXPECT_EQ(s.str().rfind("<!DOCTYPE html>", 0), 0u);
+    EXPECT_NE(s.str().find("<table id='cases'>"), std::string::npos);
+    EXPECT_EQ(s.str().find("old page"), std::string::npos);
     EXPECT_FALSE(fs::exists(dir / "report.html.tmp"));
 }

@@ -85,8 +85,9 @@ expected = [o + ' against ' + p
 assert curves == expected, curves
 ld = [t for t in titles if t.startswith('Force against displacement')]
 assert ld == ['Force against displacement, cases 1 to 3'], ld
-assert 'case 1: penalty=1e+07 Pa/m' in text and 'case 3: penalty=1e+08 Pa/m' in text
-assert 'stiffness [N/mm]' in text and 'force [N]' in text
+assert 'case 1: penalty=1e7 Pa/m' in text and 'case 3: penalty=1e8 Pa/m' in text
+assert 'contact penalty [1e7 Pa/m]' in text
+assert 'stiffness at gas mass 3.5 g [N/mm]' in text and '>force [N]<' in text
 assert len(titles) == len(expected) + len(ld), titles
 assert "class='map'" not in text
 assert not re.search(r'''(src|href)\s*=\s*['"]?\s*(https?:)?//''', text)
