@@ -318,6 +318,49 @@ Study readStudy(const fs::path& dir) {
     return s;
 }
 
+/// The numeric outputs to draw. A `per` output whose columns each case fills at most one of
+/// (one gas mass per case: stiffness_N_per_mm[gas_mass_g=3.5], [=3], ...) is drawn as one
+/// output, each case's own value, in place of its columns.
+std::vector<Output> mergePerColumns(const Study& s) {
+    std::vector<Output> out;
+    std::map<std::string, std::vector<size_t>> family;  // base column -> its outputs
+    for (size_t i = 0; i < s.outputs.size(); ++i) {
+        const std::string& name = s.outputs[i].name;
+        const auto b = name.find('[');
+        if (s.outputs[i].numeric && b != std::string::npos && name.back() == ']')
+            family[name.substr(0, b)].push_back(i);
+    }
+    std::set<size_t> done;
+    for (size_t i = 0; i < s.outputs.size(); ++i) {
+        if (done.count(i)) continue;
+        const Output& o = s.outputs[i];
+        const auto b = o.name.find('[');
+        const auto f = b == std::string::npos ? family.end() : family.find(o.name.substr(0, b));
+        bool merge = f != family.end() && f->second.size() >= 2;
+        for (size_t r = 0; merge && r < s.table.rows.size(); ++r) {
+            int filled = 0;
+            for (size_t k : f->second) filled += std::isfinite(s.outputs[k].values[r]);
+            merge = filled <= 1;
+        }
+        if (!merge) {
+            out.push_back(o);
+            continue;
+        }
+        const std::string inside = o.name.substr(b + 1, o.name.size() - b - 2);
+        Output m = makeOutput(o.name.substr(0, b), o.column);
+        m.label += " (at the case's " + words(splitUnit(inside.substr(0, inside.find('='))).first) + ")";
+        m.numeric = true;
+        m.values.assign(s.table.rows.size(), kNaN);
+        for (size_t k : f->second) {
+            done.insert(k);
+            for (size_t r = 0; r < m.values.size(); ++r)
+                if (std::isfinite(s.outputs[k].values[r])) m.values[r] = s.outputs[k].values[r];
+        }
+        out.push_back(std::move(m));
+    }
+    return out;
+}
+
 // ------------------------------------------------------------------------------ charts
 
 /// The rows grouped by the values of the parameters other than `skip`, in first-seen order.
@@ -673,8 +716,9 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
 
     // Outputs against each swept parameter.
     const std::vector<size_t> axes = findAxes(s);
+    const std::vector<Output> merged = mergePerColumns(s);
     std::vector<const Output*> numeric;
-    for (const Output& o : s.outputs)
+    for (const Output& o : merged)
         if (o.numeric) numeric.push_back(&o);
     os << "<h2 id='curves'>Outputs against the parameters</h2>";
     if (axes.empty() || numeric.empty()) {

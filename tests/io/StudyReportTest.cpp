@@ -189,3 +189,41 @@ TEST(StudyReport, WriteReplacesThePageThroughATemporaryFile) {
     EXPECT_EQ(s.str().find("old page"), std::string::npos);
     EXPECT_FALSE(fs::exists(dir / "report.html.tmp"));
 }
+
+TEST(StudyReport, AStiffnessPerGasMassWithOneMassPerCaseIsDrawnAsOneOutput) {
+    // As scenarios/seed-mass-study.yaml: each case fills the one column of its own gas mass.
+    const fs::path dir = makeDir("study-report-per");
+    io::StudyTable t;
+    t.header = {"case", "key", "test.gas_masses [g]", "contact.penalty [Pa/m]", "status", "reason",
+                "seconds", "stiffness_N_per_mm[gas_mass_g=3.5]",
+                "stiffness_N_per_mm[gas_mass_g=3]", "stiffness_N_per_mm[gas_mass_g=2.5]"};
+    int n = 0;
+    const double masses[] = {3.5, 3.0, 2.5};
+    for (int m = 0; m < 3; ++m)
+        for (double penalty : {1e7, 1e8}) {
+            ++n;
+            std::vector<std::string> row = {std::to_string(n), "k" + std::to_string(n),
+                                            io::test::formatSyntheticNumber(masses[m]),
+                                            io::test::formatSyntheticNumber(penalty), "ok", "",
+                                            "5.0", "", "", ""};
+            row[size_t(7 + m)] = io::test::formatSyntheticNumber(1.0 + m + penalty * 1e-8);
+            t.rows.push_back(row);
+        }
+    t.status = "complete";
+    t.studyText = "kind: study\nscenario: seed-load-test.yaml\n";
+    io::test::writeSyntheticStudyFiles(dir, t, "scenarios/seed-mass-study.yaml");
+    const std::string html = io::formatStudyReportHtml(dir);
+    EXPECT_NE(html.find("<title>stiffness (at the case&#39;s gas mass) against gas mass of the "
+                        "pressed bag</title>"),
+              std::string::npos);
+    EXPECT_NE(html.find("<title>stiffness (at the case&#39;s gas mass) against contact "
+                        "penalty</title>"),
+              std::string::npos);
+    EXPECT_EQ(html.find("stiffness at gas mass 3.5 g against"), std::string::npos);
+    // 1e7 and 1e8 Pa/m on the axis in units of 1e7 Pa/m; the legend as the study file writes.
+    EXPECT_NE(html.find(">contact penalty [1e7 Pa/m]</text>"), std::string::npos);
+    EXPECT_NE(html.find(">penalty=1e8 Pa/m</text>"), std::string::npos);
+    EXPECT_EQ(count(html, "<svg "), 2);
+    // The table keeps the columns as study.csv has them.
+    EXPECT_NE(html.find("<th>stiffness_N_per_mm[gas_mass_g=2.5]</th>"), std::string::npos);
+}
