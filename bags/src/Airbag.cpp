@@ -126,6 +126,10 @@ void AirbagSpec::validate() const {
     require(gravity.allFinite(), "gravity", gravity.norm(), "use a finite acceleration");
     gas.validate();
     if (connection == Connection::Orifice) orifice.validate();
+    if (connection == Connection::Orifice && gas.heatTimeConstant > 0.0)
+        throw std::invalid_argument(
+            "airbag option 'gas.heatTimeConstant' (heat exchange) needs the open connection; "
+            "the orifice connection does not carry the heat of the flow");
     imperfection.validate();
     bedContact.validate();
     require(selfContactPenalty > 0.0, "selfContactPenalty", selfContactPenalty, "use > 0 Pa/m");
@@ -270,16 +274,106 @@ struct Airbag::Impl {
         for (int g : bagGases[b]) m += model->getGas(g).getMass();
         return m;
     }
-    // No gas moves in any bag over the following advance().
-    bool isGasStill() const {
+    // No gas is let in or out of any bag over the following advance().
+    bool areFlowsStill() const {
         for (int b = 0; b < numBags; ++b)
             if (massFlow[b] != 0.0 && !(hasTarget[b] && targetMass[b] == bagMass(b))) return false;
         return true;
     }
-    // ... and none passes an orifice between chambers over a step of dt.
+    // ... over a step of dt: no flow set, and with time passing, none through an orifice
+    // between chambers or a leak, and no heat exchange.
     bool isGasStill(double dt) const {
-        return isGasStill() && (spec.connection != AirbagSpec::Connection::Orifice ||
-                                model->getNumGases() < 2 || dt <= 0.0);
+        if (!areFlowsStill()) return false;
+        if (dt <= 0.0) return true;
+        return (spec.connection != AirbagSpec::Connection::Orifice || model->getNumGases() < 2) &&
+               spec.gas.leakConductance == 0.0 && spec.gas.heatTimeConstant == 0.0;
+    }
+    // Every gas body's volume [m^3] at x.
+    std::vector<double> calcAllGasVolumes() const {
+        std::vector<double> V(model->getNumGases());
+        for (int g = 0; g < model->getNumGases(); ++g) V[g] = model->calcGasVolume(g, x, nullptr);
+        return V;
+    }
+    // Leakage over dt (GasOptions::leakConductance): each gas body loses, at its volume at x
+    // held over the step, what its share of the bag's conductance (by volume) lets out.
+    void leak(double dt) {
+        const double C = spec.gas.leakConductance;
+        if (!(C > 0.0) || !(dt > 0.0)) return;
+        for (int b = 0; b < numBags; ++b) {
+            double Vsum = 0.0;
+            const std::vector<double> V = calcGasVolumes(b, &Vsum);
+            for (size_t i = 0; i < V.size(); ++i) {
+                GasChamber& g = model->updGas(bagGases[b][i]);
+                g.transferMass(g.calcLeakTransfer(V[i], dt, C * V[i] / Vsum), V[i]);
+            }
+        }
+    }
+    // A quasi-static change of gas (no time) ends with the gas at the room's temperature at
+    // its equilibrium volume: each ramp step seals the gas at the room's temperature at the
+    // volume it starts from, and a gas that compresses adiabatically (heat exchange) would
+    // leave the last solve warmer or colder. Resealed at the volume reached and solved again
+    // (to the solver's own tolerances) until the temperature is the room's to 1e-5 K.
+    void settleAtRoomTemperature() {
+        const double tolerance = spec.forceTolerance;
+        spec.forceTolerance = spec.solver.absoluteTolerance;
+        struct Restore {
+            double& t;
+            double v;
+            ~Restore() { t = v; }
+        } restore{spec.forceTolerance, tolerance};
+        const double Tr = spec.gas.temperature;
+        for (int k = 0; k < 40; ++k) {
+            const std::vector<double> V = calcAllGasVolumes();
+            double worst = 0.0;
+            for (int g = 0; g < model->getNumGases(); ++g)
+                worst = std::max(worst, std::abs(model->getGas(g).calcTemperature(V[g]) - Tr));
+            if (worst <= 1e-5) return;
+            for (int g = 0; g < model->getNumGases(); ++g) model->updGas(g).setTemperature(Tr, V[g]);
+            SolveSummary sum;
+            double stab = 0.0;
+            if (self) self->updateCandidates(x);
+            if (!trySolve(&sum, &stab, 3, spec.solver))
+                throw NumericalError("no convergence while the gas settles at the room's temperature");
+        }
+        throw NumericalError("the gas did not settle at the room's temperature in 40 passes");
+    }
+    // Solves the current loads with the gas exchanging heat with the room over dt [s]
+    // (GasOptions::heatTimeConstant) from the `start` gases at volumes V0: each gas's
+    // temperature at the end of the step is GasChamber::calcHeatStepTemperature of its start
+    // and the volume the equilibrium reaches, found with that equilibrium by fixed-point
+    // iteration (each pass reseals the gas on the adiabat through the target temperature at
+    // the volume reached and solves again), to 1e-5 K. Every pass is solved to the solver's
+    // own tolerances, as solveWithFlow does (a loose tolerance would accept the state unmoved).
+    bool solveWithHeat(const std::vector<GasChamber>& start, const std::vector<double>& V0,
+                       double dt, SolveSummary* sum, double* stab) {
+        const double tolerance = spec.forceTolerance;
+        spec.forceTolerance = spec.solver.absoluteTolerance;
+        struct Restore {
+            double& t;
+            double v;
+            ~Restore() { t = v; }
+        } restore{spec.forceTolerance, tolerance};
+        const std::vector<RigidContact::History> history = model->getContactHistory();
+        const int n = model->getNumGases();
+        for (int k = 0; k < 40; ++k) {
+            const std::vector<double> V1 = calcAllGasVolumes();
+            std::vector<double> target(n);
+            double worst = 0.0;
+            for (int g = 0; g < n; ++g) {
+                const double T0 = start[g].calcTemperature(V0[g]);
+                target[g] = start[g].calcHeatStepTemperature(V0[g], T0, V1[g], dt);
+                worst = std::max(worst, std::abs(model->getGas(g).calcTemperature(V1[g]) - target[g]));
+            }
+            if (worst <= 1e-5) return true;
+            for (int g = 0; g < n; ++g) model->updGas(g).setTemperature(target[g], V1[g]);
+            model->setContactHistory(history);
+            SolveSummary again;
+            if (!trySolve(&again, stab, 3, spec.solver)) return false;
+            sum->iterations += again.iterations;
+            sum->factorizations += again.factorizations;
+            sum->residualNorm = again.residualNorm;
+        }
+        return false;
     }
     std::shared_ptr<Snapshot> snapshot() const {
         auto s = std::make_shared<Snapshot>();
@@ -639,10 +733,15 @@ struct Airbag::Impl {
                 }
                 addBagGasMass(b, dm);
             }
+            leak(dt);
+            const bool heat = spec.gas.heatTimeConstant > 0.0 && dt > 0.0;
+            const std::vector<GasChamber> heatStart = heat ? copyGases() : std::vector<GasChamber>();
+            const std::vector<double> heatV0 = heat ? calcAllGasVolumes() : std::vector<double>();
             if (!predicted && !warmStart()) predict(before->poses);
             predicted = true;
             if (self) self->updateCandidates(x);
             ok = solveWithFlow(copyGases(), dt, &sum, &stab);
+            if (ok && heat) ok = solveWithHeat(heatStart, heatV0, dt, &sum, &stab);
             if (ok) ok = recheckCandidates(&sum);
         } catch (const NumericalError&) {
             ok = false;  // e.g. a gas transfer no chamber could give
@@ -855,6 +954,7 @@ void Airbag::changeGasMass(const std::vector<double>& masses) {
     if (!m.inflated) throw std::logic_error("Airbag::changeGasMass before inflate");
     checkMasses(masses, m.numBags, "Airbag::changeGasMass");
     m.rampGasMasses(masses);
+    if (m.spec.gas.heatTimeConstant > 0.0) m.settleAtRoomTemperature();
     m.committed = m.snapshot();
     m.forgetIncrement();
 }

@@ -28,6 +28,15 @@ void GasOptions::validate() const {
             "use 1 <= n <= 2 (1 isothermal, 1.4 adiabatic air)");
     require(gamma > 1.0 && gamma <= 5.0 / 3.0, "gamma", gamma,
             "use 1 < gamma <= 5/3 (air: 1.4)");
+    require(leakConductance >= 0.0 && leakConductance <= kMaxLeakConductance, "leakConductance",
+            leakConductance, "use 0 (sealed) to 1e-9 kg/(s Pa) (1 mg/(s kPa))");
+    require(heatTimeConstant >= 0.0 && heatTimeConstant <= kMaxHeatTimeConstant,
+            "heatTimeConstant", heatTimeConstant,
+            "use 0 (the process as chosen) to 3600 s (the film's thermal time constant)");
+    if (heatTimeConstant > 0.0 && process == Process::Polytropic)
+        throw std::invalid_argument(
+            "gas option 'heatTimeConstant' makes the gas adiabatic with heat exchange; it does "
+            "not combine with process polytropic (use isothermal or adiabatic)");
 }
 
 double GasOptions::getAmbientDensity() const {
@@ -51,6 +60,8 @@ GasChamber::GasChamber(const GasOptions& options, double mass) : m_options(optio
         case GasOptions::Process::Adiabatic: m_exponent = options.gamma; break;
         case GasOptions::Process::Polytropic: m_exponent = options.polytropicIndex; break;
     }
+    // With heat exchange the gas compresses adiabatically between its relaxations.
+    if (options.heatTimeConstant > 0.0) m_exponent = options.gamma;
 }
 
 void GasChamber::seal(double volume) {
@@ -99,6 +110,32 @@ void GasChamber::transferMass(double dm, double volume) {
     m_pRef *= m / m_mass;
     m_mass = m;
     (void)volume;  // p(V) scales by the same factor at every volume
+}
+
+double GasChamber::calcLeakTransfer(double V, double dt, double C) const {
+    if (!(dt >= 0.0) || !(C >= 0.0)) throw std::invalid_argument("leak needs dt >= 0 and C >= 0");
+    if (dt == 0.0 || C == 0.0) return 0.0;
+    const double RT = m_options.getSpecificGasConstant() * calcTemperature(V);
+    const double m0 = m_options.ambientPressure * V / RT;  // the mass at zero gauge pressure
+    const double tau = V / (RT * C);
+    return -(m_mass - m0) * -std::expm1(-dt / tau);
+}
+
+void GasChamber::setTemperature(double T, double V) {
+    if (!(T > 0.0) || !(V > 0.0)) throw NumericalError("gas temperature or volume not positive");
+    m_VRef = V;
+    m_pRef = m_mass * m_options.getSpecificGasConstant() * T / V;
+}
+
+double GasChamber::calcHeatStepTemperature(double V0, double T0, double V1, double dt) const {
+    const double tau = m_options.heatTimeConstant;
+    const double a = (m_options.gamma - 1.0) * std::log(V1 / V0);
+    if (!(tau > 0.0) || dt <= 0.0) return T0 * std::exp(-a);
+    const double r = dt / tau;
+    const double x = a + r;
+    // (1 - e^-x) / x, smooth through x = 0
+    const double phi = std::abs(x) < 1e-8 ? 1.0 - 0.5 * x : -std::expm1(-x) / x;
+    return T0 * std::exp(-x) + m_options.temperature * r * phi;
 }
 
 void OrificeOptions::validate() const {

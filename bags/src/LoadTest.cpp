@@ -135,6 +135,10 @@ void LoadTestOptions::validate() const {
                 "use a time >= 0 s (the chambers' rest before each curve, e.g. 1000 s)");
         require(settleSteps >= 1 && settleSteps <= 60, "settleSteps", settleSteps,
                 "use 1 to 60 backward-Euler steps (e.g. 10)");
+        if (gas.heatTimeConstant > 0.0)
+            throw std::invalid_argument(
+                "load test option 'gas.heatTimeConstant' (heat exchange) needs the open "
+                "connection; the orifice connection does not carry the heat of the flow");
         if (!geometry.diaphragm)
             throw std::invalid_argument(
                 "load test option 'connection' = orifice needs the two chambers; set the "

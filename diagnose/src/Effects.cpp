@@ -23,7 +23,7 @@ const std::vector<Effect>& getEffects() {
          {{"offset", "K", 1.0, -15.0, 15.0, 5.0, "gas.temperature (the room temperature plus this)"}},
          true},
         {"machine-compliance",
-         "the testing machine and bed board yield in series with the bag",
+         "the testing machine (frame, crosshead, load cell) yields in series with the block",
          {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxMachineCompliance, 0.1e-3,
            "rig.machine_stiffness (its inverse)"}},
          false},
@@ -31,6 +31,24 @@ const std::vector<Effect>& getEffects() {
          "Coulomb friction between the film and the block",
          {{"friction", "", 1.0, 0.0, 1.0, 0.5, "contact.block.friction"}},
          true},
+        {"leakage",
+         "gas leaks through seams and valves during the test (laminar: mass flow out in "
+         "proportion to the gauge pressure)",
+         {{"conductance", "mg/(s kPa)", 1e-9, 0.0, bags::GasOptions::kMaxLeakConductance, 0.05e-9,
+           "gas.leak_conductance"}},
+         true},
+        {"heat-exchange",
+         "the gas compresses adiabatically and exchanges heat with the room through the film "
+         "(Newton cooling with a time constant)",
+         {{"time_constant", "s", 1.0, 0.0, kMaxHeatExchangeTimeConstant, 20.0,
+           "gas.heat_time_constant"}},
+         true},
+        {"bed-compliance",
+         "the bed board under the bag sinks on a spring (confusable with the machine's "
+         "compliance on the rig's data)",
+         {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxBedCompliance, 0.1e-3,
+           "rig.bed_stiffness (its inverse)"}},
+         false},
         {"load-cell-gain",
          "the load cell reads the force times 1 + gain (a calibration error)",
          {{"gain", "", 1.0, -RigEffects::kMaxLoadCellGain, RigEffects::kMaxLoadCellGain, 0.05,
@@ -82,6 +100,12 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
         rig.loadCellGain = values[0];
     } else if (effect.name == "machine-compliance") {
         rig.machineCompliance = values[0];
+    } else if (effect.name == "leakage") {
+        options.gas.leakConductance = values[0];
+    } else if (effect.name == "heat-exchange") {
+        options.gas.heatTimeConstant = values[0];
+    } else if (effect.name == "bed-compliance") {
+        rig.bedCompliance = values[0];
     } else if (effect.name == "block-friction") {
         options.blockContact.friction = values[0];
     } else {

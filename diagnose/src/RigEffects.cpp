@@ -31,7 +31,7 @@ double calcMeanPressure(const bags::LoadStep& s) {
 
 bool RigEffects::isNone() const {
     return pressureLag == 0.0 && pressureOffset == 0.0 && flowmeterOffset == 0.0 &&
-           machineCompliance == 0.0 && loadCellGain == 0.0;
+           machineCompliance == 0.0 && loadCellGain == 0.0 && bedCompliance == 0.0;
 }
 
 void RigEffects::validate() const {
@@ -44,6 +44,8 @@ void RigEffects::validate() const {
     require(machineCompliance >= 0.0 && machineCompliance <= kMaxMachineCompliance,
             "machineCompliance", machineCompliance,
             "use 0 (a rigid rig) to 2 mm/N (a rig stiffness of at least 0.5 N/mm)");
+    require(bedCompliance >= 0.0 && bedCompliance <= kMaxBedCompliance, "bedCompliance",
+            bedCompliance, "use 0 (a rigid bed board) to 2 mm/N (a bed stiffness of at least 0.5 N/mm)");
     require(std::fabs(loadCellGain) <= kMaxLoadCellGain, "loadCellGain", loadCellGain,
             "use -0.2 to 0.2 (the load cell reads the force times 1 + gain)");
 }
@@ -69,7 +71,9 @@ MachineCurve calcMachineCurve(const bags::LoadCurve& curve, const RigEffects& ri
     double t = 0.0;
     for (size_t i = 0; i < curve.steps.size(); ++i) {
         const bags::LoadStep& s = curve.steps[i];
-        const double d = s.displacement + s.force * rig.machineCompliance;
+        // The bed sinks under the bed's force, which is the block's (quasi-static; the bag's
+        // own weight was on it before contact): the crosshead follows the bag down.
+        const double d = s.displacement + s.force * (rig.machineCompliance + rig.bedCompliance);
         if (i > 0) t += std::fabs(d - mc.displacement.back()) / rate;
         mc.time.push_back(t);
         mc.displacement.push_back(d);

@@ -421,7 +421,7 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
 
 void readGas(const ScenarioNode& s, bags::GasOptions& g) {
     s.checkKeys({}, {"molar_mass", "temperature", "ambient_pressure", "process", "polytropic_index",
-                     "gamma"});
+                     "gamma", "leak_conductance", "heat_time_constant"});
     g.molarMass = s.getQuantity("molar_mass", D::MolarMass, g.molarMass);
     g.temperature = s.getQuantity("temperature", D::Temperature, g.temperature);
     g.ambientPressure = s.getQuantity("ambient_pressure", D::Pressure, g.ambientPressure);
@@ -441,6 +441,20 @@ void readGas(const ScenarioNode& s, bags::GasOptions& g) {
                "absolute pressure");
     checkRange(s, "polytropic_index", g.polytropicIndex, 1, true, kInf, false, "");
     checkRange(s, "gamma", g.gamma, 1, false, kInf, false, "");
+    // Unmodelled effects a scenario can switch on (docs/diagnosis.md#the-library-of-unmodelled-effects).
+    g.leakConductance = s.getQuantity("leak_conductance", D::LeakConductance, 0.0);
+    checkRange(s, "leak_conductance", g.leakConductance, 0, true,
+               bags::GasOptions::kMaxLeakConductance, true, "mg/(s kPa)",
+               "the mass flow out through seams and valves per gauge pressure; 0: sealed");
+    g.heatTimeConstant = s.getQuantity("heat_time_constant", D::Time, 0.0);
+    checkRange(s, "heat_time_constant", g.heatTimeConstant, 0, true,
+               bags::GasOptions::kMaxHeatTimeConstant, true, "s",
+               "the film's thermal time constant (adiabatic gas relaxing to the room); 0: the "
+               "process as chosen");
+    if (g.heatTimeConstant > 0.0 && process == "polytropic")
+        s.fail("heat_time_constant",
+               "makes the gas adiabatic with heat exchange; it does not combine with process: "
+               "polytropic (use isothermal or adiabatic)");
     try {
         g.validate();
     } catch (const std::invalid_argument& e) {
@@ -598,7 +612,8 @@ void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabiliza
 
 // The rig's effects the airbag model leaves out (docs/scenario-reference.md#rig).
 void readRig(const ScenarioNode& s, diagnose::RigEffects& r) {
-    s.checkKeys({}, {"pressure_sensor", "flowmeter", "machine_stiffness", "load_cell_gain"});
+    s.checkKeys({}, {"pressure_sensor", "flowmeter", "machine_stiffness", "bed_stiffness",
+                     "load_cell_gain"});
     const ScenarioNode ps = s.getSection("pressure_sensor", false);
     ps.checkKeys({}, {"lag", "offset"});
     r.pressureLag = ps.getQuantity("lag", D::Time, 0.0);
@@ -618,8 +633,14 @@ void readRig(const ScenarioNode& s, diagnose::RigEffects& r) {
         const double k = s.getQuantity("machine_stiffness", D::Stiffness);
         checkRange(s, "machine_stiffness", k, 1.0 / diagnose::RigEffects::kMaxMachineCompliance,
                    true, kInf, false, "N/mm",
-                   "the testing machine and bed board in series with the bag");
+                   "the testing machine in series with the block");
         r.machineCompliance = 1.0 / k;
+    }
+    if (s.has("bed_stiffness")) {
+        const double k = s.getQuantity("bed_stiffness", D::Stiffness);
+        checkRange(s, "bed_stiffness", k, 1.0 / diagnose::RigEffects::kMaxBedCompliance, true,
+                   kInf, false, "N/mm", "the spring under the bed board, in series with the bag");
+        r.bedCompliance = 1.0 / k;
     }
     r.loadCellGain = s.getNumber("load_cell_gain", 0.0);
     checkRange(s, "load_cell_gain", r.loadCellGain, -diagnose::RigEffects::kMaxLoadCellGain, true,

@@ -82,6 +82,11 @@ const std::vector<UnitInfo>& getUnitTable() {
         {"mg/s", D::MassFlow, 1e-6},
         {"kg/s", D::MassFlow, 1.0},
 
+        {"mg/(s kPa)", D::LeakConductance, 1e-9},
+        {"mg/s/kPa", D::LeakConductance, 1e-9},
+        {"g/(s kPa)", D::LeakConductance, 1e-6},
+        {"kg/(s Pa)", D::LeakConductance, 1.0},
+
         {"mL", D::Volume, 1e-6},
         {"L", D::Volume, 1e-3},
         {"cm^3", D::Volume, 1e-6},
@@ -165,6 +170,8 @@ std::string getDimensionName(Dimension d) {
             return "an area";
         case Dimension::SonicConductance:
             return "a sonic conductance (ISO 6358)";
+        case Dimension::LeakConductance:
+            return "a leak conductance (mass flow per gauge pressure)";
     }
     return "a quantity";
 }
@@ -207,6 +214,8 @@ std::string getSiUnit(Dimension d) {
             return "m^2";
         case Dimension::SonicConductance:
             return "m^3/(s Pa)";
+        case Dimension::LeakConductance:
+            return "kg/(s Pa)";
     }
     return "";
 }
@@ -249,6 +258,8 @@ std::string getExample(Dimension d) {
             return "100 cm^2";
         case Dimension::SonicConductance:
             return "0.3 dm^3/(s bar)";
+        case Dimension::LeakConductance:
+            return "0.05 mg/(s kPa)";
     }
     return "";
 }

@@ -190,6 +190,29 @@ TEST(Airbag, WrenchTangentMatchesFiniteDifferencesOfReSolvedEquilibria) {
     EXPECT_LT(T(5, 5), 0.0);  // pushing down (+z translation raises it; force falls)
 }
 
+// A bag on a bed board that has sunk by delta (a bed on a spring under load) is the same bag
+// moved down as a rigid body: pressed to the same depth below its own top it pushes back with
+// the same force and holds the same pressure (gravity is uniform). This is what lets the rig
+// take the bed's compliance as crosshead travel (diagnose::RigEffects::bedCompliance).
+// Tolerance 1e-6 of the force: the two solves start from translated states.
+TEST(Airbag, ABagOnASunkBedBoardIsTheSameBagMovedDown) {
+    AirbagSpec low = coarseSpec();
+    low.forceTolerance = 1e-6;
+    AirbagSpec high = low;
+    low.X_GB = translation(Vec3(0.0, 0.0, -0.004));  // the board 4 mm lower
+    PressedBag a(high), b(low);
+    EXPECT_NEAR(b.top, a.top - 0.004, 1e-9);
+    a.bag->setShapePose(a.shape, a.pose(0.010));
+    b.bag->setShapePose(b.shape, b.pose(0.010));
+    ASSERT_TRUE(a.bag->advance(1.0).converged);
+    ASSERT_TRUE(b.bag->advance(1.0).converged);
+    const double fa = a.bag->calcShapeWrench(a.shape).force.z();
+    EXPECT_GT(fa, 1.0);
+    EXPECT_NEAR(b.bag->calcShapeWrench(b.shape).force.z(), fa, 1e-6 * fa);
+    EXPECT_NEAR(b.bag->getChamberState(0).gaugePressure, a.bag->getChamberState(0).gaugePressure,
+                1e-6 * a.bag->getChamberState(0).gaugePressure);
+}
+
 TEST(Airbag, ImperfectionIsSmoothDeterministicAndOfTheStatedAmplitude) {
     DoubleWedgeParams g;
     g.meshSize = 0.010;

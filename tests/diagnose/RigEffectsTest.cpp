@@ -107,3 +107,36 @@ TEST(MachineCurve, TheLoadCellGainScalesTheForceReadOnly) {
     // The crosshead follows the true force through the compliance, not the reading.
     EXPECT_NEAR(m.displacement[2], 2e-3 + 4.0 * 1e-3, 1e-15);
 }
+
+// The bed board on a spring: the bag rides down on it as a rigid body (the bed carries the
+// block's force; the airbag's translation invariance is checked in tests/bags/AirbagTest.cpp),
+// so the crosshead travels the block's travel into the bag plus force times the bed's
+// compliance, in series with the machine's: exactly what a machine compliance of the sum gives
+// (tolerance: roundoff). The pressure at a sample is the bag's, unchanged: the two effects are
+// confusable on the rig's channels.
+TEST(MachineCurve, TheBedsComplianceAddsInSeriesWithTheMachines) {
+    bags::LoadCurve c;
+    for (int i = 0; i < 4; ++i) {
+        bags::LoadStep s;
+        s.displacement = 1e-3 * i;
+        s.force = 2.0 * i * i;
+        s.gaugePressure = {100.0 * i};
+        c.steps.push_back(s);
+    }
+    RigEffects bed, machine;
+    bed.bedCompliance = 0.3e-3;
+    bed.machineCompliance = 0.2e-3;
+    machine.machineCompliance = 0.5e-3;
+    const diagnose::MachineCurve a = diagnose::calcMachineCurve(c, bed, 1e-3);
+    const diagnose::MachineCurve b = diagnose::calcMachineCurve(c, machine, 1e-3);
+    for (int i = 0; i < 4; ++i) {
+        EXPECT_NEAR(a.displacement[i], 1e-3 * i + 2.0 * i * i * 0.5e-3, 1e-15);
+        EXPECT_NEAR(a.displacement[i], b.displacement[i], 1e-15);
+        EXPECT_NEAR(a.time[i], b.time[i], 1e-12);
+        EXPECT_EQ(a.pressure[i], b.pressure[i]);
+    }
+    EXPECT_FALSE(bed.isNone());
+    RigEffects bad;
+    bad.bedCompliance = 3e-3;
+    EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

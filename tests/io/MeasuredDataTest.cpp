@@ -269,6 +269,7 @@ TEST(RigSection, KeysReadInSiAndTheFlowmeterOffsetShiftsTheBagsMasses) {
         "  pressure_sensor: {lag: 2 s, offset: 0.3 kPa}\n"
         "  flowmeter: {offset: 0.1 g}\n"
         "  machine_stiffness: 20 N/mm\n"
+        "  bed_stiffness: 5 N/mm\n"
         "  load_cell_gain: -0.02\n",
         "rig.yaml");
     const io::LoadTestScenario sc = io::readLoadTestScenario(f);
@@ -277,6 +278,7 @@ TEST(RigSection, KeysReadInSiAndTheFlowmeterOffsetShiftsTheBagsMasses) {
     EXPECT_DOUBLE_EQ(sc.rig.flowmeterOffset, 0.1e-3);
     EXPECT_NEAR(sc.rig.machineCompliance, 1.0 / 20e3, 1e-15);
     EXPECT_DOUBLE_EQ(sc.rig.loadCellGain, -0.02);
+    EXPECT_NEAR(sc.rig.bedCompliance, 1.0 / 5e3, 1e-15);
     // The flowmeter reads 3.5 g and 3.0 g; the bag holds 0.1 g less.
     EXPECT_NEAR(sc.options.gasMasses[0], 3.4e-3, 1e-15);
     EXPECT_NEAR(sc.options.gasMasses[1], 2.9e-3, 1e-15);
@@ -307,4 +309,43 @@ TEST(RigSection, BadValuesAreLocated) {
     EXPECT_NE(e.getMessage().find("did you mean 'offset'"), std::string::npos) << e.what();
     e = error("  machine_stiffness: 0.1 N/mm\n");
     EXPECT_EQ(e.getKey(), "rig.machine_stiffness");
+    e = error("  bed_stiffness: 0.2 N/mm\n");
+    EXPECT_EQ(e.getKey(), "rig.bed_stiffness");
+    EXPECT_NE(e.getMessage().find("must be >= 0.5 N/mm"), std::string::npos) << e.what();
+}
+
+// The gas's leakage and heat exchange (docs/scenario-reference.md#gas): keys read in SI,
+// bounds located.
+TEST(GasSection, LeakageAndHeatExchangeKeysReadInSiAndBadValuesAreLocated) {
+    const std::string head =
+        "kind: seed-load-test\n"
+        "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
+        "membrane: {model: neo-hookean, C10: 1 MPa, thickness: 0.2 mm}\n"
+        "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
+        "gas:\n";
+    const io::LoadTestScenario sc = io::readLoadTestScenario(io::ScenarioFile::parse(
+        head + "  leak_conductance: 0.05 mg/(s kPa)\n  heat_time_constant: 20 s\n", "gas.yaml"));
+    EXPECT_NEAR(sc.options.gas.leakConductance, 0.05e-9, 1e-24);
+    EXPECT_DOUBLE_EQ(sc.options.gas.heatTimeConstant, 20.0);
+    EXPECT_NEAR(io::readLoadTestScenario(io::ScenarioFile::parse(
+                    head + "  leak_conductance: 0.05 mg/s/kPa\n", "gas.yaml"))
+                    .options.gas.leakConductance,
+                0.05e-9, 1e-24);
+    auto error = [&](const std::string& gas) {
+        return expectInputError([&] {
+            io::readLoadTestScenario(io::ScenarioFile::parse(head + gas, "gas.yaml"));
+        });
+    };
+    io::InputError e = error("  leak_conductance: 2 mg/(s kPa)\n");
+    EXPECT_EQ(e.getKey(), "gas.leak_conductance");
+    EXPECT_EQ(e.getLine(), 6);
+    EXPECT_NE(e.getMessage().find("must be in [0 mg/(s kPa), 1 mg/(s kPa)]"), std::string::npos)
+        << e.what();
+    e = error("  leak_conductance: 0.05 g/s\n");
+    EXPECT_EQ(e.getKey(), "gas.leak_conductance");
+    e = error("  heat_time_constant: -1 s\n");
+    EXPECT_EQ(e.getKey(), "gas.heat_time_constant");
+    e = error("  process: polytropic\n  polytropic_index: 1.2\n  heat_time_constant: 20 s\n");
+    EXPECT_EQ(e.getKey(), "gas.heat_time_constant");
+    EXPECT_NE(e.getMessage().find("polytropic"), std::string::npos) << e.what();
 }

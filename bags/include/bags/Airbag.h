@@ -181,9 +181,10 @@ public:
     void setTargetMass(int bag, double mass, double rate);  ///< one bag of a cluster
     double getTotalGasMass() const;       ///< [kg] summed over the module's bags
     double getGasMass(int bag) const;     ///< [kg] of one bag
-    /// No gas enters or leaves any bag, nor passes an orifice between chambers, over the
-    /// following advance() calls (no flow set, or every target reached): only the shapes'
-    /// poses can change what advance() finds.
+    /// No gas enters or leaves any bag, nor passes an orifice between chambers, nor leaks
+    /// (GasOptions::leakConductance), nor exchanges heat with the room
+    /// (GasOptions::heatTimeConstant), over the following advance() calls (no flow set, or
+    /// every target reached): only the shapes' poses can change what advance() finds.
     bool isGasStill() const;
 
     // --- the bags of a module (one unless AirbagSpec::cluster)

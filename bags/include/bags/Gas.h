@@ -22,6 +22,19 @@ struct GasOptions {
     Process process = Process::Isothermal;
     double polytropicIndex = 1.4;     ///< n in p V^n = const (Adiabatic uses gamma = 1.4)
     double gamma = 1.4;               ///< heat capacity ratio of the gas
+    /// Leakage through seams and valves [kg/(s Pa)]: the gas flows out at this conductance
+    /// times its gauge pressure (laminar; in at a gauge pressure below zero). Per bag, shared
+    /// among its gas bodies by volume. 0: sealed. docs/diagnosis.md#leakage.
+    double leakConductance = 0.0;
+    /// Heat exchange with the room through the film [s]: > 0 makes the gas's temperature a
+    /// state that compresses adiabatically (gamma) and relaxes to `temperature` (the room)
+    /// with this time constant (Newton cooling, tau = m c_v / (h A)); 0: the process as
+    /// chosen. Not with process polytropic. docs/diagnosis.md#heat-exchange.
+    double heatTimeConstant = 0.0;
+    /// Largest leak conductance accepted [kg/(s Pa)]: 1 mg/(s kPa), about a 0.2 mm hole at a
+    /// few kPa (a 3.5 L bag then loses its gauge pressure with a time constant of 40 s).
+    static constexpr double kMaxLeakConductance = 1e-9;
+    static constexpr double kMaxHeatTimeConstant = 3600.0;  ///< [s]
     /// Throws std::invalid_argument naming the option and the valid range.
     void validate() const;
     double getSpecificGasConstant() const { return kGasConstant / molarMass; }  ///< [J/(kg K)]
@@ -49,6 +62,22 @@ public:
     double calcWorkPotential(double volume) const;
     /// Temperature [K] at volume V (varies in adiabatic/polytropic processes).
     double calcTemperature(double volume) const;
+    /// Mass [kg] (negative: lost) that leaks through a conductance C [kg/(s Pa)] during dt [s]
+    /// at the held volume V [m^3], the gas keeping its temperature at V: the gauge pressure
+    /// (m - m0) R T / V, m0 = pAmbient V / (R T), decays as exp(-t / tau), tau = V / (R T C),
+    /// so dm = -(m - m0) (1 - exp(-dt / tau)) exactly. Does not change the gas.
+    double calcLeakTransfer(double volume, double dt, double conductance) const;
+    /// Reseals the gas so that its temperature at volume V [m^3] is T [K] (mass kept; the
+    /// process's exponent kept: an adiabat through (V, T)).
+    void setTemperature(double temperature, double volume);
+    /// The heat exchange over a step of dt [s] (options' heatTimeConstant tau > 0, room
+    /// temperature Tr = options' temperature): the temperature [K] at the step's end when the
+    /// gas goes from (V0, T0) to V1 along a volume exponential in time,
+    ///   dT/dt = -(gamma - 1) T dlnV/dt - (T - Tr) / tau,
+    /// integrated exactly: T1 = T0 e^-x + Tr (dt / tau) (1 - e^-x) / x with
+    /// x = (gamma - 1) ln(V1 / V0) + dt / tau. dt = 0: the adiabat T0 (V0 / V1)^(gamma - 1);
+    /// V1 = V0: Newton cooling Tr + (T0 - Tr) e^(-dt / tau).
+    double calcHeatStepTemperature(double V0, double T0, double V1, double dt) const;
     /// Adds dm [kg] (negative: removes) at volume V [m^3] without changing the gas's
     /// temperature at that volume: p(V) scales by (m + dm) / m. Exact for an isothermal gas;
     /// for adiabatic and polytropic gases it neglects the heat carried by the flow.

@@ -35,8 +35,14 @@ struct Effect {
     bool inLibrary = true;
 };
 
+/// Upper bound of the heat exchange's time constant as a candidate [s]: beyond about three
+/// times the rig's loading time the gas is adiabatic over the test (GasOptions accepts up to
+/// an hour).
+inline constexpr double kMaxHeatExchangeTimeConstant = 300.0;
+
 /// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
-/// machine-compliance, block-friction (the library), load-cell-gain (kept out of it).
+/// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance (the library),
+/// load-cell-gain (kept out of it).
 const std::vector<Effect>& getEffects();
 /// The effect of that name, or nullptr.
 const Effect* findEffect(const std::string& name);
@@ -46,7 +52,8 @@ std::string listEffectNames();
 /// Switches the effect on with these parameter values [SI] (one per parameter, in order):
 /// rig effects go into `rig`; effects on the bag into `options` (for the flowmeter's bias,
 /// options.gasMasses become `readings` less the offset; for the gas temperature,
-/// options.gas.temperature is raised by its offset).
+/// options.gas.temperature is raised by its offset; leakage and heat exchange set
+/// options.gas.leakConductance and .heatTimeConstant; bed-compliance rig.bedCompliance).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,

@@ -31,6 +31,7 @@ enum class Dimension {
     Volume,            ///< [m^3] e.g. a manifold
     Area,              ///< [m^2]
     SonicConductance,  ///< ISO 6358 sonic conductance C [m^3/(s Pa)]
+    LeakConductance,   ///< mass flow per gauge pressure, e.g. a bag's seams [kg/(s Pa)]
 };
 
 /// A unit the parser knows: value_SI = factor * value + offset.
