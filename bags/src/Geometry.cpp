@@ -49,6 +49,22 @@ class MeshBuilder {
             addTri(b, c, d, panel, outward);
         }
     }
+    /// Splits quad a-b-c-d (cyclic order, planar) by `pattern`: along a-c or b-d as
+    /// diagAC says (Legacy, Mirrored), or into four triangles around a new node at the
+    /// corners' mean (Crossed), whose index is returned (-1 otherwise).
+    int addCell(int a, int b, int c, int d, MeshPattern pattern, bool diagAC, int panel,
+                const Vec3& outward) {
+        if (pattern != MeshPattern::Crossed) {
+            addQuad(a, b, c, d, diagAC, panel, outward);
+            return -1;
+        }
+        const int m = addNode(0.25 * (m_nodes[a] + m_nodes[b] + m_nodes[c] + m_nodes[d]));
+        addTri(a, b, m, panel, outward);
+        addTri(b, c, m, panel, outward);
+        addTri(c, d, m, panel, outward);
+        addTri(d, a, m, panel, outward);
+        return m;
+    }
     /// Smallest interior angle of triangle (a, b, c) [rad].
     double calcMinAngle(int a, int b, int c) const {
         const Vec3* p[3] = {&m_nodes[a], &m_nodes[b], &m_nodes[c]};
@@ -167,10 +183,19 @@ int numSegments(double len, double h, int minSeg = 1) {
 /// (a "union jack" pattern): keeps the mesh symmetric under both reflections.
 bool unionJack(int i, int j, int ni, int nj) { return (2 * i + 1 < ni) == (2 * j + 1 < nj); }
 
-/// Alternating diagonals along i, mirrored about the centre line of j.
+/// Alternating diagonals along i, the index j mirrored about the centre line of j. The
+/// mirrored cell gets the same diagonal, not the mirrored one: MeshPattern::Legacy.
 bool diamond(int i, int j, int nj) {
     const int jm = (2 * j + 1 < nj) ? j : nj - 1 - j;
     return ((i + jm) % 2) == 0;
+}
+
+/// Alternating diagonals on the lower half of j (as diamond()), each mirrored onto the upper
+/// half: cell (i, nj-1-j) takes the mirror image of cell (i, j)'s diagonal, which is the other
+/// diagonal of the quad. With nj even no cell is its own mirror image.
+bool mirroredDiagonal(int i, int j, int nj) {
+    if (2 * j + 1 < nj) return ((i + j) % 2) == 0;
+    return ((i + nj - 1 - j) % 2) != 0;
 }
 
 ChamberBoundary allTrisChamber(const std::string& name, int numTris) {
@@ -197,6 +222,18 @@ void requirePositive(const std::string& what, double v) {
 
 // ------------------------------------------------------------------------------------------
 // Double wedge
+
+const char* getMeshPatternName(MeshPattern pattern) {
+    switch (pattern) {
+        case MeshPattern::Legacy:
+            return "legacy";
+        case MeshPattern::Mirrored:
+            return "mirrored";
+        case MeshPattern::Crossed:
+            return "crossed";
+    }
+    return "unknown";
+}
 
 double DoubleWedgeParams::calcApexX() const {
     return std::sqrt(std::max(0.0, shortSide * shortSide - height * height));
@@ -244,7 +281,15 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
                            numSegments(std::max(sLen, gLen), 1.5 * ms, 2));
     // In-row node spacing: h, or less when rows are closer than sqrt(3)/2 h (equilateral).
     const double rowSpacing = std::min(ms, 2.0 / std::sqrt(3.0) * H / n);
-    const int ny = numSegments(W, ms, 1);
+    // Mirrored needs an even number of cells across the width (an odd count has a middle cell
+    // that is its own mirror image, which no diagonal can be): the even count nearest W / h.
+    const int ny = p.pattern == MeshPattern::Mirrored
+                       ? std::max(2, 2 * static_cast<int>(std::lround(0.5 * W / ms)))
+                       : numSegments(W, ms, 1);
+    auto diagonal = [&](int i, int j) {
+        return p.pattern == MeshPattern::Mirrored ? mirroredDiagonal(i, j, ny) : diamond(i, j, ny);
+    };
+    std::vector<int> baseCentres;  // Crossed: the base cells' centre nodes (bonded with the base)
 
     // Base x stations (with a station at the apex's x when there is a diaphragm).
     std::vector<double> xs;
@@ -307,9 +352,11 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
             panel = pSteep;
             nrm = nSteep;
         }
-        for (int j = 0; j < ny; ++j)
-            b.addQuad(gid(pi, j), gid(q, j), gid(q, j + 1), gid(pi, j + 1), diamond(pi, j, ny),
-                      panel, nrm);
+        for (int j = 0; j < ny; ++j) {
+            const int centre = b.addCell(gid(pi, j), gid(q, j), gid(q, j + 1), gid(pi, j + 1),
+                                         p.pattern, diagonal(pi, j), panel, nrm);
+            if (centre >= 0 && panel == pBase) baseCentres.push_back(centre);
+        }
     }
 
     // Side panels: rows of nodes at the sloped panels' grid heights, zipped row to row; with
@@ -390,8 +437,8 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
             }
         for (int k = 0; k < n; ++k)
             for (int j = 0; j < ny; ++j)
-                b.addQuad(did(k, j), did(k + 1, j), did(k + 1, j + 1), did(k, j + 1),
-                          diamond(k, j, ny), pDia, nDia);
+                b.addCell(did(k, j), did(k + 1, j), did(k + 1, j + 1), did(k, j + 1), p.pattern,
+                          diagonal(k, j), pDia, nDia);
     }
 
     Mesh mesh = b.finish();
@@ -421,6 +468,8 @@ Mesh makeDoubleWedgeBag(const DoubleWedgeParams& p) {
     if (p.bondBase)
         for (int i = 0; i <= nb; ++i)
             for (int j = 0; j <= ny; ++j) mesh.supportNodes.push_back(gid(i, j));
+    if (p.bondBase)
+        mesh.supportNodes.insert(mesh.supportNodes.end(), baseCentres.begin(), baseCentres.end());
     std::sort(mesh.supportNodes.begin(), mesh.supportNodes.end());
     return mesh;
 }

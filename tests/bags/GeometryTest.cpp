@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <iostream>
@@ -75,6 +76,76 @@ double totalVolume(const Mesh& m) {
     return v;
 }
 
+/// For each node, the node at its mirror image across the plane y = 0, -1 if there is none
+/// within tol [m] (sort-and-sweep along x).
+std::vector<int> findMirrorNodes(const Mesh& m, double tol) {
+    const int nn = m.getNumNodes();
+    std::vector<int> order(nn), mirror(nn, -1);
+    for (int i = 0; i < nn; ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return m.X(0, a) < m.X(0, b); });
+    for (int i = 0; i < nn; ++i) {
+        const Vec3 want(m.X(0, i), -m.X(1, i), m.X(2, i));
+        auto it = std::lower_bound(order.begin(), order.end(), want.x() - tol,
+                                   [&](int a, double x) { return m.X(0, a) < x; });
+        for (; it != order.end() && m.X(0, *it) <= want.x() + tol; ++it)
+            if ((m.X.col(*it) - want).norm() < tol) mirror[i] = *it;
+    }
+    return mirror;
+}
+
+/// Number of triangles whose mirror image across y = 0 (the double wedge's mid-width plane)
+/// is not a triangle of the same panel.
+int countUnmirroredTris(const Mesh& m) {
+    const std::vector<int> mirror = findMirrorNodes(m, 1e-9);
+    std::set<std::array<int, 4>> tris;  // sorted nodes and panel
+    auto key = [&](int a, int b, int c, int panel) {
+        std::array<int, 4> k = {a, b, c, panel};
+        std::sort(k.begin(), k.begin() + 3);
+        return k;
+    };
+    for (int t = 0; t < m.getNumTris(); ++t)
+        tris.insert(key(m.tris(0, t), m.tris(1, t), m.tris(2, t), m.triPanel[t]));
+    int missing = 0;
+    for (int t = 0; t < m.getNumTris(); ++t) {
+        const int a = mirror[m.tris(0, t)], b = mirror[m.tris(1, t)], c = mirror[m.tris(2, t)];
+        const std::string& panel = m.panelNames[m.triPanel[t]];
+        // The side panels swap under the mirror; the others map onto themselves.
+        const std::string other = panel == "side-front"  ? "side-back"
+                                  : panel == "side-back" ? "side-front"
+                                                         : panel;
+        if (a < 0 || b < 0 || c < 0 || !tris.count(key(a, b, c, m.findPanel(other)))) ++missing;
+    }
+    return missing;
+}
+
+/// FNV-1a digest of bytes.
+std::uint64_t fnv1a(std::uint64_t h, const void* p, size_t n) {
+    const unsigned char* c = static_cast<const unsigned char*>(p);
+    for (size_t i = 0; i < n; ++i) {
+        h ^= c[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+/// Digest of a mesh's connectivity: triangles, panels, supports, chambers and signs.
+std::uint64_t calcTopologyDigest(const Mesh& m) {
+    std::uint64_t h = 1469598103934665603ull;
+    auto add = [&](int v) { h = fnv1a(h, &v, sizeof v); };
+    for (int t = 0; t < m.getNumTris(); ++t)
+        for (int k = 0; k < 3; ++k) add(m.tris(k, t));
+    for (int v : m.triPanel) add(v);
+    for (int v : m.supportNodes) add(v);
+    for (const ChamberBoundary& c : m.chambers) {
+        for (int v : c.tris) add(v);
+        for (int v : c.signs) add(v);
+    }
+    return h;
+}
+
+const MeshPattern kAllPatterns[] = {MeshPattern::Legacy, MeshPattern::Mirrored,
+                                    MeshPattern::Crossed};
+
 }  // namespace
 
 // ------------------------------------------------------------------------------------------
@@ -144,51 +215,54 @@ TEST(DoubleWedge, PanelAreasMatchTheProfile) {
 }
 
 TEST(DoubleWedge, MeshConformsAndOuterNormalsPointOut) {
-    for (double h : {0.010, 0.005}) {
-        DoubleWedgeParams p;
-        p.meshSize = h;
-        const Mesh m = makeDoubleWedgeBag(p);
-        ASSERT_NO_THROW(m.validate());
-        EXPECT_EQ(countDuplicateNodes(m, 1e-9), 0);
-        const int dia = m.findPanel("diaphragm");
-        std::vector<char> outer(m.getNumTris()), inner(m.getNumTris());
-        for (int t = 0; t < m.getNumTris(); ++t) {
-            outer[t] = m.triPanel[t] != dia;
-            inner[t] = !outer[t];
-        }
-        // The outer surface alone is a closed, consistently oriented 2-manifold.
-        EXPECT_EQ(countNonManifoldEdges(m, outer), 0) << "h " << h;
-        // Every diaphragm edge is either interior to it (two diaphragm triangles) or an edge
-        // of the outer surface (a shared, conforming seam).
-        const auto eo = directedEdges(m, outer);
-        const auto ed = directedEdges(m, inner);
-        int loose = 0;
-        for (const auto& [ab, count] : ed) {
-            const bool interior = ed.count({ab.second, ab.first}) > 0;
-            const bool seam = eo.count(ab) > 0 || eo.count({ab.second, ab.first}) > 0;
-            if (!interior && !seam) ++loose;
-        }
-        EXPECT_EQ(loose, 0);
-        // The prism is convex: outer normals point away from an interior point.
-        const Vec3 inside(0.35 / 3, 0.0, 0.05);
-        int inward = 0;
-        for (int t = 0; t < m.getNumTris(); ++t)
-            if (outer[t] && triNormal(m, t).dot(triCentroid(m, t) - inside) <= 0) ++inward;
-        EXPECT_EQ(inward, 0);
-        // Panel normals: base -z, sides -y / +y, diaphragm +x.
-        for (int t = 0; t < m.getNumTris(); ++t) {
-            const std::string& name = m.panelNames[m.triPanel[t]];
-            const Vec3 nrm = triNormal(m, t);
-            Vec3 want = Vec3::Zero();
-            if (name == "base") want = Vec3(0, 0, -1);
-            if (name == "side-front") want = Vec3(0, -1, 0);
-            if (name == "side-back") want = Vec3(0, 1, 0);
-            if (name == "diaphragm") want = Vec3(1, 0, 0);
-            if (want.norm() > 0) {
-                EXPECT_NEAR(nrm.dot(want), 1.0, 1e-12) << name << " triangle " << t;
+    for (MeshPattern pattern : kAllPatterns)
+        for (double h : {0.010, 0.005}) {
+            SCOPED_TRACE(getMeshPatternName(pattern));
+            DoubleWedgeParams p;
+            p.meshSize = h;
+            p.pattern = pattern;
+            const Mesh m = makeDoubleWedgeBag(p);
+            ASSERT_NO_THROW(m.validate());
+            EXPECT_EQ(countDuplicateNodes(m, 1e-9), 0);
+            const int dia = m.findPanel("diaphragm");
+            std::vector<char> outer(m.getNumTris()), inner(m.getNumTris());
+            for (int t = 0; t < m.getNumTris(); ++t) {
+                outer[t] = m.triPanel[t] != dia;
+                inner[t] = !outer[t];
+            }
+            // The outer surface alone is a closed, consistently oriented 2-manifold.
+            EXPECT_EQ(countNonManifoldEdges(m, outer), 0) << "h " << h;
+            // Every diaphragm edge is either interior to it (two diaphragm triangles) or an edge
+            // of the outer surface (a shared, conforming seam).
+            const auto eo = directedEdges(m, outer);
+            const auto ed = directedEdges(m, inner);
+            int loose = 0;
+            for (const auto& [ab, count] : ed) {
+                const bool interior = ed.count({ab.second, ab.first}) > 0;
+                const bool seam = eo.count(ab) > 0 || eo.count({ab.second, ab.first}) > 0;
+                if (!interior && !seam) ++loose;
+            }
+            EXPECT_EQ(loose, 0);
+            // The prism is convex: outer normals point away from an interior point.
+            const Vec3 inside(0.35 / 3, 0.0, 0.05);
+            int inward = 0;
+            for (int t = 0; t < m.getNumTris(); ++t)
+                if (outer[t] && triNormal(m, t).dot(triCentroid(m, t) - inside) <= 0) ++inward;
+            EXPECT_EQ(inward, 0);
+            // Panel normals: base -z, sides -y / +y, diaphragm +x.
+            for (int t = 0; t < m.getNumTris(); ++t) {
+                const std::string& name = m.panelNames[m.triPanel[t]];
+                const Vec3 nrm = triNormal(m, t);
+                Vec3 want = Vec3::Zero();
+                if (name == "base") want = Vec3(0, 0, -1);
+                if (name == "side-front") want = Vec3(0, -1, 0);
+                if (name == "side-back") want = Vec3(0, 1, 0);
+                if (name == "diaphragm") want = Vec3(1, 0, 0);
+                if (want.norm() > 0) {
+                    EXPECT_NEAR(nrm.dot(want), 1.0, 1e-12) << name << " triangle " << t;
+                }
             }
         }
-    }
 }
 
 TEST(DoubleWedge, ChambersSplitAtTheDiaphragm) {
@@ -212,38 +286,130 @@ TEST(DoubleWedge, ChambersSplitAtTheDiaphragm) {
 }
 
 TEST(DoubleWedge, BaseNodesAreSupportsWhenBonded) {
-    DoubleWedgeParams p;
-    Mesh m = makeDoubleWedgeBag(p);
-    std::set<int> sup(m.supportNodes.begin(), m.supportNodes.end());
-    EXPECT_EQ(sup.size(), m.supportNodes.size());
-    int onBase = 0;
-    for (int n = 0; n < m.getNumNodes(); ++n) {
-        const bool base = std::abs(m.X(2, n)) < 1e-12;
-        onBase += base;
-        EXPECT_EQ(base, sup.count(n) == 1) << "node " << n;
+    for (MeshPattern pattern : kAllPatterns) {
+        SCOPED_TRACE(getMeshPatternName(pattern));
+        DoubleWedgeParams p;
+        p.pattern = pattern;
+        Mesh m = makeDoubleWedgeBag(p);
+        std::set<int> sup(m.supportNodes.begin(), m.supportNodes.end());
+        EXPECT_EQ(sup.size(), m.supportNodes.size());
+        int onBase = 0;
+        for (int n = 0; n < m.getNumNodes(); ++n) {
+            const bool base = std::abs(m.X(2, n)) < 1e-12;
+            onBase += base;
+            EXPECT_EQ(base, sup.count(n) == 1) << "node " << n;
+        }
+        EXPECT_EQ(onBase, static_cast<int>(sup.size()));
+        p.bondBase = false;
+        EXPECT_TRUE(makeDoubleWedgeBag(p).supportNodes.empty());
     }
-    EXPECT_EQ(onBase, static_cast<int>(sup.size()));
-    p.bondBase = false;
-    EXPECT_TRUE(makeDoubleWedgeBag(p).supportNodes.empty());
 }
 
 TEST(DoubleWedge, QualityAndCountsAtFiveAndTenMillimetres) {
-    for (double h : {0.010, 0.005}) {
+    for (MeshPattern pattern : kAllPatterns)
+        for (double h : {0.010, 0.005}) {
+            DoubleWedgeParams p;
+            p.meshSize = h;
+            p.pattern = pattern;
+            const MeshQuality q = calcMeshQuality(makeDoubleWedgeBag(p));
+            std::cout << "[ wedge   ] " << getMeshPatternName(pattern) << ", h = " << h * 1e3
+                      << " mm: " << q.numNodes << " nodes, " << q.numTris
+                      << " triangles, min angle " << q.minAngle / kDeg << " deg, max angle "
+                      << q.maxAngle / kDeg << " deg, aspect mean " << q.meanAspect << " max "
+                      << q.maxAspect << ", edge min/mean/max " << q.minEdge * 1e3 << "/"
+                      << q.meanEdge * 1e3 << "/" << q.maxEdge * 1e3 << " mm\n";
+            // Targets of the generator: min angle > 25 deg, aspect R/2r < 2 (1 = equilateral),
+            // mean edge within 25 % of the mesh size, no edge beyond 2 h.
+            EXPECT_GT(q.minAngle, 25 * kDeg);
+            EXPECT_LT(q.maxAngle, 120 * kDeg);
+            EXPECT_LT(q.maxAspect, 2.0);
+            EXPECT_NEAR(q.meanEdge, h, 0.25 * h);
+            EXPECT_LT(q.maxEdge, 2.0 * h);
+        }
+}
+
+TEST(DoubleWedge, MirroredAndCrossedPatternsMapOntoThemselvesAcrossTheMidWidthPlane) {
+    // The bag is mirror-symmetric across y = 0; so must its mesh be, or mirror-image load
+    // cases (a neighbour at +y or at -y) disagree. 20 mm gives an odd number of cells across
+    // the 100 mm width, 25 mm an even one; 0.88 is about the seed reading's profile scale.
+    for (double h : {0.025, 0.020, 0.010, 0.0075})
+        for (double scale : {1.0, 0.88}) {
+            DoubleWedgeParams p;
+            p.meshSize = h;
+            p.longSide *= scale;
+            p.shortSide *= scale;
+            p.height *= scale;
+            for (MeshPattern pattern : kAllPatterns) {
+                p.pattern = pattern;
+                const Mesh m = makeDoubleWedgeBag(p);
+                ASSERT_NO_THROW(m.validate());
+                const int missing = countUnmirroredTris(m);
+                if (pattern == MeshPattern::Legacy) {
+                    std::cout << "[ mirror  ] legacy, h = " << h * 1e3 << " mm, scale " << scale
+                              << ": " << missing << " of " << m.getNumTris()
+                              << " triangles have no mirror image\n";
+                    // The defect the other patterns remove: most triangles have no mirror image.
+                    EXPECT_GT(missing, m.getNumTris() / 2) << "h " << h;
+                } else {
+                    EXPECT_EQ(missing, 0)
+                        << getMeshPatternName(pattern) << ", h " << h << ", scale " << scale;
+                }
+            }
+        }
+}
+
+TEST(DoubleWedge, CrossedPatternAddsACentreNodePerCellAndMirroredAnEvenWidthCount) {
+    DoubleWedgeParams p;
+    p.meshSize = 0.020;  // 100 mm / 20 mm: 5 cells across the width
+    const Mesh legacy = makeDoubleWedgeBag(p);
+    p.pattern = MeshPattern::Crossed;
+    const Mesh crossed = makeDoubleWedgeBag(p);
+    p.pattern = MeshPattern::Mirrored;
+    const Mesh mirrored = makeDoubleWedgeBag(p);
+    // Every cell of the structured panels: two triangles in Legacy, four around one new node
+    // in Crossed; the side panels are the same.
+    const int cells = crossed.getNumNodes() - legacy.getNumNodes();
+    EXPECT_GT(cells, 0);
+    EXPECT_EQ(crossed.getNumTris() - legacy.getNumTris(), 2 * cells);
+    // Nodes of a base row: one per cell boundary across the width (ny + 1).
+    auto countAcross = [](const Mesh& m) {
+        int n = 0;
+        for (int i = 0; i < m.getNumNodes(); ++i)
+            if (m.X(0, i) == 0.0 && m.X(2, i) == 0.0) ++n;
+        return n - 1;
+    };
+    EXPECT_EQ(countAcross(legacy), 5);
+    EXPECT_EQ(countAcross(crossed), 5);
+    EXPECT_EQ(countAcross(mirrored), 6);
+    // Same volume (the panels are flat; only their triangulation differs).
+    EXPECT_NEAR(totalVolume(crossed), totalVolume(legacy), 1e-12);
+    EXPECT_NEAR(totalVolume(mirrored), totalVolume(legacy), 1e-12);
+}
+
+TEST(DoubleWedge, LegacyPatternIsTheMeshOfBefore) {
+    // Digests of the double wedge as built before the patterns were added (the default is
+    // Legacy): connectivity bit for bit, and node positions to 1e-12 m.
+    struct Ref {
+        double h;
+        int nodes, tris;
+        std::uint64_t topology;
+        double sumAbsX;
+    };
+    const Ref refs[] = {
+        {0.025, 234, 484, 0x39aca71e7752cc10ull, 56.561391929792634},
+        {0.02, 380, 782, 0x61561f051e2e2bd4ull, 91.495409692901077},
+        {0.01, 1520, 3090, 0x1a6fa73d88ec28c2ull, 367.68964923703743},
+        {0.0075, 2680, 5428, 0x0bf3202983a92f87ull, 648.28136080509262},
+        {0.005, 5924, 11952, 0x6491b049f3a300d3ull, 1431.8603595236702},
+    };
+    for (const Ref& r : refs) {
         DoubleWedgeParams p;
-        p.meshSize = h;
-        const MeshQuality q = calcMeshQuality(makeDoubleWedgeBag(p));
-        std::cout << "[ wedge   ] h = " << h * 1e3 << " mm: " << q.numNodes << " nodes, "
-                  << q.numTris << " triangles, min angle " << q.minAngle / kDeg
-                  << " deg, max angle " << q.maxAngle / kDeg << " deg, aspect mean " << q.meanAspect
-                  << " max " << q.maxAspect << ", edge min/mean/max " << q.minEdge * 1e3 << "/"
-                  << q.meanEdge * 1e3 << "/" << q.maxEdge * 1e3 << " mm\n";
-        // Targets of the generator: min angle > 25 deg, aspect R/2r < 2 (1 = equilateral),
-        // mean edge within 25 % of the mesh size, no edge beyond 2 h.
-        EXPECT_GT(q.minAngle, 25 * kDeg);
-        EXPECT_LT(q.maxAngle, 120 * kDeg);
-        EXPECT_LT(q.maxAspect, 2.0);
-        EXPECT_NEAR(q.meanEdge, h, 0.25 * h);
-        EXPECT_LT(q.maxEdge, 2.0 * h);
+        p.meshSize = r.h;
+        const Mesh m = makeDoubleWedgeBag(p);
+        EXPECT_EQ(m.getNumNodes(), r.nodes) << "h " << r.h;
+        EXPECT_EQ(m.getNumTris(), r.tris) << "h " << r.h;
+        EXPECT_EQ(calcTopologyDigest(m), r.topology) << "h " << r.h;
+        EXPECT_NEAR(m.X.cwiseAbs().sum(), r.sumAbsX, 1e-12) << "h " << r.h;
     }
 }
 

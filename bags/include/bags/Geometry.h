@@ -10,6 +10,25 @@
 
 namespace bags {
 
+/// How the double wedge's structured panels (base, sloped sides, internal wall: rectangular
+/// cells of about meshSize) are split into triangles. The side profiles are triangulated
+/// row by row in every pattern. See docs/geometry.md#mesh-patterns.
+enum class MeshPattern {
+    /// Two triangles per cell, diagonals alternating from cell to cell; a cell and its mirror
+    /// image across the bag's mid-width plane (y = 0) take the same diagonal, so most
+    /// triangles have no mirror image (the pattern of every result before the option).
+    Legacy,
+    /// Two triangles per cell, alternating as Legacy on the y < 0 half and mirrored onto the
+    /// y > 0 half; an even number of cells across the width. Maps onto itself under y -> -y.
+    Mirrored,
+    /// Four triangles per cell around a node at the cell's centre: symmetric under both
+    /// reflections of every cell, with no preferred diagonal (one node more per cell).
+    Crossed,
+};
+
+/// The scenario's name of a pattern ("legacy", "mirrored", "crossed").
+const char* getMeshPatternName(MeshPattern pattern);
+
 /// The seed study's double-wedge airbag (see docs/geometry.md for the shape and why).
 /// Side profile in the x-z plane: a triangle with the long side on the bed board (z = 0),
 /// apex at height `height`, one sloped side of length `shortSide`; extruded along y by
@@ -22,6 +41,7 @@ struct DoubleWedgeParams {
     double width = 0.100;      ///< extrusion width [m]
     double height = 0.150;     ///< apex height of the panel layout [m]
     double meshSize = 0.010;   ///< target element edge [m]
+    MeshPattern pattern = MeshPattern::Legacy;  ///< how the structured panels' cells are split
     bool diaphragm = true;     ///< build the internal wall (two chambers); false: one chamber
     bool bondBase = true;      ///< base panel nodes are support nodes
     /// Throws std::invalid_argument naming the parameter if the geometry is impossible.
