@@ -345,9 +345,9 @@ int runRunCommand(int argc, char** argv) {
                   << "  airbag " << io::formatSignificant(o.geometry.longSide, "mm") << " x "
                   << io::formatSignificant(o.geometry.width, "mm") << ", height "
                   << io::formatSignificant(o.geometry.height, "mm") << ", mesh "
-                  << io::formatSignificant(o.geometry.meshSize, "mm") << "; "
-                  << o.material->getName() << " membrane "
-                  << io::formatSignificant(o.thickness, "mm") << "\n"
+                  << io::formatSignificant(o.geometry.meshSize, "mm") << " ("
+                  << bags::getMeshPatternName(o.geometry.pattern) << "); " << o.material->getName()
+                  << " membrane " << io::formatSignificant(o.thickness, "mm") << "\n"
                   << "  " << o.gasMasses.size() << " gas masses from "
                   << io::formatQuantity(o.gasMasses.front(), "g", 2) << " to "
                   << io::formatQuantity(o.gasMasses.back(), "g", 2) << "; block "

@@ -53,11 +53,15 @@ fs::path makeTestDir(const std::string& name) {
 
 TEST(InputLimits, NodeEstimateIsWithinTenPercentOfTheMesh) {
     bags::DoubleWedgeParams g;  // the seed's bag
-    for (double h : {0.025, 0.010, 0.005, 0.0025}) {
-        g.meshSize = h;
-        const double mesh = bags::makeDoubleWedgeBag(g).getNumNodes();
-        EXPECT_NEAR(io::estimateNumNodes(g) / mesh, 1.0, 0.10) << "mesh size " << h << " m";
-    }
+    for (bags::MeshPattern pattern :
+         {bags::MeshPattern::Legacy, bags::MeshPattern::Mirrored, bags::MeshPattern::Crossed})
+        for (double h : {0.025, 0.010, 0.005, 0.0025}) {
+            g.meshSize = h;
+            g.pattern = pattern;
+            const double mesh = bags::makeDoubleWedgeBag(g).getNumNodes();
+            EXPECT_NEAR(io::estimateNumNodes(g) / mesh, 1.0, 0.10)
+                << bags::getMeshPatternName(pattern) << ", mesh size " << h << " m";
+        }
 }
 
 TEST(InputLimits, MeshTooFineForTheAirbagNamesTheLimitAndTheSmallestValidSize) {

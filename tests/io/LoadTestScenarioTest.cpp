@@ -98,6 +98,32 @@ TEST(LoadTestScenario, MeshSizeCanBeOverridden) {
     EXPECT_NEAR(io::readLoadTestScenario(f).options.geometry.meshSize, 5e-3, 1e-15);
 }
 
+TEST(LoadTestScenario, MeshPatternKeyChoosesTheTriangulation) {
+    using bags::MeshPattern;
+    const auto patternOf = [](const std::string& text) {
+        return io::readLoadTestScenario(ScenarioFile::parse(text, "m.yaml"))
+            .options.geometry.pattern;
+    };
+    EXPECT_EQ(patternOf(kBase), MeshPattern::Legacy);  // unstated: the mesh of before
+    // The seed's scenario states the crossed pattern.
+    EXPECT_EQ(io::readLoadTestScenario(ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) +
+                                                          "/scenarios/seed-load-test.yaml"))
+                  .options.geometry.pattern,
+              MeshPattern::Crossed);
+    EXPECT_EQ(patternOf(replaceLine(kBase, 6, "  height: 150 mm\n  mesh_pattern: legacy")),
+              MeshPattern::Legacy);
+    EXPECT_EQ(patternOf(replaceLine(kBase, 6, "  height: 150 mm\n  mesh_pattern: mirrored")),
+              MeshPattern::Mirrored);
+    EXPECT_EQ(patternOf(replaceLine(kBase, 6, "  height: 150 mm\n  mesh_pattern: crossed")),
+              MeshPattern::Crossed);
+    const InputError e =
+        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  mesh_pattern: diagonal"));
+    EXPECT_EQ(e.getLine(), 7);
+    EXPECT_EQ(e.getKey(), "airbag.mesh_pattern");
+    for (const char* valid : {"legacy", "mirrored", "crossed"})
+        EXPECT_NE(std::string(e.what()).find(valid), std::string::npos) << e.what();
+}
+
 TEST(LoadTestScenario, BaseScenarioIsValidAndUsesDefaults) {
     const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
     const bags::LoadTestOptions defaults;
@@ -335,6 +361,7 @@ TEST(LoadTestScenario, SeedReadingsDifferOnlyInTheFillMass) {
         EXPECT_EQ(x.geometry.width, y.geometry.width);
         EXPECT_EQ(x.geometry.height, y.geometry.height);
         EXPECT_EQ(x.geometry.meshSize, y.geometry.meshSize);
+        EXPECT_EQ(x.geometry.pattern, y.geometry.pattern);
         EXPECT_EQ(x.geometry.diaphragm, y.geometry.diaphragm);
         EXPECT_EQ(x.geometry.bondBase, y.geometry.bondBase);
         EXPECT_EQ(x.material->getName(), y.material->getName());
