@@ -11,7 +11,12 @@
 #include <io/InputError.h>
 #include <io/Units.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -50,17 +55,54 @@ struct Totals {
     int steps = 0, passes = 0, cuts = 0;
 };
 
+// Writes `data` to dir/checkpoint.bin through a temporary file, flushed to the disk and
+// renamed over it: a kill while it is written leaves the previous checkpoint whole.
+void writeFileAtomically(const std::filesystem::path& path, const std::string& data) {
+    const std::filesystem::path tmp = path.string() + ".tmp";
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0) throw std::runtime_error("cannot write " + tmp.string());
+    size_t done = 0;
+    while (done < data.size()) {
+        const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            ::close(fd);
+            throw std::runtime_error("cannot write " + tmp.string());
+        }
+        done += size_t(n);
+    }
+    if (::fsync(fd) != 0 || ::close(fd) != 0)
+        throw std::runtime_error("cannot write " + tmp.string());
+    std::filesystem::rename(tmp, path);
+}
+
 }  // namespace
 
-int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool force, bool quiet,
-                      const std::string& commandLine) {
+CheckpointHeader readCheckpointHeader(bags::StateReader& r) {
+    CheckpointHeader h;
+    r.tag("header");
+    h.version = r.str();
+    h.scenarioFile = r.str();
+    h.scenarioText = r.str();
+    h.overrides.resize(r.pod<std::uint64_t>());
+    for (std::string& o : h.overrides) o = r.str();
+    r.pod(h.time);
+    return h;
+}
+
+int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
+                      const ArrayRunControl& control) {
+    const bool quiet = control.quiet;
+    const std::string& commandLine = control.commandLine;
+    bags::StateReader* const resume = control.resume;
     io::PatientOnArrayScenario sc;
     std::filesystem::path outPath;
     std::unique_ptr<io::OutputDir> outDir;
     try {
         sc = io::readPatientOnArrayScenario(file);
         outPath = out.empty() ? std::filesystem::path("out") / sc.name : std::filesystem::path(out);
-        outDir = std::make_unique<io::OutputDir>(outPath, force);
+        outDir = resume ? std::make_unique<io::OutputDir>(io::OutputDir::resume(outPath))
+                        : std::make_unique<io::OutputDir>(outPath, control.force);
     } catch (const io::InputError& e) {
         std::cerr << "bagsim: error: " << e.what() << "\n";
         return 2;
@@ -102,13 +144,23 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                       << sc.options.reduced->source.substr(0, sc.options.reduced->source.find('\n'))
                       << "\n";
         std::cerr << "  writing to " << outPath.string()
-                  << "/ (Ctrl-C stops and keeps what was computed, marked INCOMPLETE)\n";
+                  << "/ (Ctrl-C stops and keeps what was computed, marked INCOMPLETE";
+        if (sc.checkpointInterval > 0.0)
+            std::cerr << "; a checkpoint every " << fmt("%g s", sc.checkpointInterval)
+                      << " for bagsim run --resume";
+        std::cerr << ")\n";
     }
 
     io::RunInfo info{file.getFileName(), file.getText(), file.getOverrides(), commandLine};
     std::unique_ptr<io::ArrayResultsWriter> writer;
     try {
-        writer = std::make_unique<io::ArrayResultsWriter>(*outDir, info, sc.mat);
+        writer = resume ? std::make_unique<io::ArrayResultsWriter>(*outDir, sc.mat, *resume)
+                        : std::make_unique<io::ArrayResultsWriter>(*outDir, info, sc.mat);
+    } catch (const bags::StateError& e) {
+        std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": " << e.what()
+                  << "\n";
+        outDir->setStatus("interrupted", std::string("resume refused: ") + e.what());
+        return 2;
     } catch (const std::exception& e) {
         std::cerr << "bagsim: error: cannot write the results: " << e.what() << "\n";
         outDir->setStatus("failed", e.what());
@@ -121,6 +173,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
     cosim::EnvelopeCounts envelope;
     const double end = sc.getEndTime();
     double nextOutput = 0.0;
+    bool settled = !(sc.settleTime > 0.0 && sc.duration > 0.0);
+    const bool checkpoints = sc.checkpointInterval > 0.0;
+    double nextCheckpoint = checkpoints ? sc.checkpointInterval : 0.0;
     ArrayVerdict verdict(layout, sc.options.bag.geometry, sc.settleTime, sc.duration,
                          sc.targetTilt);
     // The pneumatics: the network's bags (participants), their volumes at the last committed
@@ -175,6 +230,50 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                                 : turn->getTurnedTilt(),
                             turn->getPhase() == cosim::TurnController::Phase::Done);
     };
+    // The checkpoint (docs/output-layout.md#checkpoint): header, the writers' positions, the
+    // loop's own state, the verdict so far, then the model: body, bags, coupling, pneumatics,
+    // controller. A resumed run reads it in that order.
+    auto saveRunState = [&](bags::StateWriter& w) {
+        w.tag("run");
+        w.pod(nextOutput), w.pod(settled), w.pod(nextCheckpoint);
+        w.pod(std::uint64_t(events.size()));
+        for (const cosim::ControlEvent& e : events) w.pod(e.time), w.str(e.text);
+        w.pod(std::uint64_t(eventsWritten));
+        w.pod(totals), w.pod(massMismatch), w.pod(envelope);
+        w.vec(airVolume), w.vec(airRate);
+        verdict.saveState(w);
+    };
+    std::vector<double> resumedAirVolume, resumedAirRate;  // until the network is built
+    auto loadRunState = [&](bags::StateReader& r) {
+        r.tag("run");
+        r.pod(nextOutput), r.pod(settled), r.pod(nextCheckpoint);
+        events.resize(r.pod<std::uint64_t>());
+        for (cosim::ControlEvent& e : events) r.pod(e.time), e.text = r.str();
+        eventsWritten = size_t(r.pod<std::uint64_t>());
+        r.pod(totals), r.pod(massMismatch), r.pod(envelope);
+        r.vec(resumedAirVolume), r.vec(resumedAirRate);
+        verdict.loadState(r);
+    };
+    auto saveCheckpoint = [&] {
+        bags::StateWriter w;
+        w.tag("header");
+        w.str(bagsim::kVersion);
+        w.str(file.getFileName());
+        w.str(file.getText());
+        w.pod(std::uint64_t(file.getOverrides().size()));
+        for (const std::string& o : file.getOverrides()) w.str(o);
+        w.pod(poa->getTime());
+        writer->saveState(w);
+        saveRunState(w);
+        poa->saveState(w);
+        if (air) air->saveState(w);
+        if (sc.controller) sc.controller->saveState(w);
+        w.tag("end");
+        writeFileAtomically(outDir->getFile(io::kCheckpointFile),
+                            std::string(kCheckpointMagic) + w.getData());
+        // The caches that shape later roundoff start afresh here, as in a run resumed here.
+        poa->resetCaches();
+    };
     auto stop = [&](const std::string& status, const std::string& msg) {
         try {  // the verdict on what was run (the folder stays marked INCOMPLETE)
             writeEvents();
@@ -187,6 +286,16 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         std::cerr << "bagsim: " << msg << "; results so far kept in " << outPath.string()
                   << "/ (marked INCOMPLETE)\n";
     };
+    if (resume) {
+        try {
+            loadRunState(*resume);
+        } catch (const bags::StateError& e) {
+            std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": "
+                      << e.what() << "\n";
+            writer->fail("interrupted", std::string("resume refused: ") + e.what());
+            return 2;
+        }
+    }
     try {
         outDir->setStatus("running", "building the patient and inflating the bags");
         poa = std::make_unique<cosim::PatientOnArray>(sc.patient, sc.options);
@@ -194,8 +303,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         for (size_t i = 0; i < poa->getBagIndices().size(); ++i)
             bags[poa->getBagIndices()[i]] = &poa->updBag(int(i));
         bodySurface = cosim::makeBodySurface(poa->getModel());
-        writer->setShapes(cosim::makeBagSurfaces(*poa), bodySurface.mesh,
-                          std::max(sc.outputInterval, end / 60.0), end);
+        if (!resume)
+            writer->setShapes(cosim::makeBagSurfaces(*poa), bodySurface.mesh,
+                              std::max(sc.outputInterval, end / 60.0), end);
         if (!quiet)
             std::cerr << "  built in " << fmt("%.1f s", wall()) << ": "
                       << poa->getBagIndices().size() << " bags under him, "
@@ -231,13 +341,39 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
             if (!quiet)
                 std::cerr << "  pneumatics: " << air->getBags().size() << " bags in the network\n";
         }
-        events.push_back({0.0, "released onto the bags"});
-        writeEvents();
-        outDir->setStatus("running", "the patient on the bags");
-        record();
-        nextOutput = sc.outputInterval;
+        if (resume) {
+            // The model as it was at the checkpoint (the bags just inflated are replaced).
+            try {
+                if (resumedAirVolume.size() != airVolume.size() ||
+                    resumedAirRate.size() != airRate.size())
+                    bags::StateReader::mismatch("bags in the pneumatic network",
+                                                resumedAirVolume.size(), airVolume.size());
+                airVolume = resumedAirVolume;
+                airRate = resumedAirRate;
+                poa->loadState(*resume);
+                if (air) air->loadState(*resume);
+                if (sc.controller) sc.controller->loadState(*resume);
+                resume->tag("end");
+                if (!resume->atEnd()) throw bags::StateError("checkpoint: data after its end");
+            } catch (const bags::StateError& e) {
+                std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": "
+                          << e.what() << "\n";
+                writer->fail("interrupted", std::string("resume refused: ") + e.what());
+                return 2;
+            }
+            outDir->setStatus("running", "the patient on the bags (resumed" +
+                                             fmt(" at %.4f s)", poa->getTime()));
+            if (!quiet)
+                std::cerr << "  resumed at " << fmt("%.4f s", poa->getTime())
+                          << " from the checkpoint\n";
+        } else {
+            events.push_back({0.0, "released onto the bags"});
+            writeEvents();
+            outDir->setStatus("running", "the patient on the bags");
+            record();
+            nextOutput = sc.outputInterval;
+        }
         double lastPrint = wall();
-        bool settled = !(sc.settleTime > 0.0 && sc.duration > 0.0);
         ProgressEstimate estimate;  // remaining wall time from the last minute's pace
         estimate.add(wall(), poa->getTime());
         while (poa->getTime() < end - 1e-9) {
@@ -274,6 +410,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                 }
             }
             throwIfInterrupted();
+            if (control.stopAfter >= 0.0 && poa->getTime() >= control.stopAfter - 1e-9)
+                throw Interrupted(SIGINT);  // as Ctrl-C noticed here (--stop-after)
             if (sc.options.reduced) {  // the reduced bags' first exit of each kind
                 const cosim::EnvelopeCounts e = poa->getEnvelopeCounts();
                 const std::string w =
@@ -302,6 +440,12 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
                               << fmt(" (%.3g s per simulated s", estimate.getRate())
                               << fmt(" over the last %.0f s)", estimate.getStretch()) << "\n";
                 }
+            }
+            if (checkpoints && poa->getTime() >= nextCheckpoint - 1e-9 &&
+                poa->getTime() < end - 1e-9) {
+                while (nextCheckpoint <= poa->getTime() + 1e-9)
+                    nextCheckpoint += sc.checkpointInterval;
+                saveCheckpoint();
             }
         }
     } catch (const Interrupted& e) {
@@ -396,6 +540,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool
         s.close();
         if (!s) throw std::runtime_error("cannot write summary.txt in " + outPath.string());
         writer->finish(fmt("%.4f s simulated", poa->getTime()));
+        // Finished: nothing left to resume.
+        std::filesystem::remove(outDir->getFile(io::kCheckpointFile));
     } catch (const std::exception& e) {
         stop("failed", e.what());
         return 1;

@@ -1,17 +1,48 @@
 #pragma once
-/// @file bagsim run for the scenario kind patient-on-array (called from RunCommand.cpp).
+/// @file bagsim run for the scenario kind patient-on-array (called from RunCommand.cpp), and
+/// its checkpoints (bagsim run --resume; docs/output-layout.md#checkpoint).
 
+#include <bags/StateStream.h>
 #include <io/Scenario.h>
 
 #include <string>
+#include <vector>
 
 namespace bagsim::app {
 
+/// How a patient-on-array run is run besides its scenario.
+struct ArrayRunControl {
+    bool force = false;  ///< write into a folder that is not empty
+    bool quiet = false;
+    std::string commandLine;
+    /// A resumed run: the checkpoint read past its header (readCheckpointHeader()); the
+    /// output folder is `out`, the folder of the run that wrote it. Null: a new run.
+    bags::StateReader* resume = nullptr;
+    /// [s] simulated: the run stops there as on Ctrl-C, after the macro step that reaches it
+    /// (--stop-after, for tests of --resume); negative: never.
+    double stopAfter = -1.0;
+};
+
 /// Builds the patient on the airbag array, lowers him, lets him settle and runs the gas
 /// schedule; streams regions.csv, bags.csv, tilt.csv, results.h5 (mat frames), results.xdmf
-/// and summary.txt into the output folder. Returns the exit status (0 done, 1 run failed,
-/// 2 bad input, 130/143 interrupted by SIGINT/SIGTERM: needs the caller's InterruptGuard).
-int runPatientOnArray(const io::ScenarioFile& file, const std::string& out, bool force, bool quiet,
-                      const std::string& commandLine);
+/// and summary.txt into the output folder, and a checkpoint every output.checkpoint_every.
+/// Returns the exit status (0 done, 1 run failed, 2 bad input, 130/143 interrupted by
+/// SIGINT/SIGTERM: needs the caller's InterruptGuard).
+int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
+                      const ArrayRunControl& control);
+
+/// What a checkpoint says of the run that wrote it.
+struct CheckpointHeader {
+    std::string version;       ///< bagsim's version that wrote it
+    std::string scenarioFile;  ///< the scenario's path as given
+    std::string scenarioText;  ///< its text verbatim
+    std::vector<std::string> overrides;  ///< --set key=value, in order
+    double time = 0.0;         ///< [s] simulated, of the checkpoint
+};
+/// The first bytes of a checkpoint file.
+inline constexpr const char* kCheckpointMagic = "bagsim checkpoint 1\n";
+/// Reads the header of a checkpoint (after the magic line).
+/// @throws bags::StateError if it is not one.
+CheckpointHeader readCheckpointHeader(bags::StateReader& r);
 
 }  // namespace bagsim::app

@@ -190,4 +190,64 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
     return rows;
 }
 
+namespace {
+
+void saveMap(bags::StateWriter& w, const std::map<int, double>& m) {
+    w.pod(std::uint64_t(m.size()));
+    for (const auto& [k, v] : m) w.pod(k), w.pod(v);
+}
+
+void loadMap(bags::StateReader& r, std::map<int, double>& m) {
+    m.clear();
+    const auto n = r.pod<std::uint64_t>();
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const int k = r.pod<int>();
+        m[k] = r.pod<double>();
+    }
+}
+
+}  // namespace
+
+void ArrayVerdict::saveState(bags::StateWriter& w) const {
+    w.tag("verdict");
+    w.pod(m_reached), w.pod(m_turnedTilt), w.pod(m_back), w.pod(m_turnKnown);
+    w.pod(m_haveRef), w.pod(m_lastTime), w.pod(m_firstTime);
+    w.mat(m_refCom);
+    w.pod(m_maxTravel), w.pod(m_maxTravelTime), w.pod(m_lastY);
+    w.pod(m_lowestCom), w.pod(m_lowestComTime);
+    saveMap(w, m_lastCarriedY);
+    saveMap(w, m_edgeLost);
+    w.pod(m_minHeight), w.pod(m_minHeightTime), w.pod(m_minHeightBag);
+    w.pod(std::uint64_t(m_regions.size()));
+    for (const auto& [name, reg] : m_regions) {
+        w.str(name);
+        w.pod(reg.peak), w.pod(reg.peakTime), w.pod(reg.above);
+    }
+    w.pod(std::uint64_t(m_regionOrder.size()));
+    for (const std::string& name : m_regionOrder) w.str(name);
+}
+
+void ArrayVerdict::loadState(bags::StateReader& r) {
+    r.tag("verdict");
+    r.pod(m_reached), r.pod(m_turnedTilt), r.pod(m_back), r.pod(m_turnKnown);
+    r.pod(m_haveRef), r.pod(m_lastTime), r.pod(m_firstTime);
+    Eigen::Vector3d com;
+    r.mat(com);
+    m_refCom = com;
+    r.pod(m_maxTravel), r.pod(m_maxTravelTime), r.pod(m_lastY);
+    r.pod(m_lowestCom), r.pod(m_lowestComTime);
+    loadMap(r, m_lastCarriedY);
+    loadMap(r, m_edgeLost);
+    r.pod(m_minHeight), r.pod(m_minHeightTime), r.pod(m_minHeightBag);
+    m_regions.clear();
+    const auto n = r.pod<std::uint64_t>();
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const std::string name = r.str();
+        Region& reg = m_regions[name];
+        r.pod(reg.peak), r.pod(reg.peakTime), r.pod(reg.above);
+    }
+    m_regionOrder.resize(r.pod<std::uint64_t>());
+    for (std::string& name : m_regionOrder) name = r.str();
+}
+
 }  // namespace bagsim::app

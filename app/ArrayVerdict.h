@@ -27,6 +27,9 @@ class ArrayVerdict {
     /// when the turn ended [rad] (NaN: it had not) and whether it went back to supine.
     void setTurn(double reachedTime, double turnedTilt, bool backToSupine);
     std::vector<io::VerdictRow> makeRows() const;
+    /// What the frames so far left (a checkpoint), and back into a verdict made the same way.
+    void saveState(bags::StateWriter& w) const;
+    void loadState(bags::StateReader& r);
 
   private:
     std::vector<cosim::ArrayBag> m_bags;

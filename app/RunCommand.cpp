@@ -38,6 +38,7 @@ namespace {
 
 const char* kHelp =
     "usage: bagsim run SCENARIO.yaml [--out DIR] [--force] [--set KEY=VALUE]...\n"
+    "       bagsim run --resume DIR\n"
     "\n"
     "Runs a scenario and writes its results into an output folder. The scenario kind\n"
     "seed-load-test is the seed study's test rig: one airbag inflated to each gas mass, pressed\n"
@@ -55,6 +56,12 @@ const char* kHelp =
     "  --set KEY=VALUE    override a scenario value, e.g. --set airbag.mesh_size=\"5 mm\"\n"
     "                     (repeatable; VALUE is YAML: --set test.gas_masses=\"[3 g, 2 g]\")\n"
     "  --quiet            no progress, only the summary\n"
+    "  --resume DIR       continue the interrupted patient-on-array run in DIR from its last\n"
+    "                     checkpoint (output.checkpoint_every, 1 s simulated by default), with\n"
+    "                     the scenario stored there; its files are cut back to the checkpoint\n"
+    "                     and continued, to the same results as a run never stopped\n"
+    "  --stop-after TIME  patient-on-array: stop as Ctrl-C would once the simulated time\n"
+    "                     reaches TIME (e.g. \"0.3 s\"; for tests of --resume)\n"
     "  -h, --help         this text\n"
     "\n"
     "outputs (docs/output-layout.md): results.h5, results.xdmf (open in ParaView),\n"
@@ -78,6 +85,8 @@ struct Args {
     bool force = false;
     bool quiet = false;
     bool help = false;
+    std::string resume;     // --resume DIR
+    std::string stopAfter;  // --stop-after TIME, as written
     std::vector<std::string> sets;
     std::string commandLine;
 };
@@ -104,16 +113,28 @@ Args parseArgs(int argc, char** argv) {
             a.out = value("--out");
         } else if (arg == "--set" || arg.rfind("--set=", 0) == 0) {
             a.sets.push_back(value("--set"));
+        } else if (arg == "--resume" || arg.rfind("--resume=", 0) == 0) {
+            a.resume = value("--resume");
+        } else if (arg == "--stop-after" || arg.rfind("--stop-after=", 0) == 0) {
+            a.stopAfter = value("--stop-after");
         } else if (arg.rfind("-", 0) == 0 && arg.size() > 1) {
             throw UsageError("unknown option '" + arg +
-                             "'; valid: --out DIR, --force, --set KEY=VALUE, --quiet, --help");
+                             "'; valid: --out DIR, --force, --set KEY=VALUE, --quiet, "
+                             "--resume DIR, --stop-after TIME, --help");
         } else if (a.scenario.empty()) {
             a.scenario = arg;
         } else {
             throw UsageError("one scenario at a time ('" + a.scenario + "' and '" + arg + "')");
         }
     }
-    if (!a.help && a.scenario.empty())
+    if (!a.resume.empty()) {
+        if (a.force) throw UsageError("--resume continues the run in its folder; --force does not go with it");
+        if (!a.out.empty() && std::filesystem::path(a.out).lexically_normal() !=
+                                  std::filesystem::path(a.resume).lexically_normal())
+            throw UsageError("--resume " + a.resume + " writes into that folder; --out " + a.out +
+                             " does not go with it");
+    }
+    if (!a.help && a.scenario.empty() && a.resume.empty())
         throw UsageError(
             "which scenario? e.g. bagsim run "
             "scenarios/seed-load-test.yaml");
@@ -296,6 +317,113 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
 
 }  // namespace
 
+// The first line where two texts differ, as "line N: 'a' here, 'b' there".
+std::string describeFirstDifference(const std::string& here, const std::string& there) {
+    std::istringstream a(here), b(there);
+    std::string la, lb;
+    for (int line = 1;; ++line) {
+        const bool ha = bool(std::getline(a, la)), hb = bool(std::getline(b, lb));
+        if (!ha && !hb) return "they differ in their line ends";
+        if (!ha) la = "(end of file)";
+        if (!hb) lb = "(end of file)";
+        if (!ha || !hb || la != lb)
+            return "line " + std::to_string(line) + ": '" + la.substr(0, 80) + "' given, '" +
+                   lb.substr(0, 80) + "' in the checkpoint";
+    }
+}
+
+std::string joinOverrides(const std::vector<std::string>& sets) {
+    if (sets.empty()) return "none";
+    std::string s;
+    for (const std::string& o : sets) s += (s.empty() ? "" : ", ") + std::string("--set ") + o;
+    return s;
+}
+
+// bagsim run --resume DIR: the checkpoint's scenario, checked against what was given.
+int runResume(const Args& args, const std::string& stopAfterText) {
+    const std::filesystem::path dir(args.resume);
+    const std::filesystem::path cp = dir / io::kCheckpointFile;
+    auto refuse = [&](const std::string& why) {
+        std::cerr << "bagsim: error: cannot resume " << dir.string() << ": " << why << "\n";
+        return 2;
+    };
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec))
+        return refuse("no such folder; --resume takes the output folder of an interrupted run");
+    const bool incomplete = std::filesystem::exists(dir / io::OutputDir::kMarkerName, ec);
+    if (!std::filesystem::exists(cp, ec)) {
+        if (!incomplete && std::filesystem::exists(dir / io::kResultsH5, ec))
+            return refuse("the run there finished (no INCOMPLETE marker); nothing to resume");
+        return refuse(
+            "it holds no checkpoint (" + std::string(io::kCheckpointFile) +
+            "): only patient-on-array runs write one, every output.checkpoint_every of "
+            "simulated time (1 s by default, 0 s: none); a run stopped before its first "
+            "checkpoint must be run again");
+    }
+    if (!incomplete)
+        return refuse("the run there finished (no INCOMPLETE marker); nothing to resume");
+    std::string data;
+    {
+        std::ifstream in(cp, std::ios::binary);
+        std::ostringstream s;
+        s << in.rdbuf();
+        data = s.str();
+    }
+    const std::string magic = kCheckpointMagic;
+    if (data.compare(0, magic.size(), magic) != 0)
+        return refuse(cp.string() + " is not a bagsim checkpoint (or of another format)");
+    bags::StateReader reader(data.substr(magic.size()));
+    CheckpointHeader header;
+    try {
+        header = readCheckpointHeader(reader);
+    } catch (const bags::StateError& e) {
+        return refuse(cp.string() + ": " + e.what());
+    }
+    if (header.version != bagsim::kVersion)
+        return refuse("its checkpoint was written by bagsim " + header.version + ", this is bagsim " +
+                      bagsim::kVersion + "; resume it with bagsim " + header.version +
+                      ", or run the scenario again");
+    io::ScenarioFile file;
+    try {
+        file = io::ScenarioFile::parse(header.scenarioText, header.scenarioFile);
+        for (const std::string& o : header.overrides) file.applyOverride(o);
+        if (io::readScenarioKind(file) != "patient-on-array")
+            return refuse("its checkpoint is not of a patient-on-array run");
+    } catch (const io::InputError& e) {
+        return refuse("the scenario stored in its checkpoint: " + std::string(e.what()));
+    }
+    if (!args.scenario.empty()) {
+        // A scenario given with --resume must be the one the run was started with.
+        io::ScenarioFile given;
+        try {
+            given = io::ScenarioFile::load(args.scenario);
+        } catch (const io::InputError& e) {
+            std::cerr << "bagsim: error: " << e.what() << "\n";
+            return 2;
+        }
+        if (given.getText() != header.scenarioText)
+            return refuse(args.scenario + " is not the scenario the run was started with (" +
+                          describeFirstDifference(given.getText(), header.scenarioText) +
+                          "); --resume continues that run with its own scenario (give the "
+                          "folder alone), or run " + args.scenario + " into a new folder");
+    }
+    if ((!args.scenario.empty() || !args.sets.empty()) && args.sets != header.overrides)
+        return refuse("the overrides differ from the run's (" + joinOverrides(args.sets) +
+                      " given, " + joinOverrides(header.overrides) +
+                      " in the checkpoint); give the folder alone");
+    ArrayRunControl control;
+    control.quiet = args.quiet;
+    control.commandLine = args.commandLine;
+    control.resume = &reader;
+    if (!stopAfterText.empty()) control.stopAfter = io::parseQuantity(stopAfterText, io::Dimension::Time);
+    if (!args.quiet)
+        std::cerr << "bagsim: resuming " << dir.string() << " at " << header.time
+                  << " s (its last checkpoint) with its scenario " << header.scenarioFile
+                  << (header.overrides.empty() ? "" : " and " + joinOverrides(header.overrides))
+                  << "\n";
+    return runPatientOnArray(file, dir.string(), control);
+}
+
 int runRunCommand(int argc, char** argv) {
     Args args;
     try {
@@ -313,6 +441,23 @@ int runRunCommand(int argc, char** argv) {
     // and keep their results.
     const InterruptGuard interruptGuard;
 
+    double stopAfter = -1.0;
+    if (!args.stopAfter.empty()) {
+        try {
+            stopAfter = io::parseQuantity(args.stopAfter, io::Dimension::Time);
+        } catch (const std::exception& e) {
+            std::cerr << "bagsim run: --stop-after '" << args.stopAfter << "': " << e.what()
+                      << "; valid: a simulated time, e.g. \"0.3 s\" (see bagsim run --help)\n";
+            return 2;
+        }
+        if (!(stopAfter >= 0.0)) {
+            std::cerr << "bagsim run: --stop-after '" << args.stopAfter
+                      << "': valid: a simulated time >= 0 s\n";
+            return 2;
+        }
+    }
+    if (!args.resume.empty()) return runResume(args, args.stopAfter);
+
     // Input: everything that can be wrong with the scenario is found before any output exists.
     io::ScenarioFile file;
     io::LoadTestScenario sc;
@@ -322,10 +467,19 @@ int runRunCommand(int argc, char** argv) {
         file = io::ScenarioFile::load(args.scenario);
         for (const std::string& s : args.sets) file.applyOverride(s);
         const std::string kind = io::readScenarioKind(file);
+        if (stopAfter >= 0.0 && kind != "patient-on-array")
+            throw io::InputError(args.scenario, 0, "kind",
+                                 "--stop-after is for patient-on-array runs only");
         if (kind == "patient-on-support")
             return runPatientOnSupport(file, args.out, args.force, args.quiet);
-        if (kind == "patient-on-array")
-            return runPatientOnArray(file, args.out, args.force, args.quiet, args.commandLine);
+        if (kind == "patient-on-array") {
+            ArrayRunControl control;
+            control.force = args.force;
+            control.quiet = args.quiet;
+            control.commandLine = args.commandLine;
+            control.stopAfter = stopAfter;
+            return runPatientOnArray(file, args.out, control);
+        }
         sc = io::readLoadTestScenario(file);
         outPath = args.out.empty() ? std::filesystem::path("out") / sc.name
                                    : std::filesystem::path(args.out);

@@ -384,6 +384,46 @@ struct Airbag::Impl {
         s->time = time;
         return s;
     }
+    void writeSnapshot(StateWriter& w, const Snapshot& s) const {
+        w.mat(s.x);
+        w.pod(std::uint64_t(s.gases.size()));
+        for (const GasChamber& g : s.gases) g.saveState(w);
+        w.pod(std::uint64_t(s.history.size()));
+        for (const RigidContact::History& h : s.history) {
+            w.pod(std::uint64_t(h.anchor_S.size()));
+            for (const Vec3& a : h.anchor_S) w.pod(a.x()), w.pod(a.y()), w.pod(a.z());
+            w.vec(h.hasAnchor);
+        }
+        w.pod(std::uint64_t(s.poses.size()));
+        for (const Eigen::Isometry3d& X : s.poses) w.pose(X);
+        w.pod(s.time);
+    }
+    // A snapshot as writeSnapshot() wrote it, its sizes checked against this bag's.
+    std::shared_ptr<Snapshot> readSnapshot(StateReader& r) const {
+        auto s = snapshot();  // the shapes of this bag's state, overwritten below
+        r.matOfCols(s->x, x.cols(), "nodes of the bag");
+        if (s->x.rows() != 3) StateReader::mismatch("coordinates per node", s->x.rows(), 3);
+        const auto ng = r.pod<std::uint64_t>();
+        if (ng != s->gases.size()) StateReader::mismatch("gas bodies", ng, s->gases.size());
+        for (GasChamber& g : s->gases) g.loadState(r);
+        const auto nh = r.pod<std::uint64_t>();
+        if (nh != s->history.size()) StateReader::mismatch("contacts", nh, s->history.size());
+        for (RigidContact::History& h : s->history) {
+            const auto na = r.pod<std::uint64_t>();
+            if (na != h.anchor_S.size())
+                StateReader::mismatch("nodes of a contact", na, h.anchor_S.size());
+            for (Vec3& a : h.anchor_S) {
+                const double ax = r.pod<double>(), ay = r.pod<double>(), az = r.pod<double>();
+                a = Vec3(ax, ay, az);
+            }
+            r.vecOfSize(h.hasAnchor, h.anchor_S.size(), "nodes of a contact");
+        }
+        const auto np = r.pod<std::uint64_t>();
+        if (np != s->poses.size()) StateReader::mismatch("shapes", np, s->poses.size());
+        for (Eigen::Isometry3d& X : s->poses) X = r.pose();
+        r.pod(s->time);
+        return s;
+    }
     void restore(const Snapshot& s) {
         x = s.x;
         setGases(s.gases);
@@ -1086,6 +1126,45 @@ void Airbag::setSnapshot(const std::shared_ptr<const Snapshot>& snapshot) {
 }
 
 double Airbag::getTime() const { return m_impl->time; }
+
+void Airbag::saveState(StateWriter& w) const {
+    const Impl& m = *m_impl;
+    if (!m.inflated) throw std::logic_error("Airbag::saveState before inflate");
+    w.tag("airbag");
+    m.writeSnapshot(w, *m.snapshot());
+    m.writeSnapshot(w, *m.committed);
+    for (const Impl::Shape& sh : m.shapes) w.pose(sh.target);
+    w.vec(m.massFlow);
+    w.vec(m.hasTarget);
+    w.vec(m.targetMass);
+    w.mat(m.lastIncrement);
+    w.mat(m.lastShapeDelta);
+    w.mat(m.lastAdvanced);
+}
+
+void Airbag::loadState(StateReader& r) {
+    Impl& m = *m_impl;
+    if (!m.inflated) throw std::logic_error("Airbag::loadState before inflate");
+    r.tag("airbag");
+    const std::shared_ptr<Snapshot> current = m.readSnapshot(r);
+    const std::shared_ptr<Snapshot> committed = m.readSnapshot(r);
+    for (Impl::Shape& sh : m.shapes) sh.target = r.pose();
+    r.vecOfSize(m.massFlow, size_t(m.numBags), "bags of the module");
+    r.vecOfSize(m.hasTarget, size_t(m.numBags), "bags of the module");
+    r.vecOfSize(m.targetMass, size_t(m.numBags), "bags of the module");
+    r.mat(m.lastIncrement);
+    r.mat(m.lastShapeDelta);
+    r.mat(m.lastAdvanced);
+    m.committed = committed;
+    m.restore(*current);
+    resetCaches();
+}
+
+void Airbag::resetCaches() {
+    Impl& m = *m_impl;
+    m.workspace = SolverWorkspace();
+    if (m.self) m.self->updateCandidates(m.x);
+}
 
 Wrench Airbag::calcShapeWrench(int shape) const {
     Wrench w;

@@ -145,4 +145,32 @@ Eigen::VectorXd IQNILS::next(const Eigen::VectorXd& x, const Eigen::VectorXd& Hx
     return out;
 }
 
+void IQNILS::saveState(bags::StateWriter& w) const {
+    w.tag("iqn-ils");
+    w.pod(std::uint64_t(m_old.size()));
+    for (const auto& step : m_old) {
+        for (const std::vector<Eigen::VectorXd>* cols : {&step.first, &step.second}) {
+            w.pod(std::uint64_t(cols->size()));
+            for (const Eigen::VectorXd& c : *cols) w.mat(c);
+        }
+    }
+}
+
+void IQNILS::loadState(bags::StateReader& r) {
+    r.tag("iqn-ils");
+    m_old.clear();
+    const auto n = r.pod<std::uint64_t>();
+    for (std::uint64_t k = 0; k < n; ++k) {
+        std::pair<std::vector<Eigen::VectorXd>, std::vector<Eigen::VectorXd>> step;
+        for (std::vector<Eigen::VectorXd>* cols : {&step.first, &step.second}) {
+            cols->resize(r.pod<std::uint64_t>());
+            for (Eigen::VectorXd& c : *cols) r.mat(c);
+        }
+        m_old.push_back(std::move(step));
+    }
+    m_V.clear();
+    m_W.clear();
+    m_havePrev = false;
+}
+
 }  // namespace cosim

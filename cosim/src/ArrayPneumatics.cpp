@@ -222,4 +222,31 @@ double ArrayPneumatics::getManifoldPressure() const {
     return m_net.getNodeState(m_manifold).pressure - m_net.getGas().ambientPressure;
 }
 
+void ArrayPneumatics::saveState(bags::StateWriter& w) const {
+    w.tag("array pneumatics");
+    m_net.saveState(w);
+    w.pod(m_time);
+    w.pod(std::uint64_t(m_channels.size()));
+    for (const Channel& c : m_channels) {
+        w.str(c.name);
+        w.pod(c.inflateOpen), w.pod(c.ventOpen);
+    }
+}
+
+void ArrayPneumatics::loadState(bags::StateReader& r) {
+    r.tag("array pneumatics");
+    m_net.loadState(r);
+    r.pod(m_time);
+    const auto n = r.pod<std::uint64_t>();
+    if (n != m_channels.size()) bags::StateReader::mismatch("pneumatic channels", n, m_channels.size());
+    for (Channel& c : m_channels) {
+        const std::string name = r.str();
+        if (name != c.name)
+            throw bags::StateError("checkpoint: channel '" + name + "' where the scenario has '" +
+                                   c.name + "'");
+        r.pod(c.inflateOpen), r.pod(c.ventOpen);
+    }
+    m_savedTime = -1.0;  // the next step is a new one
+}
+
 }  // namespace cosim

@@ -238,4 +238,67 @@ const SimTK::State& BodyParticipant::getCheckpoint() const { return m_impl->chec
 double BodyParticipant::getTime() const { return m_impl->current.getTime(); }
 int BodyParticipant::getLastIntegratorSteps() const { return m_impl->lastSteps; }
 
+namespace {
+
+void saveVector(bags::StateWriter& w, const SimTK::Vector& v) {
+    w.pod(std::uint64_t(v.size()));
+    for (int i = 0; i < v.size(); ++i) w.pod(v[i]);
+}
+
+void loadVector(bags::StateReader& r, SimTK::Vector& v, const char* what) {
+    const auto n = r.pod<std::uint64_t>();
+    if (n != std::uint64_t(v.size())) bags::StateReader::mismatch(what, n, size_t(v.size()));
+    for (int i = 0; i < v.size(); ++i) v[i] = r.pod<double>();
+}
+
+void saveBodyState(bags::StateWriter& w, const SimTK::State& s) {
+    w.pod(s.getTime());
+    saveVector(w, s.getQ());
+    saveVector(w, s.getU());
+    saveVector(w, s.getZ());
+}
+
+void loadBodyState(bags::StateReader& r, SimTK::State& s) {
+    s.setTime(r.pod<double>());
+    loadVector(r, s.updQ(), "the body's generalized coordinates q");
+    loadVector(r, s.updU(), "the body's generalized speeds u");
+    loadVector(r, s.updZ(), "the body's auxiliary states z");
+}
+
+}  // namespace
+
+void BodyParticipant::saveState(bags::StateWriter& w) const {
+    w.tag("body");
+    saveBodyState(w, m_impl->checkpoint);
+    saveBodyState(w, m_impl->current);
+    w.pod(std::uint64_t(m_impl->shapes->size()));
+    for (const Shape& s : *m_impl->shapes) {
+        w.mat(s.W0.torque), w.mat(s.W0.force);
+        w.mat(s.T);
+        w.pose(s.X0);
+    }
+}
+
+void BodyParticipant::loadState(bags::StateReader& r) {
+    if (!m_impl->initialized) throw std::logic_error("BodyParticipant::loadState: not initialized");
+    r.tag("body");
+    loadBodyState(r, m_impl->checkpoint);
+    loadBodyState(r, m_impl->current);
+    const auto n = r.pod<std::uint64_t>();
+    if (n != m_impl->shapes->size())
+        bags::StateReader::mismatch("the body's contact shapes", n, m_impl->shapes->size());
+    for (Shape& s : *m_impl->shapes) {
+        Vec3 torque, force;
+        r.mat(torque), r.mat(force);
+        s.W0.torque = torque;
+        s.W0.force = force;
+        Mat6 T;
+        r.mat(T);
+        s.T = T;
+        s.X0 = r.pose();
+    }
+    m_impl->system.realize(m_impl->checkpoint, SimTK::Stage::Velocity);
+    m_impl->system.realize(m_impl->current, SimTK::Stage::Velocity);
+}
+
 }  // namespace cosim

@@ -532,4 +532,42 @@ const CouplingOptions& Coupling::getOptions() const { return m_impl->options; }
 const CouplingProfile& Coupling::getProfile() const { return m_impl->profile; }
 void Coupling::resetProfile() { m_impl->profile = CouplingProfile(); }
 
+void Coupling::saveState(bags::StateWriter& w) const {
+    const Impl& m = *m_impl;
+    if (!m.initialized) throw std::logic_error("Coupling::saveState: initialize() first");
+    w.tag("coupling");
+    w.pod(m.options.macroStep), w.pod(m.options.minMacroStep);
+    w.pod(m.baseTime), w.pod(m.stepsSinceBase), w.pod(m.largestStep);
+    w.pod(m.goodInARow), w.pod(m.steps);
+    w.pod(std::uint64_t(m.links.size()));
+    for (size_t i = 0; i < m.links.size(); ++i) {
+        w.mat(m.W[i].torque), w.mat(m.W[i].force);
+        w.mat(m.T[i]);
+        w.pose(m.X0[i]);
+    }
+    m.accelerator->saveState(w);
+}
+
+void Coupling::loadState(bags::StateReader& r) {
+    Impl& m = *m_impl;
+    if (!m.initialized) throw std::logic_error("Coupling::loadState: initialize() first");
+    r.tag("coupling");
+    r.pod(m.options.macroStep), r.pod(m.options.minMacroStep);
+    r.pod(m.baseTime), r.pod(m.stepsSinceBase), r.pod(m.largestStep);
+    r.pod(m.goodInARow), r.pod(m.steps);
+    const auto n = r.pod<std::uint64_t>();
+    if (n != m.links.size()) bags::StateReader::mismatch("coupling links", n, m.links.size());
+    for (size_t i = 0; i < m.links.size(); ++i) {
+        Vec3 torque, force;
+        r.mat(torque), r.mat(force);
+        m.W[i].torque = torque;
+        m.W[i].force = force;
+        Mat6 T;
+        r.mat(T);
+        m.T[i] = T;
+        m.X0[i] = r.pose();
+    }
+    m.accelerator->loadState(r);
+}
+
 }  // namespace cosim

@@ -286,4 +286,31 @@ const std::vector<Link>& PatientOnArray::getLinks() const { return m_impl->links
 Bag& PatientOnArray::updBag(int participant) { return *m_impl->bags.at(participant); }
 Coupling& PatientOnArray::updCoupling() { return *m_impl->coupling; }
 
+void PatientOnArray::saveState(bags::StateWriter& w) const {
+    const Impl& m = *m_impl;
+    w.tag("patient on array");
+    w.vec(m.bagIndices);
+    m.body->saveState(w);
+    for (const auto& b : m.bags) b->saveState(w);
+    m.coupling->saveState(w);
+}
+
+void PatientOnArray::loadState(bags::StateReader& r) {
+    Impl& m = *m_impl;
+    r.tag("patient on array");
+    std::vector<int> indices;
+    r.vec(indices);
+    if (indices != m.bagIndices)
+        throw bags::StateError(
+            "checkpoint: other bags take part (the patient or the array differs)");
+    m.body->loadState(r);
+    for (auto& b : m.bags) b->loadState(r);
+    m.coupling->loadState(r);
+    resetCaches();
+}
+
+void PatientOnArray::resetCaches() {
+    for (auto& b : m_impl->bags) b->resetCaches();
+}
+
 }  // namespace cosim

@@ -319,4 +319,78 @@ double TurnController::findNextChange(double t) const {
     return kInf;
 }
 
+namespace {
+
+void saveBands(bags::StateWriter& w, const std::vector<BandController>& bands) {
+    w.pod(std::uint64_t(bands.size()));
+    for (const BandController& b : bands) w.pod(int(b.getState()));
+}
+
+void loadBands(bags::StateReader& r, std::vector<BandController>& bands, bool fixedSize) {
+    const auto n = r.pod<std::uint64_t>();
+    if (fixedSize && n != bands.size())
+        bags::StateReader::mismatch("controller channels", n, bands.size());
+    bands.resize(n);
+    for (BandController& b : bands) {
+        const int s = r.pod<int>();
+        if (s < 0 || s > 2) throw bags::StateError("checkpoint: a controller state out of range");
+        b.setState(static_cast<BandController::State>(s));
+    }
+}
+
+}  // namespace
+
+void ValveSchedule::saveState(bags::StateWriter& w) const {
+    w.tag("valve schedule");
+    w.pod(std::uint64_t(m_commands.size()));
+    w.pod(m_applied);
+}
+
+void ValveSchedule::loadState(bags::StateReader& r) {
+    r.tag("valve schedule");
+    const auto n = r.pod<std::uint64_t>();
+    if (n != m_commands.size()) bags::StateReader::mismatch("valve commands", n, m_commands.size());
+    r.pod(m_applied);
+}
+
+void TargetController::saveState(bags::StateWriter& w) const {
+    w.tag("target controller");
+    saveBands(w, m_band);
+}
+
+void TargetController::loadState(bags::StateReader& r) {
+    r.tag("target controller");
+    loadBands(r, m_band, true);
+}
+
+void TurnController::saveState(bags::StateWriter& w) const {
+    w.tag("turn controller");
+    w.pod(int(m_phase));
+    w.pod(m_phaseStart);
+    w.pod(m_reached);
+    w.vec(m_channels);
+    w.vec(m_initialMass);
+    w.vec(m_turnedMass);
+    w.pod(m_turnedTilt);
+    saveBands(w, m_band);
+}
+
+void TurnController::loadState(bags::StateReader& r) {
+    r.tag("turn controller");
+    const int phase = r.pod<int>();
+    if (phase < 0 || phase > int(Phase::Done))
+        throw bags::StateError("checkpoint: the turn's phase out of range");
+    m_phase = static_cast<Phase>(phase);
+    r.pod(m_phaseStart);
+    r.pod(m_reached);
+    std::vector<int> channels;
+    r.vec(channels);
+    if (channels != m_channels)
+        throw bags::StateError("checkpoint: the turn's channels differ from the scenario's");
+    r.vec(m_initialMass);
+    r.vec(m_turnedMass);
+    r.pod(m_turnedTilt);
+    loadBands(r, m_band, false);
+}
+
 }  // namespace cosim

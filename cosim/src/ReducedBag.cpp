@@ -600,4 +600,73 @@ std::string describeEnvelopeCounts(const EnvelopeCounts& e, const ReducedBagCali
     return s;
 }
 
+namespace {
+
+template <class V>
+void saveFixed(bags::StateWriter& w, const V& v) {
+    for (Eigen::Index i = 0; i < v.size(); ++i) w.pod(v.data()[i]);
+}
+template <class V>
+void loadFixed(bags::StateReader& r, V& v) {
+    for (Eigen::Index i = 0; i < v.size(); ++i) r.pod(v.data()[i]);
+}
+
+}  // namespace
+
+void ReducedBag::saveState(bags::StateWriter& w) const {
+    w.tag("reduced bag");
+    for (const State* s : {&m_cur, &m_committed}) {
+        w.pod(s->mass), w.pod(s->pressure), w.pod(s->time);
+        w.pod(s->flow), w.pod(s->target), w.pod(s->rate);
+    }
+    w.pod(std::uint64_t(m_poses.size()));
+    for (const Eigen::Isometry3d& X : m_poses) w.pose(X);
+    for (const Eigen::Isometry3d& X : m_committedPoses) w.pose(X);
+    for (const ShapeResult& res : m_results) {
+        w.pod(std::uint64_t(res.samples.size()));
+        for (const Sample& smp : res.samples) {
+            w.pod(smp.point), w.pod(smp.delta), w.pod(smp.blend);
+            saveFixed(w, smp.t), saveFixed(w, smp.c), saveFixed(w, smp.n), saveFixed(w, smp.dndp);
+        }
+        w.pod(res.volume), w.pod(res.depth), w.pod(res.area);
+        w.pod(res.depthSum1), w.pod(res.depthSum2), w.pod(res.deepest);
+        saveFixed(w, res.wrench.torque), saveFixed(w, res.wrench.force);
+    }
+    w.pod(m_displaced), w.pod(m_dPdV);
+    w.mat(m_points);
+    w.mat(m_areas);
+    w.pod(m_envelope);
+}
+
+void ReducedBag::loadState(bags::StateReader& r) {
+    r.tag("reduced bag");
+    for (State* s : {&m_cur, &m_committed}) {
+        r.pod(s->mass), r.pod(s->pressure), r.pod(s->time);
+        r.pod(s->flow), r.pod(s->target), r.pod(s->rate);
+    }
+    const auto n = r.pod<std::uint64_t>();
+    if (n != m_poses.size()) bags::StateReader::mismatch("shapes of a reduced bag", n, m_poses.size());
+    for (Eigen::Isometry3d& X : m_poses) X = r.pose();
+    for (Eigen::Isometry3d& X : m_committedPoses) X = r.pose();
+    for (ShapeResult& res : m_results) {
+        res.samples.resize(r.pod<std::uint64_t>());
+        for (Sample& smp : res.samples) {
+            r.pod(smp.point), r.pod(smp.delta), r.pod(smp.blend);
+            loadFixed(r, smp.t), loadFixed(r, smp.c), loadFixed(r, smp.n), loadFixed(r, smp.dndp);
+        }
+        r.pod(res.volume), r.pod(res.depth), r.pod(res.area);
+        r.pod(res.depthSum1), r.pod(res.depthSum2), r.pod(res.deepest);
+        loadFixed(r, res.wrench.torque), loadFixed(r, res.wrench.force);
+    }
+    r.pod(m_displaced), r.pod(m_dPdV);
+    r.matOfCols(m_points, m_points.cols(), "points of a reduced bag");
+    Eigen::VectorXd areas;
+    r.mat(areas);
+    if (areas.size() != m_areas.size())
+        bags::StateReader::mismatch("points of a reduced bag", areas.size(), m_areas.size());
+    m_areas = areas;
+    r.pod(m_envelope);
+    for (size_t s = 0; s < m_shapes.size(); ++s) m_shapes[s]->setPose(m_poses[s]);
+}
+
 }  // namespace cosim

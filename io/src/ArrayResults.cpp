@@ -2,6 +2,7 @@
 #include <io/StudyTable.h>
 
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -332,5 +333,96 @@ std::string ArrayResultsWriter::writeVerdict(const std::vector<VerdictRow>& rows
 }
 
 int ArrayResultsWriter::getNumFrames() const { return m_impl->frames; }
+
+namespace {
+constexpr const char* kCsvNames[] = {kRegionsCsv, kBagsCsv, kTiltCsv, kBodyCsv, kEventsCsv,
+                                     kPneumaticsCsv};
+}
+
+void ArrayResultsWriter::saveState(bags::StateWriter& w) {
+    Impl& d = *m_impl;
+    if (d.closed) throw std::logic_error("ArrayResultsWriter::saveState after finish/fail");
+    d.flush();
+    w.tag("array results");
+    // Each file's length on the disk, everything written flushed into it.
+    for (const char* name : kCsvNames)
+        w.pod(std::int64_t(std::filesystem::file_size(d.dir.getFile(name))));
+    w.pod(d.frames);
+    w.vec(d.frameTimes);
+    w.pod(std::uint64_t(d.matTime.getRows()));
+    w.pod(std::uint64_t(d.shapeSets.size()));
+    for (const Impl::ShapeSet& set : d.shapeSets) {
+        w.str(set.name), w.str(set.group);
+        w.pod(std::int64_t(set.nodes)), w.pod(std::int64_t(set.triangles));
+    }
+    w.vec(d.shapeTimes);
+    w.pod(d.shapeInterval), w.pod(d.shapeEnd), w.pod(d.nextShape);
+}
+
+ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const cosim::PressureMatOptions& mat,
+                                       bags::StateReader& r)
+    : m_impl(std::make_unique<Impl>(dir)) {
+    Impl& d = *m_impl;
+    d.mat = mat;
+    r.tag("array results");
+    std::int64_t sizes[6];
+    for (std::int64_t& n : sizes) r.pod(n);
+    r.pod(d.frames);
+    r.vec(d.frameTimes);
+    const auto matRows = r.pod<std::uint64_t>();
+    d.shapeSets.resize(r.pod<std::uint64_t>());
+    for (Impl::ShapeSet& set : d.shapeSets) {
+        set.name = r.str(), set.group = r.str();
+        set.nodes = Eigen::Index(r.pod<std::int64_t>());
+        set.triangles = Eigen::Index(r.pod<std::int64_t>());
+    }
+    r.vec(d.shapeTimes);
+    r.pod(d.shapeInterval), r.pod(d.shapeEnd), r.pod(d.nextShape);
+
+    // The CSV files as they were at the checkpoint (what the run wrote after it goes).
+    std::ofstream* files[] = {&d.regions, &d.bags, &d.tilt, &d.body, &d.events, &d.pneumatics};
+    for (int k = 0; k < 6; ++k) {
+        const std::filesystem::path path = dir.getFile(kCsvNames[k]);
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(path, ec);
+        if (ec || size < std::uintmax_t(sizes[k]))
+            throw std::runtime_error(path.string() + " is " +
+                                     (ec ? std::string("missing") : "shorter than at the checkpoint") +
+                                     "; the run cannot be resumed from this folder");
+        std::filesystem::resize_file(path, std::uintmax_t(sizes[k]));
+        files[k]->open(path, std::ios::in | std::ios::out);
+        files[k]->seekp(0, std::ios::end);
+        if (!*files[k]) throw std::runtime_error("cannot write " + path.string());
+    }
+    h5::silenceErrors();
+    try {
+        d.file = h5::openFileReadWrite(dir.getFile(kResultsH5).string());
+    } catch (const std::exception& e) {
+        throw std::runtime_error(dir.getFile(kResultsH5).string() + ": " + e.what() +
+                                 "; the run cannot be resumed from this folder");
+    }
+    d.meta = h5::openGroup(d.file.get(), "meta");
+    d.matGroup = h5::openGroup(d.file.get(), "mat");
+    const hid_t g = d.matGroup.get();
+    d.matTime = h5::GrowingDataset::open(g, "time", H5T_NATIVE_DOUBLE, {}, matRows);
+    d.matPressure = h5::GrowingDataset::open(g, "pressure", H5T_NATIVE_DOUBLE,
+                                             {hsize_t(mat.columns), hsize_t(mat.rows)}, matRows);
+    d.matForce = h5::GrowingDataset::open(g, "force", H5T_NATIVE_DOUBLE, {}, matRows);
+    d.matOffForce = h5::GrowingDataset::open(g, "off_mat_force", H5T_NATIVE_DOUBLE, {}, matRows);
+    if (!d.shapeSets.empty()) {
+        d.shapesGroup = h5::openGroup(d.file.get(), "shapes");
+        d.shapeTime = h5::GrowingDataset::open(d.shapesGroup.get(), "time", H5T_NATIVE_DOUBLE, {},
+                                               d.shapeTimes.size());
+        for (const Impl::ShapeSet& set : d.shapeSets) {
+            h5::Handle pos = h5::openGroup(d.shapesGroup.get(), set.name + "/positions");
+            for (size_t n = d.shapeTimes.size();; ++n) {
+                if (!h5::hasLink(pos.get(), std::to_string(n))) break;
+                h5::deleteLink(pos.get(), std::to_string(n));
+            }
+        }
+    }
+    setRunStatus(d.meta.get(), "running", "resumed from its checkpoint");
+    h5::check(H5Fflush(d.file.get(), H5F_SCOPE_LOCAL), "cannot flush results");
+}
 
 }  // namespace io

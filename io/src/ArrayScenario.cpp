@@ -798,9 +798,13 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     }
 
     const ScenarioNode out = root.getSection("output", false);
-    out.checkKeys({}, {"every"});
+    out.checkKeys({}, {"every", "checkpoint_every"});
     sc.outputInterval = out.getQuantity("every", D::Time, sc.outputInterval);
     checkBetween(out, "every", sc.outputInterval, 1e-3, 60.0, "ms");
+    sc.checkpointInterval = out.getQuantity("checkpoint_every", D::Time, sc.checkpointInterval);
+    if (sc.checkpointInterval != 0.0)
+        checkBetween(out, "checkpoint_every", sc.checkpointInterval, 1e-3, 3600.0, "s",
+                     "or 0 s for no checkpoints");
 
     try {
         sc.options.validate();

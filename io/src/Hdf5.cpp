@@ -192,6 +192,40 @@ void GrowingDataset::append(const void* data, hsize_t rows) {
     m_rows += rows;
 }
 
+GrowingDataset GrowingDataset::open(hid_t loc, const std::string& name, hid_t type,
+                                    std::vector<hsize_t> inner, hsize_t rows) {
+    GrowingDataset d;
+    d.m_type = type;
+    d.m_inner = std::move(inner);
+    d.m_name = name;
+    d.m_dataset = Handle(check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), "cannot open " + name));
+    const int rank = 1 + static_cast<int>(d.m_inner.size());
+    Handle space(check(H5Dget_space(d.m_dataset.get()), "dataspace of " + name));
+    if (H5Sget_simple_extent_ndims(space.get()) != rank)
+        throw std::runtime_error("HDF5: " + name + " has another shape than expected");
+    std::vector<hsize_t> dims(rank);
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    if (dims[0] < rows)
+        throw std::runtime_error("HDF5: " + name + " has " + std::to_string(dims[0]) +
+                                 " rows, fewer than the " + std::to_string(rows) + " to keep");
+    dims[0] = rows;
+    check(H5Dset_extent(d.m_dataset.get(), dims.data()), "cannot cut back " + name);
+    d.m_rows = rows;
+    return d;
+}
+
+Handle openFileReadWrite(const std::string& path) {
+    silenceErrors();
+    if (H5Fis_hdf5(path.c_str()) <= 0)
+        throw std::runtime_error("not an HDF5 file (or it cannot be read)");
+    return Handle(check(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT),
+                        "cannot open it to write (is a run still writing it?)"));
+}
+
+void deleteLink(hid_t loc, const std::string& name) {
+    check(H5Ldelete(loc, name.c_str(), H5P_DEFAULT), "cannot remove " + name);
+}
+
 Handle openFileReadOnly(const std::string& path) {
     silenceErrors();
     if (H5Fis_hdf5(path.c_str()) <= 0)

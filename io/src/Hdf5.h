@@ -60,6 +60,10 @@ void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>
 void writeDataset(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
                   const float* data, const std::string& unit);
 
+/// Opens an existing file to write into it (a resumed run). @throws std::runtime_error.
+Handle openFileReadWrite(const std::string& path);
+/// Removes the link `name` from `loc` (the object goes once nothing links to it).
+void deleteLink(hid_t loc, const std::string& name);
 /// Opens a file read-only. @throws std::runtime_error (without the path) if it is not an HDF5
 /// file or is locked.
 Handle openFileReadOnly(const std::string& path);
@@ -88,6 +92,10 @@ class GrowingDataset {
                    hsize_t chunkRows, const std::string& unit);
     /// Appends `rows` rows from data (row-major, rows * prod(inner) values of the memory type).
     void append(const void* data, hsize_t rows = 1);
+    /// An existing dataset made by the constructor above, cut back to its first `rows` rows
+    /// (a resumed run continues it). @throws std::runtime_error if it has fewer.
+    static GrowingDataset open(hid_t loc, const std::string& name, hid_t type,
+                               std::vector<hsize_t> inner, hsize_t rows);
     hsize_t getRows() const { return m_rows; }
     hid_t getId() const { return m_dataset.get(); }
     bool isValid() const { return m_dataset.isValid(); }

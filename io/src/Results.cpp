@@ -56,7 +56,8 @@ const char* const kOwnedFiles[] = {kResultsH5,      kResultsXdmf,      kLoadDisp
                                    "regions.csv",   "bags.csv",        "tilt.csv",
                                    "report.html",   "report.html.tmp", "summary.txt",
                                    "verdict.csv",   "events.csv",      "body.csv",
-                                   "pneumatics.csv", kKOfMYaml};
+                                   "pneumatics.csv", kKOfMYaml,       kCheckpointFile,
+                                   "checkpoint.bin.tmp"};
 
 }  // namespace
 
@@ -79,6 +80,17 @@ OutputDir::OutputDir(const fs::path& path, bool force) : m_path(path) {
     if (ec || !fs::is_directory(path))
         throw InputError(where, 0, "", "cannot create the output folder (" + ec.message() + ")");
     setStatus("running", "started " + getUtcTimestamp());
+}
+
+OutputDir OutputDir::resume(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::is_directory(path, ec))
+        throw InputError(path.string(), 0, "",
+                         "is not a folder; --resume takes the output folder of an interrupted run");
+    OutputDir d;
+    d.m_path = path;
+    d.setStatus("running", "resumed " + getUtcTimestamp());
+    return d;
 }
 
 void OutputDir::setStatus(const std::string& status, const std::string& detail) const {

@@ -540,4 +540,62 @@ void Network::setSensorLagState(int sensor, double value) {
 double Network::getFlowmeterMass(int meter) const { return m_meters.at(meter).mass; }
 double Network::getFlowmeterFlow(int meter) const { return m_meters.at(meter).flow; }
 
+void Network::saveState(bags::StateWriter& w) const {
+    w.tag("pneumatic network");
+    w.pod(std::uint64_t(m_nodes.size()));
+    for (const Node& n : m_nodes) {
+        w.str(n.name);
+        w.pod(n.mass), w.pod(n.temperature), w.pod(n.volume), w.pod(n.pressure), w.pod(n.received);
+    }
+    w.pod(std::uint64_t(m_links.size()));
+    for (const Link& l : m_links) {
+        w.str(l.name);
+        w.pod(l.opening), w.pod(l.command), w.pod(l.speed), w.pod(l.lastFlow);
+    }
+    w.pod(std::uint64_t(m_sensors.size()));
+    for (const Sensor& s : m_sensors) {
+        w.pod(s.lag), w.pod(s.reading);
+        w.rng(s.rng);
+    }
+    w.pod(std::uint64_t(m_meters.size()));
+    for (const Meter& m : m_meters) w.pod(m.mass), w.pod(m.flow);
+    w.pod(m_time), w.pod(m_timeCompensation);
+    w.pod(m_summary);
+    w.vec(m_stepTransfer);
+}
+
+void Network::loadState(bags::StateReader& r) {
+    r.tag("pneumatic network");
+    auto count = [&](size_t expected, const char* what) {
+        const auto n = r.pod<std::uint64_t>();
+        if (n != expected) bags::StateReader::mismatch(what, n, expected);
+    };
+    count(m_nodes.size(), "nodes of the pneumatic network");
+    for (Node& n : m_nodes) {
+        const std::string name = r.str();
+        if (name != n.name)
+            throw bags::StateError("checkpoint: pneumatic node '" + name + "' where the model has '" +
+                                   n.name + "'");
+        r.pod(n.mass), r.pod(n.temperature), r.pod(n.volume), r.pod(n.pressure), r.pod(n.received);
+    }
+    count(m_links.size(), "links of the pneumatic network");
+    for (Link& l : m_links) {
+        const std::string name = r.str();
+        if (name != l.name)
+            throw bags::StateError("checkpoint: pneumatic link '" + name + "' where the model has '" +
+                                   l.name + "'");
+        r.pod(l.opening), r.pod(l.command), r.pod(l.speed), r.pod(l.lastFlow);
+    }
+    count(m_sensors.size(), "pressure sensors");
+    for (Sensor& s : m_sensors) {
+        r.pod(s.lag), r.pod(s.reading);
+        r.rng(s.rng);
+    }
+    count(m_meters.size(), "flowmeters");
+    for (Meter& m : m_meters) r.pod(m.mass), r.pod(m.flow);
+    r.pod(m_time), r.pod(m_timeCompensation);
+    r.pod(m_summary);
+    r.vec(m_stepTransfer);
+}
+
 }  // namespace pneumatics

@@ -212,6 +212,22 @@ public:
     void setSnapshot(const std::shared_ptr<const Snapshot>& snapshot);
     double getTime() const;               ///< [s] accumulated by advance()
 
+    // --- checkpoints (bags/StateStream.h)
+    /// Writes everything that decides what the bag does next into a checkpoint: the current
+    /// and the committed state (positions, gas, friction history, shape poses and targets,
+    /// time), the gas flows set, and the predictor's and warm start's increments. The solver's
+    /// caches are not written: call resetCaches() where the checkpoint is taken.
+    void saveState(StateWriter& w) const;
+    /// Reads what saveState() wrote, into an Airbag built from the same spec with the same
+    /// shapes and inflated (its own state is replaced); then resetCaches().
+    /// @throws StateError if the checkpoint is of another bag (sizes, chambers, shapes).
+    void loadState(StateReader& r);
+    /// Forgets the caches that only speed the solves up but shape their roundoff: the stored
+    /// factorisation and sparsity pattern, and the self-contact candidates (rebuilt at the
+    /// current state). A run that checkpoints calls it at every checkpoint, and a resumed
+    /// run after loading, so that both continue from the same bits.
+    void resetCaches();
+
     // --- results at the current state
     Wrench calcShapeWrench(int shape) const;
     /// d(torque, force)/d(rotation, translation) of the shape's pose [6x6]: rows torque then

@@ -7,6 +7,8 @@
 /// the bag's equilibrium has the follower pressure load and the gas stiffness
 /// -(dp/dV) g g^T, g = dV/dx, comes out as the Hessian of -G.
 
+#include <bags/StateStream.h>
+
 #include <string>
 
 namespace bags {
@@ -83,6 +85,19 @@ public:
     /// for adiabatic and polytropic gases it neglects the heat carried by the flow.
     void transferMass(double dm, double volume);
     const GasOptions& getOptions() const { return m_options; }
+    /// The state (mass and reference state) into a checkpoint, bit for bit, and back.
+    void saveState(StateWriter& w) const {
+        w.pod(m_mass);
+        w.pod(m_exponent);
+        w.pod(m_pRef);
+        w.pod(m_VRef);
+    }
+    void loadState(StateReader& r) {
+        r.pod(m_mass);
+        r.pod(m_exponent);
+        r.pod(m_pRef);
+        r.pod(m_VRef);
+    }
 private:
     GasOptions m_options;
     double m_mass = 0.0;

@@ -7,6 +7,8 @@
 /// converge; endStep() once the step has converged (an IQN-ILS keeps that step's secant
 /// information for later steps when asked to).
 
+#include <bags/StateStream.h>
+
 #include <Eigen/Core>
 #include <deque>
 #include <memory>
@@ -21,6 +23,9 @@ class Accelerator {
     /// x_{k+1} from x_k and H(x_k) (same size every call within a step).
     virtual Eigen::VectorXd next(const Eigen::VectorXd& x, const Eigen::VectorXd& Hx) = 0;
     virtual void endStep() = 0;  ///< the step has converged
+    /// What it keeps from earlier steps, into a checkpoint (between steps); default: nothing.
+    virtual void saveState(bags::StateWriter& w) const { w.tag("accelerator"); }
+    virtual void loadState(bags::StateReader& r) { r.tag("accelerator"); }
 };
 
 /// x_{k+1} = x_k + omega r_k.
@@ -68,6 +73,9 @@ class IQNILS : public Accelerator {
     Eigen::VectorXd next(const Eigen::VectorXd& x, const Eigen::VectorXd& Hx) override;
     void endStep() override;
     int getNumColumnsUsed() const { return m_used; }  ///< columns in the last least-squares fit
+    /// The earlier steps' columns (reuseSteps).
+    void saveState(bags::StateWriter& w) const override;
+    void loadState(bags::StateReader& r) override;
   private:
     double m_initial;
     int m_reuse;

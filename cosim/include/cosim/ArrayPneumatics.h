@@ -108,6 +108,12 @@ class ArrayPneumatics {
     const pneumatics::Network& getNetwork() const { return m_net; }
     double getManifoldPressure() const;  ///< [Pa] gauge
 
+    // --- checkpoints (bags/StateStream.h), between steps
+    /// The network's state and every channel's commanded valves.
+    void saveState(bags::StateWriter& w) const;
+    /// @throws bags::StateError if the checkpoint's network or channels differ.
+    void loadState(bags::StateReader& r);
+
   private:
     struct Channel {
         std::string name;

@@ -39,6 +39,17 @@ class Bag : public Participant {
     /// The bag's potential energy [J] at the current state (membrane, gas, its weight,
     /// contact with the shapes), up to a constant: for energy balances.
     virtual double calcPotentialEnergy() const = 0;
+
+    // --- checkpoints (bags/StateStream.h), between steps
+    /// Writes everything that decides what the bag does next (its current and committed
+    /// states, gas flows, whatever it carries from step to step).
+    virtual void saveState(bags::StateWriter& w) const = 0;
+    /// Reads what saveState() wrote into a bag built the same way (shapes added, inflated).
+    /// @throws bags::StateError if the checkpoint is of another bag.
+    virtual void loadState(bags::StateReader& r) = 0;
+    /// Forgets caches that shape the roundoff of later steps (bags::Airbag::resetCaches()):
+    /// called at every checkpoint of a run that checkpoints. Default: none.
+    virtual void resetCaches() {}
 };
 
 }  // namespace cosim

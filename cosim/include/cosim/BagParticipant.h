@@ -40,6 +40,10 @@ class BagParticipant : public Bag {
     const Eigen::Matrix3Xd& getPressurePoints() const override;
     Eigen::VectorXd getPressureAreas() const override;
     double calcPotentialEnergy() const override;
+    /// The airbag's saveState(), loadState(), resetCaches().
+    void saveState(bags::StateWriter& w) const override { m_bag->saveState(w); }
+    void loadState(bags::StateReader& r) override { m_bag->loadState(r); }
+    void resetCaches() override { m_bag->resetCaches(); }
 
     const bags::Airbag& getAirbag() const { return *m_bag; }  ///< the wrapped airbag
     bags::Airbag& updAirbag() { return *m_bag; }              ///< the wrapped airbag

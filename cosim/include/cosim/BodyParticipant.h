@@ -20,6 +20,8 @@
 
 #include <Simbody.h>
 
+#include <bags/StateStream.h>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
@@ -83,6 +85,13 @@ class BodyParticipant {
     const SimTK::State& getCheckpoint() const;  ///< the checkpoint
     double getTime() const;                     ///< [s] of the current state
     int getLastIntegratorSteps() const;         ///< internal steps of the last advanceTo()
+
+    // --- checkpoints (bags/StateStream.h), between steps
+    /// Writes the checkpoint's and the current state (time, q, u, z) and every shape's load.
+    void saveState(bags::StateWriter& w) const;
+    /// Reads what saveState() wrote into a participant on the same system, initialized.
+    /// @throws bags::StateError if the system's sizes or the shapes differ.
+    void loadState(bags::StateReader& r);
 
     struct Shape;  ///< a shape and its load (implementation detail)
   private:

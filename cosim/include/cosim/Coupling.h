@@ -183,6 +183,16 @@ class Coupling {
     const CouplingProfile& getProfile() const;
     void resetProfile();
 
+    // --- checkpoints (bags/StateStream.h), between steps
+    /// Writes the coupling's own state: time and step count, the current and largest macro
+    /// step and the successes in a row (stepAdaptive()), every link's wrench, tangent and
+    /// linearisation pose, the accelerator's memory. The body and the participants are
+    /// written by their owner.
+    void saveState(bags::StateWriter& w) const;
+    /// Reads what saveState() wrote into a coupling built the same way and initialized.
+    /// @throws bags::StateError if the links differ.
+    void loadState(bags::StateReader& r);
+
   private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;

@@ -131,6 +131,16 @@ class PatientOnArray {
     Bag& updBag(int participant);
     Coupling& updCoupling();
 
+    // --- checkpoints (bags/StateStream.h), between steps
+    /// Writes the body, every bag and the coupling. Call resetCaches() where it is taken.
+    void saveState(bags::StateWriter& w) const;
+    /// Reads what saveState() wrote into a PatientOnArray built from the same spec and
+    /// options (the bags inflated again by the constructor are replaced), then resetCaches().
+    /// @throws bags::StateError if the checkpoint is of another patient or array.
+    void loadState(bags::StateReader& r);
+    /// Every bag's Bag::resetCaches().
+    void resetCaches();
+
   private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;

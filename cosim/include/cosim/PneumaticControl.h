@@ -43,6 +43,11 @@ class PneumaticController {
     virtual double findNextChange(double /*t*/) const {
         return std::numeric_limits<double>::infinity();
     }
+    /// Writes what the controller remembers between steps (its modes, phases, commands
+    /// applied) into a checkpoint; loadState() reads it into a controller built the same way.
+    /// @throws bags::StateError (loadState) if the checkpoint is of another controller.
+    virtual void saveState(bags::StateWriter& w) const = 0;
+    virtual void loadState(bags::StateReader& r) = 0;
 };
 
 /// A timed valve state of one channel.
@@ -77,6 +82,7 @@ class BandController {
     /// Sets the channel's valves for a measured value; returns true if the state changed.
     bool update(double measured, double target, double band, int channel, ArrayPneumatics& p);
     State getState() const { return m_state; }
+    void setState(State s) { m_state = s; }  ///< as read from a checkpoint
 
   private:
     State m_state = State::Holding;

@@ -117,6 +117,8 @@ class ReducedBag : public Bag {
     const Eigen::Matrix3Xd& getPressurePoints() const override { return m_points; }
     Eigen::VectorXd getPressureAreas() const override { return m_areas; }
     double calcPotentialEnergy() const override;
+    void saveState(bags::StateWriter& w) const override;
+    void loadState(bags::StateReader& r) override;
 
     double getGaugePressure() const { return m_cur.pressure; }  ///< [Pa]
     /// The overlap volume V_s [m^3] and the depth d_s [m] of a shape (current state).

@@ -67,6 +67,12 @@ class ArrayResultsWriter {
     /// @throws std::runtime_error on I/O failure.
     ArrayResultsWriter(const OutputDir& dir, const RunInfo& info,
                        const cosim::PressureMatOptions& mat);
+    /// A resumed run: opens the files a run wrote into `dir` and cuts each back to where
+    /// saveState() found it (CSV files to their byte length then, results.h5's datasets to
+    /// their rows then, the shapes saved after it removed); further frames are appended.
+    /// @throws bags::StateError if the checkpoint does not fit, std::runtime_error on I/O.
+    ArrayResultsWriter(const OutputDir& dir, const cosim::PressureMatOptions& mat,
+                       bags::StateReader& r);
     ~ArrayResultsWriter();
     ArrayResultsWriter(const ArrayResultsWriter&) = delete;
     ArrayResultsWriter& operator=(const ArrayResultsWriter&) = delete;
@@ -90,6 +96,9 @@ class ArrayResultsWriter {
     /// closes the files and keeps the INCOMPLETE marker. Never throws.
     void fail(const std::string& status, const std::string& message) noexcept;
     int getNumFrames() const;  ///< output times written
+    /// Flushes every file and writes where each stands into a checkpoint (for the resuming
+    /// constructor).
+    void saveState(bags::StateWriter& w);
 
   private:
     struct Impl;

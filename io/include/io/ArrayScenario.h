@@ -48,6 +48,9 @@ struct PatientOnArrayScenario {
     double settleTime = 1.5;              ///< [s] run.settle_time: release to the schedule's 0
     double duration = 0.0;                ///< [s] run.duration: after the settle
     double outputInterval = 0.05;         ///< [s] output.every
+    /// [s] output.checkpoint_every: simulated time between checkpoints (bagsim run --resume);
+    /// 0: none.
+    double checkpointInterval = 1.0;
     cosim::PressureMatOptions mat;        ///< mat section (default: 64 x 32 over the array)
     /// pneumatics section: the air hardware (absent: the gas list sets the bags' flows).
     bool hasPneumatics = false;

@@ -40,6 +40,9 @@ class OutputDir {
     ///   it are overwritten where the run writes them, others are left alone), or if it cannot
     ///   be created.
     OutputDir(const std::filesystem::path& path, bool force);
+    /// The folder of an interrupted run, to resume it: nothing in it is removed; the marker
+    /// says the run is running again. @throws InputError if it is not a folder.
+    static OutputDir resume(const std::filesystem::path& path);
 
     const std::filesystem::path& getPath() const { return m_path; }  ///< the folder
     /// Path of a file in the folder.
@@ -53,8 +56,12 @@ class OutputDir {
     bool isIncomplete() const;
 
   private:
+    OutputDir() = default;
     std::filesystem::path m_path;
 };
+
+/// The checkpoint a patient-on-array run keeps in its output folder (docs/output-layout.md).
+inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 
 /// True if a curve stopped on a numerical failure (LoadCurve::failure says "no convergence
 /// ..."): its branch ends early and the run's status is "partial". A curve that bottomed out

@@ -166,6 +166,14 @@ class Network {
     Eigen::VectorXd calcSubstepResidual(double h, const std::vector<double>& bagVolumesEnd,
                                         const Eigen::VectorXd& x, Eigen::MatrixXd* J) const;
 
+    // --- checkpoints (bags/StateStream.h)
+    /// Writes the network's state (every node's gas, every link's opening, command, speed and
+    /// last flow, the sensors' lag, reading and random generator, the flowmeters, the time).
+    void saveState(bags::StateWriter& w) const;
+    /// Reads what saveState() wrote into a network built the same way.
+    /// @throws bags::StateError if its nodes, links, sensors or meters differ.
+    void loadState(bags::StateReader& r);
+
   private:
     struct Node {
         std::string name;

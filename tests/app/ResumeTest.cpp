@@ -1,0 +1,173 @@
+// bagsim run --resume (docs/output-layout.md#checkpoint): a coarse patient-on-array run stopped
+// as by Ctrl-C (--stop-after) and resumed from its last checkpoint writes every CSV file byte
+// for byte as the run that was never stopped; the supine settle (body, bags, coupling) and the
+// pneumatic turn (network, valves, noisy lagged sensors, turn controller). A resumed run is
+// refused, naming what differs, when given another scenario or other overrides, and when its
+// checkpoint is cut short or of another bagsim.
+#include <bagsim/Version.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ArrayRunTestUtil.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kBagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\"";
+const std::string kScenarios = std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/";
+
+// Runs `bagsim run ARGS`, its output into log; returns the exit status.
+int runBagsim(const std::string& args, const fs::path& log) {
+    const std::string cmd = kBagsim + " run " + args + " > \"" + log.string() + "\" 2>&1";
+    const int rc = std::system(cmd.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+std::string readFile(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+void writeFile(const fs::path& p, const std::string& data) {
+    std::ofstream out(p, std::ios::binary | std::ios::trunc);
+    out << data;
+}
+
+// Every CSV file of the run that was never stopped, byte for byte in the resumed one.
+void expectSameCsvFiles(const fs::path& whole, const fs::path& resumed) {
+    int compared = 0;
+    for (const auto& e : fs::directory_iterator(whole)) {
+        if (e.path().extension() != ".csv") continue;
+        const fs::path other = resumed / e.path().filename();
+        ASSERT_TRUE(fs::exists(other)) << other;
+        const std::string a = readFile(e.path()), b = readFile(other);
+        EXPECT_EQ(a.size(), b.size()) << e.path().filename();
+        if (a != b) {
+            size_t i = 0;
+            while (i < a.size() && i < b.size() && a[i] == b[i]) ++i;
+            const size_t from = a.rfind('\n', i) == std::string::npos ? 0 : a.rfind('\n', i) + 1;
+            ADD_FAILURE() << e.path().filename() << " differs from byte " << i << ":\n  whole:   "
+                          << a.substr(from, a.find('\n', i) - from) << "\n  resumed: "
+                          << b.substr(from, b.find('\n', i) - from);
+        }
+        ++compared;
+    }
+    EXPECT_GE(compared, 7);  // regions, bags, tilt, body, events, pneumatics, verdict
+}
+
+std::string readLog(const fs::path& p) { return readFile(p); }
+
+}  // namespace
+
+TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
+    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/supine";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string scenario = "\"" + kScenarios + "supine-on-array-coarse.yaml\"";
+    const std::string sets =
+        " --set run.settle_time='0.3 s' --set output.checkpoint_every='0.1 s' --quiet";
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets,
+                        dir / "whole.log"),
+              0)
+        << readLog(dir / "whole.log");
+    EXPECT_FALSE(fs::exists(dir / "whole" / "checkpoint.bin"));  // a finished run keeps none
+
+    // Stopped after 0.15 s (checkpoint at 0.1 s), resumed and stopped after 0.25 s (its own
+    // checkpoint at 0.2 s), resumed to the end.
+    const fs::path out = dir / "stopped";
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
+                            " --stop-after '0.15 s'",
+                        dir / "stopped.log"),
+              130)
+        << readLog(dir / "stopped.log");
+    ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
+    ASSERT_TRUE(fs::exists(out / "INCOMPLETE"));
+
+    // Bad input, refused with exit 2 and the folder left as it was.
+    const std::string checkpoint = readFile(out / "checkpoint.bin");
+    const std::string tilt = readFile(out / "tilt.csv");
+    EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" \"" + kScenarios +
+                            "turn-left-coarse.yaml\" --quiet",
+                        dir / "other.log"),
+              2);
+    EXPECT_NE(readLog(dir / "other.log")
+                  .find("turn-left-coarse.yaml is not the scenario the run was started with (line 1"),
+              std::string::npos)
+        << readLog(dir / "other.log");
+    EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --set run.settle_time='0.4 s' --quiet",
+                        dir / "set.log"),
+              2);
+    EXPECT_NE(readLog(dir / "set.log").find("the overrides differ from the run's (--set "
+                                            "run.settle_time=0.4 s given, --set "
+                                            "run.settle_time=0.3 s, --set "
+                                            "output.checkpoint_every=0.1 s in the checkpoint)"),
+              std::string::npos)
+        << readLog(dir / "set.log");
+    writeFile(out / "checkpoint.bin", checkpoint.substr(0, checkpoint.size() / 2));
+    EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "cut.log"), 2);
+    EXPECT_NE(readLog(dir / "cut.log").find("checkpoint: cut short"), std::string::npos)
+        << readLog(dir / "cut.log");
+    std::string otherVersion = checkpoint;
+    const size_t at = otherVersion.find(bagsim::kVersion);
+    ASSERT_NE(at, std::string::npos);
+    otherVersion[at] = otherVersion[at] == '9' ? '8' : '9';
+    writeFile(out / "checkpoint.bin", otherVersion);
+    EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "version.log"), 2);
+    EXPECT_NE(readLog(dir / "version.log").find("its checkpoint was written by bagsim "),
+              std::string::npos)
+        << readLog(dir / "version.log");
+    EXPECT_NE(readLog(dir / "version.log").find(std::string(", this is bagsim ") + bagsim::kVersion),
+              std::string::npos);
+    writeFile(out / "checkpoint.bin", checkpoint);
+    EXPECT_EQ(readFile(out / "tilt.csv"), tilt);
+
+    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet --stop-after '0.25 s'",
+                        dir / "resumed1.log"),
+              130)
+        << readLog(dir / "resumed1.log");
+    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed2.log"), 0)
+        << readLog(dir / "resumed2.log");
+    EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
+    EXPECT_FALSE(fs::exists(out / "checkpoint.bin"));
+    expectSameCsvFiles(dir / "whole", out);
+    // Finished: nothing to resume.
+    EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "again.log"), 2);
+    EXPECT_NE(readLog(dir / "again.log").find("the run there finished"), std::string::npos)
+        << readLog(dir / "again.log");
+}
+
+TEST(Resume, PneumaticTurnWithNoisySensorsEndsByteIdentical) {
+    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/pneumatic";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string scenario = "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"";
+    const std::string sets =
+        " --set run.settle_time='0.15 s' --set run.duration='0.15 s' --set output.every='50 ms'"
+        " --set output.checkpoint_every='0.1 s' --quiet";
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets,
+                        dir / "whole.log"),
+              0)
+        << readLog(dir / "whole.log");
+    // The turn has started (valves open, noisy sensors read) before the checkpoint at 0.2 s.
+    const app::test::Csv events = app::test::readCsv(dir / "whole" / "events.csv");
+    ASSERT_GE(events.rows.size(), 3u);
+    const fs::path out = dir / "stopped";
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
+                            " --stop-after '0.23 s'",
+                        dir / "stopped.log"),
+              130)
+        << readLog(dir / "stopped.log");
+    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log"), 0)
+        << readLog(dir / "resumed.log");
+    expectSameCsvFiles(dir / "whole", out);
+    EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
+}
