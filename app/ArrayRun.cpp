@@ -269,8 +269,11 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         if (air) air->saveState(w);
         if (sc.controller) sc.controller->saveState(w);
         w.tag("end");
+        bags::StateWriter head;
+        head.pod(std::uint64_t(w.getData().size()));
+        head.pod(calcCheckpointHash(w.getData()));
         writeFileAtomically(outDir->getFile(io::kCheckpointFile),
-                            std::string(kCheckpointMagic) + w.getData());
+                            std::string(kCheckpointMagic) + head.getData() + w.getData());
         // The caches that shape later roundoff start afresh here, as in a run resumed here.
         poa->resetCaches();
     };

@@ -5,6 +5,7 @@
 #include <bags/StateStream.h>
 #include <io/Scenario.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -39,8 +40,18 @@ struct CheckpointHeader {
     std::vector<std::string> overrides;  ///< --set key=value, in order
     double time = 0.0;         ///< [s] simulated, of the checkpoint
 };
-/// The first bytes of a checkpoint file.
+/// A checkpoint file: this magic line, the length of the data that follows and its FNV-1a
+/// hash (two little-endian uint64), then the data (header first).
 inline constexpr const char* kCheckpointMagic = "bagsim checkpoint 1\n";
+/// FNV-1a 64-bit hash of `data`: tells a damaged checkpoint from a sound one.
+inline std::uint64_t calcCheckpointHash(const std::string& data) {
+    std::uint64_t h = 14695981039346656037ull;
+    for (unsigned char c : data) {
+        h ^= c;
+        h *= 1099511628211ull;
+    }
+    return h;
+}
 /// Reads the header of a checkpoint (after the magic line).
 /// @throws bags::StateError if it is not one.
 CheckpointHeader readCheckpointHeader(bags::StateReader& r);

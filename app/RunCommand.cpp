@@ -372,7 +372,20 @@ int runResume(const Args& args, const std::string& stopAfterText) {
     const std::string magic = kCheckpointMagic;
     if (data.compare(0, magic.size(), magic) != 0)
         return refuse(cp.string() + " is not a bagsim checkpoint (or of another format)");
-    bags::StateReader reader(data.substr(magic.size()));
+    // The length and hash of the data, then the data: all of it is checked before anything in
+    // the folder is touched.
+    std::uint64_t length = 0, hash = 0;
+    if (data.size() >= magic.size() + 16) {
+        bags::StateReader head(data.substr(magic.size(), 16));
+        length = head.pod<std::uint64_t>();
+        hash = head.pod<std::uint64_t>();
+    }
+    const size_t have = data.size() < magic.size() + 16 ? 0 : data.size() - magic.size() - 16;
+    if (data.size() < magic.size() + 16 || have != length)
+        return refuse(cp.string() + " is cut short (" + std::to_string(have) + " of " +
+                      std::to_string(length) + " bytes of state); its run cannot be resumed");
+    const std::string payload = data.substr(magic.size() + 16);
+    bags::StateReader reader(payload);
     CheckpointHeader header;
     try {
         header = readCheckpointHeader(reader);
@@ -383,6 +396,9 @@ int runResume(const Args& args, const std::string& stopAfterText) {
         return refuse("its checkpoint was written by bagsim " + header.version + ", this is bagsim " +
                       bagsim::kVersion + "; resume it with bagsim " + header.version +
                       ", or run the scenario again");
+    if (calcCheckpointHash(payload) != hash)
+        return refuse(cp.string() + " is damaged (its data do not match their checksum); its run "
+                                    "cannot be resumed");
     io::ScenarioFile file;
     try {
         file = io::ScenarioFile::parse(header.scenarioText, header.scenarioFile);

@@ -114,7 +114,7 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
         << readLog(dir / "set.log");
     writeFile(out / "checkpoint.bin", checkpoint.substr(0, checkpoint.size() / 2));
     EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "cut.log"), 2);
-    EXPECT_NE(readLog(dir / "cut.log").find("checkpoint: cut short"), std::string::npos)
+    EXPECT_NE(readLog(dir / "cut.log").find("checkpoint.bin is cut short ("), std::string::npos)
         << readLog(dir / "cut.log");
     std::string otherVersion = checkpoint;
     const size_t at = otherVersion.find(bagsim::kVersion);

@@ -67,6 +67,8 @@ class ValveSchedule : public PneumaticController {
     void update(const ControlInputs& in, ArrayPneumatics& p,
                 std::vector<ControlEvent>& events) override;
     double findNextChange(double t) const override;
+    void saveState(bags::StateWriter& w) const override;
+    void loadState(bags::StateReader& r) override;
 
   private:
     std::vector<ValveCommand> m_commands;  // sorted by time
@@ -107,6 +109,8 @@ class TargetController : public PneumaticController {
     void update(const ControlInputs& in, ArrayPneumatics& p,
                 std::vector<ControlEvent>& events) override;
     double findNextChange(double t) const override;
+    void saveState(bags::StateWriter& w) const override;
+    void loadState(bags::StateReader& r) override;
 
   private:
     double measure(const ArrayPneumatics& p, int channel) const;
@@ -146,6 +150,8 @@ class TurnController : public PneumaticController {
     void update(const ControlInputs& in, ArrayPneumatics& p,
                 std::vector<ControlEvent>& events) override;
     double findNextChange(double t) const override;
+    void saveState(bags::StateWriter& w) const override;
+    void loadState(bags::StateReader& r) override;
     Phase getPhase() const { return m_phase; }
     /// [s] when the target tilt was reached (NaN: not yet, or never).
     double getTiltReachedTime() const { return m_reached; }

@@ -10,6 +10,7 @@
 /// it, addFrame() at every output time, then finish() (status "complete", marker removed) or
 /// fail() (status "failed" or "interrupted", marker kept).
 
+#include <bags/StateStream.h>
 #include <cosim/ArrayReadings.h>
 #include <cosim/ArrayShapes.h>
 #include <io/Results.h>
