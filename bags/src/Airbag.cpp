@@ -1140,6 +1140,8 @@ void Airbag::saveState(StateWriter& w) const {
     w.mat(m.lastIncrement);
     w.mat(m.lastShapeDelta);
     w.mat(m.lastAdvanced);
+    w.pod(m.self != nullptr);
+    if (m.self) m.self->saveState(w);
 }
 
 void Airbag::loadState(StateReader& r) {
@@ -1155,16 +1157,15 @@ void Airbag::loadState(StateReader& r) {
     r.mat(m.lastIncrement);
     r.mat(m.lastShapeDelta);
     r.mat(m.lastAdvanced);
+    if (r.pod<bool>() != (m.self != nullptr))
+        throw StateError("checkpoint: the bag's self-contact is on in one, off in the other");
+    if (m.self) m.self->loadState(r);
     m.committed = committed;
     m.restore(*current);
     resetCaches();
 }
 
-void Airbag::resetCaches() {
-    Impl& m = *m_impl;
-    m.workspace = SolverWorkspace();
-    if (m.self) m.self->updateCandidates(m.x);
-}
+void Airbag::resetCaches() { m_impl->workspace = SolverWorkspace(); }
 
 Wrench Airbag::calcShapeWrench(int shape) const {
     Wrench w;

@@ -572,4 +572,32 @@ std::vector<std::pair<int, int>> SelfContact::getCandidatePairs() const {
     return out;
 }
 
+void SelfContact::saveState(StateWriter& w) const {
+    const Impl& m = *m_impl;
+    w.tag("self contact");
+    w.pod(m.numNodes);
+    w.pod(std::uint64_t(m.cands.size()));
+    for (const Candidate& c : m.cands) w.pod(c.node), w.pod(c.tri), w.pod(c.side), w.pod(c.group);
+    w.mat(m.xUpdate);
+    w.pod(m.updated);
+}
+
+void SelfContact::loadState(StateReader& r) {
+    Impl& m = *m_impl;
+    r.tag("self contact");
+    const int n = r.pod<int>();
+    if (n != m.numNodes) StateReader::mismatch("nodes of the self-contact mesh", n, m.numNodes);
+    m.cands.resize(r.pod<std::uint64_t>());
+    const int nt = static_cast<int>(m.tris.cols());
+    for (Candidate& c : m.cands) {
+        r.pod(c.node), r.pod(c.tri), r.pod(c.side), r.pod(c.group);
+        if (c.node < 0 || c.node >= m.numNodes || c.tri < 0 || c.tri >= nt)
+            throw StateError("checkpoint: a self-contact pair outside the mesh");
+    }
+    r.mat(m.xUpdate);
+    r.pod(m.updated);
+    m.maxGroup = 0;
+    m.forEachGroup([&](size_t i, size_t j) { m.maxGroup = std::max(m.maxGroup, j - i); });
+}
+
 }  // namespace bags

@@ -215,17 +215,18 @@ public:
     // --- checkpoints (bags/StateStream.h)
     /// Writes everything that decides what the bag does next into a checkpoint: the current
     /// and the committed state (positions, gas, friction history, shape poses and targets,
-    /// time), the gas flows set, and the predictor's and warm start's increments. The solver's
-    /// caches are not written: call resetCaches() where the checkpoint is taken.
+    /// time), the gas flows set, the predictor's and warm start's increments, and the
+    /// self-contact's candidate pairs with their sides. The solver's caches are not written:
+    /// call resetCaches() where the checkpoint is taken.
     void saveState(StateWriter& w) const;
     /// Reads what saveState() wrote, into an Airbag built from the same spec with the same
     /// shapes and inflated (its own state is replaced); then resetCaches().
     /// @throws StateError if the checkpoint is of another bag (sizes, chambers, shapes).
     void loadState(StateReader& r);
     /// Forgets the caches that only speed the solves up but shape their roundoff: the stored
-    /// factorisation and sparsity pattern, and the self-contact candidates (rebuilt at the
-    /// current state). A run that checkpoints calls it at every checkpoint, and a resumed
-    /// run after loading, so that both continue from the same bits.
+    /// factorisation that preconditions the Newton solves and the sparsity pattern it grew.
+    /// A run that checkpoints calls it at every checkpoint, and a resumed run after loading,
+    /// so that both continue from the same bits.
     void resetCaches();
 
     // --- results at the current state

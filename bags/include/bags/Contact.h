@@ -12,6 +12,8 @@
 
 #include <Eigen/Geometry>
 
+#include <bags/StateStream.h>
+
 #include <memory>
 #include <string>
 #include <utility>
@@ -136,6 +138,12 @@ public:
     bool isCandidateListValid(const Eigen::Matrix3Xd& x) const;
     /// Current candidate pairs as (node, triangle), sorted.
     std::vector<std::pair<int, int>> getCandidatePairs() const;
+    /// The candidate list with each pair's side (history: a pair that persists keeps the
+    /// side its node was found on), and the positions it was built at, into a checkpoint
+    /// (bags/StateStream.h), and back into a SelfContact of the same mesh.
+    void saveState(StateWriter& w) const;
+    /// @throws StateError if the checkpoint is of another mesh.
+    void loadState(StateReader& r);
 private:
     struct Impl;
     std::shared_ptr<Impl> m_impl;
