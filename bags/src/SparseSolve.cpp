@@ -1,6 +1,7 @@
 #include "SparseSolve.h"
 
 #include <algorithm>
+#include <mutex>
 
 namespace bags::detail {
 
@@ -12,6 +13,14 @@ std::uint64_t hashPattern(const SparseSpdSolver::Matrix& A) {
     for (int k = 0; k < A.nonZeros(); ++k) mix(static_cast<std::uint64_t>(A.innerIndexPtr()[k]));
     return h;
 }
+
+// METIS, under CHOLMOD's nested dissection, draws from one random generator for the whole
+// process, seeded at the start of each ordering. Two bags analysed at once on two threads (the
+// co-simulation advances bags in parallel) interleave its draws: the ordering, and so the
+// roundoff of every later solve, then depends on the threads' timing (two runs of one
+// scenario differed in the 8th significant digit of a bag's force). One analysis at a time
+// keeps every ordering a function of its pattern alone.
+std::mutex g_analysisMutex;
 }  // namespace
 
 SparseSpdSolver::SparseSpdSolver() = default;
@@ -28,7 +37,10 @@ bool SparseSpdSolver::factorize(const Matrix& A) {
         m_llt->cholmod().nmethods = 1;
         m_llt->cholmod().method[0].ordering = CHOLMOD_NESDIS;
         m_llt->cholmod().postorder = 1;
-        m_llt->analyzePattern(A);
+        {
+            const std::lock_guard<std::mutex> lock(g_analysisMutex);
+            m_llt->analyzePattern(A);
+        }
         m_patternHash = h;
         m_analyzed = true;
         ++m_numAnalyses;
