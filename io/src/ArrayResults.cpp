@@ -379,8 +379,15 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const cosim::Pressu
     r.vec(d.shapeTimes);
     r.pod(d.shapeInterval), r.pod(d.shapeEnd), r.pod(d.nextShape);
 
+    h5::silenceErrors();
+    try {
+        d.file = h5::openFileReadWrite(dir.getFile(kResultsH5).string());
+    } catch (const std::exception& e) {
+        throw std::runtime_error(dir.getFile(kResultsH5).string() + ": " + e.what() +
+                                 "; the run cannot be resumed from this folder");
+    }
     // The CSV files as they were at the checkpoint (what the run wrote after it goes).
-    std::ofstream* files[] = {&d.regions, &d.bags, &d.tilt, &d.body, &d.events, &d.pneumatics};
+    // Every file checked before any is cut.
     for (int k = 0; k < 6; ++k) {
         const std::filesystem::path path = dir.getFile(kCsvNames[k]);
         std::error_code ec;
@@ -389,17 +396,14 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const cosim::Pressu
             throw std::runtime_error(path.string() + " is " +
                                      (ec ? std::string("missing") : "shorter than at the checkpoint") +
                                      "; the run cannot be resumed from this folder");
+    }
+    std::ofstream* files[] = {&d.regions, &d.bags, &d.tilt, &d.body, &d.events, &d.pneumatics};
+    for (int k = 0; k < 6; ++k) {
+        const std::filesystem::path path = dir.getFile(kCsvNames[k]);
         std::filesystem::resize_file(path, std::uintmax_t(sizes[k]));
         files[k]->open(path, std::ios::in | std::ios::out);
         files[k]->seekp(0, std::ios::end);
         if (!*files[k]) throw std::runtime_error("cannot write " + path.string());
-    }
-    h5::silenceErrors();
-    try {
-        d.file = h5::openFileReadWrite(dir.getFile(kResultsH5).string());
-    } catch (const std::exception& e) {
-        throw std::runtime_error(dir.getFile(kResultsH5).string() + ": " + e.what() +
-                                 "; the run cannot be resumed from this folder");
     }
     d.meta = h5::openGroup(d.file.get(), "meta");
     d.matGroup = h5::openGroup(d.file.get(), "mat");
