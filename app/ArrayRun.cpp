@@ -125,6 +125,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                   << io::formatQuantity(layout.gasMass, "g", 2) << " each";
         for (const cosim::BagGroup& g : layout.groups)
             std::cerr << ", group '" << g.name << "' " << io::formatQuantity(g.gasMass, "g", 2);
+        std::cerr << (sc.options.boardContact ? "; the bed board carries him where he reaches it"
+                                              : "; no bed board under him (array.board_contact)");
         std::cerr << "\n  " << cosim::toString(sc.options.coupling.scheme) << " coupling ("
                   << cosim::toString(sc.options.coupling.acceleration) << "), macro step "
                   << io::formatSignificant(sc.options.coupling.macroStep, "ms") << "; settle "

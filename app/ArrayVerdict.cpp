@@ -161,14 +161,14 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
                                        "further toward their edge; the first from " +
                                        fmt("%.2f s", first)});
     }
-    // Fell through or off the bags: his centre of mass below the bed board (the model has no
-    // floor and no board under the body: only the bags carry him).
+    // Fell through or off the bags: his centre of mass below the bed board (with
+    // array.board_contact off only the bags carry him; with it the board stops him).
     if (m_haveRef)
         rows.push_back({"fell through or off the bags", m_lowestCom < 0.0 ? "fail" : "ok",
                         1e3 * m_lowestCom, "mm",
                         "lowest height of his centre of mass above the bed board " + window +
                             fmt(" (at %.2f s)", m_lowestComTime) +
-                            "; fail below 0 mm: nothing under him any more"});
+                            "; fail below 0 mm: below the bed board"});
     // Bottoming out.
     if (m_minHeightBag < 0 || !std::isfinite(m_minHeight))
         rows.push_back({"bag bottomed out", "n/a", kNaN, "mm", "no pressed node judged"});

@@ -143,7 +143,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     s.checkKeys({"rows", "columns", "gas_mass"},
                 {"row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
-                 "groups"});
+                 "groups", "board_contact"});
     cosim::ArrayLayout& a = sc.options.layout;
     a.rows = s.get("rows").asInteger();
     a.columns = s.get("columns").asInteger();
@@ -179,6 +179,9 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
         }
     }
     a.mirrorColumns = s.getBool("mirror_columns", false);
+    // The bed board under the bags, as the body feels it where it reaches it (between bags,
+    // through a slack or bottomed bag, beside the array): PatientOnArrayOptions::boardContact.
+    sc.options.boardContact = s.getBool("board_contact", true);
     a.gasMass = s.getQuantity("gas_mass", D::Mass);
     checkPositive(s, "gas_mass", a.gasMass, "g");
     if (s.has("groups")) {

@@ -88,6 +88,21 @@ TEST(ArrayScenario, ReadsGroupsGasCommandsAndDefaults) {
     EXPECT_DOUBLE_EQ(sc.getEndTime(), 11.0);
 }
 
+TEST(ArrayScenario, TheBedBoardCarriesTheBodyByDefaultAndCanBeLeftOut) {
+    EXPECT_TRUE(read(kBase).options.boardContact);
+    std::string off = kBase;
+    off.insert(off.find("  groups:"), "  board_contact: false\n");
+    EXPECT_FALSE(read(off).options.boardContact);
+    std::string on = kBase;
+    on.insert(on.find("  groups:"), "  board_contact: true\n");
+    EXPECT_TRUE(read(on).options.boardContact);
+    std::string bad = kBase;
+    bad.insert(bad.find("  groups:"), "  board_contact: maybe\n");
+    const io::InputError e = readError(bad);
+    EXPECT_EQ(e.getLine(), 12);
+    EXPECT_EQ(e.getKey(), "array.board_contact");
+}
+
 TEST(ArrayScenario, OverlappingRowsAreRefusedAtTheRowPitch) {
     std::string text = kBase;
     text.replace(text.find("105 mm"), 6, "90 mm");
