@@ -55,7 +55,7 @@ TEST(PneumaticsScenario, ReadsTheCoarsePneumaticTurnAndTheDefaults) {
     EXPECT_DOUBLE_EQ(p.sensor.timeConstant, 0.05);
     EXPECT_DOUBLE_EQ(p.sensor.noiseStdDev, 50.0);
     EXPECT_EQ(sc.controlKind, "turn");
-    EXPECT_NEAR(sc.targetTilt, 30.0 * M_PI / 180.0, 1e-12);
+    EXPECT_NEAR(sc.targetTilt, 12.0 * M_PI / 180.0, 1e-12);  // what these wedges reach
     ASSERT_TRUE(sc.controller);
 
     // The defaults: one channel per group, the typical hardware.
