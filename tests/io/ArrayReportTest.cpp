@@ -13,21 +13,16 @@
 
 #include "SyntheticArrayRun.h"
 
+#include "ReportTestUtil.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path makeDir(const std::string& name) {
-    const fs::path p = fs::path(BAGSIM_BINARY_DIR) / "test-output" / "io" / name;
-    fs::remove_all(p);
-    fs::create_directories(p.parent_path());
-    return p;
-}
+fs::path makeDir(const std::string& name) { return io::test::makeReportTestDir(name); }
 
 int count(const std::string& s, const std::string& what) {
-    int n = 0;
-    for (size_t i = s.find(what); i != std::string::npos; i = s.find(what, i + 1)) ++n;
-    return n;
+    return io::test::countOccurrences(s, what);
 }
 
 std::string fmt(const char* f, double v) {
@@ -37,12 +32,7 @@ std::string fmt(const char* f, double v) {
 }
 
 std::string errorOf(const fs::path& dir) {
-    try {
-        io::formatArrayReportHtml(dir);
-    } catch (const io::InputError& e) {
-        return e.what();
-    }
-    return "(no error)";
+    return io::test::reportErrorOf([](const fs::path& d) { return io::formatArrayReportHtml(d); }, dir);
 }
 
 }  // namespace

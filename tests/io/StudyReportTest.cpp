@@ -14,21 +14,16 @@
 
 #include "SyntheticStudy.h"
 
+#include "ReportTestUtil.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path makeDir(const std::string& name) {
-    const fs::path p = fs::path(BAGSIM_BINARY_DIR) / "test-output" / "io" / name;
-    fs::remove_all(p);
-    fs::create_directories(p.parent_path());
-    return p;
-}
+fs::path makeDir(const std::string& name) { return io::test::makeReportTestDir(name); }
 
 int count(const std::string& s, const std::string& what) {
-    int n = 0;
-    for (size_t i = s.find(what); i != std::string::npos; i = s.find(what, i + 1)) ++n;
-    return n;
+    return io::test::countOccurrences(s, what);
 }
 
 /// The text of the element that opens with `open` up to its closing `close`.
@@ -40,12 +35,7 @@ std::string section(const std::string& html, const std::string& open, const std:
 }
 
 std::string errorOf(const fs::path& dir) {
-    try {
-        io::formatStudyReportHtml(dir);
-    } catch (const io::InputError& e) {
-        return e.what();
-    }
-    return "(no error)";
+    return io::test::reportErrorOf([](const fs::path& d) { return io::formatStudyReportHtml(d); }, dir);
 }
 
 }  // namespace
