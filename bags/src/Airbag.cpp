@@ -312,15 +312,16 @@ struct Airbag::Impl {
     // its equilibrium volume: each ramp step seals the gas at the room's temperature at the
     // volume it starts from, and a gas that compresses adiabatically (heat exchange) would
     // leave the last solve warmer or colder. Resealed at the volume reached and solved again
+    // Sets a value for a scope and puts the old one back when the scope ends.
+    struct ScopedValue {
+        ScopedValue(double& ref, double value) : ref(ref), old(ref) { ref = value; }
+        ~ScopedValue() { ref = old; }
+        double& ref;
+        double old;
+    };
     // (to the solver's own tolerances) until the temperature is the room's to 1e-5 K.
     void settleAtRoomTemperature() {
-        const double tolerance = spec.forceTolerance;
-        spec.forceTolerance = spec.solver.absoluteTolerance;
-        struct Restore {
-            double& t;
-            double v;
-            ~Restore() { t = v; }
-        } restore{spec.forceTolerance, tolerance};
+        const ScopedValue tight(spec.forceTolerance, spec.solver.absoluteTolerance);
         const double Tr = spec.gas.temperature;
         for (int k = 0; k < 40; ++k) {
             const std::vector<double> V = calcAllGasVolumes();
@@ -346,13 +347,7 @@ struct Airbag::Impl {
     // own tolerances, as solveWithFlow does (a loose tolerance would accept the state unmoved).
     bool solveWithHeat(const std::vector<GasChamber>& start, const std::vector<double>& V0,
                        double dt, SolveSummary* sum, double* stab) {
-        const double tolerance = spec.forceTolerance;
-        spec.forceTolerance = spec.solver.absoluteTolerance;
-        struct Restore {
-            double& t;
-            double v;
-            ~Restore() { t = v; }
-        } restore{spec.forceTolerance, tolerance};
+        const ScopedValue tight(spec.forceTolerance, spec.solver.absoluteTolerance);
         const std::vector<RigidContact::History> history = model->getContactHistory();
         const int n = model->getNumGases();
         for (int k = 0; k < 40; ++k) {
