@@ -152,6 +152,10 @@ void AirbagSpec::validate() const {
             throw std::invalid_argument(
                 "airbag option 'cluster' needs the open connection (one gas body per bag)");
     }
+    if (sharedAir && cluster.size() < 2)
+        throw std::invalid_argument(
+            "airbag option 'sharedAir' joins the air of a cluster's bags; it needs a cluster of "
+            "two or more bags (the cluster has " + std::to_string(cluster.size()) + ")");
     solver.validate();
 }
 
@@ -270,6 +274,14 @@ struct Airbag::Impl {
         return m;
     }
     double bagMass(int b) const {
+        if (spec.sharedAir) {
+            // Bag b's share of the shared air: its chambers' share of the air's volume.
+            if (bagGases[b].empty()) return 0.0;
+            const int g = bagGases[b].front();
+            double Vb = 0.0;
+            for (int c : bagChambers[b]) Vb += calcChamberVolume(mesh, c, x);
+            return model->getGas(g).getMass() * Vb / model->calcGasVolume(g, x, nullptr);
+        }
         double m = 0.0;
         for (int g : bagGases[b]) m += model->getGas(g).getMass();
         return m;
@@ -299,6 +311,14 @@ struct Airbag::Impl {
     void leak(double dt) {
         const double C = spec.gas.leakConductance;
         if (!(C > 0.0) || !(dt > 0.0)) return;
+        if (spec.sharedAir) {
+            // Every bag's seams leak the shared air: numBags times one bag's conductance.
+            const int g = bagGases.front().front();
+            const double V = model->calcGasVolume(g, x, nullptr);
+            GasChamber& gas = model->updGas(g);
+            gas.transferMass(gas.calcLeakTransfer(V, dt, C * numBags), V);
+            return;
+        }
         for (int b = 0; b < numBags; ++b) {
             double Vsum = 0.0;
             const std::vector<double> V = calcGasVolumes(b, &Vsum);
@@ -453,6 +473,14 @@ struct Airbag::Impl {
     // Takes every bag quasi-statically from its gas mass now to masses[b], the bags' masses
     // moving in proportion (the ramp's parameter is the mass of the bag that changes most).
     void rampGasMasses(const std::vector<double>& masses) {
+        if (spec.sharedAir) {
+            // One body of air: its mass goes to the masses' sum.
+            double to = 0.0;
+            for (double mb : masses) to += mb;
+            solveRamp(totalMass(), to, [&](double m) { setBagGasMass(0, m); },
+                      "changing the gas mass");
+            return;
+        }
         std::vector<double> from(numBags);
         int ref = 0;
         for (int b = 0; b < numBags; ++b) {
@@ -946,6 +974,7 @@ void Airbag::inflate(const std::vector<double>& masses) {
         pTarget[b] = std::clamp(probe.calcGaugePressure(Vflat), 200.0, 5000.0);
         pMax = std::max(pMax, pTarget[b]);
     }
+    if (m.spec.sharedAir) pTarget.assign(m.numBags, pMax);  // one air: one pressure
     m.solveRamp(0.0, pMax,
                 [&](double p) {
                     for (int b = 0; b < m.numBags; ++b)
@@ -968,7 +997,15 @@ void Airbag::inflate(const std::vector<double>& masses) {
         gas.seal(V);
         m.bagGases[b].push_back(m.model->addGas(gas, chambers));
     };
-    for (int b = 0; b < m.numBags; ++b) {
+    if (m.spec.sharedAir) {
+        // One body of air over every bag's chambers, each bag pointing at it.
+        std::vector<int> all;
+        for (int b = 0; b < m.numBags; ++b)
+            all.insert(all.end(), m.bagChambers[b].begin(), m.bagChambers[b].end());
+        sealGas(0, all);
+        for (int b = 1; b < m.numBags; ++b) m.bagGases[b] = m.bagGases[0];
+    }
+    for (int b = 0; b < m.numBags && !m.spec.sharedAir; ++b) {
         const std::vector<int>& chambers = m.bagChambers[b];
         if (m.spec.connection == AirbagSpec::Connection::Orifice && chambers.size() >= 2) {
             for (int c : chambers) sealGas(b, {c});
@@ -1014,6 +1051,10 @@ void Airbag::setTargetMass(int bag, double mass, double rate) {
         throw std::invalid_argument(
             "Airbag::setTargetMass: use a mass > 0 and < 1 kg and a positive rate");
     Impl& m = *m_impl;
+    if (m.spec.sharedAir)
+        throw std::logic_error(
+            "Airbag::setTargetMass: the bags share their air (AirbagSpec::sharedAir); a bag's "
+            "own target mass has no meaning, set flows (setMassFlow) instead");
     m.massFlow.at(bag) = rate;
     m.hasTarget.at(bag) = 1;
     m.targetMass.at(bag) = mass;

@@ -69,6 +69,7 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     spec.threads = o.threads;
     spec.predictor = o.predictor;
     spec.cluster = calcNeighbourPoses(o);
+    spec.sharedAir = o.neighbourSharedAir && !spec.cluster.empty();
     return spec;
 }
 

@@ -125,6 +125,7 @@ const std::vector<KeyAlias>& getAliases() {
         {"residualTolerance", "solver", "residual_tolerance"},
         {"neighbourGap", "airbag", "neighbours"},
         {"neighbourGasMass", "airbag", "neighbours"},
+        {"neighbourSharedAir", "airbag", "neighbours"},
         {"neighbours", "airbag", "neighbours"},
     };
     return aliases;
@@ -229,7 +230,7 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
     // The pressed bag among neighbours of the same bag (docs/array-coupling.md).
     if (s.has("neighbours")) {
         const ScenarioNode nb = s.getSection("neighbours");
-        nb.checkKeys({"layout"}, {"gap", "gas_mass", "pressed"});
+        nb.checkKeys({"layout"}, {"gap", "gas_mass", "pressed", "shared_air"});
         using N = bags::LoadTestOptions::Neighbours;
         const std::string layout = nb.getChoice("layout", {"none", "pair", "row3", "block3x3"});
         o.neighbours = layout == "pair"       ? N::Pair
@@ -263,6 +264,8 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
                 nb.fail("pressed", "needs layout: block3x3 (the other layouts press their "
                                    "middle bag); use [0, 0] or leave it out");
         }
+        // With layout none there is no neighbour to share air with: read, checked, unused.
+        o.neighbourSharedAir = nb.getBool("shared_air", false);
         if (o.neighbours != N::None && connection == "orifice")
             s.fail("connection", "orifice is not supported with neighbours (one gas body per "
                                  "bag); use connection: open");

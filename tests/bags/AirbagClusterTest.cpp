@@ -147,3 +147,113 @@ TEST(AirbagCluster, BadClustersAndMassesAreRefusedNamingTheOption) {
     }
     EXPECT_THROW(pair.getGasMass(2), std::out_of_range);
 }
+
+namespace {
+
+// An ellipsoid pressed `depth` [m] into bag 0's apex, bag 0 at -y of a pair; returns the
+// force on it. The ellipsoid starts clear of the bag while it inflates to `masses`.
+Vec3 pressBagZero(Airbag& pair, const std::vector<double>& masses, double depth) {
+    const auto [b0, e0] = pair.getBagNodes(0);
+    int apex = b0;
+    for (int i = b0; i < e0; ++i)
+        if (pair.getMesh().X(2, i) > pair.getMesh().X(2, apex)) apex = i;
+    const Vec3 c = pair.getMesh().X.col(apex);
+    std::shared_ptr<RigidShape> e(makeEllipsoid(Vec3(0.04, 0.03, 0.02)));
+    e->setPose(translation(c + Vec3(0, 0, 0.5)));
+    const int s = pair.addShape(e, RigidContact::Options());
+    pair.inflate(masses);
+    double top = -1.0;
+    for (int i = b0; i < e0; ++i) top = std::max(top, pair.getPositions()(2, i));
+    pair.setShapePose(s, translation(Vec3(c.x(), c.y(), top + 0.02 - depth)));
+    EXPECT_TRUE(pair.advance(1.0).converged);
+    pair.commit();
+    return pair.calcShapeWrench(s).force;
+}
+
+double gaugePressure(const Airbag& bag, int b) {
+    return bag.getChamberState(bag.getBagChambers(b).front()).gaugePressure;
+}
+
+}  // namespace
+
+TEST(AirbagCluster, SharedAirIsOneBodyOfAirThatAPressMovesIntoTheNeighbour) {
+    // Two bags 50 mm apart (their walls never meet), each first with its own air, then
+    // sharing it (AirbagSpec::sharedAir), 4.0 + 4.0 g, bag 0 pressed 10 mm by an ellipsoid.
+    // References:
+    //  - the shared air is one ideal gas: (p + p_ambient) V_total = m R T to 1e-9 relative,
+    //    one pressure in every chamber of both bags (exact: one gas body), its mass the two
+    //    masses summed (1e-15 kg);
+    //  - pressed, it moves air into bag 1 (bag 1's share grows) and raises bag 1's pressure,
+    //    which with separate air stays where inflation left it (1e-9 relative);
+    //  - the press's pressure rise: isothermal, dp = p_abs dV / V, so twice the volume of air
+    //    takes half the rise: shared / own = 0.5, to 2 % (the films' own give differs a
+    //    little between the two states); the force on the ellipsoid is then lower.
+    AirbagSpec own = pairSpec(0.050), shared = pairSpec(0.050);
+    shared.sharedAir = true;
+    const std::vector<double> masses{4.0e-3, 4.0e-3};
+    // The unpressed pressures (the ellipsoid far away).
+    auto unpressed = [&](const AirbagSpec& spec) {
+        std::shared_ptr<RigidShape> far(makeEllipsoid(Vec3(0.01, 0.01, 0.01)));
+        far->setPose(translation(Vec3(0, 0, 5.0)));
+        Airbag probe(spec);
+        probe.addShape(far, RigidContact::Options());
+        probe.inflate(masses);
+        return std::make_unique<Airbag>(std::move(probe));
+    };
+    const auto ownAt0 = unpressed(own), sharedAt0 = unpressed(shared);
+    EXPECT_NEAR(sharedAt0->getTotalGasMass(), 8.0e-3, 1e-15);
+    EXPECT_NEAR(sharedAt0->getGasMass(0), 4.0e-3, 1e-9);  // mirror images: equal shares
+    EXPECT_EQ(gaugePressure(*sharedAt0, 0), gaugePressure(*sharedAt0, 1));
+
+    Airbag a(own), b(shared);
+    const Vec3 fOwn = pressBagZero(a, masses, 0.010);
+    const Vec3 fShared = pressBagZero(b, masses, 0.010);
+    const double p1 = gaugePressure(*ownAt0, 1);
+    EXPECT_NEAR(gaugePressure(a, 1), p1, 1e-9 * p1);  // separate air: bag 1 feels nothing
+    const double riseOwn = gaugePressure(a, 0) - gaugePressure(*ownAt0, 0);
+    const double riseShared = gaugePressure(b, 0) - gaugePressure(*sharedAt0, 0);
+    EXPECT_GT(riseOwn, 10.0);  // [Pa] a real press
+    EXPECT_NEAR(riseShared / riseOwn, 0.5, 0.01);
+    EXPECT_GT(fOwn.z(), 1.0);
+    EXPECT_LT(fShared.z(), fOwn.z());  // softer with shared air
+
+    EXPECT_NEAR(b.getTotalGasMass(), 8.0e-3, 1e-15);
+    EXPECT_GT(b.getGasMass(1), 4.0e-3 + 1e-6);  // air pressed into bag 1
+    EXPECT_NEAR(b.getGasMass(0) + b.getGasMass(1), 8.0e-3, 1e-12);
+    for (int c = 0; c < b.getNumChambers(); ++c)
+        EXPECT_EQ(b.getChamberState(c).gaugePressure, gaugePressure(b, 0));
+    double V = 0.0;
+    for (int c = 0; c < b.getNumChambers(); ++c) V += b.getChamberState(c).volume;
+    const GasOptions& g = shared.gas;
+    const double pAbs = gaugePressure(b, 0) + g.ambientPressure;
+    EXPECT_NEAR(pAbs * V, 8.0e-3 * g.getSpecificGasConstant() * g.temperature,
+                1e-9 * pAbs * V);
+    EXPECT_GT(gaugePressure(b, 1), gaugePressure(*sharedAt0, 1));  // the press reached bag 1
+}
+
+TEST(AirbagCluster, SharedAirTakesFlowsIntoAnyBagAndRefusesPerBagTargets) {
+    // Reference: mass balance, 0.5 g/s into bag 1 over 1 s adds 0.5 g to the shared air
+    // (1e-12 kg); a target for one bag has no meaning with one body of air.
+    AirbagSpec shared = pairSpec(0.050);
+    shared.sharedAir = true;
+    Airbag pair(shared);
+    pair.inflate({4.0e-3, 3.0e-3});
+    EXPECT_NEAR(pair.getTotalGasMass(), 7.0e-3, 1e-15);
+    EXPECT_EQ(gaugePressure(pair, 0), gaugePressure(pair, 1));
+    pair.setMassFlow(1, 0.5e-3);
+    ASSERT_TRUE(pair.advance(1.0).converged);
+    pair.commit();
+    EXPECT_NEAR(pair.getTotalGasMass(), 7.5e-3, 1e-12);
+    EXPECT_THROW(pair.setTargetMass(0, 4.0e-3, 1e-3), std::logic_error);
+    pair.changeGasMass({3.0e-3, 3.0e-3});
+    EXPECT_NEAR(pair.getTotalGasMass(), 6.0e-3, 1e-12);
+
+    AirbagSpec alone = coarseSpec();
+    alone.sharedAir = true;
+    try {
+        Airbag bag(alone);
+        FAIL() << "shared air without a cluster was accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("sharedAir"), std::string::npos) << e.what();
+    }
+}

@@ -531,6 +531,17 @@ TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
     const auto base = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
     EXPECT_EQ(base.options.neighbours, bags::LoadTestOptions::Neighbours::None);
     EXPECT_EQ(base.options.neighbourGasMass, 0.0);  // the pressed bag's own at each curve
+    EXPECT_FALSE(sc.options.neighbourSharedAir);      // each bag its own air by default
+    const io::LoadTestScenario shared = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 6, "  height: 150 mm\n  neighbours: {layout: pair, shared_air: true}"),
+        "s.yaml"));
+    EXPECT_TRUE(shared.options.neighbourSharedAir);
+    EXPECT_TRUE(bags::makeAirbagSpec(shared.options).sharedAir);
+    EXPECT_FALSE(bags::makeAirbagSpec(sc.options).sharedAir);
+    const InputError es = errorFor(replaceLine(
+        kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: pair\n    shared_air: perhaps"));
+    EXPECT_EQ(es.getKey(), "airbag.neighbours.shared_air");
+    EXPECT_EQ(es.getLine(), 9);
 
     // Where in a 3 x 3 block the pressed bag stands.
     const io::LoadTestScenario corner = io::readLoadTestScenario(ScenarioFile::parse(

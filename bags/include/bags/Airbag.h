@@ -85,6 +85,13 @@ struct AirbagSpec {
     /// be on; the connection must be open (one gas body per bag). Empty: one bag at B.
     /// docs/airbag-module.md#several-bags-in-one-module.
     std::vector<Eigen::Isometry3d> cluster;
+    /// The bags of a cluster share one body of air, as bags joined by open tubes (a manifold
+    /// whose valves are open): one pressure in every bag, and air pressed out of one bag
+    /// goes into the others. inflate() and changeGasMass() then take per-bag masses whose
+    /// sum is the shared air's mass; getGasMass(b) is bag b's share (by volume); a flow into
+    /// any bag goes into the shared air; per-bag targets (setTargetMass) are refused. Needs a
+    /// cluster of two or more bags and the open connection. false: one body of air per bag.
+    bool sharedAir = false;
     OrificeOptions orifice;
     Imperfection imperfection;
     bool bedBoard = true;                ///< a rigid plane z_B = 0 under the bag
@@ -176,11 +183,12 @@ public:
     void setMassFlow(double massFlow);
     void setMassFlow(int bag, double massFlow);   ///< one bag of a cluster
     /// Flow at |rate| [kg/s] during the following advance() calls until the bag's (every
-    /// bag's) mass is `mass` [kg], then none.
+    /// bag's) mass is `mass` [kg], then none. Refused with AirbagSpec::sharedAir.
     void setTargetMass(double mass, double rate);
     void setTargetMass(int bag, double mass, double rate);  ///< one bag of a cluster
     double getTotalGasMass() const;       ///< [kg] summed over the module's bags
-    double getGasMass(int bag) const;     ///< [kg] of one bag
+    /// [kg] of one bag (AirbagSpec::sharedAir: its share of the shared air, by volume)
+    double getGasMass(int bag) const;
     /// No gas enters or leaves any bag, nor passes an orifice between chambers, nor leaks
     /// (GasOptions::leakConductance), nor exchanges heat with the room
     /// (GasOptions::heatTimeConstant), over the following advance() calls (no flow set, or

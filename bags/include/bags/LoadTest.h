@@ -68,6 +68,9 @@ struct LoadTestOptions {
     double neighbourGap = 5.0e-3;       ///< [m] between facing flat panels (0 < gap < 100 mm)
     /// [kg] every neighbour's gas mass at every curve; 0: the pressed bag's mass of that curve
     double neighbourGasMass = 0.0;
+    /// The pressed bag and its neighbours share one body of air (joined by open tubes:
+    /// AirbagSpec::sharedAir), its mass the bags' masses summed; false: each its own.
+    bool neighbourSharedAir = false;
     double blockSize = 0.050;           ///< square block edge [m]
     double loadingRate = 10.0e-3 / 60.0;///< [m/s] (10 mm/min)
     double peakForce = 50.0;            ///< [N]
