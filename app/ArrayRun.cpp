@@ -127,6 +127,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             std::cerr << ", group '" << g.name << "' " << io::formatQuantity(g.gasMass, "g", 2);
         std::cerr << (sc.options.boardContact ? "; the bed board carries him where he reaches it"
                                               : "; no bed board under him (array.board_contact)");
+        std::cerr << "; body on the films: "
+                  << (sc.options.contact.friction > 0.0 ? "friction " + fmt("%g", sc.options.contact.friction)
+                                                        : std::string("frictionless"));
         std::cerr << "\n  " << cosim::toString(sc.options.coupling.scheme) << " coupling ("
                   << cosim::toString(sc.options.coupling.acceleration) << "), macro step "
                   << io::formatSignificant(sc.options.coupling.macroStep, "ms") << "; settle "

@@ -122,7 +122,13 @@ struct RigidContact::Impl {
             if (kt * r <= cap) {  // stick: an elastic spring to the anchor
                 out.energy += 0.5 * kt * r * r;
                 out.grad += kt * dt;
-                if (wantHess) out.hess += kt * P;
+                // d(P (p - a))/dp = P - (n.(p - a)) dn/dp - n dt^T dn/dp (n^T dn/dp = 0): the
+                // projection turns with the normal on a curved shape. The last term is
+                // symmetrised; at dt = 0 (a node where its anchor was set) this is exact.
+                if (wantHess) {
+                    const Mat3 c = n * (dt.transpose() * dn);
+                    out.hess += kt * (P - n.dot(p - a_G) * dn - 0.5 * (c + c.transpose()));
+                }
             } else {  // slip: force mu f_n against the offset; its dependence on f_n is dropped
                 const Vec3 t = dt / r;
                 out.energy += cap * (r - 0.5 * cap / kt);

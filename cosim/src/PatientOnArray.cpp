@@ -26,7 +26,12 @@ void PatientOnArrayOptions::validate() const {
             throw std::invalid_argument(
                 "bag.calibration: made for another bag (sizes or diaphragm differ from the "
                 "scenario's bag reading); valid: a calibration of this bag");
+        if (contact.friction > 0.0)
+            throw std::invalid_argument(
+                "bag.body_friction: the reduced bag carries normal force only; valid: 0 with "
+                "the reduced model");
     }
+    contact.validate();
     body.validate();
     if (boardContact) board.validate();
     integrator.validate();

@@ -23,6 +23,12 @@ std::string fmtUnit(double si, const std::string& unit) {
     return buf;
 }
 
+std::string fmtNumber(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
 // A value of `key` must lie in [lo, hi] (SI), shown in `unit`.
 void checkBetween(const ScenarioNode& s, const std::string& key, double v, double lo, double hi,
                   const std::string& unit, const std::string& why = "") {
@@ -111,7 +117,7 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 
 void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
-                     "contact_penalty", "model", "calibration"});
+                     "contact_penalty", "body_friction", "model", "calibration"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -132,10 +138,23 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     sc.options.contact.pressurePenalty =
         s.getQuantity("contact_penalty", D::StiffnessPerArea, 1e8);
     checkBetween(s, "contact_penalty", sc.options.contact.pressurePenalty, 1e5, 1e10, "Pa/m");
+    // Coulomb friction of the body's shapes on the films (skin or sheet on the bags' nylon or
+    // TPU film). 0, frictionless, is the default: every figure measured before the key came
+    // was frictionless (docs/cosim.md#friction-between-the-body-and-the-films).
+    sc.options.contact.friction = s.getNumber("body_friction", 0.0);
+    if (!(sc.options.contact.friction >= 0.0 && sc.options.contact.friction <= 2.0))
+        s.fail("body_friction", fmtNumber(sc.options.contact.friction) +
+                                    " is not valid; valid: 0 (frictionless) to 2, e.g. 0.4 "
+                                    "(skin or cotton on a fabric or film: 0.3-0.5)");
     // The seed's Yeoh fit of its tensile test, 0.2 mm film (scenarios/seed-load-test.yaml).
     b.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     b.threads = 1;  // bags run in parallel, one per thread
     readReducedBagKeys(s, sc.options, fileName);
+    if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&
+        sc.options.contact.friction > 0.0)
+        s.fail("body_friction",
+               fmtNumber(sc.options.contact.friction) + " is not valid with model: reduced (the reduced bag carries normal force "
+                   "only); valid: 0, or model: finite-element");
 }
 
 // -------------------------------------------------------------------------------------- array

@@ -103,6 +103,24 @@ TEST(ArrayScenario, TheBedBoardCarriesTheBodyByDefaultAndCanBeLeftOut) {
     EXPECT_EQ(e.getKey(), "array.board_contact");
 }
 
+TEST(ArrayScenario, TheBodyOnTheFilmsIsFrictionlessByDefaultAndTakesACoulombCoefficient) {
+    EXPECT_EQ(read(kBase).options.contact.friction, 0.0);
+    auto with = [](const std::string& value) {
+        std::string t = kBase;
+        t.replace(t.find("bag: {mesh_size: 30 mm}"), 23,
+                  "bag: {mesh_size: 30 mm, body_friction: " + value + "}");
+        return t;
+    };
+    EXPECT_EQ(read(with("0")).options.contact.friction, 0.0);
+    EXPECT_DOUBLE_EQ(read(with("0.4")).options.contact.friction, 0.4);
+    for (const char* bad : {"-0.1", "3"}) {
+        const io::InputError e = readError(with(bad));
+        EXPECT_EQ(e.getLine(), 3);
+        EXPECT_EQ(e.getKey(), "bag.body_friction");
+        EXPECT_NE(e.getMessage().find("valid: 0 (frictionless) to 2"), std::string::npos) << e.what();
+    }
+}
+
 TEST(ArrayScenario, OverlappingRowsAreRefusedAtTheRowPitch) {
     std::string text = kBase;
     text.replace(text.find("105 mm"), 6, "90 mm");

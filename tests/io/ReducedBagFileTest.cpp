@@ -128,4 +128,11 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
     const io::InputError e5 =
         expectInputError([&] { readWith("30 mm", "finite-element", shipped); });
     EXPECT_EQ(e5.getKey(), "bag.calibration");
+    // The reduced bag carries normal force only: friction of the body on its film is refused.
+    const io::InputError e6 = expectInputError(
+        [&] { readWith("30 mm", "reduced", shipped + ", body_friction: 0.4"); });
+    EXPECT_EQ(e6.getKey(), "bag.body_friction");
+    EXPECT_NE(std::string(e6.what()).find("model: reduced"), std::string::npos) << e6.what();
+    EXPECT_EQ(readWith("30 mm", "reduced", shipped + ", body_friction: 0").options.contact.friction,
+              0.0);
 }
