@@ -1216,8 +1216,9 @@ Eigen::Matrix<double, 6, 6> Airbag::calcShapeWrenchTangent(int shape) const {
 std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
     const std::vector<int>& shapes) const {
     const Impl& m = *m_impl;
-    // W = -dE_c/dq at fixed x, so dW/dx = -B^T with B = d(grad E)/dq; the bag re-equilibrates,
-    // dx/dq = -K^-1 B, hence dW/dq = dW/dq|_x + B^T K^-1 B. One K for every shape's B.
+    // B = d(grad E)/dq at fixed x; the bag re-equilibrates, dx/dq = -K^-1 B, hence
+    // dW/dq = dW/dq|_x - (dW/dx) K^-1 B, and frictionless W = -dE_c/dq so dW/dx = -B^T.
+    // One K for every shape's B.
     std::vector<Eigen::Matrix<double, 6, 6>> T(shapes.size(), Eigen::Matrix<double, 6, 6>::Zero());
     std::vector<int> pressing;  // indices into `shapes`
     for (size_t k = 0; k < shapes.size(); ++k)
@@ -1227,8 +1228,15 @@ std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
     for (size_t j = 0; j < pressing.size(); ++j)
         B.middleCols<6>(6 * j) = m.calcContactPoseDerivative(shapes[pressing[j]], &T[pressing[j]]);
     const Eigen::MatrixXd Y = solveTangent(*m.model, m.x, B);
-    for (size_t j = 0; j < pressing.size(); ++j)
-        T[pressing[j]] += B.middleCols<6>(6 * j).transpose() * Y.middleCols<6>(6 * j);
+    for (size_t j = 0; j < pressing.size(); ++j) {
+        const RigidContact& c = *m.shapes.at(shapes[pressing[j]]).contact;
+        // Frictionless, dW/dx = -B^T (the wrench is minus the contact energy's derivative by
+        // the pose); with friction the tangential force is a law, and dW/dx is its own.
+        if (c.isConservative())
+            T[pressing[j]] += B.middleCols<6>(6 * j).transpose() * Y.middleCols<6>(6 * j);
+        else
+            T[pressing[j]] -= c.calcWrenchNodeDerivative(m.x) * Y.middleCols<6>(6 * j);
+    }
     return T;
 }
 

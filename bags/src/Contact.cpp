@@ -253,6 +253,31 @@ void RigidContact::calcWrenchOnShape(const Eigen::Matrix3Xd& x, Vec3* force, Vec
     if (torque) *torque = T;
 }
 
+Eigen::MatrixXd RigidContact::calcWrenchNodeDerivative(const Eigen::Matrix3Xd& x) const {
+    const Impl& m = *m_impl;
+    Eigen::MatrixXd D = Eigen::MatrixXd::Zero(6, 3 * m.numNodes);
+    const Vec3 o = m.shape->getPose().translation();
+    const double h = 1e-7;  // [m]
+    NodeTerm t;
+    for (size_t j = 0; j < m.nodes.size(); ++j) {
+        const Vec3 p = x.col(m.nodes[j]);
+        m.evalNode(static_cast<int>(j), p, false, t);
+        if (!t.active) continue;
+        for (int k = 0; k < 3; ++k) {
+            Eigen::Matrix<double, 6, 1> w[2];
+            for (int side = 0; side < 2; ++side) {
+                Vec3 q = p;
+                q[k] += side == 0 ? h : -h;
+                m.evalNode(static_cast<int>(j), q, false, t);
+                w[side].setZero();
+                if (t.active) w[side] << (t.closest - o).cross(t.grad), t.grad;
+            }
+            D.col(3 * m.nodes[j] + k) = (w[0] - w[1]) / (2.0 * h);
+        }
+    }
+    return D;
+}
+
 Eigen::VectorXd RigidContact::calcNodalPressure(const Eigen::Matrix3Xd& x) const {
     const Impl& m = *m_impl;
     Eigen::VectorXd p = Eigen::VectorXd::Zero(m.numNodes);

@@ -103,6 +103,13 @@ public:
     /// Total force [N] the membrane exerts on the shape, and torque [N m] about the shape's
     /// frame origin, both in Ground.
     void calcWrenchOnShape(const Eigen::Matrix3Xd& x, Vec3* force, Vec3* torque) const;
+    /// d(torque, force)/d(node positions) of calcWrenchOnShape() at x [6 x 3 n], n the mesh's
+    /// nodes: rows torque then force (Ground), columns node coordinates (node v at 3v..3v+2),
+    /// the shape held. Central differences of each contact node's own term (1e-7 m), zero
+    /// columns for nodes out of contact. Without friction this is -B^T, B the derivative of
+    /// the contact's gradient with respect to the shape's pose; with friction the tangential
+    /// force is a law, not the gradient of a potential, and the two differ.
+    Eigen::MatrixXd calcWrenchNodeDerivative(const Eigen::Matrix3Xd& x) const;
     /// Contact pressure [Pa] per mesh node (0 for nodes not in contact / not in the set).
     Eigen::VectorXd calcNodalPressure(const Eigen::Matrix3Xd& x) const;
     int getNumActive(const Eigen::Matrix3Xd& x) const;
