@@ -1,7 +1,8 @@
 // bagsim run --resume (docs/output-layout.md#checkpoint): a coarse patient-on-array run stopped
 // as by Ctrl-C (--stop-after) and resumed from its last checkpoint writes every CSV file byte
 // for byte as the run that was never stopped; the supine settle (body, bags, coupling) and the
-// pneumatic turn (network, valves, noisy lagged sensors, turn controller). A resumed run is
+// pneumatic turn (network, valves, noisy lagged sensors, turn controller, and the body's
+// friction on the films: every contact node's anchor is in the checkpoint). A resumed run is
 // refused, naming what differs, when given another scenario or other overrides, and when its
 // checkpoint is cut short or of another bagsim.
 #include <bagsim/Version.h>
@@ -154,12 +155,13 @@ TEST(Resume, PneumaticTurnWithNoisySensorsEndsByteIdentical) {
     const std::string scenario = "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"";
     const std::string sets =
         " --set run.settle_time='0.15 s' --set run.duration='0.15 s' --set output.every='50 ms'"
-        " --set output.checkpoint_every='0.1 s' --quiet";
+        " --set output.checkpoint_every='0.1 s' --set bag.body_friction=0.4 --quiet";
     ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets,
                         dir / "whole.log"),
               0)
         << readLog(dir / "whole.log");
-    // The turn has started (valves open, noisy sensors read) before the checkpoint at 0.2 s.
+    // The turn has started (valves open, noisy sensors read) before the checkpoint at 0.2 s,
+    // and the body has lain on the films with friction since his release.
     const app::test::Csv events = app::test::readCsv(dir / "whole" / "events.csv");
     ASSERT_GE(events.rows.size(), 3u);
     const fs::path out = dir / "stopped";
