@@ -320,6 +320,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                       << poa->getPairs().size() << " segment-bag pairs; released "
                       << fmt("%.1f mm", 1e3 * poa->getReleaseClearance())
                       << " above the board\n";
+        if (!quiet && sc.options.neighbourContact) {
+            // The modules of neighbours that may touch (one participant each).
+            std::cerr << "  neighbouring bags touch: " << poa->getModules().size()
+                      << " modules (one participant each) of";
+            for (const std::vector<int>& mod : poa->getModules()) std::cerr << ' ' << mod.size();
+            std::cerr << " bags\n";
+        }
         if (sc.hasPneumatics) {
             const int n = layout.rows * layout.columns;
             std::vector<double> masses(n, -1.0), volumes(n, 0.0);
@@ -481,6 +488,17 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
           << fmt("%+.3f %%", 100.0 * (carried - weight) / weight) << "); the mat reads "
           << fmt("%.2f N", mat.calcTotalForce()) << " (normal force, "
           << fmt("%.2f N", mat.getOffMatForce()) << " off the mat)\n";
+    {  // how far neighbouring films pass through each other (bags.csv overlap_mm over time)
+        const std::vector<double> overlaps = poa->calcNeighbourOverlaps();
+        const auto worst = std::max_element(overlaps.begin(), overlaps.end());
+        if (worst != overlaps.end())
+            table << "films of neighbouring bags overlap by at most "
+                  << fmt("%.2f mm", 1e3 * *worst) << " (bag "
+                  << poa->getBagIndices()[size_t(worst - overlaps.begin())] << "; "
+                  << (sc.options.neighbourContact ? "neighbours touch: array.neighbour_contact"
+                                                  : "each bag solved alone")
+                  << ")\n";
+    }
     if (const double board = poa->calcBoardForce(); board > 0.0)
         table << "the bed board carries " << fmt("%.2f N", board)
               << " of him directly (pressed through slack bags or beside the array)\n";
@@ -557,7 +575,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     writeReportAfterRun(outPath, quiet);
     std::cout << table.str() << "support verdict:\n" << verdictText << "results in " << outPath.string() << "/:\n"
               << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N\n"
-              << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N\n"
+              << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm\n"
               << "  " << io::kTiltCsv << "      time_s,pelvis_tilt_deg,thorax_tilt_deg\n"
               << "  " << io::kBodyCsv << "      time_s,com_x_mm,com_y_mm,com_z_mm\n"
               << "  " << io::kEventsCsv << "    time_s,event\n"

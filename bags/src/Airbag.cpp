@@ -926,10 +926,23 @@ Airbag::Airbag(Airbag&&) noexcept = default;
 Airbag& Airbag::operator=(Airbag&&) noexcept = default;
 
 int Airbag::addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options) {
+    return addShape(std::move(shape), options, -1);
+}
+
+int Airbag::addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options,
+                     int bag) {
     if (!shape) throw std::invalid_argument("Airbag::addShape: no shape");
     Impl& m = *m_impl;
+    std::vector<int> nodes;
+    if (bag < 0) {
+        nodes = m.freeNodes;
+    } else {
+        const std::pair<int, int> range = getBagNodes(bag);
+        for (int n : m.freeNodes)
+            if (n >= range.first && n < range.second) nodes.push_back(n);
+    }
     Impl::Shape s;
-    s.contact = std::make_shared<RigidContact>(m.mesh, m.freeNodes, *shape, options);
+    s.contact = std::make_shared<RigidContact>(m.mesh, std::move(nodes), *shape, options);
     s.target = shape->getPose();
     s.shape = std::move(shape);
     m.model->addRigidContact(s.contact);

@@ -67,6 +67,7 @@ std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaTh
 
 std::vector<BagReading> calcBagReadings(const PatientOnArray& poa) {
     const std::vector<double> forces = poa.calcBagForces();
+    const std::vector<double> overlaps = poa.calcNeighbourOverlaps();
     std::vector<BagReading> out;
     for (size_t i = 0; i < poa.getBagIndices().size(); ++i) {
         const Bag& a = poa.getBag(int(i));
@@ -81,6 +82,7 @@ std::vector<BagReading> calcBagReadings(const PatientOnArray& poa) {
         }
         r.gaugePressure = r.volume > 0.0 ? pv / r.volume : 0.0;
         r.force = forces[i];
+        r.overlap = overlaps[i];
         out.push_back(r);
     }
     return out;

@@ -11,10 +11,9 @@ namespace cosim {
 
 namespace {
 
-// The FE bag's airbag, or null for a bag without a mesh (a ReducedBag: no surface is drawn).
-const bags::Airbag* findAirbag(const PatientOnArray& poa, int participant) {
-    const auto* fe = dynamic_cast<const BagParticipant*>(&poa.getBag(participant));
-    return fe ? &fe->getAirbag() : nullptr;
+// The bag's film, or null for a bag without one (a ReducedBag: no surface is drawn).
+const bags::Mesh* findFilm(const PatientOnArray& poa, int bag) {
+    return poa.getBag(bag).getFilmMesh();
 }
 
 }  // namespace
@@ -24,14 +23,14 @@ SurfaceMesh makeBagSurfaces(const PatientOnArray& poa) {
     const std::vector<int>& indices = poa.getBagIndices();
     int nodes = 0, tris = 0;
     for (size_t b = 0; b < indices.size(); ++b)
-        if (const bags::Airbag* a = findAirbag(poa, int(b))) tris += a->getMesh().getNumTris();
+        if (const bags::Mesh* f = findFilm(poa, int(b))) tris += f->getNumTris();
     m.triangles.resize(3, tris);
     m.triangleGroup.reserve(size_t(tris));
     int t = 0;
     for (size_t b = 0; b < indices.size(); ++b) {
-        const bags::Airbag* a = findAirbag(poa, int(b));
-        if (!a) continue;
-        const bags::Mesh& mesh = a->getMesh();
+        const bags::Mesh* film = findFilm(poa, int(b));
+        if (!film) continue;
+        const bags::Mesh& mesh = *film;
         for (int k = 0; k < mesh.getNumTris(); ++k, ++t) {
             m.triangles.col(t) = mesh.tris.col(k).array() + nodes;
             m.triangleGroup.push_back(indices[b]);
@@ -47,13 +46,12 @@ SurfaceMesh makeBagSurfaces(const PatientOnArray& poa) {
 Eigen::Matrix3Xd calcBagSurfacePositions(const PatientOnArray& poa) {
     int nodes = 0;
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b)
-        if (const bags::Airbag* a = findAirbag(poa, int(b))) nodes += int(a->getPositions().cols());
+        if (findFilm(poa, int(b))) nodes += int(poa.getBag(int(b)).getPressurePoints().cols());
     Eigen::Matrix3Xd x(3, nodes);
     int at = 0;
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
-        const bags::Airbag* a = findAirbag(poa, int(b));
-        if (!a) continue;
-        const Eigen::Matrix3Xd& p = a->getPositions();
+        if (!findFilm(poa, int(b))) continue;
+        const Eigen::Matrix3Xd& p = poa.getBag(int(b)).getPressurePoints();
         x.middleCols(at, p.cols()) = p;
         at += int(p.cols());
     }

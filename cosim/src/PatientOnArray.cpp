@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "cosim/BodyShapes.h"
+#include "cosim/NeighbourModules.h"
 
 namespace cosim {
 
@@ -32,6 +33,20 @@ void PatientOnArrayOptions::validate() const {
                 "the reduced model");
     }
     contact.validate();
+    if (neighbourContact) {
+        if (model != BagModel::FiniteElement)
+            throw std::invalid_argument(
+                "array.neighbour_contact: needs the finite-element bags (the reduced model has "
+                "no film to touch); valid: false with bag.model reduced");
+        if (!bag.selfContact)
+            throw std::invalid_argument(
+                "array.neighbour_contact: the films of neighbouring bags meet through the bags' "
+                "self-contact; valid: with bag.self_contact: true");
+    }
+    if (!(neighbourMargin >= 0.0) || !std::isfinite(neighbourMargin))
+        throw std::invalid_argument("array.neighbour_margin must be finite and >= 0 [m]");
+    if (!(neighbourMass >= 0.0) || !std::isfinite(neighbourMass))
+        throw std::invalid_argument("neighbourMass must be finite and >= 0 [kg]");
     body.validate();
     if (boardContact) board.validate();
     integrator.validate();
@@ -41,11 +56,16 @@ void PatientOnArrayOptions::validate() const {
 struct PatientOnArray::Impl {
     std::unique_ptr<body::BodyModel> model;
     std::unique_ptr<BodyParticipant> body;
-    std::vector<std::unique_ptr<Bag>> bags;
-    std::vector<int> bagIndices;       // ArrayBag index per participant
-    std::vector<ShapeBagPair> pairs;   // shape = segment
-    std::vector<int> linkParticipant;  // per link
-    std::vector<Link> links;           // per pair
+    ArrayParticipants fe;               // finite-element bags and modules
+    std::vector<std::unique_ptr<ReducedBag>> reducedBags;
+    std::vector<Bag*> participants;     // what the coupling advances
+    std::vector<Bag*> bags;             // per coupled bag: a participant or a ModuleBag
+    std::vector<std::vector<int>> modules;  // per participant: its bags (positions in bags)
+    bool grouped = false;               // neighbourContact
+    std::vector<int> bagIndices;        // ArrayBag index per coupled bag
+    std::vector<ShapeBagPair> pairs;    // shape = segment
+    std::vector<int> pairBag;           // per pair: the bag's position in bags
+    std::vector<Link> links;            // per pair, in bag terms
     std::unique_ptr<Coupling> coupling;
     const body::PlaneSupport* board = nullptr;  // the body's bed board (owned by the model)
     double clearance = 0.0;
@@ -129,25 +149,40 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
 
     // The bags that some shape may touch; each pair gets its own bag shape (bags advance on
     // different threads and set their shapes' poses) and its own body shape (one link each).
-    std::vector<int> participantOf(cells.size(), -1);
+    std::vector<int> positionOf(cells.size(), -1);
     for (const ShapeBagPair& p : m.pairs)
-        if (participantOf[p.bag] < 0) {
-            participantOf[p.bag] = int(m.bagIndices.size());
+        if (positionOf[p.bag] < 0) {
+            positionOf[p.bag] = int(m.bagIndices.size());
             m.bagIndices.push_back(p.bag);
         }
+    const int numBags = int(m.bagIndices.size());
     // Parked well clear above the flat panels while the bags inflate.
     const double parked = options.bag.geometry.height + 0.5;
     model.setPosture(state, parked);
     model.getSystem().realize(state, SimTK::Stage::Position);
     const bool reduced = options.model == PatientOnArrayOptions::BagModel::Reduced;
-    for (int b : m.bagIndices) {
-        if (reduced) {
-            m.bags.push_back(std::make_unique<ReducedBag>(options.reduced, cells[b].X_GB));
-        } else {
-            bags::AirbagSpec bs = options.bag;
-            bs.X_GB = cells[b].X_GB;
-            m.bags.push_back(std::make_unique<BagParticipant>(std::make_unique<bags::Airbag>(bs)));
+    // The participants: one per bag, or with neighbourContact one per group of bags whose
+    // inflated extents may meet (cosim/NeighbourModules.h).
+    m.grouped = options.neighbourContact;
+    std::vector<int> participantOf;
+    if (reduced) {
+        for (int i = 0; i < numBags; ++i) {
+            m.reducedBags.push_back(
+                std::make_unique<ReducedBag>(options.reduced, cells[m.bagIndices[i]].X_GB));
+            m.participants.push_back(m.reducedBags.back().get());
+            m.bags.push_back(m.reducedBags.back().get());
+            m.modules.push_back({i});
+            participantOf.push_back(i);
         }
+    } else {
+        double mass = options.neighbourMass;
+        for (int b : m.bagIndices) mass = std::max(mass, cells[b].gasMass);
+        m.fe = makeArrayParticipants(cells, m.bagIndices, options.bag, options.neighbourContact,
+                                     options.neighbourMargin, mass);
+        for (auto& p : m.fe.participants) m.participants.push_back(p.get());
+        m.bags = m.fe.bags;
+        m.modules = m.fe.modules;
+        participantOf = m.fe.participantOf;
     }
     std::vector<Link> links;
     std::vector<std::shared_ptr<bags::RigidShape>> probes;  // per pair, for the touch search
@@ -156,26 +191,28 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         const auto seg = static_cast<body::Segment>(p.shape);
         BagShapeOfBody b = makeBagShape(model.getContactShape(seg));
         b.shape->setPose(shapePose(model, state, p.shape, b.X_BS));
-        const int part = participantOf[p.bag];
-        const int local =
-            reduced ? static_cast<ReducedBag&>(*m.bags[part]).addShape(b.shape)
-                    : static_cast<BagParticipant&>(*m.bags[part]).updAirbag().addShape(
-                          b.shape, options.contact);
+        const int pos = positionOf[p.bag];
+        const int part = participantOf[size_t(pos)];
+        int local = 0, bagLocal = 0;
+        if (reduced)
+            local = bagLocal = m.reducedBags[size_t(pos)]->addShape(b.shape);
+        else
+            bagLocal = m.fe.addShape(pos, b.shape, options.contact, &local);
         const int bodyShape = m.body->addShape(model.getMobilizedBodyIndex(seg), b.X_BS);
         const body::ContactShape& cs = model.getContactShape(seg);
         const double reach = (cs.getBoundingCentre() - b.X_BS.p()).norm() + cs.getBoundingRadius();
         links.push_back(Link{bodyShape, part, local, reach});
-        m.linkParticipant.push_back(part);
+        m.links.push_back(Link{bodyShape, pos, bagLocal, reach});
+        m.pairBag.push_back(pos);
         probes.push_back(makeBagShape(model.getContactShape(seg)).shape);
         X_BS.push_back(b.X_BS);
     }
-    for (size_t i = 0; i < m.bags.size(); ++i) {
-        const double mass = cells[m.bagIndices[i]].gasMass;
-        if (reduced)
-            static_cast<ReducedBag&>(*m.bags[i]).setGasMass(mass);
-        else
-            static_cast<BagParticipant&>(*m.bags[i]).updAirbag().inflate(mass);
-    }
+    std::vector<double> masses;
+    for (int b : m.bagIndices) masses.push_back(cells[b].gasMass);
+    if (reduced)
+        for (size_t i = 0; i < masses.size(); ++i) m.reducedBags[i]->setGasMass(masses[i]);
+    else
+        m.fe.inflate(masses);
 
     // The lowest clearance at which no node of a paired bag lies inside a shape (bisection to
     // 1e-6 m over [0, parked]).
@@ -185,7 +222,7 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         for (size_t i = 0; i < m.pairs.size(); ++i) {
             bags::RigidShape& s = *probes[i];
             s.setPose(shapePose(model, state, m.pairs[i].shape, X_BS[i]));
-            const Eigen::Matrix3Xd& x = m.bags[m.linkParticipant[i]]->getPressurePoints();
+            const Eigen::Matrix3Xd& x = m.bags[m.pairBag[i]]->getPressurePoints();
             for (int n = 0; n < x.cols(); ++n)
                 if (s.calcSignedDistance(x.col(n), nullptr, nullptr) < 0.0) return true;
         }
@@ -199,8 +236,7 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
     m.body->initialize(state);
 
     std::vector<Participant*> ps;
-    for (auto& b : m.bags) ps.push_back(b.get());
-    m.links = links;
+    for (Bag* b : m.participants) ps.push_back(b);
     m.coupling = std::make_unique<Coupling>(*m.body, ps, links, options.coupling);
     m.coupling->initialize();
 }
@@ -222,8 +258,8 @@ double PatientOnArray::getTime() const { return m_impl->coupling->getTime(); }
 
 std::vector<double> PatientOnArray::calcBagForces() const {
     std::vector<double> f(m_impl->bags.size(), 0.0);
-    for (size_t i = 0; i < m_impl->linkParticipant.size(); ++i)
-        f[m_impl->linkParticipant[i]] += m_impl->coupling->getLinkWrench(int(i)).force.z();
+    for (size_t i = 0; i < m_impl->pairBag.size(); ++i)
+        f[m_impl->pairBag[i]] += m_impl->coupling->getLinkWrench(int(i)).force.z();
     return f;
 }
 
@@ -250,7 +286,7 @@ double PatientOnArray::calcEnergy() const {
     SimTK::State s = m.body->getState();
     m.model->getSystem().realize(s, SimTK::Stage::Dynamics);
     double e = m.model->getSystem().calcEnergy(s);
-    for (const auto& b : m.bags) e += b->calcPotentialEnergy();
+    for (const Bag* b : m.participants) e += b->calcPotentialEnergy();
     return e;
 }
 
@@ -267,8 +303,8 @@ double PatientOnArray::calcMaxSpeed() const {
 double PatientOnArray::getReleaseClearance() const { return m_impl->clearance; }
 EnvelopeCounts PatientOnArray::getEnvelopeCounts() const {
     EnvelopeCounts sum;
-    for (const auto& b : m_impl->bags)
-        if (const auto* r = dynamic_cast<const ReducedBag*>(b.get())) {
+    for (const auto& b : m_impl->reducedBags)
+        if (const ReducedBag* r = b.get()) {
             const EnvelopeCounts& e = r->getEnvelopeCounts();
             sum.mass += e.mass, sum.depth += e.depth, sum.radius += e.radius, sum.tilt += e.tilt;
             sum.steps += e.steps;
@@ -284,19 +320,46 @@ const std::vector<ShapeBagPair>& PatientOnArray::getPairs() const { return m_imp
 const std::vector<int>& PatientOnArray::getBagIndices() const { return m_impl->bagIndices; }
 const body::BodyModel& PatientOnArray::getModel() const { return *m_impl->model; }
 const BodyParticipant& PatientOnArray::getBody() const { return *m_impl->body; }
-const Bag& PatientOnArray::getBag(int participant) const {
-    return *m_impl->bags.at(participant);
-}
+const Bag& PatientOnArray::getBag(int bag) const { return *m_impl->bags.at(size_t(bag)); }
 const std::vector<Link>& PatientOnArray::getLinks() const { return m_impl->links; }
-Bag& PatientOnArray::updBag(int participant) { return *m_impl->bags.at(participant); }
+Bag& PatientOnArray::updBag(int bag) { return *m_impl->bags.at(size_t(bag)); }
+const std::vector<std::vector<int>>& PatientOnArray::getModules() const {
+    return m_impl->modules;
+}
+
+std::vector<double> PatientOnArray::calcNeighbourOverlaps() const {
+    const Impl& m = *m_impl;
+    const size_t n = m.bags.size();
+    std::vector<double> out(n, 0.0);
+    std::vector<Eigen::Matrix3Xd> x(n);
+    for (size_t i = 0; i < n; ++i)
+        if (m.bags[i]->getFilmMesh()) x[i] = m.bags[i]->getPressurePoints();
+    for (size_t i = 0; i < n; ++i) {
+        const bags::Mesh* fi = m.bags[i]->getFilmMesh();
+        if (!fi) continue;
+        for (size_t j = i + 1; j < n; ++j) {
+            const bags::Mesh* fj = m.bags[j]->getFilmMesh();
+            if (!fj) continue;
+            const double d = calcFilmOverlap(*fi, x[i], *fj, x[j]);
+            out[i] = std::max(out[i], d);
+            out[j] = std::max(out[j], d);
+        }
+    }
+    return out;
+}
 Coupling& PatientOnArray::updCoupling() { return *m_impl->coupling; }
 
 void PatientOnArray::saveState(bags::StateWriter& w) const {
     const Impl& m = *m_impl;
     w.tag("patient on array");
     w.vec(m.bagIndices);
+    if (m.grouped) {  // the modules (a checkpoint without them is of bags solved alone)
+        w.tag("neighbour modules");
+        w.pod(std::uint64_t(m.modules.size()));
+        for (const std::vector<int>& mod : m.modules) w.vec(mod);
+    }
     m.body->saveState(w);
-    for (const auto& b : m.bags) b->saveState(w);
+    for (const Bag* b : m.participants) b->saveState(w);
     m.coupling->saveState(w);
 }
 
@@ -308,14 +371,23 @@ void PatientOnArray::loadState(bags::StateReader& r) {
     if (indices != m.bagIndices)
         throw bags::StateError(
             "checkpoint: other bags take part (the patient or the array differs)");
+    if (m.grouped) {
+        r.tag("neighbour modules");
+        std::vector<std::vector<int>> modules(size_t(r.pod<std::uint64_t>()));
+        for (std::vector<int>& mod : modules) r.vec(mod);
+        if (modules != m.modules)
+            throw bags::StateError(
+                "checkpoint: the neighbouring bags were grouped into other modules (the "
+                "array or array.neighbour_margin differs)");
+    }
     m.body->loadState(r);
-    for (auto& b : m.bags) b->loadState(r);
+    for (Bag* b : m.participants) b->loadState(r);
     m.coupling->loadState(r);
     resetCaches();
 }
 
 void PatientOnArray::resetCaches() {
-    for (auto& b : m_impl->bags) b->resetCaches();
+    for (Bag* b : m_impl->participants) b->resetCaches();
 }
 
 }  // namespace cosim

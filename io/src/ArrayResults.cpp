@@ -175,7 +175,7 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info
         if (!f) throw std::runtime_error("cannot write " + dir.getFile(name).string());
     };
     open(d.regions, kRegionsCsv, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N");
-    open(d.bags, kBagsCsv, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N");
+    open(d.bags, kBagsCsv, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm");
     open(d.tilt, kTiltCsv, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
     open(d.body, kBodyCsv, "time_s,com_x_mm,com_y_mm,com_z_mm");
     open(d.events, kEventsCsv, "time_s,event");
@@ -255,7 +255,7 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
     for (const cosim::BagReading& b : f.bags)
         d.bags << t << "," << b.bag << "," << fmt("%.6f", b.gasMass * 1e3) << ","
                << fmt("%.5f", b.gaugePressure * 1e-3) << "," << fmt("%.6f", b.volume * 1e3)
-               << "," << fmt("%.5f", b.force) << "\n";
+               << "," << fmt("%.5f", b.force) << "," << fmt("%.3f", b.overlap * 1e3) << "\n";
     d.tilt << t << "," << fmt("%.4f", f.pelvisTilt * 180.0 / kPi) << ","
            << fmt("%.4f", f.thoraxTilt * 180.0 / kPi) << "\n";
     d.body << t << "," << fmt("%.3f", 1e3 * f.centreOfMass.x()) << ","

@@ -162,7 +162,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     s.checkKeys({"rows", "columns", "gas_mass"},
                 {"row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
-                 "groups", "board_contact"});
+                 "groups", "board_contact", "neighbour_contact", "neighbour_margin"});
     cosim::ArrayLayout& a = sc.options.layout;
     a.rows = s.get("rows").asInteger();
     a.columns = s.get("columns").asInteger();
@@ -201,6 +201,22 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     // The bed board under the bags, as the body feels it where it reaches it (between bags,
     // through a slack or bottomed bag, beside the array): PatientOnArrayOptions::boardContact.
     sc.options.boardContact = s.getBool("board_contact", true);
+    // Neighbouring bags touch: the bags that may meet once inflated are solved as one module
+    // (PatientOnArrayOptions::neighbourContact, docs/cosim.md#contact-between-neighbouring-bags).
+    sc.options.neighbourContact = s.getBool("neighbour_contact", false);
+    sc.options.neighbourMargin =
+        s.getQuantity("neighbour_margin", D::Length, sc.options.neighbourMargin);
+    checkBetween(s, "neighbour_margin", sc.options.neighbourMargin, 0.0, 0.1, "mm",
+                 "added on every side of an inflated bag's extent when grouping neighbours");
+    if (sc.options.neighbourContact && !sc.options.bag.selfContact)
+        s.fail("neighbour_contact",
+               "true needs bag.self_contact: true (the films of neighbouring bags meet through "
+               "the bags' self-contact); valid: false, or turn bag.self_contact on");
+    if (sc.options.neighbourContact &&
+        sc.options.model != cosim::PatientOnArrayOptions::BagModel::FiniteElement)
+        s.fail("neighbour_contact",
+               "true needs the finite-element bags (the reduced model has no film to touch); "
+               "valid: false with bag.model reduced");
     a.gasMass = s.getQuantity("gas_mass", D::Mass);
     checkPositive(s, "gas_mass", a.gasMass, "g");
     if (s.has("groups")) {
@@ -274,6 +290,9 @@ void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
         if (e.has("target")) {
             c.kind = cosim::GasCommand::Kind::Target;
             c.targetMass = e.getQuantity("target", D::Mass);
+            // The grouping of neighbours measures a bag inflated to the largest mass it is
+            // taken to.
+            sc.options.neighbourMass = std::max(sc.options.neighbourMass, c.targetMass);
             checkPositive(e, "target", c.targetMass, "g");
             if (!e.has("rate"))
                 e.fail("rate", "missing: a target is reached at a stated mass flow, e.g. rate: "

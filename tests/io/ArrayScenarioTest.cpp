@@ -121,6 +121,37 @@ TEST(ArrayScenario, TheBodyOnTheFilmsIsFrictionlessByDefaultAndTakesACoulombCoef
     }
 }
 
+TEST(ArrayScenario, NeighbourContactIsOffByDefaultAndNeedsTheBagsSelfContact) {
+    const io::PatientOnArrayScenario plain = read(kBase);
+    EXPECT_FALSE(plain.options.neighbourContact);
+    EXPECT_DOUBLE_EQ(plain.options.neighbourMargin, 0.003);
+    std::string on = kBase;
+    on.replace(on.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm, self_contact: true}");
+    on.insert(on.find("  groups:"), "  neighbour_contact: true\n  neighbour_margin: 8 mm\n");
+    const io::PatientOnArrayScenario sc = read(on);
+    EXPECT_TRUE(sc.options.neighbourContact);
+    EXPECT_DOUBLE_EQ(sc.options.neighbourMargin, 0.008);
+    // Without the bags' self-contact (off by default) the films cannot meet: refused there.
+    std::string noSelf = kBase;
+    noSelf.insert(noSelf.find("  groups:"), "  neighbour_contact: true\n");
+    const io::InputError e = readError(noSelf);
+    EXPECT_EQ(e.getLine(), 12);
+    EXPECT_EQ(e.getKey(), "array.neighbour_contact");
+    EXPECT_NE(e.getMessage().find("needs bag.self_contact: true"), std::string::npos) << e.what();
+    std::string badMargin = on;
+    badMargin.replace(badMargin.find("8 mm"), 4, "-1 mm");
+    const io::InputError m = readError(badMargin);
+    EXPECT_EQ(m.getKey(), "array.neighbour_margin");
+    // The layout's own located errors are unchanged with the key on.
+    std::string overlap = on;
+    overlap.replace(overlap.find("105 mm"), 6, "90 mm");
+    const io::InputError o = readError(overlap);
+    EXPECT_EQ(o.getLine(), 7);
+    EXPECT_EQ(o.getKey(), "array.row_pitch");
+    EXPECT_NE(o.getMessage().find("would overlap; valid: 100 mm or more"), std::string::npos)
+        << o.what();
+}
+
 TEST(ArrayScenario, OverlappingRowsAreRefusedAtTheRowPitch) {
     std::string text = kBase;
     text.replace(text.find("105 mm"), 6, "90 mm");

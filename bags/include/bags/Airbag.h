@@ -163,6 +163,10 @@ public:
     /// Adds a rigid shape that may touch the bag's free nodes (shared: the caller may keep
     /// it, but moves it only through setShapePose). Returns its index.
     int addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options);
+    /// As addShape(), the shape touching only bag b's free nodes (a module of several bags,
+    /// AirbagSpec::cluster): its wrench and contact pressures are then that bag's alone.
+    int addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options,
+                 int bag);
     int getNumShapes() const;
 
     // --- gas

@@ -49,6 +49,9 @@ struct BagReading {
     double gaugePressure = 0.0;  ///< [Pa] volume-weighted over the chambers
     double volume = 0.0;         ///< [m^3] total
     double force = 0.0;          ///< [N] vertical force of the bag on the body
+    /// [m] largest depth by which its film and a neighbour's overlap (pass through each
+    /// other): PatientOnArray::calcNeighbourOverlaps(); 0 for bags without a film.
+    double overlap = 0.0;
 };
 
 /// One reading per participant (PatientOnArray::getBagIndices() order).

@@ -36,6 +36,11 @@ class Bag : public Participant {
     /// Area [m^2] each point carries (N).
     virtual Eigen::VectorXd getPressureAreas() const = 0;
 
+    /// The bag's film as a mesh whose nodes are getPressurePoints()' columns (triangles,
+    /// panels, chambers; its X is the reference state), or null for a bag without a film
+    /// (ReducedBag). Used to draw the bags and to measure how far neighbours' films overlap.
+    virtual const bags::Mesh* getFilmMesh() const { return nullptr; }
+
     /// The bag's potential energy [J] at the current state (membrane, gas, its weight,
     /// contact with the shapes), up to a constant: for energy balances.
     virtual double calcPotentialEnergy() const = 0;

@@ -40,6 +40,7 @@ class BagParticipant : public Bag {
     const Eigen::Matrix3Xd& getPressurePoints() const override;
     Eigen::VectorXd getPressureAreas() const override;
     double calcPotentialEnergy() const override;
+    const bags::Mesh* getFilmMesh() const override { return &m_bag->getMesh(); }
     /// The airbag's saveState(), loadState(), resetCaches().
     void saveState(bags::StateWriter& w) const override { m_bag->saveState(w); }
     void loadState(bags::StateReader& r) override { m_bag->loadState(r); }

@@ -58,6 +58,19 @@ struct PatientOnArrayOptions {
         o.damping = 2.0e5;
         return o;
     }
+    /// Neighbouring bags touch (docs/cosim.md#contact-between-neighbouring-bags): the bags
+    /// whose inflated extents, grown by neighbourMargin, meet are solved as one module (one
+    /// participant, a bags::Airbag with AirbagSpec::cluster), their films kept apart by the
+    /// module's self-contact (bag.selfContact must be on; finite-element bags only). Off:
+    /// every bag is its own participant and neighbours' films pass through each other.
+    bool neighbourContact = false;
+    /// [m] added on every side of a bag's inflated extent when grouping (the patient squashes
+    /// a bag outwards, gas flows in).
+    double neighbourMargin = 0.003;
+    /// [kg] the grouping measures a bag's inflated extent (calcInflatedExtent()) at the
+    /// largest gas mass of the coupled bags in the layout, or at this mass if larger (a
+    /// scenario gives the largest target mass of its gas commands).
+    double neighbourMass = 0.0;
     BodyIntegratorOptions integrator;
     CouplingOptions coupling;
     /// @throws std::invalid_argument naming the option (the layout's errors name their keys).
@@ -118,17 +131,26 @@ class PatientOnArray {
     EnvelopeCounts getEnvelopeCounts() const;
 
     const std::vector<ShapeBagPair>& getPairs() const;  ///< shape = segment, bag = ArrayBag index
-    const std::vector<int>& getBagIndices() const;      ///< ArrayBag index per participant
-    /// The coupling's links, one per pair (link i is pair i): body shape, participant, and the
-    /// shape's index on that participant (for its contact pressures).
+    const std::vector<int>& getBagIndices() const;      ///< ArrayBag index per coupled bag
+    /// One link per pair (link i is pair i), in bag terms: body shape, the bag (its position
+    /// in getBagIndices()), and the shape's index on that bag (getBag(), for its contact
+    /// pressures). Without neighbourContact these are the coupling's own links.
     const std::vector<Link>& getLinks() const;
     const body::BodyModel& getModel() const;
     const BodyParticipant& getBody() const;
-    /// Participant i's bag: a BagParticipant (finite elements) or a ReducedBag, as
-    /// PatientOnArrayOptions::model says.
-    const Bag& getBag(int participant) const;
-    /// The participant's bag, to set its gas flow between steps (GasSchedule::apply()).
-    Bag& updBag(int participant);
+    /// Coupled bag i (getBagIndices() order): a BagParticipant (finite elements), a ReducedBag
+    /// (PatientOnArrayOptions::model), or with neighbourContact a ModuleBag (a bag of a
+    /// module: it reads and sets its module's state; the module is the participant).
+    const Bag& getBag(int bag) const;
+    /// Coupled bag i, to set its gas flow between steps (GasSchedule::apply()).
+    Bag& updBag(int bag);
+    /// The coupling's participants as groups of coupled bags (positions in getBagIndices()):
+    /// one bag each, or with neighbourContact the bags of each module.
+    const std::vector<std::vector<int>>& getModules() const;
+    /// Largest depth [m] by which a node of one coupled bag's film lies inside a neighbouring
+    /// coupled bag, per coupled bag, at the current state (calcFilmOverlap() with every bag
+    /// whose nodes' bounding box meets its own); 0 for bags without a film.
+    std::vector<double> calcNeighbourOverlaps() const;
     Coupling& updCoupling();
 
     // --- checkpoints (bags/StateStream.h), between steps
