@@ -148,34 +148,6 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
         << readLog(dir / "again.log");
 }
 
-TEST(Resume, NeighbourModulesStoppedAndResumedEndByteIdentical) {
-    // The coarse settle with neighbouring bags grouped into modules (array.neighbour_contact):
-    // the checkpoint holds the modules (and refuses other ones); resumed, every CSV file
-    // (bags.csv's overlap_mm included) is the never-stopped run's, byte for byte.
-    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/neighbours";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    const std::string scenario = "\"" + kScenarios + "supine-on-array-coarse.yaml\"";
-    const std::string sets =
-        " --set array.neighbour_contact=true --set run.settle_time='0.06 s'"
-        " --set output.checkpoint_every='0.03 s' --quiet";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets,
-                        dir / "whole.log"),
-              0)
-        << readLog(dir / "whole.log");
-    const fs::path out = dir / "stopped";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
-                            " --stop-after '0.04 s'",
-                        dir / "stopped.log"),
-              130)
-        << readLog(dir / "stopped.log");
-    ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
-    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log"), 0)
-        << readLog(dir / "resumed.log");
-    EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
-    expectSameCsvFiles(dir / "whole", out);
-}
-
 TEST(Resume, PneumaticTurnWithNoisySensorsEndsByteIdentical) {
     const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/pneumatic";
     fs::remove_all(dir);
