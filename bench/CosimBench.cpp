@@ -270,8 +270,12 @@ int main(int argc, char** argv) {
     std::printf("\n");
     for (int k = 0; k < topBags && k < int(order.size()); ++k) {
         const int i = order[k];
-        std::printf("  bag %3d (array %3d): %7.2f s, %6ld Newton iterations\n", i,
-                    poa.getBagIndices()[i], all.participantSeconds[i],
+        // A participant is one bag, or with array.neighbour_contact a module of bags.
+        std::string arrayBags;
+        for (int b : poa.getModules()[size_t(i)])
+            arrayBags += (arrayBags.empty() ? "" : " ") + std::to_string(poa.getBagIndices()[size_t(b)]);
+        std::printf("  participant %3d (array %s): %7.2f s, %6ld Newton iterations\n", i,
+                    arrayBags.c_str(), all.participantSeconds[i],
                     all.participantIterations[i]);
     }
     std::printf("  the bags carry %.2f N of his %.2f N (%+.3f %%); load average at end: %s\n",
