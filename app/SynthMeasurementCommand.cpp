@@ -56,6 +56,8 @@ const char* kHelp =
     "                       in proportion to the gauge pressure; also mg/s/kPa)\n"
     "  heat-exchange        time_constant [20 s] (adiabatic gas relaxing to the room)\n"
     "  bed-compliance       compliance [0.1 mm/N] (the bed board under the bag on a spring)\n"
+    "  viscoelasticity      g [0.2], tau [20 s] (one Prony term on the film's stress;\n"
+    "                       the scenario's film constants are its long-term law)\n"
     "  load-cell-gain       gain [0.05] (reads the force times 1 + gain; not among the\n"
     "                       diagnosis's candidates: an effect outside its library)\n"
     "\n"

@@ -125,6 +125,7 @@ void AirbagSpec::validate() const {
             bendingStiffness, "use 0 (a pure membrane) to 1 N m");
     require(gravity.allFinite(), "gravity", gravity.norm(), "use a finite acceleration");
     gas.validate();
+    prony.validate();
     if (connection == Connection::Orifice) orifice.validate();
     if (connection == Connection::Orifice && gas.heatTimeConstant > 0.0)
         throw std::invalid_argument(
@@ -166,6 +167,7 @@ struct Airbag::Snapshot {
     Eigen::Matrix3Xd x;
     std::vector<GasChamber> gases;
     std::vector<RigidContact::History> history;
+    ViscousState viscous;  // the film's internal variables (empty without Prony terms)
     std::vector<Eigen::Isometry3d> poses;
     double time = 0.0;
 };
@@ -395,6 +397,7 @@ struct Airbag::Impl {
         s->x = x;
         s->gases = copyGases();
         s->history = model->getContactHistory();
+        if (model->hasProny()) s->viscous = model->getViscousState();
         for (const Shape& sh : shapes) s->poses.push_back(sh.shape->getPose());
         s->time = time;
         return s;
@@ -408,6 +411,12 @@ struct Airbag::Impl {
             w.pod(std::uint64_t(h.anchor_S.size()));
             for (const Vec3& a : h.anchor_S) w.pod(a.x()), w.pod(a.y()), w.pod(a.z());
             w.vec(h.hasAnchor);
+        }
+        if (model->hasProny()) {  // only then: checkpoints of an elastic bag are as before
+            w.tag("viscous");
+            w.mat(s.viscous.branchStrain);
+            w.mat(s.viscous.strain);
+            w.pod(s.viscous.stepTime);
         }
         w.pod(std::uint64_t(s.poses.size()));
         for (const Eigen::Isometry3d& X : s.poses) w.pose(X);
@@ -433,6 +442,13 @@ struct Airbag::Impl {
             }
             r.vecOfSize(h.hasAnchor, h.anchor_S.size(), "nodes of a contact");
         }
+        if (model->hasProny()) {
+            r.tag("viscous");
+            r.matOfCols(s->viscous.branchStrain, s->viscous.branchStrain.cols(),
+                        "viscous branches (Prony terms x elements)");
+            r.matOfCols(s->viscous.strain, s->viscous.strain.cols(), "elements of the film");
+            r.pod(s->viscous.stepTime);
+        }
         const auto np = r.pod<std::uint64_t>();
         if (np != s->poses.size()) StateReader::mismatch("shapes", np, s->poses.size());
         for (Eigen::Isometry3d& X : s->poses) X = r.pose();
@@ -443,6 +459,7 @@ struct Airbag::Impl {
         x = s.x;
         setGases(s.gases);
         model->setContactHistory(s.history);
+        if (model->hasProny()) model->setViscousState(s.viscous);
         for (size_t i = 0; i < shapes.size(); ++i) shapes[i].shape->setPose(s.poses[i]);
         time = s.time;
     }
@@ -756,11 +773,14 @@ struct Airbag::Impl {
     bool solveSubstep(const std::vector<Eigen::Isometry3d>& from, double s1, double dt,
                       AdvanceSummary* out) {
         const std::shared_ptr<Snapshot> before = snapshot();
-        // Nothing to solve when no gas moves and every shape that moves touches the bag
-        // neither before nor after: the energy of the state is unchanged, so is the state.
+        // The film's step potential over dt (viscoelastic film; restored with `before`).
+        model->beginViscousStep(dt);
+        // Nothing to solve when no gas moves, the film has no strained viscous branch to relax
+        // over the time, and every shape that moves touches the bag neither before nor after: the
+        // energy of the state is unchanged, so is the state.
         // A bag nothing touches costs next to nothing, and a released bag that was accepted
         // with stabilisation springs is not re-solved just because a shape moved away.
-        const bool gasStill = isGasStill(dt);
+        const bool gasStill = isGasStill(dt) && (dt == 0.0 || model->isViscouslyRelaxed());
         bool untouched = gasStill;
         for (size_t i = 0; i < shapes.size() && untouched; ++i)
             untouched = shapes[i].contact->getNumActive(x) == 0;
@@ -778,6 +798,7 @@ struct Airbag::Impl {
                 ++out->substeps;
                 out->residual = untouchedResidual;
                 out->stabilizationEnergy = 0.0;
+                model->endViscousStep(x);
                 time += dt;
                 return true;
             }
@@ -818,6 +839,7 @@ struct Airbag::Impl {
             ++out->substeps;
             out->residual = untouchedResidual;
             out->stabilizationEnergy = 0.0;
+            model->endViscousStep(x);
             time += dt;
             return true;
         }
@@ -828,6 +850,7 @@ struct Airbag::Impl {
         ++out->substeps;
         out->residual = sum.residualNorm;
         out->stabilizationEnergy = stab;
+        model->endViscousStep(x);
         time += dt;
         return true;
     }
@@ -891,6 +914,7 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     if (spec.density > 0.0 && spec.gravity.squaredNorm() > 0.0)
         m.model->setGravity(spec.density, spec.gravity);
     if (spec.bendingStiffness > 0.0) m.model->setBendingStiffness(spec.bendingStiffness);
+    if (spec.prony.isOn()) m.model->setProny(spec.prony);
     m.model->setNumThreads(spec.threads);
     std::vector<char> isSupport(mesh.getNumNodes(), 0);
     for (int n : mesh.supportNodes) isSupport[n] = 1;
@@ -1038,8 +1062,11 @@ void Airbag::changeGasMass(const std::vector<double>& masses) {
     Impl& m = *m_impl;
     if (!m.inflated) throw std::logic_error("Airbag::changeGasMass before inflate");
     checkMasses(masses, m.numBags, "Airbag::changeGasMass");
+    // Quasi-static (no time, infinitely slow): the film's long-term law, ending relaxed.
+    m.model->beginViscousStep(std::numeric_limits<double>::infinity());
     m.rampGasMasses(masses);
     if (m.spec.gas.heatTimeConstant > 0.0) m.settleAtRoomTemperature();
+    m.model->resetViscousState(m.x);
     m.committed = m.snapshot();
     m.forgetIncrement();
 }
@@ -1263,7 +1290,9 @@ Vec3 Airbag::calcBedForce() const {
     return f;
 }
 
-bool Airbag::isGasStill() const { return m_impl->isGasStill(1.0); }
+bool Airbag::isGasStill() const {
+    return m_impl->isGasStill(1.0) && m_impl->model->isViscouslyRelaxed();
+}
 
 int Airbag::getNumChambers() const { return static_cast<int>(m_impl->mesh.chambers.size()); }
 

@@ -50,6 +50,7 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     spec.thickness = o.thickness;
     spec.density = o.density;
     spec.wrinklingResidual = o.wrinklingResidual;
+    spec.prony = o.prony;
     spec.bendingStiffness = o.bendingStiffness;
     spec.gravity = o.gravity ? Vec3(0, 0, -9.81) : Vec3::Zero();
     spec.gas = o.gas;
@@ -116,6 +117,11 @@ void LoadTestOptions::validate() const {
     require(density >= 0.0, "density", density, "use a density >= 0 kg/m^3");
     require(wrinklingResidual > 0.0 && wrinklingResidual < 0.1, "wrinklingResidual",
             wrinklingResidual, "use 0 < residual < 0.1 (e.g. 1e-3)");
+    try {
+        prony.validate();
+    } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(std::string("load test option 'prony': ") + e.what());
+    }
     gas.validate();
     if (gasMasses.empty()) throw std::invalid_argument("load test option 'gasMasses' is empty");
     for (double m : gasMasses)

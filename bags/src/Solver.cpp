@@ -268,7 +268,21 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
             Eigen::Vector3d S;
             Eigen::Matrix3d D;
             const double vol = m_area0[e] * m_thickness;
-            energy += vol * mat.calcEnergy(C, wantG || wantH ? &S : nullptr, wantH ? &D : nullptr);
+            double w = mat.calcEnergy(C, wantG || wantH ? &S : nullptr, wantH ? &D : nullptr);
+            if (m_viscous &&
+                !addBranches(e, C, &w, wantG || wantH ? &S : nullptr, wantH ? &D : nullptr)) {
+#pragma omp critical
+                {
+                    if (!invalid || e < badElement) badElement = e;
+                    invalid = true;
+                }
+                if (wantH)
+                    std::fill(acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e),
+                              acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e + 1),
+                              Triplet(0, 0, 0.0));
+                continue;
+            }
+            energy += vol * w;
             if (!wantG && !wantH) continue;
             Mat2 Sm;
             Sm << S(0), S(2), S(2), S(1);
@@ -393,8 +407,7 @@ Eigen::VectorXd MembraneModel::calcPrincipalStress(const Eigen::Matrix3Xd& x) co
         const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
         const Mat32 F = calcDeformationGradient(m_mesh.tris, e, sg, x);
         const Mat2 C = F.transpose() * F;
-        Eigen::Vector3d S;
-        m_material->calcEnergy(C, &S, nullptr);
+        const Eigen::Vector3d S = calcElementStress(x, e);
         Mat2 Sm;
         Sm << S(0), S(2), S(2), S(1);
         // Cauchy stress in the deformed plane: sigma = J^-1 F S F^T with J = 1 (incompressible):
@@ -404,6 +417,147 @@ Eigen::VectorXd MembraneModel::calcPrincipalStress(const Eigen::Matrix3Xd& x) co
         s(e) = es.eigenvalues().real().maxCoeff();
     }
     return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Viscoelasticity (bags/Viscoelastic.h): one Maxwell branch per Prony term and element
+
+namespace {
+
+// Green strain [E11, E22, E12] (tensor components) of an in-plane C.
+Eigen::Vector3d calcGreenStrain(const Mat2& C) {
+    return Eigen::Vector3d(0.5 * (C(0, 0) - 1.0), 0.5 * (C(1, 1) - 1.0), 0.5 * C(0, 1));
+}
+
+}  // namespace
+
+Mat2 MembraneModel::calcElementC(const Eigen::Matrix3Xd& x, int e) const {
+    const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
+    const Mat32 F = calcDeformationGradient(m_mesh.tris, e, sg, x);
+    return F.transpose() * F;
+}
+
+bool MembraneModel::addBranches(int e, const Mat2& C, double* W, Eigen::Vector3d* S,
+                                Eigen::Matrix3d* D) const {
+    const int nt = m_mesh.getNumTris();
+    const Eigen::Vector3d E = calcGreenStrain(C);
+    for (size_t i = 0; i < m_viscousPhi.size(); ++i) {
+        const double phi = m_viscousPhi[i];
+        if (!(phi > 0.0)) continue;  // no branch (g = 0) or a quasi-static step
+        // The branch's elastic strain at the end of the step, linear in E: q = phi E + c. Its
+        // energy (k / phi) W_L(I + 2 q) has the stress k S_L(I + 2 q) and the tangent
+        // k phi D_L(I + 2 q) (dq/dE = phi).
+        const Eigen::Vector3d q = phi * E + m_viscousOffset.col(int(i) * nt + e);
+        Mat2 Cb;
+        Cb << 1.0 + 2.0 * q(0), 2.0 * q(2), 2.0 * q(2), 1.0 + 2.0 * q(1);
+        if (!(Cb.determinant() > 1e-12)) return false;
+        Eigen::Vector3d Sb;
+        Eigen::Matrix3d Db;
+        const double wb = m_material->calcEnergy(Cb, S ? &Sb : nullptr, D ? &Db : nullptr);
+        const double weight = m_viscousWeight[i];  // k / phi
+        *W += weight * wb;
+        if (S) *S += weight * phi * Sb;
+        if (D) *D += weight * phi * phi * Db;
+    }
+    return true;
+}
+
+void MembraneModel::setProny(const PronySeries& prony) {
+    prony.validate();
+    m_prony = prony;
+    m_viscous = prony.isOn();
+    m_viscousState = ViscousState();
+    m_viscousOffset.resize(3, 0);
+    m_viscousPhi.clear();
+    m_viscousWeight.clear();
+    m_viscousStepTime = std::numeric_limits<double>::infinity();
+    if (m_viscous) resetViscousState(m_mesh.X);
+}
+
+void MembraneModel::setViscousStep(double dt) {
+    const double ginf = m_prony.getLongTermFraction();
+    m_viscousStepTime = dt;
+    m_viscousPhi.assign(m_prony.terms.size(), 0.0);
+    m_viscousWeight.assign(m_prony.terms.size(), 0.0);
+    for (size_t i = 0; i < m_prony.terms.size(); ++i) {
+        const PronyTerm& t = m_prony.terms[i];
+        if (!(t.g > 0.0)) continue;
+        m_viscousPhi[i] = calcPronyPhi(dt / t.tau);
+        if (m_viscousPhi[i] > 0.0) m_viscousWeight[i] = t.g / ginf / m_viscousPhi[i];
+    }
+}
+
+void MembraneModel::resetViscousState(const Eigen::Matrix3Xd& x) {
+    if (!m_viscous) return;
+    const int nt = m_mesh.getNumTris();
+    ViscousState s;
+    s.branchStrain = Eigen::Matrix3Xd::Zero(3, nt * static_cast<int>(m_prony.terms.size()));
+    s.strain.resize(3, nt);
+    for (int e = 0; e < nt; ++e) s.strain.col(e) = calcGreenStrain(calcElementC(x, e));
+    setViscousState(s);
+}
+
+void MembraneModel::setViscousState(const ViscousState& state) {
+    if (!m_viscous) return;
+    const int nt = m_mesh.getNumTris();
+    const int nk = static_cast<int>(m_prony.terms.size());
+    if (state.branchStrain.cols() != nt * nk || state.strain.cols() != nt)
+        throw std::invalid_argument("MembraneModel::setViscousState: the state is of another "
+                                    "mesh or Prony series");
+    m_viscousState = state;
+    // The potential of the step that ended here: q_i(C) = phi_i E(C) + c gives q_i at the
+    // state's own strain, c = q_i - phi_i E.
+    setViscousStep(state.stepTime);
+    m_viscousOffset.resize(3, nt * nk);
+    for (int i = 0; i < nk; ++i)
+        m_viscousOffset.middleCols(i * nt, nt) =
+            state.branchStrain.middleCols(i * nt, nt) - m_viscousPhi[i] * state.strain;
+}
+
+void MembraneModel::beginViscousStep(double dt) {
+    if (!m_viscous) return;
+    if (!(dt >= 0.0)) throw std::invalid_argument("MembraneModel::beginViscousStep: dt < 0");
+    const int nt = m_mesh.getNumTris();
+    const int nk = static_cast<int>(m_prony.terms.size());
+    setViscousStep(dt);
+    // Over the step the branch's strain q obeys dq/dt = dE/dt - q / tau; with E linear in
+    // time, q(end) = exp(-dt / tau) q(n) + phi (E(end) - E(n)) exactly.
+    m_viscousOffset.resize(3, nt * nk);
+    for (int i = 0; i < nk; ++i) {
+        const double decay = m_viscousPhi[i] > 0.0 ? std::exp(-dt / m_prony.terms[i].tau) : 0.0;
+        m_viscousOffset.middleCols(i * nt, nt) =
+            decay * m_viscousState.branchStrain.middleCols(i * nt, nt) -
+            m_viscousPhi[i] * m_viscousState.strain;
+    }
+}
+
+void MembraneModel::endViscousStep(const Eigen::Matrix3Xd& x) {
+    if (!m_viscous) return;
+    const int nt = m_mesh.getNumTris();
+    const int nk = static_cast<int>(m_prony.terms.size());
+    ViscousState& s = m_viscousState;
+    for (int e = 0; e < nt; ++e) {
+        const Eigen::Vector3d E = calcGreenStrain(calcElementC(x, e));
+        for (int i = 0; i < nk; ++i)
+            s.branchStrain.col(i * nt + e) = m_viscousPhi[i] * E + m_viscousOffset.col(i * nt + e);
+        s.strain.col(e) = E;
+    }
+    s.stepTime = m_viscousStepTime;
+}
+
+bool MembraneModel::isViscouslyRelaxed() const {
+    return !m_viscous || (m_viscousState.branchStrain.array() == 0.0).all();
+}
+
+Eigen::Vector3d MembraneModel::calcElementStress(const Eigen::Matrix3Xd& x, int e) const {
+    const Mat2 C = calcElementC(x, e);
+    Eigen::Vector3d S;
+    double w = m_material->calcEnergy(C, &S, nullptr);
+    if (m_viscous && !addBranches(e, C, &w, &S, nullptr))
+        throw NumericalError("membrane element " + std::to_string(e) +
+                                 ": a viscous branch collapsed (det <= 0)",
+                             -1, -1, e);
+    return S;
 }
 
 }  // namespace bags

@@ -49,6 +49,13 @@ const std::vector<Effect>& getEffects() {
          {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxBedCompliance, 0.1e-3,
            "rig.bed_stiffness (its inverse)"}},
          false},
+        {"viscoelasticity",
+         "the film relaxes (one Prony term on its stress): stiffer while pressed, softer while "
+         "released, a loop that depends on the rate",
+         {{"g", "", 1.0, 0.0, kMaxViscoelasticModulus, 0.2, "membrane.prony[0].g"},
+          {"tau", "s", 1.0, kMinViscoelasticTime, kMaxViscoelasticTime, 20.0,
+           "membrane.prony[0].tau"}},
+         true},
         {"load-cell-gain",
          "the load cell reads the force times 1 + gain (a calibration error)",
          {{"gain", "", 1.0, -RigEffects::kMaxLoadCellGain, RigEffects::kMaxLoadCellGain, 0.05,
@@ -106,6 +113,8 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
         options.gas.heatTimeConstant = values[0];
     } else if (effect.name == "bed-compliance") {
         rig.bedCompliance = values[0];
+    } else if (effect.name == "viscoelasticity") {
+        options.prony.terms = {{values[0], values[1]}};
     } else if (effect.name == "block-friction") {
         options.blockContact.friction = values[0];
     } else {

@@ -82,6 +82,7 @@ const std::vector<KeyAlias>& getAliases() {
         {"wrinklingResidual", "membrane", "wrinkling_residual"},
         {"wrinkling_residual", "membrane", "wrinkling_residual"},
         {"bendingStiffness", "membrane", "bending_stiffness"},
+        {"'prony'", "membrane", "prony"},
         {"ensemble", "test", "ensemble"},
         {"imperfection.amplitude", "airbag", "imperfection"},
         {"bending_stiffness", "membrane", "bending_stiffness"},
@@ -336,6 +337,36 @@ const std::vector<ModelInfo>& getModels() {
     return models;
 }
 
+// membrane.prony: [{g: 0.1, tau: 20 s}, ...], the film's viscoelasticity
+// (docs/materials.md#viscoelasticity): each term located when it is wrong.
+bags::PronySeries readProny(const ScenarioNode& s) {
+    const ScenarioNode list = s.get("prony");
+    const std::vector<ScenarioNode> terms = list.getElements();
+    const std::string example = "e.g. prony: [{g: 0.1, tau: 20 s}]";
+    if (static_cast<int>(terms.size()) > bags::PronySeries::kMaxTerms)
+        s.fail("prony", "has " + std::to_string(terms.size()) + " terms; use 1 to " +
+                            std::to_string(bags::PronySeries::kMaxTerms) + " (" + example + ")");
+    bags::PronySeries p;
+    double sum = 0.0;
+    for (const ScenarioNode& t : terms) {
+        t.checkKeys({"g", "tau"}, {});
+        bags::PronyTerm term;
+        term.g = t.getNumber("g");
+        term.tau = t.getQuantity("tau", D::Time);
+        checkRange(t, "g", term.g, 0, true, 1, false, "",
+                   "the term's relative modulus (of the instantaneous modulus)");
+        checkRange(t, "tau", term.tau, bags::PronySeries::kMinTau, true,
+                   bags::PronySeries::kMaxTau, true, "s", "the term's relaxation time");
+        sum += term.g;
+        if (!(sum <= bags::PronySeries::kMaxSum))
+            t.fail("g", "brings the sum of the relative moduli to " + fmt(sum) +
+                            "; the sum must be at most " + fmt(bags::PronySeries::kMaxSum) +
+                            " (the long-term modulus 1 - sum g stays positive)");
+        p.terms.push_back(term);
+    }
+    return p;
+}
+
 void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
     std::vector<std::string> allConstants;
     std::vector<std::string> modelNames;
@@ -347,7 +378,8 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
     }
     std::vector<std::string> optional = allConstants;
     optional.insert(optional.end(),
-                    {"density", "wrinkling_residual", "extrapolation", "bending_stiffness"});
+                    {"density", "wrinkling_residual", "extrapolation", "bending_stiffness",
+                     "prony"});
     s.checkKeys({"model", "thickness"}, optional);
     const std::string model = s.getChoice("model", modelNames);
     // Beyond the stable range a Yeoh continues linearly in I1 (default) or as its polynomial.
@@ -416,6 +448,7 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
     checkRange(s, "thickness", o.thickness, 0, false, 0.01, true, "mm");
     checkRange(s, "density", o.density, 0, true, kInf, false, "kg/m^3");
     checkRange(s, "wrinkling_residual", o.wrinklingResidual, 0, false, 0.1, false, "");
+    if (s.has("prony")) o.prony = readProny(s);
     // The film's bending stiffness: a moment, `plate` (the homogeneous film's plate value from
     // the material and thickness, also when the key is absent) or 0 (off).
     const std::string bending = getRaw(s, "bending_stiffness");

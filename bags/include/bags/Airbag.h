@@ -37,6 +37,7 @@
 #include <bags/Material.h>
 #include <bags/Mesh.h>
 #include <bags/Solver.h>
+#include <bags/Viscoelastic.h>
 
 #include <Eigen/Geometry>
 
@@ -71,6 +72,10 @@ struct AirbagSpec {
     double thickness = 0.2e-3;           ///< membrane thickness [m]
     double density = 1150.0;             ///< membrane density [kg/m^3]
     double wrinklingResidual = 1e-3;     ///< residual stiffness fraction of slack states
+    /// Viscoelastic film: a Prony series on its stress (`material` is then the long-term law);
+    /// its Maxwell branches relax over advance()'s time, a quasi-static change (inflate,
+    /// changeGasMass) ends relaxed. Empty: elastic. docs/materials.md#viscoelasticity.
+    PronySeries prony;
     /// Bending stiffness of the film [N m] (discrete hinges); 0: a pure membrane.
     double bendingStiffness = 0.0;
     Vec3 gravity = Vec3(0, 0, -9.81);    ///< [m/s^2] in Ground, on the sheet's own weight
@@ -196,7 +201,8 @@ public:
     /// No gas enters or leaves any bag, nor passes an orifice between chambers, nor leaks
     /// (GasOptions::leakConductance), nor exchanges heat with the room
     /// (GasOptions::heatTimeConstant), over the following advance() calls (no flow set, or
-    /// every target reached): only the shapes' poses can change what advance() finds.
+    /// every target reached), and the film has no strained viscous branch that would relax
+    /// (AirbagSpec::prony): only the shapes' poses can change what advance() finds.
     bool isGasStill() const;
 
     // --- the bags of a module (one unless AirbagSpec::cluster)
@@ -218,7 +224,8 @@ public:
     void commit();
     void rollback();
     struct Snapshot;
-    /// A copy of the whole current state (positions, gas, friction history, poses, time).
+    /// A copy of the whole current state (positions, gas, friction history, the film's
+    /// viscous internal variables, poses, time).
     std::shared_ptr<const Snapshot> getSnapshot() const;
     /// Makes a snapshot current (and the commit point).
     void setSnapshot(const std::shared_ptr<const Snapshot>& snapshot);
@@ -226,8 +233,8 @@ public:
 
     // --- checkpoints (bags/StateStream.h)
     /// Writes everything that decides what the bag does next into a checkpoint: the current
-    /// and the committed state (positions, gas, friction history, shape poses and targets,
-    /// time), the gas flows set, the predictor's and warm start's increments, and the
+    /// and the committed state (positions, gas, friction history, the film's viscous internal
+    /// variables when it has Prony terms, shape poses and targets, time), the gas flows set, the predictor's and warm start's increments, and the
     /// self-contact's candidate pairs with their sides. The solver's caches are not written:
     /// call resetCaches() where the checkpoint is taken.
     void saveState(StateWriter& w) const;

@@ -29,6 +29,9 @@ struct LoadTestOptions {
     double thickness = 0.2e-3;          ///< membrane thickness [m]
     double density = 1150.0;            ///< membrane density [kg/m^3] (gravity on the sheet)
     double wrinklingResidual = 1e-3;    ///< residual stiffness fraction of slack states
+    /// Viscoelastic film (AirbagSpec::prony): `material` is the long-term law; the
+    /// Maxwell branches relax over the test's time (block travel / loadingRate). Empty: elastic.
+    PronySeries prony;
     double bendingStiffness = 0.0;      ///< film bending stiffness [N m] (0: pure membrane)
     Imperfection imperfection;          ///< stated geometric imperfection of the bag
     int threads = 0;                    ///< element-loop threads (0: default; results identical)

@@ -14,8 +14,10 @@
 #include <bags/Material.h>
 #include <bags/Mesh.h>
 #include <bags/Types.h>
+#include <bags/Viscoelastic.h>
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -67,8 +69,19 @@ struct SolveSummary {
 
 class MembraneModel;
 
-/// State kept between solves: the last factorisation of the tangent, used to precondition
-/// later Newton systems (a load curve then factors rarely). One per model; not thread safe.
+/// The film's viscoelastic internal variables (MembraneModel::setProny), per element, at one
+/// state: what a snapshot of the bag keeps and a checkpoint writes.
+struct ViscousState {
+    /// Each Maxwell branch's elastic Green strain q_i per term and element, tensor components
+    /// [q11, q22, q12] [-]: column i * triangles + e.
+    Eigen::Matrix3Xd branchStrain;
+    /// The element's Green strain E at the state, [E11, E22, E12] [-].
+    Eigen::Matrix3Xd strain;
+    /// [s] length of the step that ended at this state (+inf: a quasi-static change); it fixes
+    /// the step potential whose equilibrium the state is.
+    double stepTime = std::numeric_limits<double>::infinity();
+};
+
 class SolverWorkspace {
 public:
     SolverWorkspace();
@@ -137,6 +150,32 @@ public:
     void setNumThreads(int threads) { m_threads = threads; }
     int getNumThreads() const { return m_threads; }
 
+    /// Viscoelastic film (bags/Viscoelastic.h): the material is the long-term law, and every
+    /// element carries a Maxwell branch per Prony term. An empty series (or all g = 0)
+    /// switches it off: the energy is then the elastic one, bit for bit. Starts relaxed at the
+    /// reference state.
+    /// @throws std::invalid_argument if the series is invalid.
+    void setProny(const PronySeries& prony);
+    const PronySeries& getProny() const { return m_prony; }
+    bool hasProny() const { return m_viscous; }
+    /// Sets the step potential of a step of dt [s] (+inf: quasi-static) from the current
+    /// internal variables.
+    void beginViscousStep(double dt);
+    /// Advances the internal variables to the end of the step begun last, at x (converged);
+    /// the step potential stays. No-op without Prony terms.
+    void endViscousStep(const Eigen::Matrix3Xd& x);
+    /// Relaxed at x: no branch strain, the quasi-static step's potential.
+    void resetViscousState(const Eigen::Matrix3Xd& x);
+    const ViscousState& getViscousState() const { return m_viscousState; }
+    /// Makes a state current, with the potential of the step that ended there.
+    /// @throws std::invalid_argument if its sizes are not this model's.
+    void setViscousState(const ViscousState& state);
+    /// True if no branch is strained (a relaxed film stays as it is over time).
+    bool isViscouslyRelaxed() const;
+    /// The film's stress S_v [Pa] of triangle e at x under the current step potential (the
+    /// material's stress without Prony terms).
+    Eigen::Vector3d calcElementStress(const Eigen::Matrix3Xd& x, int e) const;
+
     /// Total potential energy and its derivatives at x, added into acc.
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     /// Only the membrane: its elements (strain energy, internal forces, material+geometric
@@ -191,6 +230,21 @@ private:
     std::vector<Eigen::Matrix2d> m_DmInv;
     std::vector<double> m_area0;
     Eigen::VectorXd m_nodalMass;          ///< [kg]
+    // Viscoelasticity (setProny): the series, its state and the current step's potential:
+    // per term phi_i (0: the branch is gone), the branch's energy weight k_i / phi_i, and per
+    // term and element the constant c of the branch strain q_i(C) = phi_i E(C) + c.
+    PronySeries m_prony;
+    bool m_viscous = false;
+    ViscousState m_viscousState;
+    std::vector<double> m_viscousPhi, m_viscousWeight;
+    Eigen::Matrix3Xd m_viscousOffset;
+    double m_viscousStepTime = std::numeric_limits<double>::infinity();
+    void setViscousStep(double dt);
+    /// Adds the branches' energy, stress and tangent of element e at C (false: a branch
+    /// strain with det(I + 2 q) <= 0).
+    bool addBranches(int e, const Mat2& C, double* W, Eigen::Vector3d* S,
+                     Eigen::Matrix3d* D) const;
+    Mat2 calcElementC(const Eigen::Matrix3Xd& x, int e) const;
 };
 
 /// Minimises the model's energy over the free dofs, starting from x (updated in place).

@@ -40,9 +40,18 @@ struct Effect {
 /// an hour).
 inline constexpr double kMaxHeatExchangeTimeConstant = 300.0;
 
+/// Bounds of the film's viscoelasticity as a candidate (one Prony term): its relative modulus
+/// g up to 0.5 (a coated fabric that loses half its stress when held), its relaxation time
+/// from 1 s (about twice the instruments' sample interval: faster, the film is relaxed at every
+/// sample) to 120 s (about twice a tiny-rig test's loading and unloading: slower, the term acts
+/// as a stiffer elastic film over the test).
+inline constexpr double kMaxViscoelasticModulus = 0.5;
+inline constexpr double kMinViscoelasticTime = 1.0;    ///< [s]
+inline constexpr double kMaxViscoelasticTime = 120.0;  ///< [s]
+
 /// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
-/// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance (the library),
-/// load-cell-gain (kept out of it).
+/// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance,
+/// viscoelasticity (the library), load-cell-gain (kept out of it).
 const std::vector<Effect>& getEffects();
 /// The effect of that name, or nullptr.
 const Effect* findEffect(const std::string& name);
@@ -53,7 +62,8 @@ std::string listEffectNames();
 /// rig effects go into `rig`; effects on the bag into `options` (for the flowmeter's bias,
 /// options.gasMasses become `readings` less the offset; for the gas temperature,
 /// options.gas.temperature is raised by its offset; leakage and heat exchange set
-/// options.gas.leakConductance and .heatTimeConstant; bed-compliance rig.bedCompliance).
+/// options.gas.leakConductance and .heatTimeConstant; bed-compliance rig.bedCompliance;
+/// viscoelasticity options.prony, one term).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,
