@@ -349,3 +349,45 @@ TEST(GasSection, LeakageAndHeatExchangeKeysReadInSiAndBadValuesAreLocated) {
     EXPECT_EQ(e.getKey(), "gas.heat_time_constant");
     EXPECT_NE(e.getMessage().find("polytropic"), std::string::npos) << e.what();
 }
+
+// The film's viscoelasticity (docs/scenario-reference.md#membrane): membrane.prony read in SI
+// (times with units), every bad term located at its own key and line.
+TEST(MembraneSection, PronyTermsReadInSiAndBadTermsAreLocated) {
+    const std::string head =
+        "kind: seed-load-test\n"
+        "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
+        "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
+        "membrane:\n"
+        "  model: neo-hookean\n"
+        "  C10: 1 MPa\n"
+        "  thickness: 0.2 mm\n";
+    const io::LoadTestScenario sc = io::readLoadTestScenario(io::ScenarioFile::parse(
+        head + "  prony: [{g: 0.1, tau: 20 s}, {g: 0.25, tau: 2 min}]\n", "film.yaml"));
+    ASSERT_EQ(sc.options.prony.terms.size(), 2u);
+    EXPECT_DOUBLE_EQ(sc.options.prony.terms[0].g, 0.1);
+    EXPECT_DOUBLE_EQ(sc.options.prony.terms[0].tau, 20.0);
+    EXPECT_DOUBLE_EQ(sc.options.prony.terms[1].tau, 120.0);
+    EXPECT_TRUE(io::readLoadTestScenario(io::ScenarioFile::parse(head, "film.yaml"))
+                    .options.prony.terms.empty());
+    auto error = [&](const std::string& prony) {
+        return expectInputError([&] {
+            io::readLoadTestScenario(io::ScenarioFile::parse(head + prony, "film.yaml"));
+        });
+    };
+    io::InputError e = error("  prony:\n    - {g: 0.1, tau: 20 s}\n    - {g: 1.2, tau: 5 s}\n");
+    EXPECT_EQ(e.getKey(), "membrane.prony[1].g");
+    EXPECT_EQ(e.getLine(), 10);
+    EXPECT_NE(e.getMessage().find("must be in [0, 1)"), std::string::npos) << e.what();
+    e = error("  prony: [{g: 0.6, tau: 20 s}, {g: 0.5, tau: 5 s}]\n");
+    EXPECT_EQ(e.getKey(), "membrane.prony[1].g");
+    EXPECT_NE(e.getMessage().find("sum"), std::string::npos) << e.what();
+    e = error("  prony: [{g: 0.1, tau: 20}]\n");
+    EXPECT_EQ(e.getKey(), "membrane.prony[0].tau");
+    EXPECT_NE(e.getMessage().find("has no unit"), std::string::npos) << e.what();
+    e = error("  prony: [{g: 0.1, tau: 0 s}]\n");
+    EXPECT_EQ(e.getKey(), "membrane.prony[0].tau");
+    e = error("  prony: [{g: 0.1}]\n");
+    EXPECT_NE(e.getMessage().find("tau"), std::string::npos) << e.what();
+    e = error("  prony: [{g: 0.1, tau: 20 s, beta: 1}]\n");
+    EXPECT_EQ(e.getKey(), "membrane.prony[0].beta") << e.what();
+}
