@@ -43,8 +43,8 @@ inline constexpr double kMaxHeatExchangeTimeConstant = 300.0;
 /// Bounds of the film's viscoelasticity as a candidate (one Prony term): its relative modulus
 /// g up to 0.5 (a coated fabric that loses half its stress when held), its relaxation time
 /// from 1 s (about twice the instruments' sample interval: faster, the film is relaxed at every
-/// sample) to 120 s (about twice a tiny-rig test's loading and unloading: slower, the term acts
-/// as a stiffer elastic film over the test).
+/// sample) to 120 s (longer than a tiny-rig test's press and release, 38-106 s: slower, the term
+/// acts more and more as a stiffer elastic film over the test).
 inline constexpr double kMaxViscoelasticModulus = 0.5;
 inline constexpr double kMinViscoelasticTime = 1.0;    ///< [s]
 inline constexpr double kMaxViscoelasticTime = 120.0;  ///< [s]
