@@ -253,7 +253,9 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
             const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);
             const Mat32 F = calcDeformationGradient(m_mesh.tris, e, sg, x);
             const Mat2 C = F.transpose() * F;
-            if (!(C.determinant() > 1e-12)) {
+            // A collapsed element (or a viscous branch that cannot be evaluated): recorded,
+            // its Hessian slots zeroed, the element skipped.
+            auto markInvalid = [&] {
 #pragma omp critical
                 {
                     if (!invalid || e < badElement) badElement = e;
@@ -263,6 +265,9 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
                     std::fill(acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e),
                               acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e + 1),
                               Triplet(0, 0, 0.0));
+            };
+            if (!(C.determinant() > 1e-12)) {
+                markInvalid();
                 continue;
             }
             Eigen::Vector3d S;
@@ -271,15 +276,7 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
             double w = mat.calcEnergy(C, wantG || wantH ? &S : nullptr, wantH ? &D : nullptr);
             if (m_viscous &&
                 !addBranches(e, C, &w, wantG || wantH ? &S : nullptr, wantH ? &D : nullptr)) {
-#pragma omp critical
-                {
-                    if (!invalid || e < badElement) badElement = e;
-                    invalid = true;
-                }
-                if (wantH)
-                    std::fill(acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e),
-                              acc.hess.begin() + hessBase + 81 * static_cast<size_t>(e + 1),
-                              Triplet(0, 0, 0.0));
+                markInvalid();
                 continue;
             }
             energy += vol * w;
