@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
     bool verbose = false;
     o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     // Leading options: --step MM, --bending N_M|plate, --imperfection MM, --seed N,
-    // --threads N, --scale F (the x-z profile scaled by F).
+    // --threads N, --scale F (the x-z profile scaled by F), --pattern legacy|mirrored|crossed.
     while (first + 1 < argc && std::strncmp(argv[first], "--", 2) == 0) {
         const char* key = argv[first];
         const char* val = argv[first + 1];
@@ -86,6 +86,17 @@ int main(int argc, char** argv) {
             verbose = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--threads") == 0) {
             o.threads = std::atoi(val);
+        } else if (std::strcmp(key, "--pattern") == 0) {
+            if (std::strcmp(val, "crossed") == 0) {
+                o.geometry.pattern = bags::MeshPattern::Crossed;
+            } else if (std::strcmp(val, "mirrored") == 0) {
+                o.geometry.pattern = bags::MeshPattern::Mirrored;
+            } else if (std::strcmp(val, "legacy") == 0) {
+                o.geometry.pattern = bags::MeshPattern::Legacy;
+            } else {
+                std::fprintf(stderr, "bench_load_test: --pattern %s: valid are legacy, mirrored, crossed\n", val);
+                return 2;
+            }
         } else if (std::strcmp(key, "--scale") == 0) {
             const double f = std::atof(val);
             o.geometry.longSide *= f;

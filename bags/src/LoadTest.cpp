@@ -257,36 +257,50 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         // Park the block well clear. A slack bag released from a deep press may be left in a
         // stabilised, folded state whose relaxation cannot be solved: it then goes back to
         // its state before that curve's loading (an equilibrium, block clear).
-        bag.setShapePose(block, makeBlockPose(blockCentreXY, calcTop(bag.getPositions()) + 0.05));
-        if (!bag.advance(0.0, 12).converged) {
-            if (!lastUnloaded) throw NumericalError("no convergence while parking the block");
-            bag.setSnapshot(lastUnloaded);
+        // A set-up that cannot be solved (parking, the gas change, the settling) ends this
+        // curve as failed, with its reason and no steps; the next mass is tried from the last
+        // curve's unloaded state, so the curves already done keep their results.
+        try {
             bag.setShapePose(block,
                              makeBlockPose(blockCentreXY, calcTop(bag.getPositions()) + 0.05));
-            if (!bag.advance(0.0, 12).converged)
-                throw NumericalError("no convergence while parking the block");
-        }
-        bag.commit();
-        // Let the gas out (or in) to this curve's mass, block clear.
-        if (cluster) {
-            bag.changeGasMass(bagMasses(k));
-        } else {
-            bag.changeGasMass(curve.gasMass);
-        }
-        if (o.connection == LoadTestOptions::Connection::Orifice && o.settleTime > 0.0) {
-            // Before loading, the chambers settle towards one pressure (a long wait, 1000 s
-            // by default). Backward Euler in steps doubling in length (0.98 s first of 10):
-            // the pressure difference falls fastest at the start. On the 20 mm rig with a
-            // 0.01 mm orifice one step leaves 53.34 Pa, 10 steps 52.7988 Pa, 40 steps
-            // 52.7982 Pa (tests/bags/LoadTestTest.cpp).
-            const int n = o.settleSteps;
-            const double first = o.settleTime / (std::pow(2.0, n) - 1.0);
-            for (int i = 0; i < n; ++i) {
-                if (!bag.advance(first * std::pow(2.0, i), 0).converged)
-                    throw NumericalError(
-                        "no convergence while the chambers settle through the orifice");
-                bag.commit();
+            if (!bag.advance(0.0, 12).converged) {
+                if (!lastUnloaded) throw NumericalError("no convergence while parking the block");
+                bag.setSnapshot(lastUnloaded);
+                bag.setShapePose(block,
+                                 makeBlockPose(blockCentreXY, calcTop(bag.getPositions()) + 0.05));
+                if (!bag.advance(0.0, 12).converged)
+                    throw NumericalError("no convergence while parking the block");
             }
+            bag.commit();
+            // Let the gas out (or in) to this curve's mass, block clear.
+            if (cluster) {
+                bag.changeGasMass(bagMasses(k));
+            } else {
+                bag.changeGasMass(curve.gasMass);
+            }
+            if (o.connection == LoadTestOptions::Connection::Orifice && o.settleTime > 0.0) {
+                // Before loading, the chambers settle towards one pressure (a long wait, 1000 s
+                // by default). Backward Euler in steps doubling in length (0.98 s first of 10):
+                // the pressure difference falls fastest at the start. On the 20 mm rig with a
+                // 0.01 mm orifice one step leaves 53.34 Pa, 10 steps 52.7988 Pa, 40 steps
+                // 52.7982 Pa (tests/bags/LoadTestTest.cpp).
+                const int n = o.settleSteps;
+                const double first = o.settleTime / (std::pow(2.0, n) - 1.0);
+                for (int i = 0; i < n; ++i) {
+                    if (!bag.advance(first * std::pow(2.0, i), 0).converged)
+                        throw NumericalError(
+                            "no convergence while the chambers settle through the orifice");
+                    bag.commit();
+                }
+            }
+        } catch (const NumericalError& e) {
+            if (!lastUnloaded) throw;
+            bag.setSnapshot(lastUnloaded);
+            curve.failure = std::string("before loading: ") + e.what();
+            curve.failed = true;
+            curve.stiffness = curve.r2 = std::numeric_limits<double>::quiet_NaN();
+            result.curves.push_back(std::move(curve));
+            continue;
         }
         const double top = calcTopUnderBlock(bag.getPositions(), blockCentreXY, 0.5 * o.blockSize,
                                              pressedBegin, pressedEnd);

@@ -7,8 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 using namespace bags;
 
@@ -24,6 +26,32 @@ LoadTestOptions coarseOptions() {
     o.displacementStep = 2e-3;
     return o;
 }
+
+// A film that can be broken from outside: once `broken` is set, every evaluation is NaN, so
+// every solve fails from then on (the bag's copies share the switch).
+class BreakableMaterial : public MembraneMaterial {
+public:
+    BreakableMaterial(std::shared_ptr<const MembraneMaterial> base,
+                      std::shared_ptr<std::atomic<bool>> broken)
+        : m_base(std::move(base)), m_broken(std::move(broken)) {}
+    double calcEnergy(const Mat2& C, Eigen::Vector3d* S, Eigen::Matrix3d* D) const override {
+        const double w = m_base->calcEnergy(C, S, D);
+        if (!*m_broken) return w;
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        if (S) S->setConstant(nan);
+        if (D) D->setConstant(nan);
+        return nan;
+    }
+    double getInitialShearModulus() const override { return m_base->getInitialShearModulus(); }
+    std::string getName() const override { return m_base->getName(); }
+    std::unique_ptr<MembraneMaterial> clone() const override {
+        return std::make_unique<BreakableMaterial>(m_base, m_broken);
+    }
+
+private:
+    std::shared_ptr<const MembraneMaterial> m_base;
+    std::shared_ptr<std::atomic<bool>> m_broken;
+};
 
 }  // namespace
 
@@ -435,4 +463,40 @@ TEST(LoadTest, RejectsImpossibleNeighbourOptions) {
     ASSERT_EQ(poses.size(), 9u);
     EXPECT_TRUE(poses[0].translation().isZero());
     EXPECT_NEAR(poses[1].translation().x(), -(v.geometry.longSide + v.neighbourGap), 1e-15);
+}
+
+// A curve whose set-up cannot be solved (parking the block, letting the gas out) ends as
+// failed with its reason and no steps; the curves done before keep their results, bit for bit,
+// and the sweep goes on to the next mass instead of losing everything to one exception.
+TEST(LoadTest, ASetUpThatCannotBeSolvedFailsThatCurveAndKeepsTheOthers) {
+    LoadTestOptions o = coarseOptions();
+    o.gasMasses = {4.5e-3, 4.0e-3, 3.9e-3};
+    const LoadTestResult clean = runLoadTest(o);
+    ASSERT_EQ(clean.curves.size(), 3u);
+    ASSERT_TRUE(clean.curves[0].reachedPeak);
+
+    auto broken = std::make_shared<std::atomic<bool>>(false);
+    o.material = std::make_shared<BreakableMaterial>(o.material, broken);
+    // The film breaks at the last step of the first curve's unloading (the block has left).
+    const LoadTestResult r = runLoadTest(o, [&](const LoadStep& s, const Mesh&,
+                                                const Eigen::Matrix3Xd&) {
+        if (s.curve == 0 && !s.loading && s.force <= 0.0) *broken = true;
+    });
+    ASSERT_TRUE(*broken);
+    ASSERT_EQ(r.curves.size(), 3u);
+    const LoadCurve& first = r.curves[0];
+    EXPECT_TRUE(first.reachedPeak);
+    EXPECT_FALSE(first.failed);
+    ASSERT_EQ(first.steps.size(), clean.curves[0].steps.size());
+    EXPECT_EQ(first.stiffness, clean.curves[0].stiffness);  // bit for bit
+    for (size_t k = 1; k < 3; ++k) {
+        const LoadCurve& c = r.curves[k];
+        EXPECT_EQ(c.gasMass, o.gasMasses[k]);
+        EXPECT_TRUE(c.failed) << k;
+        EXPECT_FALSE(c.reachedPeak) << k;
+        EXPECT_TRUE(c.steps.empty()) << k;
+        EXPECT_EQ(c.failure.rfind("before loading: no convergence", 0), 0u) << c.failure;
+        EXPECT_TRUE(std::isnan(c.stiffness)) << k;
+        EXPECT_EQ(c.stage, 0) << k;
+    }
 }
