@@ -263,6 +263,12 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
         if (!c.failure.empty())
             out << "  " << io::formatQuantity(c.gasMass, "g", 2)
                 << (io::isCurveFailed(c) ? " FAILED: " : " stopped early: ") << c.failure << "\n";
+    for (const bags::LoadCurve& c : r.curves)
+        if (c.snaps > 0)
+            out << "  " << io::formatQuantity(c.gasMass, "g", 2) << ": " << c.snaps
+                << (c.snaps == 1 ? " snap" : " snaps") << " stepped over ("
+                << fmt("%.1f mm", c.snapTravel * 1e3)
+                << " of block travel without points: a fold snapped; docs/solver.md)\n";
 
     const std::vector<double> seed = bags::getSeedStiffnessPolynomial();
     out << "\nk(m) [N/mm], m [g]:\n";

@@ -9,6 +9,7 @@
 // "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps; --step sets
 // the target block increment (default 1 mm, as the scenario).
 #include <bags/LoadTest.h>
+#include <bags/SeedReading.h>
 #include <bags/Bending.h>
 #include <bags/MaterialFit.h>
 
@@ -38,6 +39,7 @@ int main(int argc, char** argv) {
     bags::LoadTestOptions o;
     int first = 1;
     bool verbose = false;
+    double fillMass = 0.0;  // [kg] --fill-mass G: profile scaled until G just fills the bag
     o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     // Leading options: --step MM, --bending N_M|plate, --imperfection MM, --seed N,
     // --threads N, --scale F (the x-z profile scaled by F), --pattern legacy|mirrored|crossed.
@@ -97,6 +99,8 @@ int main(int argc, char** argv) {
                 std::fprintf(stderr, "bench_load_test: --pattern %s: valid are legacy, mirrored, crossed\n", val);
                 return 2;
             }
+        } else if (std::strcmp(key, "--fill-mass") == 0) {
+            fillMass = std::atof(val) * 1e-3;
         } else if (std::strcmp(key, "--scale") == 0) {
             const double f = std::atof(val);
             o.geometry.longSide *= f;
@@ -114,6 +118,13 @@ int main(int argc, char** argv) {
         if (std::strcmp(argv[i], "seed") != 0) o.gasMasses.push_back(std::atof(argv[i]) * 1e-3);
     if (o.gasMasses.empty())
         for (int i = 0; i <= 10; ++i) o.gasMasses.push_back((3.5 - 0.25 * i) * 1e-3);
+    if (fillMass > 0.0) {
+        // As `airbag.fill_mass` with `fill_scaling: profile` in a scenario (after --scale).
+        const bags::FillScaleResult fs =
+            bags::findFillScale(o, fillMass, bags::FillScaling::Profile);
+        o.geometry = fs.geometry;
+        std::printf("fill mass %.4f g: profile scale %.6f\n", fillMass * 1e3, fs.scale);
+    }
     int nodes = 0, tris = 0, steps = 0, iterations = 0, loadingSteps = 0;
     const auto t0 = std::chrono::steady_clock::now();
     double tFirst = -1.0, tInflated = -1.0;

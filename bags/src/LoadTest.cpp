@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -298,7 +299,10 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             bag.setSnapshot(lastUnloaded);
             curve.failure = std::string("before loading: ") + e.what();
             curve.failed = true;
-            curve.stiffness = curve.r2 = std::numeric_limits<double>::quiet_NaN();
+            // Never reached: its unloaded state is unknown, not zero.
+            const double nan = std::numeric_limits<double>::quiet_NaN();
+            curve.stiffness = curve.r2 = nan;
+            curve.unloadedHeight = curve.inflatedVolume = curve.inflatedGaugePressure = nan;
             result.curves.push_back(std::move(curve));
             continue;
         }
@@ -346,6 +350,17 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             if (sum->converged) bag.commit();
             return sum->converged;
         };
+        // A fold snapping through under the block: step over it (stepOverSnap), counted.
+        auto snapOver = [&](double from, double tried, double dir, double limit,
+                            AdvanceSummary* sum) {
+            const double to = stepOverSnap([&](double t) { return advance(t, sum); }, from,
+                                           tried, dir, limit, o.displacementStep);
+            if (to >= 0.0) {
+                ++curve.snaps;
+                curve.snapTravel += std::abs(to - from);
+            }
+            return to;
+        };
         // A loading failure is kept when the unloading from there fails too.
         auto fail = [&](const char* branch, double disp) {
             std::ostringstream s;
@@ -384,11 +399,14 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             AdvanceSummary sum;
             if (!advance(disp + step, &sum)) {
                 ds = 0.5 * step;
-                if (ds < minStep) {
+                if (ds >= minStep) continue;
+                const double to = snapOver(disp, step, +1.0, maxDisp, &sum);
+                if (to < 0.0) {
                     fail("loading", disp);
                     break;
                 }
-                continue;
+                step = to - disp;
+                ds = o.displacementStep;
             }
             const double prevForce = force;
             disp += step;
@@ -406,15 +424,18 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         while (o.unload && disp > 0.0) {
             const double cap = (unloadForce < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
                                o.displacementStep;
-            const double step = std::min({ds, cap, disp});
+            double step = std::min({ds, cap, disp});
             AdvanceSummary sum;
             if (!advance(disp - step, &sum)) {
                 ds = 0.5 * step;
-                if (ds < minStep) {
+                if (ds >= minStep) continue;
+                const double to = snapOver(disp, step, -1.0, 0.0, &sum);
+                if (to < 0.0) {
                     fail("unloading", disp);
                     break;
                 }
-                continue;
+                step = disp - to;
+                ds = o.displacementStep;
             }
             disp = std::max(disp - step, 0.0);
             unloadForce = record(disp, false, sum);
@@ -467,6 +488,17 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
 }
 
 }  // namespace
+
+double stepOverSnap(const std::function<bool(double)>& tryTravel, double from, double tried,
+                    double dir, double limit, double displacementStep) {
+    for (const double n : {1.0, 2.0, 4.0}) {
+        double to = from + dir * n * displacementStep;
+        to = dir > 0.0 ? std::min(to, limit) : std::max(to, limit);
+        if (std::abs(to - from) <= tried * (1.0 + 1e-12)) continue;  // no longer than the failed
+        if (tryTravel(to)) return to;
+    }
+    return -1.0;
+}
 
 LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& observer) {
     o.validate();

@@ -556,6 +556,8 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
         h5::setAttribute(g.get(), "end", getCurveEnd(c));
         h5::setAttribute(g.get(), "stabilized_steps", c.stabilizedSteps);
         h5::setAttribute(g.get(), "stabilization_share", c.stabilizationShare);
+        h5::setAttribute(g.get(), "snaps", c.snaps);
+        h5::setAttribute(g.get(), "snap_travel", c.snapTravel);
     }
     h5::Handle sum = h5::createGroup(d.file.get(), "summary");
     const hsize_t hn = n;

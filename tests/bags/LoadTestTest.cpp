@@ -497,6 +497,45 @@ TEST(LoadTest, ASetUpThatCannotBeSolvedFailsThatCurveAndKeepsTheOthers) {
         EXPECT_TRUE(c.steps.empty()) << k;
         EXPECT_EQ(c.failure.rfind("before loading: no convergence", 0), 0u) << c.failure;
         EXPECT_TRUE(std::isnan(c.stiffness)) << k;
+        EXPECT_TRUE(std::isnan(c.unloadedHeight)) << k;  // never reached: unknown, not zero
+        EXPECT_TRUE(std::isnan(c.inflatedGaugePressure)) << k;
         EXPECT_EQ(c.stage, 0) << k;
     }
+}
+
+// Stepping over a snapping fold (docs/solver.md#snaps-stepped-over): from the last equilibrium
+// the block goes on by 1, 2, 4 displacement steps, the first that converges is taken, never
+// past the limit, never a step no longer than the one that failed; -1 when none converges.
+TEST(LoadTest, ASnappingFoldIsSteppedOverByOneTwoOrFourSteps) {
+    std::vector<double> tried;
+    // The film finds an equilibrium again from 65.2 mm of travel on (loading from 63.5 mm).
+    auto beyond = [&](double at) {
+        return [&tried, at](double to) {
+            tried.push_back(to);
+            return to >= at;
+        };
+    };
+    const double h = 1e-3, from = 63.5e-3;
+    EXPECT_NEAR(stepOverSnap(beyond(64.0e-3), from, 2.5e-5, +1.0, 0.2, h), 64.5e-3, 1e-15);
+    EXPECT_EQ(tried.size(), 1u);
+    tried.clear();
+    EXPECT_NEAR(stepOverSnap(beyond(65.2e-3), from, 2.5e-5, +1.0, 0.2, h), 65.5e-3, 1e-15);
+    EXPECT_EQ(tried.size(), 2u);
+    tried.clear();
+    EXPECT_NEAR(stepOverSnap(beyond(66.0e-3), from, 2.5e-5, +1.0, 0.2, h), 67.5e-3, 1e-15);
+    ASSERT_EQ(tried.size(), 3u);
+    tried.clear();
+    EXPECT_EQ(stepOverSnap(beyond(70.0e-3), from, 2.5e-5, +1.0, 0.2, h), -1.0);  // no way over
+    EXPECT_EQ(tried.size(), 3u);
+    tried.clear();
+    // The limit (the block 2 mm above the board) caps the jumps; a capped jump no longer than
+    // the failed step is not tried again.
+    EXPECT_NEAR(stepOverSnap(beyond(0.0), from, 2.5e-5, +1.0, 64.2e-3, h), 64.2e-3, 1e-15);
+    tried.clear();
+    EXPECT_EQ(stepOverSnap(beyond(0.0), from, 2.5e-5, +1.0, from + 1e-5, h), -1.0);
+    EXPECT_TRUE(tried.empty());
+    // Unloading goes back, down to the block's first touch at 0.
+    auto below = [&](double at) { return [at](double to) { return to <= at; }; };
+    EXPECT_NEAR(stepOverSnap(below(1.5e-3), 3.0e-3, 2.5e-5, -1.0, 0.0, h), 1.0e-3, 1e-15);
+    EXPECT_NEAR(stepOverSnap(below(0.0), 3.0e-3, 2.5e-5, -1.0, 0.0, h), 0.0, 0.0);
 }

@@ -145,6 +145,13 @@ struct LoadCurve {
     /// how far the curve is from a true equilibrium path
     /// (Abaqus' rule of thumb for its automatic stabilisation: keep it below about 0.05).
     double stabilizationShare = 0.0;
+    /// Snaps the displacement control stepped over: where no equilibrium could be found near
+    /// the last one at any step down to the smallest (a fold snapping through under the block),
+    /// the block went on by 1, 2 or 4 displacement steps and the curve continued from the
+    /// equilibrium found there, with no points in between. Their number and the block travel
+    /// they span [m], loading and unloading together.
+    int snaps = 0;
+    double snapTravel = 0.0;
     /// Over the ensemble's bags (LoadTestOptions::ensemble; this curve's bag included): the
     /// least and largest stiffness [N/m] (NaN if any bag has none) and the number of bags.
     double stiffnessMin = 0.0;
@@ -160,6 +167,17 @@ struct LoadTestResult {
 
 /// Called after each converged step with the step and the nodal positions (3 x N).
 using LoadTestObserver = std::function<void(const LoadStep&, const Mesh&, const Eigen::Matrix3Xd&)>;
+
+/// The load test's way over a fold that snaps through under the block. When no equilibrium is
+/// found near the last one (block travel `from`) at any step down to the smallest, the
+/// equilibrium branch has turned back: the film snaps to another shape at about that travel.
+/// The block then goes on from the last equilibrium by 1, 2 and 4 displacement steps in the
+/// direction `dir` (+1 loading, -1 unloading), never past `limit`, skipping any not longer than
+/// the step that failed (`tried`); `tryTravel(to)` solves the bag at travel `to` from the last
+/// equilibrium and keeps it if it converges. Returns the travel of the first that converged, or
+/// -1 if none did. The curve has no points in between (LoadCurve::snaps, snapTravel).
+double stepOverSnap(const std::function<bool(double)>& tryTravel, double from, double tried,
+                    double dir, double limit, double displacementStep);
 
 LoadTestResult runLoadTest(const LoadTestOptions& options, const LoadTestObserver& observer = {});
 
