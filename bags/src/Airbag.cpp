@@ -132,6 +132,12 @@ void AirbagSpec::validate() const {
             "airbag option 'gas.heatTimeConstant' (heat exchange) needs the open connection; "
             "the orifice connection does not carry the heat of the flow");
     imperfection.validate();
+    if (!material->isIsotropic())
+        for (const Eigen::Isometry3d& X : cluster)
+            if (!X.linear().isApprox(Eigen::Matrix3d::Identity(), 1e-12))
+                throw std::invalid_argument(
+                    "airbag option 'cluster': a rotated copy of an anisotropic film's bag (its "
+                    "warp follows the bag frame's x); place the copies without rotation");
     bedContact.validate();
     require(selfContactPenalty > 0.0, "selfContactPenalty", selfContactPenalty, "use > 0 Pa/m");
     require(stabilization >= 0.0, "stabilization", stabilization,
@@ -908,9 +914,13 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     for (int i = 0; i < mesh.getNumNodes(); ++i) mesh.X.col(i) = spec.X_GB * Vec3(mesh.X.col(i));
     m.mesh = mesh;
     m.meanEdge = calcMeshQuality(mesh).meanEdge;
-    auto material =
-        std::make_shared<WrinklingMaterial>(spec.material->clone(), spec.wrinklingResidual);
+    std::shared_ptr<const MembraneMaterial> material =
+        makeRelaxedMaterial(*spec.material, spec.wrinklingResidual);
     m.model = std::make_shared<MembraneModel>(mesh, material, spec.thickness);
+    // A woven film's warp runs along the bag frame's x (the long side), or its z in a panel
+    // across it (docs/materials.md#fabric-anisotropy).
+    if (!material->isIsotropic())
+        m.model->setWarpAxes(spec.X_GB.linear() * Vec3::UnitX(), spec.X_GB.linear() * Vec3::UnitZ());
     if (spec.density > 0.0 && spec.gravity.squaredNorm() > 0.0)
         m.model->setGravity(spec.density, spec.gravity);
     if (spec.bendingStiffness > 0.0) m.model->setBendingStiffness(spec.bendingStiffness);

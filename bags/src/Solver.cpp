@@ -81,27 +81,55 @@ MembraneModel::MembraneModel(Mesh mesh, std::shared_ptr<const MembraneMaterial> 
     precompute();
 }
 
-void MembraneModel::precompute() {
+void MembraneModel::setWarpAxes(const Vec3& axis, const Vec3& fallback) {
+    if (!(axis.norm() > 0.0) || !(fallback.norm() > 0.0) ||
+        !(axis.normalized().cross(fallback.normalized()).norm() > 0.5))
+        throw std::invalid_argument(
+            "warp axes: give two directions more than 30 degrees apart (the bag's long side and "
+            "its height)");
+    m_warpAxis = axis.normalized();
+    m_warpFallback = fallback.normalized();
+    if (!m_material->isIsotropic()) precomputeFrames();
+}
+
+std::vector<Vec3> MembraneModel::calcWarpDirections() const {
+    // Per panel: its mean normal if it is flat (every reference panel of the bags is; a
+    // stated imperfection tilts its triangles a little), the warp axis projected onto that
+    // plane, or the fallback's projection where the axis is within 30 degrees of the normal.
+    // Then per triangle: that direction projected onto the triangle's own plane.
     const int nt = m_mesh.getNumTris();
-    m_DmInv.resize(nt);
-    m_area0.resize(nt);
+    const int np = static_cast<int>(m_mesh.panelNames.size());
+    std::vector<Vec3> normalSum(np, Vec3::Zero());
+    std::vector<double> areaSum(np, 0.0);
+    std::vector<Vec3> triNormal(nt);
     for (int e = 0; e < nt; ++e) {
         const Vec3 X0 = m_mesh.X.col(m_mesh.tris(0, e));
-        const Vec3 X1 = m_mesh.X.col(m_mesh.tris(1, e));
-        const Vec3 X2 = m_mesh.X.col(m_mesh.tris(2, e));
-        const Vec3 a = X1 - X0, b = X2 - X0;
-        const Vec3 n = a.cross(b);
-        const double twiceArea = n.norm();
-        if (!(twiceArea > 0.0)) {
-            throw NumericalError("degenerate reference triangle " + std::to_string(e), -1, -1, e);
+        const Vec3 n = (Vec3(m_mesh.X.col(m_mesh.tris(1, e))) - X0)
+                           .cross(Vec3(m_mesh.X.col(m_mesh.tris(2, e))) - X0);
+        triNormal[e] = n.normalized();
+        const int p = m_mesh.triPanel.empty() ? -1 : m_mesh.triPanel[e];
+        if (p >= 0 && p < np) {
+            normalSum[p] += n;
+            areaSum[p] += n.norm();
         }
-        const Vec3 e1 = a.normalized();
-        const Vec3 e2 = (n / twiceArea).cross(e1);
-        Mat2 Dm;
-        Dm << a.dot(e1), b.dot(e1), a.dot(e2), b.dot(e2);
-        m_DmInv[e] = Dm.inverse();
-        m_area0[e] = 0.5 * twiceArea;
     }
+    auto inPlane = [&](const Vec3& nHat) {
+        Vec3 w = m_warpAxis - m_warpAxis.dot(nHat) * nHat;
+        if (w.norm() < 0.5) w = m_warpFallback - m_warpFallback.dot(nHat) * nHat;
+        return w;
+    };
+    std::vector<Vec3> warp(nt);
+    for (int e = 0; e < nt; ++e) {
+        const int p = m_mesh.triPanel.empty() ? -1 : m_mesh.triPanel[e];
+        const bool flat = p >= 0 && p < np && normalSum[p].norm() >= 0.99 * areaSum[p];
+        const Vec3 w = inPlane(flat ? Vec3(normalSum[p].normalized()) : triNormal[e]);
+        warp[e] = (w - w.dot(triNormal[e]) * triNormal[e]).normalized();
+    }
+    return warp;
+}
+
+void MembraneModel::precompute() {
+    precomputeFrames();
     m_chamberGas.assign(m_mesh.chambers.size(), -1);
     m_chamberPressure.assign(m_mesh.chambers.size(), 0.0);
 
@@ -114,6 +142,33 @@ void MembraneModel::precompute() {
         if (fixed[i]) m_fixedDofs.push_back(i);
     m_nodalMass = Eigen::VectorXd::Zero(m_mesh.getNumNodes());
     m_nodalArea = m_mesh.calcNodalAreas();
+}
+
+void MembraneModel::precomputeFrames() {
+    const int nt = m_mesh.getNumTris();
+    m_DmInv.resize(nt);
+    m_area0.resize(nt);
+    // An anisotropic film's element frame has the warp as its first axis; an isotropic one's
+    // the first edge (as it always had: its results do not depend on the frame, its bits do).
+    std::vector<Vec3> warp;
+    if (!m_material->isIsotropic()) warp = calcWarpDirections();
+    for (int e = 0; e < nt; ++e) {
+        const Vec3 X0 = m_mesh.X.col(m_mesh.tris(0, e));
+        const Vec3 X1 = m_mesh.X.col(m_mesh.tris(1, e));
+        const Vec3 X2 = m_mesh.X.col(m_mesh.tris(2, e));
+        const Vec3 a = X1 - X0, b = X2 - X0;
+        const Vec3 n = a.cross(b);
+        const double twiceArea = n.norm();
+        if (!(twiceArea > 0.0)) {
+            throw NumericalError("degenerate reference triangle " + std::to_string(e), -1, -1, e);
+        }
+        const Vec3 e1 = warp.empty() ? Vec3(a.normalized()) : warp[e];
+        const Vec3 e2 = (n / twiceArea).cross(e1);
+        Mat2 Dm;
+        Dm << a.dot(e1), b.dot(e1), a.dot(e2), b.dot(e2);
+        m_DmInv[e] = Dm.inverse();
+        m_area0[e] = 0.5 * twiceArea;
+    }
 }
 
 void MembraneModel::setBendingStiffness(double D) {
@@ -389,6 +444,8 @@ void MembraneModel::addLoadEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& 
 std::vector<int> MembraneModel::calcWrinkleStates(const Eigen::Matrix3Xd& x) const {
     std::vector<int> states(m_mesh.getNumTris(), 0);
     const auto* w = dynamic_cast<const WrinklingMaterial*>(m_material.get());
+    if (const auto* fabric = dynamic_cast<const FabricMaterial*>(m_material.get()))
+        w = dynamic_cast<const WrinklingMaterial*>(&fabric->getMatrix());  // the matrix's state
     if (!w) return states;
     for (int e = 0; e < m_mesh.getNumTris(); ++e) {
         const ShapeGradients sg = calcShapeGradients(m_DmInv[e]);

@@ -1,5 +1,8 @@
 #include <diagnose/Effects.h>
 
+#include <bags/Material.h>
+
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -55,6 +58,13 @@ const std::vector<Effect>& getEffects() {
          {{"g", "", 1.0, 0.0, kMaxViscoelasticModulus, 0.2, "membrane.prony[0].g"},
           {"tau", "s", 1.0, kMinViscoelasticTime, kMaxViscoelasticTime, 20.0,
            "membrane.prony[0].tau"}},
+         true},
+        {"fabric-anisotropy",
+         "the film is a woven fabric: yarns along the warp and the weft (the bag's long side and "
+         "across it) stiffen it along themselves and carry no compression",
+         {{"yarn", "", 1.0, 0.0, kMaxYarnStiffnessRatio, 1.0,
+           "membrane.anisotropy.warp and .weft (each this times the film's Young's modulus "
+           "3 mu)"}},
          true},
         {"load-cell-gain",
          "the load cell reads the force times 1 + gain (a calibration error)",
@@ -115,6 +125,16 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
         rig.bedCompliance = values[0];
     } else if (effect.name == "viscoelasticity") {
         options.prony.terms = {{values[0], values[1]}};
+    } else if (effect.name == "fabric-anisotropy") {
+        // A balanced weave (840D nylon both ways): the same yarn stiffness along warp and weft.
+        const auto* fabric = dynamic_cast<const bags::FabricMaterial*>(options.material.get());
+        const bags::MembraneMaterial& matrix = fabric ? fabric->getMatrix() : *options.material;
+        bags::FabricAnisotropy yarns;
+        yarns.warpModulus = yarns.weftModulus = values[0] * 3.0 * matrix.getInitialShearModulus();
+        if (yarns.isOn())
+            options.material = std::make_shared<bags::FabricMaterial>(matrix.clone(), yarns);
+        else
+            options.material = matrix.clone();
     } else if (effect.name == "block-friction") {
         options.blockContact.friction = values[0];
     } else {

@@ -367,6 +367,25 @@ bags::PronySeries readProny(const ScenarioNode& s) {
     return p;
 }
 
+// membrane.anisotropy: {warp: 95 MPa, weft: 60 MPa, angle: 0 deg}, the woven fabric's yarns
+// (docs/materials.md#fabric-anisotropy).
+bags::FabricAnisotropy readAnisotropy(const ScenarioNode& s) {
+    const ScenarioNode a = s.getSection("anisotropy");
+    a.checkKeys({"warp", "weft"}, {"angle"});
+    bags::FabricAnisotropy y;
+    y.warpModulus = a.getQuantity("warp", D::Pressure);
+    y.weftModulus = a.getQuantity("weft", D::Pressure);
+    y.angle = a.getQuantity("angle", D::Angle, 0.0);
+    const std::string why = "the yarns' tangent modulus in Green strain; 0: none";
+    checkRange(a, "warp", y.warpModulus, 0, true, bags::FabricAnisotropy::kMaxModulus, true,
+               "MPa", why);
+    checkRange(a, "weft", y.weftModulus, 0, true, bags::FabricAnisotropy::kMaxModulus, true,
+               "MPa", why);
+    checkRange(a, "angle", y.angle, -0.5 * M_PI, true, 0.5 * M_PI, true, "deg",
+               "the warp's angle from its panel's reference direction");
+    return y;
+}
+
 void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
     std::vector<std::string> allConstants;
     std::vector<std::string> modelNames;
@@ -379,7 +398,7 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
     std::vector<std::string> optional = allConstants;
     optional.insert(optional.end(),
                     {"density", "wrinkling_residual", "extrapolation", "bending_stiffness",
-                     "prony"});
+                     "prony", "anisotropy"});
     s.checkKeys({"model", "thickness"}, optional);
     const std::string model = s.getChoice("model", modelNames);
     // Beyond the stable range a Yeoh continues linearly in I1 (default) or as its polynomial.
@@ -449,6 +468,11 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
     checkRange(s, "density", o.density, 0, true, kInf, false, "kg/m^3");
     checkRange(s, "wrinkling_residual", o.wrinklingResidual, 0, false, 0.1, false, "");
     if (s.has("prony")) o.prony = readProny(s);
+    if (s.has("anisotropy")) {
+        const bags::FabricAnisotropy yarns = readAnisotropy(s);
+        if (yarns.isOn())  // both moduli 0: the isotropic film, as without the key
+            o.material = std::make_shared<bags::FabricMaterial>(o.material->clone(), yarns);
+    }
     // The film's bending stiffness: a moment, `plate` (the homogeneous film's plate value from
     // the material and thickness, also when the key is absent) or 0 (off).
     const std::string bending = getRaw(s, "bending_stiffness");

@@ -47,6 +47,10 @@ public:
     /// incompressible, e2 = e1^(-1/2); compressible materials override it.
     virtual double calcNaturalWidth(double e1, double* d1, double* d2) const;
 
+    /// False for a material with directions in the sheet (FabricMaterial): its C must be
+    /// given in the element frame whose first axis is the warp (MembraneModel builds it so).
+    virtual bool isIsotropic() const { return true; }
+
     virtual std::unique_ptr<MembraneMaterial> clone() const = 0;
 };
 
@@ -101,5 +105,53 @@ private:
     double m_residual;
     std::unique_ptr<MembraneMaterial> m_residualMaterial;  ///< null: the base
 };
+
+/// The woven fabric's yarns (docs/materials.md#fabric-anisotropy): two families, warp and
+/// weft, at right angles in the sheet, each a fibre that carries tension only.
+struct FabricAnisotropy {
+    double warpModulus = 0.0;  ///< k_w [Pa]: the warp yarns' tangent modulus in Green strain
+    double weftModulus = 0.0;  ///< k_f [Pa]: the weft yarns'
+    /// [rad] the warp's angle from the element frame's first axis (MembraneModel aligns that
+    /// axis with the panel's reference warp direction), positive about the element normal.
+    double angle = 0.0;
+    /// Largest modulus accepted [Pa] (a hundred times the seed film's Young's modulus).
+    static constexpr double kMaxModulus = 2.0e10;
+    /// True if a family has a modulus (zero: the isotropic film, bit for bit).
+    bool isOn() const { return warpModulus > 0.0 || weftModulus > 0.0; }
+    /// @throws std::invalid_argument naming the member (warpModulus, weftModulus, angle) and
+    /// its valid range: moduli 0 to kMaxModulus, |angle| <= pi/2.
+    void validate() const;
+};
+
+/// An isotropic matrix (the film's law, with or without the tension field) reinforced by two
+/// yarn families that carry no compression: the standard reinforcing model with the fibre
+/// switched off in compression,
+///   W = W_matrix(C) + k_w/2 <E_w>^2 + k_f/2 <E_f>^2,   E_a = (a . C a - 1) / 2,
+/// <x> = max(x, 0), a the warp (cos angle, sin angle) and the weft at right angles to it, in
+/// the element frame. The stress adds k <E_a> a a^T per family (positive semidefinite), so
+/// with a tension-field matrix the sum carries no compression in any direction.
+class FabricMaterial : public MembraneMaterial {
+public:
+    /// @throws std::invalid_argument if the matrix is null or the yarns are invalid.
+    FabricMaterial(std::unique_ptr<MembraneMaterial> matrix, const FabricAnisotropy& yarns);
+    FabricMaterial(const FabricMaterial& other);
+    double calcEnergy(const Mat2& C, Eigen::Vector3d* S, Eigen::Matrix3d* D) const override;
+    /// The matrix's (the yarns add stiffness along themselves only).
+    double getInitialShearModulus() const override;
+    std::string getName() const override;
+    bool isIsotropic() const override { return false; }
+    std::unique_ptr<MembraneMaterial> clone() const override;
+    const MembraneMaterial& getMatrix() const { return *m_matrix; }
+    const FabricAnisotropy& getYarns() const { return m_yarns; }
+private:
+    std::unique_ptr<MembraneMaterial> m_matrix;
+    FabricAnisotropy m_yarns;
+};
+
+/// The material the membrane elements use: the tension field on the base
+/// (WrinklingMaterial(base, residual)); for a FabricMaterial, the tension field on its matrix
+/// with the yarns added to it (each part carries no compression).
+std::unique_ptr<MembraneMaterial> makeRelaxedMaterial(const MembraneMaterial& base,
+                                                      double residual);
 
 }  // namespace bags

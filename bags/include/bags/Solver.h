@@ -196,7 +196,17 @@ public:
     std::vector<RigidContact::History> getContactHistory() const;
     void setContactHistory(const std::vector<RigidContact::History>& h);
 
-    /// Membrane state per triangle: 0 taut, 1 wrinkled, 2 slack (needs a WrinklingMaterial).
+    /// The reference directions an anisotropic film's warp is taken from, in the mesh's frame
+    /// (default: x, the double wedge's long side, and z, its height): in each panel's plane
+    /// the projection of `axis`, or of `fallback` where `axis` is within 30 degrees of the
+    /// panel's normal (docs/materials.md#fabric-anisotropy). No effect on an isotropic film.
+    /// @throws std::invalid_argument for a zero direction or two within 30 degrees.
+    void setWarpAxes(const Vec3& axis, const Vec3& fallback);
+    /// Unit warp direction per triangle in the reference configuration (the rule above).
+    std::vector<Vec3> calcWarpDirections() const;
+
+    /// Membrane state per triangle: 0 taut, 1 wrinkled, 2 slack (needs a WrinklingMaterial;
+    /// of a FabricMaterial, its matrix's).
     std::vector<int> calcWrinkleStates(const Eigen::Matrix3Xd& x) const;
     /// Largest in-plane principal Cauchy stress per triangle [Pa].
     Eigen::VectorXd calcPrincipalStress(const Eigen::Matrix3Xd& x) const;
@@ -208,6 +218,7 @@ private:
         std::vector<int> chambers;
     };
     void precompute();
+    void precomputeFrames();  ///< m_DmInv and m_area0 (the element frames)
 
     Mesh m_mesh;
     std::shared_ptr<const MembraneMaterial> m_material;
@@ -221,6 +232,8 @@ private:
     std::shared_ptr<SelfContact> m_selfContact;
     std::vector<int> m_fixedDofs;
     std::shared_ptr<const DiscreteBending> m_bending;  ///< null: no bending
+    Vec3 m_warpAxis = Vec3::UnitX();      ///< an anisotropic film's warp reference (setWarpAxes)
+    Vec3 m_warpFallback = Vec3::UnitZ();
     int m_threads = 0;                    ///< 0: OpenMP default
     double m_stabilization = 0.0;         ///< [Pa/m]
     Eigen::Matrix3Xd m_anchor;

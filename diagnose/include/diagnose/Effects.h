@@ -49,9 +49,17 @@ inline constexpr double kMaxViscoelasticModulus = 0.5;
 inline constexpr double kMinViscoelasticTime = 1.0;    ///< [s]
 inline constexpr double kMaxViscoelasticTime = 120.0;  ///< [s]
 
+/// Upper bound of the fabric's yarn stiffness as a candidate, as a multiple of the film law's
+/// small-strain Young's modulus 3 mu (docs/diagnosis.md#fabric-anisotropy): 3, a strip cut
+/// along a yarn 4 times as stiff as the isotropic law and about 3.4 times as stiff as one cut
+/// on the bias. A judgement, not a measurement of this fabric: uncoated weaves reach larger
+/// ratios (their bias is held only by the yarns' friction), a coating that locks the yarns
+/// lowers them; beyond, the scenario's isotropic law would no longer be the film's matrix.
+inline constexpr double kMaxYarnStiffnessRatio = 3.0;
+
 /// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
 /// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance,
-/// viscoelasticity (the library), load-cell-gain (kept out of it).
+/// viscoelasticity, fabric-anisotropy (the library), load-cell-gain (kept out of it).
 const std::vector<Effect>& getEffects();
 /// The effect of that name, or nullptr.
 const Effect* findEffect(const std::string& name);
@@ -63,7 +71,8 @@ std::string listEffectNames();
 /// options.gasMasses become `readings` less the offset; for the gas temperature,
 /// options.gas.temperature is raised by its offset; leakage and heat exchange set
 /// options.gas.leakConductance and .heatTimeConstant; bed-compliance rig.bedCompliance;
-/// viscoelasticity options.prony, one term).
+/// viscoelasticity options.prony, one term; fabric-anisotropy wraps options.material in a
+/// bags::FabricMaterial whose warp and weft moduli are both the ratio times 3 mu, angle 0).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,
