@@ -1,8 +1,12 @@
 // The rig's effects (diagnose/RigEffects.h) against their analytic answers: a first-order
 // sensor on a ramp and a step, the offset, the compliance in series, the flowmeter's bias.
+// The fabric-anisotropy candidate applied to the film.
 #include <gtest/gtest.h>
 
+#include <diagnose/Effects.h>
 #include <diagnose/RigEffects.h>
+
+#include <bags/Material.h>
 
 #include <cmath>
 #include <vector>
@@ -139,4 +143,46 @@ TEST(MachineCurve, TheBedsComplianceAddsInSeriesWithTheMachines) {
     RigEffects bad;
     bad.bedCompliance = 3e-3;
     EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The fabric's yarns as a candidate: the film becomes the matrix of a balanced weave whose
+// warp and weft moduli are the ratio times 3 mu; a ratio of 0 leaves the film as it was (the
+// same material, bit for bit); outside its bounds it is refused naming the bounds.
+TEST(Effects, FabricAnisotropyAddsBalancedYarnsAndZeroLeavesTheFilm) {
+    const diagnose::Effect* effect = diagnose::findEffect("fabric-anisotropy");
+    ASSERT_NE(effect, nullptr);
+    EXPECT_TRUE(effect->changesTheBag);
+    EXPECT_TRUE(effect->inLibrary);
+    bags::LoadTestOptions o;
+    o.material = bags::makeYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    diagnose::RigEffects rig;
+    bags::LoadTestOptions on = o;
+    diagnose::applyEffect(*effect, {0.5}, {}, rig, on);
+    const auto* fabric = dynamic_cast<const bags::FabricMaterial*>(on.material.get());
+    ASSERT_NE(fabric, nullptr);
+    EXPECT_DOUBLE_EQ(fabric->getYarns().warpModulus, 0.5 * 6.0 * 31.587917e6);
+    EXPECT_EQ(fabric->getYarns().weftModulus, fabric->getYarns().warpModulus);
+    EXPECT_EQ(fabric->getYarns().angle, 0.0);
+    // Applied again (a trial value on a fabric film): the yarns are replaced, not stacked.
+    diagnose::applyEffect(*effect, {0.25}, {}, rig, on);
+    fabric = dynamic_cast<const bags::FabricMaterial*>(on.material.get());
+    ASSERT_NE(fabric, nullptr);
+    EXPECT_DOUBLE_EQ(fabric->getYarns().warpModulus, 0.25 * 6.0 * 31.587917e6);
+    EXPECT_TRUE(fabric->getMatrix().isIsotropic());
+    bags::LoadTestOptions off = o;
+    diagnose::applyEffect(*effect, {0.0}, {}, rig, off);
+    ASSERT_TRUE(off.material->isIsotropic());
+    bags::Mat2 C;
+    C << 1.04, 0.01, 0.01, 0.99;
+    Eigen::Vector3d S0, S1;
+    Eigen::Matrix3d D0, D1;
+    EXPECT_EQ(off.material->calcEnergy(C, &S0, &D0), o.material->calcEnergy(C, &S1, &D1));
+    EXPECT_EQ(S0, S1);
+    EXPECT_EQ(D0, D1);
+    try {
+        diagnose::applyEffect(*effect, {3.5}, {}, rig, on);
+        ADD_FAILURE() << "a ratio of 3.5 accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("valid: 0 to 3"), std::string::npos) << e.what();
+    }
 }

@@ -391,3 +391,49 @@ TEST(MembraneSection, PronyTermsReadInSiAndBadTermsAreLocated) {
     e = error("  prony: [{g: 0.1, tau: 20 s, beta: 1}]\n");
     EXPECT_EQ(e.getKey(), "membrane.prony[0].beta") << e.what();
 }
+
+// The woven film's yarns (docs/scenario-reference.md#membrane): membrane.anisotropy read in
+// SI, moduli 0 (or no key) the isotropic film, every bad value located at its key and line.
+TEST(MembraneSection, AnisotropyReadInSiAndBadValuesAreLocated) {
+    const std::string head =
+        "kind: seed-load-test\n"
+        "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
+        "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
+        "membrane:\n"
+        "  model: neo-hookean\n"
+        "  C10: 1 MPa\n"
+        "  thickness: 0.2 mm\n";
+    auto read = [&](const std::string& extra) {
+        return io::readLoadTestScenario(io::ScenarioFile::parse(head + extra, "film.yaml"));
+    };
+    const io::LoadTestScenario sc =
+        read("  anisotropy: {warp: 12 MPa, weft: 6 MPa, angle: 30 deg}\n");
+    const auto* fabric = dynamic_cast<const bags::FabricMaterial*>(sc.options.material.get());
+    ASSERT_NE(fabric, nullptr);
+    EXPECT_DOUBLE_EQ(fabric->getYarns().warpModulus, 12e6);
+    EXPECT_DOUBLE_EQ(fabric->getYarns().weftModulus, 6e6);
+    EXPECT_NEAR(fabric->getYarns().angle, M_PI / 6, 1e-15);
+    EXPECT_EQ(fabric->getMatrix().getName(), "neo-hookean");
+    // The plate bending default stays the matrix's (the coating bends, not the yarns).
+    EXPECT_DOUBLE_EQ(sc.options.bendingStiffness, read("").options.bendingStiffness);
+    EXPECT_TRUE(read("").options.material->isIsotropic());
+    EXPECT_TRUE(read("  anisotropy: {warp: 0 MPa, weft: 0 MPa}\n").options.material->isIsotropic());
+    auto error = [&](const std::string& extra) { return expectInputError([&] { read(extra); }); };
+    io::InputError e = error("  anisotropy: {warp: -1 MPa, weft: 6 MPa}\n");
+    EXPECT_EQ(e.getKey(), "membrane.anisotropy.warp");
+    EXPECT_EQ(e.getLine(), 8);
+    EXPECT_NE(e.getMessage().find("must be in [0 MPa, 20000 MPa]"), std::string::npos) << e.what();
+    e = error("  anisotropy:\n    warp: 10 MPa\n    weft: 1e5 MPa\n");
+    EXPECT_EQ(e.getKey(), "membrane.anisotropy.weft");
+    EXPECT_EQ(e.getLine(), 10);
+    e = error("  anisotropy: {warp: 10 MPa, weft: 6 MPa, angle: 100 deg}\n");
+    EXPECT_EQ(e.getKey(), "membrane.anisotropy.angle");
+    EXPECT_NE(e.getMessage().find("must be in [-90 deg, 90 deg]"), std::string::npos) << e.what();
+    e = error("  anisotropy: {warp: 10, weft: 6 MPa}\n");
+    EXPECT_EQ(e.getKey(), "membrane.anisotropy.warp");
+    EXPECT_NE(e.getMessage().find("has no unit"), std::string::npos) << e.what();
+    e = error("  anisotropy: {warp: 10 MPa}\n");
+    EXPECT_NE(e.getMessage().find("weft"), std::string::npos) << e.what();
+    e = error("  anisotropy: {warp: 10 MPa, weft: 6 MPa, ratio: 2}\n");
+    EXPECT_EQ(e.getKey(), "membrane.anisotropy.ratio") << e.what();
+}
