@@ -350,17 +350,21 @@ TEST(GasSection, LeakageAndHeatExchangeKeysReadInSiAndBadValuesAreLocated) {
     EXPECT_NE(e.getMessage().find("polytropic"), std::string::npos) << e.what();
 }
 
+// A load-test scenario up to its membrane section's last required key (line 7), for the film's
+// optional keys to follow.
+const char* const kFilmScenarioHead =
+    "kind: seed-load-test\n"
+    "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
+    "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
+    "membrane:\n"
+    "  model: neo-hookean\n"
+    "  C10: 1 MPa\n"
+    "  thickness: 0.2 mm\n";
+
 // The film's viscoelasticity (docs/scenario-reference.md#membrane): membrane.prony read in SI
 // (times with units), every bad term located at its own key and line.
 TEST(MembraneSection, PronyTermsReadInSiAndBadTermsAreLocated) {
-    const std::string head =
-        "kind: seed-load-test\n"
-        "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
-        "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
-        "membrane:\n"
-        "  model: neo-hookean\n"
-        "  C10: 1 MPa\n"
-        "  thickness: 0.2 mm\n";
+    const std::string head = kFilmScenarioHead;
     const io::LoadTestScenario sc = io::readLoadTestScenario(io::ScenarioFile::parse(
         head + "  prony: [{g: 0.1, tau: 20 s}, {g: 0.25, tau: 2 min}]\n", "film.yaml"));
     ASSERT_EQ(sc.options.prony.terms.size(), 2u);
@@ -395,14 +399,7 @@ TEST(MembraneSection, PronyTermsReadInSiAndBadTermsAreLocated) {
 // The woven film's yarns (docs/scenario-reference.md#membrane): membrane.anisotropy read in
 // SI, moduli 0 (or no key) the isotropic film, every bad value located at its key and line.
 TEST(MembraneSection, AnisotropyReadInSiAndBadValuesAreLocated) {
-    const std::string head =
-        "kind: seed-load-test\n"
-        "airbag: {long_side: 350 mm, short_side: 200 mm, width: 100 mm, height: 150 mm}\n"
-        "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
-        "membrane:\n"
-        "  model: neo-hookean\n"
-        "  C10: 1 MPa\n"
-        "  thickness: 0.2 mm\n";
+    const std::string head = kFilmScenarioHead;
     auto read = [&](const std::string& extra) {
         return io::readLoadTestScenario(io::ScenarioFile::parse(head + extra, "film.yaml"));
     };
