@@ -63,9 +63,7 @@ double FabricMaterial::calcEnergy(const Mat2& C, Eigen::Vector3d* S, Eigen::Matr
     return W;
 }
 
-double FabricMaterial::getInitialShearModulus() const {
-    return m_matrix->getInitialShearModulus();
-}
+double FabricMaterial::getInitialShearModulus() const { return m_matrix->getInitialShearModulus(); }
 
 std::string FabricMaterial::getName() const { return m_matrix->getName() + "+yarns"; }
 

@@ -3,22 +3,20 @@
 // differences (taut, wrinkled, slack; yarns stretched and compressed), the element's tangent,
 // closed forms of a single element stretched along the warp, the weft and the bias, the warp
 // directions of the double wedge's panels, and the isotropic film unchanged when it is off.
-#include "MaterialTestUtil.h"
-#include "TestMeshes.h"
-
 #include <bags/Airbag.h>
 #include <bags/Geometry.h>
 #include <bags/Material.h>
 #include <bags/MaterialFit.h>
 #include <bags/Solver.h>
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCore>
-
 #include <cmath>
 #include <random>
+
+#include "MaterialTestUtil.h"
+#include "TestMeshes.h"
 
 using namespace bags;
 using bags::test::kC10;
@@ -51,8 +49,8 @@ double yarnStrain(const Mat2& C, double t) {
 }
 
 // S = S_matrix + k <E_a> a a^T per family, from the formula (not through FabricMaterial).
-Eigen::Vector3d expectedStress(const MembraneMaterial& matrix, const Mat2& C, double kw,
-                               double kf, double angle) {
+Eigen::Vector3d expectedStress(const MembraneMaterial& matrix, const Mat2& C, double kw, double kf,
+                               double angle) {
     Eigen::Vector3d S;
     matrix.calcEnergy(C, &S, nullptr);
     for (int f = 0; f < 2; ++f) {
@@ -141,8 +139,10 @@ TEST(Fabric, ElementTangentMatchesFiniteDifferencesTautAndWrinkled) {
         const auto states = model.calcWrinkleStates(x);
         int nWrinkled = 0;
         for (int s : states) nWrinkled += s == 1;
-        if (wrinkled) EXPECT_GT(nWrinkled, 0);
-        else EXPECT_EQ(nWrinkled, 0);
+        if (wrinkled)
+            EXPECT_GT(nWrinkled, 0);
+        else
+            EXPECT_EQ(nWrinkled, 0);
         auto eval = [&](const Eigen::Matrix3Xd& y, bool hess) {
             EnergyAccumulator acc(model.getMesh().getNumNodes());
             acc.wantHessian = hess;
@@ -190,9 +190,9 @@ TEST(Fabric, SingleElementBiaxialStretchAlongWarpWeftAndBiasGivesTheClosedForm) 
         MembraneModel model(mesh, mat, 0.2e-3);
         const std::vector<Vec3> warp = model.calcWarpDirections();
         EXPECT_LT((warp[0] - Vec3::UnitX()).norm(), 1e-15);
-        for (const auto& l : {std::pair<double, double>{1.03, 1.01},
-                              std::pair<double, double>{1.05, 0.99},
-                              std::pair<double, double>{1.02, 1.04}}) {
+        for (const auto& l :
+             {std::pair<double, double>{1.03, 1.01}, std::pair<double, double>{1.05, 0.99},
+              std::pair<double, double>{1.02, 1.04}}) {
             Eigen::Matrix3Xd x = mesh.X;
             x.row(0) *= l.first;
             x.row(1) *= l.second;
@@ -321,8 +321,8 @@ TEST(Fabric, TheAirbagsFilmTakesTheYarnsAlongItsOwnFrame) {
     iso.material = makeStableYeoh(kC10, kC20, kC30);
     iso.forceTolerance = 1e-6;  // the turned bag is solved from turned states: to roundoff
     AirbagSpec yarns = iso;
-    yarns.material = std::make_shared<FabricMaterial>(iso.material->clone(),
-                                                      makeYarns(kE, kE, 0.0));
+    yarns.material =
+        std::make_shared<FabricMaterial>(iso.material->clone(), makeYarns(kE, kE, 0.0));
     AirbagSpec turned = yarns;
     turned.X_GB = Eigen::Isometry3d(Eigen::AngleAxisd(0.5 * kPi, Vec3::UnitZ()));
     auto inflated = [](const AirbagSpec& spec) {
