@@ -127,6 +127,9 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
         options.prony.terms = {{values[0], values[1]}};
     } else if (effect.name == "fabric-anisotropy") {
         // A balanced weave (840D nylon both ways): the same yarn stiffness along warp and weft.
+        if (!options.material)
+            throw std::invalid_argument("effect 'fabric-anisotropy' needs the film's material "
+                                        "(load test option 'material' is not set)");
         const auto* fabric = dynamic_cast<const bags::FabricMaterial*>(options.material.get());
         const bags::MembraneMaterial& matrix = fabric ? fabric->getMatrix() : *options.material;
         bags::FabricAnisotropy yarns;

@@ -8,6 +8,8 @@
 #include <diagnose/Diagnosis.h>
 #include <diagnose/Synthesis.h>
 
+#include <bags/Material.h>
+
 #include <cmath>
 
 namespace {
@@ -53,6 +55,8 @@ struct Rig {
         options.stiffnessFrom = 5.0;
         options.stiffnessTo = 15.0;
         options.gas.temperature = 296.15;
+        // The stand-in ignores its film; the film-changing candidates need one to act on.
+        options.material = bags::makeNeoHookean(1e6);
         protocol.rate = options.loadingRate;
         protocol.peakForce = options.peakForce;
         protocol.blockSize = 0.05;

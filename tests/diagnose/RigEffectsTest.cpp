@@ -179,6 +179,8 @@ TEST(Effects, FabricAnisotropyAddsBalancedYarnsAndZeroLeavesTheFilm) {
     EXPECT_EQ(off.material->calcEnergy(C, &S0, &D0), o.material->calcEnergy(C, &S1, &D1));
     EXPECT_EQ(S0, S1);
     EXPECT_EQ(D0, D1);
+    bags::LoadTestOptions noFilm;
+    EXPECT_THROW(diagnose::applyEffect(*effect, {0.5}, {}, rig, noFilm), std::invalid_argument);
     try {
         diagnose::applyEffect(*effect, {3.5}, {}, rig, on);
         ADD_FAILURE() << "a ratio of 3.5 accepted";
