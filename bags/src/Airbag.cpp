@@ -809,32 +809,53 @@ struct Airbag::Impl {
                 return true;
             }
         }
-        bool predicted = false;
         SolveSummary sum;
         double stab = 0.0;
-        bool ok = false;
-        try {
-            // Gas in or out of each bag over the step, at the volumes of the start of the step.
-            for (int b = 0; b < numBags; ++b) {
-                double dm = massFlow[b] * dt;
-                if (hasTarget[b]) {
-                    const double left = targetMass[b] - bagMass(b);
-                    dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
+        // From the state at `before` (its shapes at their poses): gas moved over dt, Newton from
+        // the warm start (if `warm` and taken) or the predictor's start. True if solved.
+        // *warmed: the warm start was taken.
+        auto attempt = [&](bool warm, bool* warmed) {
+            *warmed = false;
+            try {
+                // Gas in or out of each bag over the step, at the volumes of the start of the step.
+                for (int b = 0; b < numBags; ++b) {
+                    double dm = massFlow[b] * dt;
+                    if (hasTarget[b]) {
+                        const double left = targetMass[b] - bagMass(b);
+                        dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
+                    }
+                    addBagGasMass(b, dm);
                 }
-                addBagGasMass(b, dm);
+                leak(dt);
+                const bool heat = spec.gas.heatTimeConstant > 0.0 && dt > 0.0;
+                const std::vector<GasChamber> heatStart = heat ? copyGases() : std::vector<GasChamber>();
+                const std::vector<double> heatV0 = heat ? calcAllGasVolumes() : std::vector<double>();
+                *warmed = warm && warmStart();
+                if (!*warmed) predict(before->poses);
+                if (self) self->updateCandidates(x);
+                bool solved = solveWithFlow(copyGases(), dt, &sum, &stab);
+                if (solved && heat) solved = solveWithHeat(heatStart, heatV0, dt, &sum, &stab);
+                if (solved) solved = recheckCandidates(&sum);
+                return solved;
+            } catch (const NumericalError&) {
+                return false;  // e.g. a gas transfer no chamber could give
             }
-            leak(dt);
-            const bool heat = spec.gas.heatTimeConstant > 0.0 && dt > 0.0;
-            const std::vector<GasChamber> heatStart = heat ? copyGases() : std::vector<GasChamber>();
-            const std::vector<double> heatV0 = heat ? calcAllGasVolumes() : std::vector<double>();
-            if (!predicted && !warmStart()) predict(before->poses);
-            predicted = true;
-            if (self) self->updateCandidates(x);
-            ok = solveWithFlow(copyGases(), dt, &sum, &stab);
-            if (ok && heat) ok = solveWithHeat(heatStart, heatV0, dt, &sum, &stab);
-            if (ok) ok = recheckCandidates(&sum);
-        } catch (const NumericalError&) {
-            ok = false;  // e.g. a gas transfer no chamber could give
+        };
+        bool warmed = false;
+        bool ok = attempt(true, &warmed);
+        if (warmed && (!ok || stab > 0.0)) {
+            // The warm start did not end on an equilibrium: a state held by the stabilisation
+            // springs (anchored where Newton starts) depends on that start, here the last
+            // pass's end, so the bag would answer the same poses differently from pass to
+            // pass and an implicit coupling could not converge. Solved again from the start a
+            // first pass takes, whose answer is the poses' alone.
+            out->newtonIterations += sum.iterations;
+            out->factorizations += sum.factorizations;
+            restore(*before);
+            model->beginViscousStep(dt);
+            for (size_t i = 0; i < shapes.size(); ++i)
+                shapes[i].shape->setPose(interpolatePose(from[i], shapes[i].target, s1));
+            ok = attempt(false, &warmed);
         }
         out->newtonIterations += sum.iterations;
         out->factorizations += sum.factorizations;
@@ -1181,7 +1202,11 @@ AdvanceSummary Airbag::advance(double dt, int maxCuts) {
         }
     }
     out.converged = true;
-    m.lastAdvanced = m.x;
+    // A warm start only from an equilibrium: a state the springs hold is no start to share.
+    if (out.stabilizationEnergy > 0.0)
+        m.lastAdvanced.resize(3, 0);
+    else
+        m.lastAdvanced = m.x;
     return out;
 }
 

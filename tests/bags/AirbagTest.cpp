@@ -487,3 +487,41 @@ TEST(Airbag, AShapePushedSidewaysOnTheFilmSticksThenSlipsAtMuTimesTheNormalForce
     EXPECT_LT(ratioFirst, 0.9 * mu);
     EXPECT_GT(ratioLast, 0.98 * mu);
 }
+
+TEST(Airbag, ARepeatedAdvanceThatNeedsTheSpringsAnswersTheSamePosesTheSameWay) {
+    // An implicit coupling advances a bag again and again from one commit, and converges only
+    // if the bag answers the same poses the same way. A slack bag (2.0 g; the coarse literal
+    // bag fills at about 3.6 g) with friction 0.4 on the film, pressed 20 mm and then pushed
+    // 5 mm deeper and 10 mm sideways in one step, cannot reach the tight force tolerance of the
+    // patient runs (0.1 mN): the step is accepted held by the stabilisation springs, which
+    // are anchored where Newton starts. Warm-started from the last pass's end, each repeat
+    // relaxed further (measured before this was fixed: the wrench moved by 79 mN on the
+    // second pass and 86 mN on the third, the residual 28, 1.1 and 2.5 mN), so the coupling
+    // chased a moving answer. A warm start that does not end on an equilibrium
+    // is solved again from the first pass's start: the repeats give the first pass's wrench.
+    AirbagSpec spec = coarseSpec(0.030);
+    spec.forceTolerance = 1e-4;
+    RigidContact::Options contact;
+    contact.friction = 0.4;
+    PressedBag p(spec, 2.0e-3, contact);
+    Airbag& bag = *p.bag;
+    bag.setShapePose(p.shape, p.pose(0.020));
+    ASSERT_TRUE(bag.advance(0.01).converged);
+    bag.commit();
+    Eigen::Isometry3d X = p.pose(0.025);
+    X.translation().y() += 0.010;
+    bag.setShapePose(p.shape, X);
+    const AdvanceSummary first = bag.advance(0.01);
+    ASSERT_TRUE(first.converged);
+    ASSERT_GT(first.stabilizationEnergy, 0.0);              // held by the springs
+    ASSERT_GT(first.residual, 10.0 * spec.forceTolerance);  // not an equilibrium
+    const Vec3 f1 = bag.calcShapeWrench(p.shape).force;
+    for (int pass = 2; pass <= 3; ++pass) {
+        const AdvanceSummary again = bag.advance(0.01);
+        ASSERT_TRUE(again.converged);
+        const Vec3 f = bag.calcShapeWrench(p.shape).force;
+        std::printf("pass %d: residual %.3g N (first %.3g N), force moved %.3g N of %.4f N\n", pass,
+                    again.residual, first.residual, (f - f1).norm(), f1.norm());
+        EXPECT_LT((f - f1).norm(), spec.forceTolerance) << "pass " << pass;
+    }
+}
