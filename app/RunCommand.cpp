@@ -268,7 +268,8 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
             out << "  " << io::formatQuantity(c.gasMass, "g", 2) << ": " << c.snaps
                 << (c.snaps == 1 ? " snap" : " snaps") << " stepped over ("
                 << fmt("%.1f mm", c.snapTravel * 1e3)
-                << " of block travel without points: a fold snapped; docs/solver.md)\n";
+                << " of block travel without points where no nearby equilibrium was found: a "
+                   "fold snapping, or a step the solver could not take; docs/solver.md)\n";
 
     const std::vector<double> seed = bags::getSeedStiffnessPolynomial();
     out << "\nk(m) [N/mm], m [g]:\n";

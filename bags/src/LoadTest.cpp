@@ -353,6 +353,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         // A fold snapping through under the block: step over it (stepOverSnap), counted.
         auto snapOver = [&](double from, double tried, double dir, double limit,
                             AdvanceSummary* sum) {
+            if (!o.stepOverSnaps) return -1.0;
             const double to = stepOverSnap([&](double t) { return advance(t, sum); }, from,
                                            tried, dir, limit, o.displacementStep);
             if (to >= 0.0) {

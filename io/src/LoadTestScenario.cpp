@@ -577,7 +577,8 @@ std::vector<double> readGasMasses(const ScenarioNode& s) {
 
 void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
     s.checkKeys({"gas_masses"}, {"block", "rate", "peak_force", "unload", "displacement_step",
-                                 "stiffness_range", "polynomial_order", "gravity", "ensemble"});
+                                 "stiffness_range", "polynomial_order", "gravity", "ensemble",
+                                 "step_over_snaps"});
     o.gasMasses = readGasMasses(s);
     o.blockSize = s.getQuantity("block", D::Length, o.blockSize);
     o.loadingRate = s.getQuantity("rate", D::Velocity, o.loadingRate);
@@ -587,6 +588,7 @@ void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
     o.polynomialOrder = s.getInteger("polynomial_order", o.polynomialOrder);
     o.gravity = s.getBool("gravity", o.gravity);
     o.ensemble = s.getInteger("ensemble", o.ensemble);
+    o.stepOverSnaps = s.getBool("step_over_snaps", o.stepOverSnaps);
     if (o.ensemble < 1 || o.ensemble > 64)
         s.fail("ensemble", std::to_string(o.ensemble) +
                                " must be from 1 (one bag) to 64 imperfection seeds");

@@ -83,6 +83,9 @@ struct LoadTestOptions {
     /// under almost no force), block steps may grow to this many times displacementStep
     /// (the loading step also stays short of half stiffnessFrom by the stiffness so far).
     double lowForceStepFactor = 4.0;
+    /// Where no equilibrium is found near the last one at any step down to the smallest, go on
+    /// by 1, 2 or 4 displacement steps (stepOverSnap) instead of ending the curve as failed.
+    bool stepOverSnaps = true;
     double stiffnessFrom = 10.0;        ///< [N] force range of the stiffness fit
     double stiffnessTo = 35.0;          ///< [N]
     int polynomialOrder = 5;            ///< k(m) fit order (seed: 5)
