@@ -456,9 +456,12 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         }
         // How much the stabilisation carried: steps accepted with springs, and the energy the
         // springs held at those states, summed over the steps so far, against the block's
-        // work so far (trapezoidal): the largest ratio along the loading branch.
+        // work so far (trapezoidal): the largest ratio along the loading branch from where the
+        // force reaches the stiffness range (before it the block's work is next to nothing and
+        // any ratio is large), or at the loading's end if it never does.
         {
             double work = 0.0, held = 0.0;
+            bool inRange = false, any = false;
             for (size_t i = 0; i < curve.steps.size(); ++i) {
                 const LoadStep& st = curve.steps[i];
                 if (st.stabilizationEnergy > 0.0) ++curve.stabilizedSteps;
@@ -466,9 +469,12 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 const LoadStep& prev = curve.steps[i - 1];
                 work += 0.5 * (st.force + prev.force) * (st.displacement - prev.displacement);
                 held += st.stabilizationEnergy;
-                if (work > 0.0 && held > 0.0)
+                any = true;
+                inRange = inRange || st.force >= o.stiffnessFrom;
+                if (inRange && work > 0.0 && held > 0.0)
                     curve.stabilizationShare = std::max(curve.stabilizationShare, held / work);
             }
+            if (!inRange && any && work > 0.0) curve.stabilizationShare = held / work;
         }
         const LinearFit lf = calcRangeStiffness(curve.steps, o.stiffnessFrom, o.stiffnessTo);
         curve.stiffness = lf.slope;
