@@ -461,7 +461,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         // any ratio is large), or at the loading's end if it never does.
         {
             double work = 0.0, held = 0.0;
-            bool inRange = false, any = false;
+            bool inRange = false;
             for (size_t i = 0; i < curve.steps.size(); ++i) {
                 const LoadStep& st = curve.steps[i];
                 if (st.stabilizationEnergy > 0.0) ++curve.stabilizedSteps;
@@ -469,12 +469,11 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 const LoadStep& prev = curve.steps[i - 1];
                 work += 0.5 * (st.force + prev.force) * (st.displacement - prev.displacement);
                 held += st.stabilizationEnergy;
-                any = true;
                 inRange = inRange || st.force >= o.stiffnessFrom;
                 if (inRange && work > 0.0 && held > 0.0)
                     curve.stabilizationShare = std::max(curve.stabilizationShare, held / work);
             }
-            if (!inRange && any && work > 0.0) curve.stabilizationShare = held / work;
+            if (!inRange && work > 0.0) curve.stabilizationShare = held / work;
         }
         const LinearFit lf = calcRangeStiffness(curve.steps, o.stiffnessFrom, o.stiffnessTo);
         curve.stiffness = lf.slope;
