@@ -1,6 +1,7 @@
 // Elastic-foundation contact of the body shapes with a flat rigid support (see SupportContact.h).
 #include "body/SupportContact.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -52,7 +53,25 @@ PlaneSupport::PlaneSupport(const BodyModel& model, const PlaneSupportOptions& op
         }
         for (const SurfaceSample& s : samples)
             m_patches[i].push_back({s.p_B, s.n_B, s.area, model.findRegion(seg, s.p_B)});
+        SimTK::Vec3 lo(0), hi(0);
+        if (!m_patches[i].empty()) lo = hi = m_patches[i].front().p_B;
+        for (const Patch& p : m_patches[i])
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = std::min(lo[k], p.p_B[k]);
+                hi[k] = std::max(hi[k], p.p_B[k]);
+            }
+        m_boxCentre[i] = 0.5 * (lo + hi);
+        m_boxHalf[i] = 0.5 * (hi - lo);
     }
+}
+
+bool PlaneSupport::isClearOfSupport(int i, const SimTK::Transform& X_GB) const {
+    if (m_patches[i].empty()) return true;
+    // Lowest point of the rotated box: its centre's height less the extents projected on Z.
+    const SimTK::Mat33& R = X_GB.R().asMat33();
+    double reach = 0;
+    for (int k = 0; k < 3; ++k) reach += std::abs(R(2, k)) * m_boxHalf[i][k];
+    return (X_GB * m_boxCentre[i])[2] - reach > m_options.height;
 }
 
 int PlaneSupport::getPatchCount() const {
@@ -69,9 +88,7 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
         const Segment seg = static_cast<Segment>(i);
         const SimTK::MobilizedBody& mb = m_model.getMobilizedBody(seg);
         const SimTK::Transform& X_GB = mb.getBodyTransform(state);
-        const ContactShape& shape = m_model.getContactShape(seg);
-        // Broad phase: skip a segment whose bounding sphere is above the plane.
-        if ((X_GB * shape.getBoundingCentre())[2] - shape.getBoundingRadius() > o.height) continue;
+        if (isClearOfSupport(i, X_GB)) continue;  // broad phase
         const SimTK::SpatialVec& V_GB = mb.getBodyVelocity(state);
         for (const Patch& p : m_patches[i]) {
             const SimTK::Vec3 r_G = X_GB.R() * p.p_B;
@@ -111,6 +128,7 @@ SimTK::Real PlaneSupport::calcPotentialEnergy(const SimTK::State& state) const {
     for (int i = 0; i < kSegmentCount; ++i) {
         const SimTK::Transform& X_GB =
             m_model.getMobilizedBody(static_cast<Segment>(i)).getBodyTransform(state);
+        if (isClearOfSupport(i, X_GB)) continue;
         for (const Patch& p : m_patches[i]) {
             const double delta = o.height - (X_GB * p.p_B)[2];
             const double nz = (X_GB.R() * p.n_B)[2];

@@ -58,6 +58,7 @@ struct BodyParticipant::Shape {
     ShapeWrench W0;
     Mat6 T = Mat6::Zero();
     Eigen::Isometry3d X0 = Eigen::Isometry3d::Identity();
+    bool loaded = false;  ///< W0 or T not zero; an unloaded shape adds nothing
 };
 
 namespace {
@@ -91,6 +92,7 @@ class CouplingForce : public SimTK::Force::Custom::Implementation {
                    SimTK::Vector_<SimTK::Vec3>& particleForces,
                    SimTK::Vector& mobilityForces) const override {
         for (const BodyParticipant::Shape& s : *m_shapes) {
+            if (!s.loaded) continue;  // no wrench, no tangent: no force, no damping
             const SimTK::MobilizedBody& mobod = m_matter.getMobilizedBody(s.body);
             const SimTK::Transform& X_GB = mobod.getBodyTransform(state);
             const SimTK::Transform X_GS = X_GB * s.X_BS;
@@ -172,6 +174,7 @@ void BodyParticipant::setShapeLoad(int shape, const ShapeWrench& W0, const Mat6&
     s.W0 = W0;
     s.T = T;
     s.X0 = X0;
+    s.loaded = !(W0.asVector().isZero(0.0) && T.isZero(0.0));
 }
 
 void BodyParticipant::advanceTo(double time) {

@@ -65,10 +65,16 @@ class PlaneSupport : public SimTK::Force::Custom::Implementation {
     };
     template <class Visit>
     void forEachContact(const SimTK::State& state, Visit&& visit) const;
+    // True when no patch of segment i can reach the support at body pose X_GB (the patches'
+    // box in the body frame lies wholly above the plane).
+    bool isClearOfSupport(int i, const SimTK::Transform& X_GB) const;
 
     const BodyModel& m_model;
     PlaneSupportOptions m_options;
     std::array<std::vector<Patch>, kSegmentCount> m_patches;
+    // Per segment, the axis-aligned box of its patches in the body frame: centre and half
+    // extents [m] (the broad phase; tighter than the shape's bounding sphere).
+    std::array<SimTK::Vec3, kSegmentCount> m_boxCentre, m_boxHalf;
 };
 
 /// Adds a PlaneSupport to the model's forces; the returned reference stays valid as long as
