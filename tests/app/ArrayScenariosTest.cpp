@@ -1,4 +1,4 @@
-// The shipped pneumatic scenarios end to end at a coarse setting (30 mm meshes, settled 0.1 s,
+// The shipped pneumatic scenarios (and scripts/demo's turn-quick) end to end at a coarse setting (30 mm meshes, settled 0.1 s,
 // run 0.1 s; about 15-35 s each on the shared machine): each runs to the end, its controller
 // acts at the end of the settle (events.csv), and the gas moves the way it should: the turn's
 // inflated side gains and its vented side loses, the alternating cycle's odd rows gain while
@@ -88,6 +88,7 @@ INSTANTIATE_TEST_SUITE_P(
     Pneumatic, ShippedScenario,
     testing::Values(Case{"turn-left-pneumatic", "turn started", "", rightGains},
                     Case{"turn-right-pneumatic", "turn started", "", leftGains},
+                    Case{"turn-quick", "turn started", "", rightGains},
                     Case{"alternating-pressure", "schedule: channel 'odd-rows' inflate open", "",
                          oddRowsGain},
                     Case{"turn-left-pneumatic-small-woman", "turn started",
