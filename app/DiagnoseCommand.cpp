@@ -300,6 +300,7 @@ int run(const Args& a) {
         which = std::make_unique<diagnose::WhichReport>(diagnose::calibrateCandidates(
             data, sc.options, sc.rig, base, tests, where, counted, co));
         for (const auto& c : which->candidates) simulations += c.simulations;
+        simulations += which->pairSimulations;
         if (!a.quiet) {
             std::cout << "which: candidates ranked by the shrink of the held-out gap beyond the "
                          "validation uncertainty (leave one gas mass out), less "
@@ -347,6 +348,18 @@ int run(const Args& a) {
                 }
             }
             for (const auto& p : which->confusable)
+                std::cout << "  confusable on these data: " << p.first << " and " << p.second << "\n";
+            std::cout << "pairs: " << which->pairStageReason << "\n";
+            for (const auto& p : which->pairs)
+                if (p.refined)
+                    std::cout << "  " << p.result.effect << ": shrink "
+                              << fmt("%.1f %%", 100 * p.result.excessShrink)
+                              << " beyond the uncertainty, score " << fmt("%.3f", p.result.score)
+                              << "; " << p.why << (p.accepted ? ": accepted" : ": not accepted") << "\n";
+                else
+                    std::cout << "  " << p.first << " + " << p.second << ": screened (cost "
+                              << fmt("%.4g", p.screenCost) << ")\n";
+            for (const auto& p : which->confusablePairs)
                 std::cout << "  confusable on these data: " << p.first << " and " << p.second << "\n";
         }
     }

@@ -293,6 +293,10 @@ int run(const Args& a) {
             throw UsageError(std::string("--param: ") + e.what());
         }
     }
+    // A testing machine stops at its load cell's reading of the peak force: the truth is
+    // loaded to the force the load cell reads as the protocol's peak.
+    const double peakReading = sc.options.peakForce;  // the protocol's, as the load cell reads it
+    truth.peakForce = peakReading / (1.0 + rig.loadCellGain);
     std::string modelForm = "displacement step " + io::formatSignificant(0.5 * truth.displacementStep, "mm") +
                             " (the scenario's " + io::formatSignificant(truth.displacementStep, "mm") + ")";
     truth.displacementStep *= 0.5;
@@ -326,7 +330,7 @@ int run(const Args& a) {
     // warmer than the room).
     protocol.blockSize = truth.blockSize;
     protocol.rate = truth.loadingRate;
-    protocol.peakForce = truth.peakForce;
+    protocol.peakForce = peakReading;
     protocol.roomTemperature = roomTemperature;
     diagnose::MeasuredData data =
         diagnose::synthesizeMeasurement(result.curves, readings, rig, protocol, so);

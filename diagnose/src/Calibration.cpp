@@ -5,6 +5,8 @@
 #include <ceres/ceres.h>
 
 #include <algorithm>
+#include <atomic>
+#include <functional>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -19,28 +21,70 @@ namespace {
 using detail::fmt;
 using detail::kNaN;
 
-// Simulated comparisons of one effect at trial parameter values, with the load tests of
-// effects that change the bag cached by parameter value (shared by all folds).
+// Load tests at trial values, shared by every candidate and pair: keyed by the effects that
+// change the bag and their scaled values, so that a pair whose other member changes only the
+// instruments reuses the simulations of its member that changes the bag (and all folds share
+// them).
+class SimulationCache {
+  public:
+    bool find(const std::string& key, std::shared_ptr<const bags::LoadTestResult>& r) {
+        std::lock_guard<std::mutex> lock(m_mutex);
+        auto it = m_map.find(key);
+        if (it == m_map.end()) return false;
+        r = it->second;
+        return true;
+    }
+    void put(const std::string& key, std::shared_ptr<const bags::LoadTestResult> r) {
+        std::lock_guard<std::mutex> lock(m_mutex);
+        m_map[key] = std::move(r);
+    }
+
+  private:
+    std::mutex m_mutex;
+    std::map<std::string, std::shared_ptr<const bags::LoadTestResult>> m_map;
+};
+
+// Simulated comparisons with one effect, or two at once, at trial parameter values (the
+// effects' parameters in order, the first's then the second's).
 class Evaluator {
   public:
     Evaluator(const MeasuredData& data, const bags::LoadTestOptions& base, const RigEffects& rig,
-              const bags::LoadTestResult& baseResult, const Effect& effect,
-              const Simulator& simulate)
-        : m_data(data), m_base(base), m_rig(rig), m_baseResult(baseResult), m_effect(effect),
-          m_simulate(simulate) {
+              const bags::LoadTestResult& baseResult, std::vector<const Effect*> effects,
+              const Simulator& simulate, SimulationCache& cache)
+        : m_data(data), m_base(base), m_rig(rig), m_baseResult(baseResult),
+          m_effects(std::move(effects)), m_simulate(simulate), m_cache(cache) {
         for (const MeasuredTest& t : data.tests) m_readings.push_back(t.gasMass);
+        for (const Effect* e : m_effects)
+            for (const EffectParameter& p : e->parameters) m_parameters.push_back(&p);
+    }
+
+    int getParameterCount() const { return static_cast<int>(m_parameters.size()); }
+    const EffectParameter& getParameter(int i) const { return *m_parameters[i]; }
+    bool changesTheBag() const {
+        for (const Effect* e : m_effects)
+            if (e->changesTheBag) return true;
+        return false;
     }
 
     /// x: scaled parameters, 1 + (v - lower) / (upper - lower) in [1, 2] (so Ceres' relative
     /// finite-difference step is a fixed share of the range).
     std::vector<double> toValues(const double* x) const {
         std::vector<double> v;
-        for (size_t i = 0; i < m_effect.parameters.size(); ++i) {
-            const EffectParameter& p = m_effect.parameters[i];
+        for (size_t i = 0; i < m_parameters.size(); ++i) {
+            const EffectParameter& p = *m_parameters[i];
             const double xi = std::clamp(x[i], 1.0, 2.0);
             v.push_back(p.lower + (xi - 1.0) * (p.upper - p.lower));
         }
         return v;
+    }
+    /// The scaled parameters of values [SI] (toValues' inverse), from parameter `from` on.
+    std::vector<double> toScaled(const std::vector<double>& v, size_t from = 0) const {
+        std::vector<double> x;
+        for (size_t i = 0; i < v.size(); ++i) {
+            const EffectParameter& p = *m_parameters[from + i];
+            x.push_back(1.0 + (v[i] - p.lower) / (p.upper - p.lower));
+        }
+        return x;
     }
 
     /// The comparisons of all tests at scaled parameters x; false if the simulation failed.
@@ -48,9 +92,14 @@ class Evaluator {
         const std::vector<double> v = toValues(x);
         RigEffects rig = m_rig;
         bags::LoadTestOptions o = m_base;
-        applyEffect(m_effect, v, m_readings, rig, o);
+        size_t k = 0;
+        for (const Effect* e : m_effects) {
+            const size_t np = e->parameters.size();
+            applyEffect(*e, std::vector<double>(v.begin() + k, v.begin() + k + np), m_readings, rig, o);
+            k += np;
+        }
         std::shared_ptr<const bags::LoadTestResult> r;
-        if (m_effect.changesTheBag) {
+        if (changesTheBag()) {
             r = simulate(x, o);
             if (!r) return false;
         }
@@ -64,40 +113,43 @@ class Evaluator {
     /// Runs (or finds) the load test at these parameters; null if it failed.
     std::shared_ptr<const bags::LoadTestResult> simulate(const double* x,
                                                          const bags::LoadTestOptions& o) {
-        std::vector<long> key;
-        for (size_t i = 0; i < m_effect.parameters.size(); ++i)
-            key.push_back(std::lround(x[i] * 1e6));
-        {
-            std::lock_guard<std::mutex> lock(m_mutex);
-            auto it = m_cache.find(key);
-            if (it != m_cache.end()) return it->second;
+        // Only the effects that change the bag make the simulation.
+        std::string key;
+        size_t k = 0;
+        for (const Effect* e : m_effects) {
+            if (e->changesTheBag) {
+                key += e->name + ":";
+                for (size_t i = 0; i < e->parameters.size(); ++i)
+                    key += std::to_string(std::lround(x[k + i] * 1e6)) + ",";
+                key += "|";
+            }
+            k += e->parameters.size();
         }
         std::shared_ptr<const bags::LoadTestResult> r;
+        if (m_cache.find(key, r)) return r;
         try {
             r = std::make_shared<bags::LoadTestResult>(m_simulate(o));
         } catch (const bags::NumericalError&) {
             r = nullptr;  // this trial value cannot be simulated: the fit steps back
         }
-        std::lock_guard<std::mutex> lock(m_mutex);
-        ++m_simulations;
-        m_cache[key] = r;
+        m_simulations.fetch_add(1);
+        m_cache.put(key, r);
         return r;
     }
 
-    int getSimulations() const { return m_simulations; }
-    const Effect& getEffect() const { return m_effect; }
+    int getSimulations() const { return m_simulations.load(); }
 
   private:
     const MeasuredData& m_data;
     const bags::LoadTestOptions& m_base;
     RigEffects m_rig;
     const bags::LoadTestResult& m_baseResult;
-    const Effect& m_effect;
+    std::vector<const Effect*> m_effects;
+    std::vector<const EffectParameter*> m_parameters;
     const Simulator& m_simulate;
+    SimulationCache& m_cache;
     std::vector<double> m_readings;
-    std::mutex m_mutex;
-    std::map<std::vector<long>, std::shared_ptr<const bags::LoadTestResult>> m_cache;
-    int m_simulations = 0;
+    std::atomic<int> m_simulations{0};
 };
 
 // Which samples of each training test enter the fit: at most kMaxSamples per channel,
@@ -191,20 +243,17 @@ std::vector<std::vector<double>> makeGrid(int params, int points) {
     return g;
 }
 
-Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
-              const std::vector<int>& train, double fr, double pr, const CalibrationOptions& o,
-              bool covariance) {
-    const SampleSet s = makeSamples(baseline, train);
-    const int np = static_cast<int>(e.getEffect().parameters.size());
-    // Coarse scan (its simulations in parallel), then Ceres from the best point.
-    const std::vector<std::vector<double>> grid = makeGrid(np, o.gridPoints);
-    std::vector<double> costs(grid.size(), INFINITY);
-    if (e.getEffect().changesTheBag) {
-        std::vector<std::string> errors(grid.size());
+// The least-squares cost at each of the points (scaled), their simulations run at once when
+// the effects change the bag.
+std::vector<double> scanCosts(Evaluator& e, const std::vector<std::vector<double>>& points,
+                              const SampleSet& s, double fr, double pr, const CalibrationOptions& o) {
+    std::vector<double> costs(points.size(), INFINITY);
+    if (e.changesTheBag()) {
+        std::vector<std::string> errors(points.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(o.threads)
-        for (int i = 0; i < static_cast<int>(grid.size()); ++i) {
+        for (int i = 0; i < static_cast<int>(points.size()); ++i) {
             try {
-                costs[i] = calcCost(e, grid[i].data(), s, fr, pr);
+                costs[i] = calcCost(e, points[i].data(), s, fr, pr);
             } catch (const std::exception& ex) {
                 errors[i] = ex.what();
             }
@@ -212,8 +261,20 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
         for (const std::string& err : errors)
             if (!err.empty()) throw std::runtime_error(err);  // e.g. an interrupt
     } else {
-        for (size_t i = 0; i < grid.size(); ++i) costs[i] = calcCost(e, grid[i].data(), s, fr, pr);
+        for (size_t i = 0; i < points.size(); ++i) costs[i] = calcCost(e, points[i].data(), s, fr, pr);
     }
+    return costs;
+}
+
+// Fits the parameters on the training tests: the best of the start points (scaled; empty:
+// the coarse grid of gridPoints per parameter), then Ceres from there.
+Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
+              const std::vector<int>& train, double fr, double pr, const CalibrationOptions& o,
+              bool covariance, const std::vector<std::vector<double>>& starts = {}) {
+    const SampleSet s = makeSamples(baseline, train);
+    const int np = e.getParameterCount();
+    const std::vector<std::vector<double>> grid = starts.empty() ? makeGrid(np, o.gridPoints) : starts;
+    const std::vector<double> costs = scanCosts(e, grid, s, fr, pr, o);
     const size_t best = std::min_element(costs.begin(), costs.end()) - costs.begin();
     Fit fit;
     fit.x = grid[best];
@@ -261,6 +322,240 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
     return fit;
 }
 
+// The channel ranges and validation uncertainties the gaps are measured with.
+struct GapScale {
+    double forceRange = 0.0, pressureRange = 0.0, forceUncertainty = 0.0, pressureUncertainty = 0.0;
+};
+
+// Fits the evaluator's parameters with leave-one-test-out folds and on all tests, and measures
+// the held-out gap before and after. `starts(h)`: the scan's start points for the fit without
+// test h (h = -1: all tests); empty, the coarse grid.
+CandidateResult evaluateCandidate(Evaluator& e, const std::string& name, int n,
+                                  const std::vector<TestComparison>& baseline, const GapScale& g,
+                                  const CalibrationOptions& o,
+                                  const std::function<std::vector<std::vector<double>>(int)>& starts) {
+    const double fr = g.forceRange, pr = g.pressureRange, fu = g.forceUncertainty,
+                 pu = g.pressureUncertainty;
+    CandidateResult cr;
+    cr.effect = name;
+    double sumBefore = 0.0, sumAfter = 0.0, sumExcessBefore = 0.0, sumExcessAfter = 0.0;
+    std::vector<TestComparison> heldAfter;  // each test as held out, with its fold's fit
+    for (int h = 0; h < n; ++h) {
+        std::vector<int> train;
+        for (int i = 0; i < n; ++i)
+            if (i != h) train.push_back(i);
+        const Fit fit = calibrate(e, baseline, train, fr, pr, o, false, starts(h));
+        FoldResult f;
+        f.heldOut = h;
+        f.parameters = e.toValues(fit.x.data());
+        f.before = calcGap(baseline, {h}, fr, pr);
+        f.excessBefore = calcGap(baseline, {h}, fr, pr, fu, pu);
+        std::vector<TestComparison> c;
+        if (e.compare(fit.x.data(), c)) {
+            f.after = calcGap(c, {h}, fr, pr);
+            f.excessAfter = calcGap(c, {h}, fr, pr, fu, pu);
+            heldAfter.push_back(c[h]);
+        } else {
+            f.after = f.excessAfter = INFINITY;
+        }
+        sumBefore += f.before;
+        sumAfter += f.after;
+        sumExcessBefore += f.excessBefore;
+        sumExcessAfter += f.excessAfter;
+        cr.folds.push_back(f);
+    }
+    std::vector<int> all(n);
+    for (int i = 0; i < n; ++i) all[i] = i;
+    const Fit full = calibrate(e, baseline, all, fr, pr, o, true, starts(-1));
+    cr.parameters = e.toValues(full.x.data());
+    if (!e.compare(full.x.data(), cr.fitted)) cr.fitted.clear();
+    const int np = e.getParameterCount();
+    for (int i = 0; i < np; ++i)
+        cr.parameterStdDev.push_back(full.sdX[i] * (e.getParameter(i).upper - e.getParameter(i).lower));
+    cr.heldoutBefore = sumBefore / n;
+    cr.heldoutAfter = sumAfter / n;
+    cr.shrink = cr.heldoutBefore > 0.0 ? 1.0 - cr.heldoutAfter / cr.heldoutBefore : 0.0;
+    cr.excessBefore = sumExcessBefore / n;
+    cr.excessAfter = sumExcessAfter / n;
+    cr.excessShrink = cr.excessBefore > 0.0 ? 1.0 - cr.excessAfter / cr.excessBefore : 0.0;
+    cr.score = cr.excessShrink - o.parameterPenalty * double(np);
+    cr.simulations = e.getSimulations();
+    cr.heldoutMetricsBefore = calcGapMetrics(baseline);
+    if (static_cast<int>(heldAfter.size()) == n) cr.heldoutMetricsAfter = calcGapMetrics(heldAfter);
+    return cr;
+}
+
+const CandidateResult* findSingle(const WhichReport& r, const std::string& name) {
+    for (const CandidateResult& c : r.candidates)
+        if (c.effect == name) return &c;
+    return nullptr;
+}
+
+bool areConfusable(const WhichReport& r, const std::string& a, const std::string& b) {
+    for (const auto& [x, y] : r.confusable)
+        if ((x == a && y == b) || (x == b && y == a)) return true;
+    return false;
+}
+
+// The points a pair's scan starts from: the first member at its single fit (`first`, SI) with
+// the second over its coarse grid, and with the second at its own single fit.
+std::vector<std::vector<double>> makePairStarts(const Evaluator& e, const std::vector<double>& first,
+                                                const std::vector<double>& second, int gridPoints) {
+    const std::vector<double> x1 = e.toScaled(first);
+    std::vector<std::vector<double>> starts;
+    auto add = [&](const std::vector<double>& x2) {
+        std::vector<double> x = x1;
+        x.insert(x.end(), x2.begin(), x2.end());
+        starts.push_back(x);
+    };
+    for (const std::vector<double>& x2 : makeGrid(static_cast<int>(second.size()), gridPoints)) add(x2);
+    add(e.toScaled(second, first.size()));
+    return starts;
+}
+
+// Judges a fitted pair against the singles it must beat (the best single, and each member
+// alone): the share of the held-out gap beyond the uncertainty that single leaves which the
+// pair removes, less the penalty per parameter the pair adds; the least of these is its gain.
+void judgePair(PairResult& p, const WhichReport& r, const CalibrationOptions& o) {
+    const CandidateResult& pair = p.result;
+    p.gain = INFINITY;
+    for (const CandidateResult* s : {&r.candidates.front(), findSingle(r, p.first), findSingle(r, p.second)}) {
+        if (!s) continue;
+        const double extra = o.parameterPenalty *
+                             std::max<double>(0.0, double(pair.parameters.size()) - double(s->parameters.size()));
+        const double shrink = s->excessAfter > 0.0 && std::isfinite(pair.excessAfter)
+                                  ? 1.0 - pair.excessAfter / s->excessAfter
+                                  : -INFINITY;
+        if (shrink - extra < p.gain) {
+            p.gain = shrink - extra;
+            p.against = s->effect;
+            p.singleExcessAfter = s->excessAfter;
+            p.shrinkOverSingle = shrink;
+            p.extraPenalty = extra;
+        }
+    }
+    const bool gains = p.gain >= o.explainThreshold, explains = pair.score >= o.explainThreshold;
+    p.accepted = gains && explains;
+    p.why = "removes " + fmt("%.0f", 100 * p.shrinkOverSingle) + " % of the held-out gap beyond "
+            "the uncertainty that " + p.against + " alone leaves (" + fmt("%.4f", p.singleExcessAfter) +
+            " -> " + fmt("%.4f", pair.excessAfter) + "), less " + fmt("%.2f", p.extraPenalty) +
+            " for the parameters it adds: " + fmt("%.3f", p.gain) + (gains ? " >= " : " < ") +
+            fmt("%g", o.explainThreshold) + "; its own score " + fmt("%.3f", pair.score) +
+            (explains ? " >= " : " < ") + fmt("%g", o.explainThreshold);
+}
+
+// The pair stage (docs/diagnosis.md#two-effects-at-once): when the best single leaves a channel
+// beyond twice its validation uncertainty held out, the best singles are each fitted jointly
+// with every other candidate (screened cheaply first, the best few fitted in full), and a pair
+// is named when it explains at least the threshold's share of what the singles leave.
+void runPairStage(WhichReport& report, const MeasuredData& data, const bags::LoadTestOptions& base,
+                  const RigEffects& baseRig, const bags::LoadTestResult& baseResult,
+                  const std::vector<TestComparison>& baseline, const WhereReport& where,
+                  const Simulator& simulate, const CalibrationOptions& o, SimulationCache& cache,
+                  const GapScale& g) {
+    const int n = static_cast<int>(data.tests.size());
+    if (!o.pairs) {
+        report.pairStageReason = "not run: switched off";
+        return;
+    }
+    if (where.withinValidation) {
+        report.pairStageReason = "not run: every channel is within twice its validation uncertainty";
+        return;
+    }
+    if (report.candidates.size() < 2) {
+        report.pairStageReason = "not run: fewer than two candidates";
+        return;
+    }
+    const CandidateResult& best = report.candidates.front();
+    std::string left;
+    for (const GapMetrics& m : best.heldoutMetricsAfter) {
+        double u = 0.0;
+        for (const ChannelSummary& c : where.channels)
+            if (c.channel == m.channel) u = c.validation;
+        if (m.rmse > 2.0 * u)
+            left += (left.empty() ? "" : ", ") + m.channel + " RMSE " +
+                    fmt("%.4g", m.rmse / getChannelUnitScale(getChannelKind(m.channel))) + " " +
+                    getChannelUnit(getChannelKind(m.channel)) + " > twice " +
+                    fmt("%.3g", u / getChannelUnitScale(getChannelKind(m.channel)));
+    }
+    if (best.heldoutMetricsAfter.empty()) left = "a fold of " + best.effect + " failed";
+    if (left.empty() && o.pairGate) {
+        report.pairStageReason = "not run: " + best.effect + " leaves every channel within twice its "
+                                 "validation uncertainty, held out";
+        return;
+    }
+    report.pairStageRan = true;
+    report.pairStageReason = left.empty() ? "run without its gate"
+                                          : "run: " + best.effect + " leaves, held out, " + left;
+
+    // The pairs: each of the best singles with every other candidate, but not with one it is
+    // confusable with (on these data the two are one effect).
+    std::vector<std::unique_ptr<Evaluator>> evaluators;
+    const int firsts = std::min<int>(o.pairFirstMembers, static_cast<int>(report.candidates.size()));
+    for (int f = 0; f < firsts; ++f) {
+        const CandidateResult& a = report.candidates[f];
+        if (!(a.excessShrink > 0.0)) continue;
+        for (const CandidateResult& b : report.candidates) {
+            if (b.effect == a.effect || areConfusable(report, a.effect, b.effect)) continue;
+            bool listed = false;
+            for (const PairResult& p : report.pairs)
+                listed = listed || (p.first == b.effect && p.second == a.effect);
+            if (listed) continue;
+            PairResult p;
+            p.first = a.effect;
+            p.second = b.effect;
+            evaluators.push_back(std::make_unique<Evaluator>(
+                data, base, baseRig, baseResult,
+                std::vector<const Effect*>{findEffect(a.effect), findEffect(b.effect)}, simulate, cache));
+            // Screen on all tests: the first at its single fit, the second scanned.
+            Evaluator& e = *evaluators.back();
+            std::vector<int> all(n);
+            for (int i = 0; i < n; ++i) all[i] = i;
+            const std::vector<std::vector<double>> starts =
+                makePairStarts(e, a.parameters, b.parameters, o.gridPoints);
+            const std::vector<double> costs =
+                scanCosts(e, starts, makeSamples(baseline, all), g.forceRange, g.pressureRange, o);
+            const size_t k = std::min_element(costs.begin(), costs.end()) - costs.begin();
+            p.screenCost = costs[k];
+            p.screenParameters = e.toValues(starts[k].data());
+            p.why = "screened out: its cost on all tests at the scan's best is not among the " +
+                    std::to_string(o.pairsRefined) + " lowest";
+            report.pairs.push_back(p);
+        }
+    }
+    // The pairs whose screen fits best are fitted in full, as a single is.
+    std::vector<size_t> order(report.pairs.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
+        return report.pairs[x].screenCost < report.pairs[y].screenCost;
+    });
+    for (size_t r = 0; r < order.size() && static_cast<int>(r) < o.pairsRefined; ++r) {
+        PairResult& p = report.pairs[order[r]];
+        if (!std::isfinite(p.screenCost)) continue;
+        const CandidateResult& a = *findSingle(report, p.first);
+        const CandidateResult& b = *findSingle(report, p.second);
+        Evaluator& e = *evaluators[order[r]];
+        p.result = evaluateCandidate(e, p.first + " + " + p.second, n, baseline, g, o, [&](int h) {
+            return h < 0 ? makePairStarts(e, a.parameters, b.parameters, o.gridPoints)
+                         : makePairStarts(e, a.folds[h].parameters, b.folds[h].parameters, o.gridPoints);
+        });
+        p.refined = true;
+        judgePair(p, report, o);
+    }
+    for (size_t i = 0; i < report.pairs.size(); ++i) {
+        report.pairs[i].result.simulations = evaluators[i]->getSimulations();
+        report.pairSimulations += evaluators[i]->getSimulations();
+    }
+    // Refined pairs first, by gain; then the screened, by their screen's cost.
+    std::stable_sort(report.pairs.begin(), report.pairs.end(), [](const PairResult& x, const PairResult& y) {
+        if (x.refined != y.refined) return x.refined;
+        return x.refined ? x.gain > y.gain : x.screenCost < y.screenCost;
+    });
+    // The pair named: the accepted one with the largest gain (the first, as they are sorted).
+    for (size_t i = 0; i < report.pairs.size() && report.pairChosen < 0; ++i)
+        if (report.pairs[i].accepted) report.pairChosen = static_cast<int>(i);
+}
+
 }  // namespace
 
 WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOptions& base,
@@ -270,68 +565,24 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                                 const CalibrationOptions& o) {
     const int n = static_cast<int>(data.tests.size());
     if (n < 2) throw std::invalid_argument("the calibration needs two tests or more (one held out)");
-    double fr = 0.0, pr = 0.0, fu = 0.0, pu = 0.0;
+    GapScale g;
     for (const ChannelSummary& c : where.channels) {
-        if (c.channel == "force") fr = c.range, fu = c.validation;
-        if (c.channel == "pressure") pr = c.range, pu = c.validation;
+        if (c.channel == "force") g.forceRange = c.range, g.forceUncertainty = c.validation;
+        if (c.channel == "pressure") g.pressureRange = c.range, g.pressureUncertainty = c.validation;
     }
-    if (!(fr > 0.0) || !(pr > 0.0))
+    if (!(g.forceRange > 0.0) || !(g.pressureRange > 0.0))
         throw std::invalid_argument("the measured force and pressure must vary to be compared");
 
+    SimulationCache cache;
     WhichReport report;
     for (const Effect& effect : getEffects()) {
         if (o.candidates.empty() ? !effect.inLibrary
                                  : std::find(o.candidates.begin(), o.candidates.end(),
                                              effect.name) == o.candidates.end())
             continue;
-        Evaluator e(data, base, baseRig, baseResult, effect, simulate);
-        CandidateResult cr;
-        cr.effect = effect.name;
-        double sumBefore = 0.0, sumAfter = 0.0, sumExcessBefore = 0.0, sumExcessAfter = 0.0;
-        std::vector<TestComparison> heldAfter;  // each test as held out, with its fold's fit
-        for (int h = 0; h < n; ++h) {
-            std::vector<int> train;
-            for (int i = 0; i < n; ++i)
-                if (i != h) train.push_back(i);
-            const Fit fit = calibrate(e, baseline, train, fr, pr, o, false);
-            FoldResult f;
-            f.heldOut = h;
-            f.parameters = e.toValues(fit.x.data());
-            f.before = calcGap(baseline, {h}, fr, pr);
-            f.excessBefore = calcGap(baseline, {h}, fr, pr, fu, pu);
-            std::vector<TestComparison> c;
-            if (e.compare(fit.x.data(), c)) {
-                f.after = calcGap(c, {h}, fr, pr);
-                f.excessAfter = calcGap(c, {h}, fr, pr, fu, pu);
-                heldAfter.push_back(c[h]);
-            } else {
-                f.after = f.excessAfter = INFINITY;
-            }
-            sumBefore += f.before;
-            sumAfter += f.after;
-            sumExcessBefore += f.excessBefore;
-            sumExcessAfter += f.excessAfter;
-            cr.folds.push_back(f);
-        }
-        std::vector<int> all(n);
-        for (int i = 0; i < n; ++i) all[i] = i;
-        const Fit full = calibrate(e, baseline, all, fr, pr, o, true);
-        cr.parameters = e.toValues(full.x.data());
-        if (!e.compare(full.x.data(), cr.fitted)) cr.fitted.clear();
-        for (size_t i = 0; i < effect.parameters.size(); ++i)
-            cr.parameterStdDev.push_back(full.sdX[i] *
-                                         (effect.parameters[i].upper - effect.parameters[i].lower));
-        cr.heldoutBefore = sumBefore / n;
-        cr.heldoutAfter = sumAfter / n;
-        cr.shrink = cr.heldoutBefore > 0.0 ? 1.0 - cr.heldoutAfter / cr.heldoutBefore : 0.0;
-        cr.excessBefore = sumExcessBefore / n;
-        cr.excessAfter = sumExcessAfter / n;
-        cr.excessShrink = cr.excessBefore > 0.0 ? 1.0 - cr.excessAfter / cr.excessBefore : 0.0;
-        cr.score = cr.excessShrink - o.parameterPenalty * double(effect.parameters.size());
-        cr.simulations = e.getSimulations();
-        cr.heldoutMetricsBefore = calcGapMetrics(baseline);
-        if (static_cast<int>(heldAfter.size()) == n) cr.heldoutMetricsAfter = calcGapMetrics(heldAfter);
-        report.candidates.push_back(cr);
+        Evaluator e(data, base, baseRig, baseResult, {&effect}, simulate, cache);
+        report.candidates.push_back(evaluateCandidate(
+            e, effect.name, n, baseline, g, o, [](int) { return std::vector<std::vector<double>>(); }));
     }
     std::stable_sort(report.candidates.begin(), report.candidates.end(),
                      [](const CandidateResult& a, const CandidateResult& b) {
@@ -345,6 +596,13 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                 report.confusable.push_back({a.effect, b.effect});
         }
 
+    // The effects these data cannot tell from the one named.
+    auto confusableWith = [&](const std::string& effect) {
+        std::string others;
+        for (const auto& [a, b] : report.confusable)
+            if (a == effect || b == effect) others += (others.empty() ? "" : ", ") + (a == effect ? b : a);
+        return others;
+    };
     const CandidateResult* best = report.candidates.empty() ? nullptr : &report.candidates[0];
     if (where.withinValidation) {
         report.verdict = "none";
@@ -352,16 +610,13 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                         "(sensor noise, numerical and input uncertainty)";
     } else if (best && best->score >= o.explainThreshold) {
         report.verdict = best->effect;
+        report.verdictEffects = {best->effect};
         report.reason = "it shrinks the held-out gap beyond the validation uncertainty by " +
                         fmt("%.0f", 100 * best->excessShrink) + " % (from " +
                         fmt("%.4f", best->excessBefore) + " to " + fmt("%.4f", best->excessAfter) +
                         "; the whole gap by " + fmt("%.0f", 100 * best->shrink) + " %, from " +
                         fmt("%.4f", best->heldoutBefore) + " to " + fmt("%.4f", best->heldoutAfter) + ")";
-        // The effects these data cannot tell from the one named.
-        std::string others;
-        for (const auto& [a, b] : report.confusable)
-            if (a == best->effect || b == best->effect)
-                others += (others.empty() ? "" : ", ") + (a == best->effect ? b : a);
+        const std::string others = confusableWith(best->effect);
         if (!others.empty()) report.reason += "; confusable with " + others + " on these data";
     } else {
         report.verdict = "unexplained";
@@ -371,6 +626,34 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                         (best ? " (best: " + best->effect + ", " +
                                     fmt("%.0f", 100 * best->excessShrink) + " %)"
                               : std::string());
+    }
+
+    runPairStage(report, data, base, baseRig, baseResult, baseline, where, simulate, o, cache, g);
+    if (report.pairChosen >= 0) {
+        const PairResult& p = report.pairs[report.pairChosen];
+        const std::string single = report.verdict;
+        report.verdict = p.first + " + " + p.second;
+        report.verdictEffects = {p.first, p.second};
+        report.reason = "the two at once shrink the held-out gap beyond the validation uncertainty by " +
+                        fmt("%.0f", 100 * p.result.excessShrink) + " % (from " +
+                        fmt("%.4f", p.result.excessBefore) + " to " + fmt("%.4f", p.result.excessAfter) +
+                        "; the whole gap by " + fmt("%.0f", 100 * p.result.shrink) + " %); the pair " +
+                        p.why + " (the single stage's verdict: " + single + ")";
+        for (const std::string& m : {p.first, p.second}) {
+            const std::string others = confusableWith(m);
+            if (!others.empty()) report.reason += "; " + m + " confusable with " + others + " on these data";
+        }
+        // Other accepted pairs that explain about as much: these data do not tell them apart.
+        std::string others;
+        for (size_t i = 0; i < report.pairs.size(); ++i)
+            if (static_cast<int>(i) != report.pairChosen && report.pairs[i].accepted &&
+                std::fabs(report.pairs[i].gain - p.gain) < 0.1) {
+                others += (others.empty() ? "" : ", ") + report.pairs[i].result.effect;
+                report.confusablePairs.push_back({p.result.effect, report.pairs[i].result.effect});
+            }
+        if (!others.empty()) report.reason += "; the pair is confusable with " + others + " on these data";
+    } else if (report.pairStageRan) {
+        report.reason += "; no pair of effects explains what is left (the pair stage names none)";
     }
     return report;
 }

@@ -47,6 +47,24 @@ std::string formatParameters(const diagnose::Effect* e, const std::vector<double
     return os.str() + "}";
 }
 
+// A pair's parameters, the first effect's then the second's, each named "effect.parameter".
+std::string formatPairParameters(const diagnose::PairResult& p, const std::vector<double>& v,
+                                 const std::vector<double>* sd) {
+    std::ostringstream os;
+    os << "{";
+    size_t k = 0;
+    for (const std::string& name : {p.first, p.second}) {
+        const diagnose::Effect* e = diagnose::findEffect(name);
+        for (size_t i = 0; e && i < e->parameters.size() && k < v.size(); ++i, ++k) {
+            const diagnose::EffectParameter& q = e->parameters[i];
+            os << (k ? ", " : "") << str(name + "." + q.name) << ": {\"value\": " << num(v[k] / q.siPerUnit);
+            if (sd && k < sd->size()) os << ", \"std_dev\": " << num((*sd)[k] / q.siPerUnit);
+            os << ", \"unit\": " << str(q.unit) << "}";
+        }
+    }
+    return os.str() + "}";
+}
+
 std::string formatMetric(const diagnose::GapMetrics& g) {
     return "{\"rmse\": " + num(inUnit(g.channel, g.rmse)) + ", \"mean_error\": " +
            num(inUnit(g.channel, g.meanError)) + ", \"max_error\": " +
@@ -197,8 +215,50 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
         for (size_t i = 0; i < which->confusable.size(); ++i)
             os << (i ? ", " : "") << "[" << str(which->confusable[i].first) << ", "
                << str(which->confusable[i].second) << "]";
-        os << "],\n  \"verdict\": " << str(which->verdict) << ",\n"
-           << "  \"reason\": " << str(which->reason) << "\n";
+        os << "],\n  \"confusable_pairs\": [";
+        for (size_t i = 0; i < which->confusablePairs.size(); ++i)
+            os << (i ? ", " : "") << "[" << str(which->confusablePairs[i].first) << ", "
+               << str(which->confusablePairs[i].second) << "]";
+        os << "],\n  \"pair_stage\": {\"ran\": " << (which->pairStageRan ? "true" : "false")
+           << ", \"reason\": " << str(which->pairStageReason)
+           << ", \"simulations\": " << which->pairSimulations << ", \"pairs\": [";
+        for (size_t i = 0; i < which->pairs.size(); ++i) {
+            const diagnose::PairResult& p = which->pairs[i];
+            const diagnose::CandidateResult& c = p.result;
+            os << (i ? "," : "") << "\n    {\"effects\": [" << str(p.first) << ", " << str(p.second)
+               << "], \"refined\": " << (p.refined ? "true" : "false")
+               << ", \"screen_cost\": " << num(p.screenCost)
+               << ", \"screen_parameters\": " << formatPairParameters(p, p.screenParameters, nullptr);
+            if (p.refined) {
+                os << ",\n     \"parameters\": " << formatPairParameters(p, c.parameters, &c.parameterStdDev)
+                   << ", \"heldout_before\": " << num(c.heldoutBefore) << ", \"heldout_after\": "
+                   << num(c.heldoutAfter) << ", \"shrink\": " << num(c.shrink, "%.4f")
+                   << ", \"excess_before\": " << num(c.excessBefore) << ", \"excess_after\": "
+                   << num(c.excessAfter) << ", \"excess_shrink\": " << num(c.excessShrink, "%.4f")
+                   << ", \"score\": " << num(c.score, "%.4f")
+                   << ",\n     \"against\": " << str(p.against)
+                   << ", \"single_excess_after\": " << num(p.singleExcessAfter)
+                   << ", \"shrink_over_single\": " << num(p.shrinkOverSingle, "%.4f")
+                   << ", \"extra_penalty\": " << num(p.extraPenalty, "%.4f")
+                   << ", \"gain\": " << num(p.gain, "%.4f")
+                   << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": [";
+                for (size_t k = 0; k < c.folds.size(); ++k) {
+                    const auto& f = c.folds[k];
+                    os << (k ? ", " : "") << "{\"held_out_test\": " << f.heldOut + 1
+                       << ", \"parameters\": " << formatPairParameters(p, f.parameters, nullptr)
+                       << ", \"before\": " << num(f.before) << ", \"after\": " << num(f.after)
+                       << ", \"excess_before\": " << num(f.excessBefore)
+                       << ", \"excess_after\": " << num(f.excessAfter) << "}";
+                }
+                os << "]";
+            }
+            os << ", \"simulations\": " << c.simulations
+               << ", \"accepted\": " << (p.accepted ? "true" : "false") << ", \"why\": " << str(p.why) << "}";
+        }
+        os << "]},\n  \"verdict\": " << str(which->verdict) << ",\n  \"verdict_effects\": [";
+        for (size_t i = 0; i < which->verdictEffects.size(); ++i)
+            os << (i ? ", " : "") << str(which->verdictEffects[i]);
+        os << "],\n  \"reason\": " << str(which->reason) << "\n";
     } else {
         os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run (--where-only or one test)\"\n";
     }

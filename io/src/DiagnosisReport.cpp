@@ -48,8 +48,11 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
                                       const std::vector<diagnose::TestComparison>& tests,
                                       const diagnose::WhereReport& w,
                                       const diagnose::WhichReport* which) {
+    // The curves with the verdict's fit: the pair named, else the best single.
     const diagnose::CandidateResult* best =
-        which && !which->candidates.empty() ? &which->candidates.front() : nullptr;
+        which && which->pairChosen >= 0 ? &which->pairs[which->pairChosen].result
+        : which && !which->candidates.empty() ? &which->candidates.front()
+                                               : nullptr;
     std::ostringstream os;
     os << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>bagsim diagnosis: "
        << esc(info.measuredFolder) << "</title><style>body{font-family:sans-serif;margin:2em;}"
@@ -103,7 +106,34 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
                << " %</td><td>" << num(100 * c.shrink, "%.1f") << " %</td><td>"
                << num(c.score, "%.3f") << "</td><td>" << esc(params) << "</td></tr>";
         }
-        os << "</table>";
+        os << "</table><h3>Two effects at once</h3><p>Pair stage " << esc(which->pairStageReason)
+           << ".</p>";
+        if (!which->pairs.empty()) {
+            os << "<table><tr><th>pair</th><th>fitted in full</th><th>shrink beyond the "
+               << "uncertainty</th><th>of what the single leaves</th><th>gain</th><th>named</th>"
+               << "<th>parameters (all tests)</th></tr>";
+            for (const auto& p : which->pairs) {
+                std::string params;
+                size_t k = 0;
+                const std::vector<double>& v = p.refined ? p.result.parameters : p.screenParameters;
+                for (const std::string& name : {p.first, p.second}) {
+                    const diagnose::Effect* e = diagnose::findEffect(name);
+                    for (size_t i = 0; e && i < e->parameters.size() && k < v.size(); ++i, ++k)
+                        params += (k ? ", " : "") + name + "." + e->parameters[i].name + " " +
+                                  num(v[k] / e->parameters[i].siPerUnit) +
+                                  (e->parameters[i].unit.empty() ? "" : " " + e->parameters[i].unit);
+                }
+                os << "<tr><td>" << esc(p.first + " + " + p.second) << "</td><td>"
+                   << (p.refined ? "yes" : "screened") << "</td><td>"
+                   << (p.refined ? num(100 * p.result.excessShrink, "%.1f") + " %" : "-")
+                   << "</td><td>"
+                   << (p.refined ? num(100 * p.shrinkOverSingle, "%.1f") + " % (" + esc(p.against) + ")"
+                                 : "-")
+                   << "</td><td>" << (p.refined ? num(p.gain, "%.3f") : "-") << "</td><td>"
+                   << (p.accepted ? "accepted" : "no") << "</td><td>" << esc(params) << "</td></tr>";
+            }
+            os << "</table>";
+        }
     }
     const bool after = best && best->fitted.size() == tests.size();
     os << "<h2>Curves</h2><p>Dots: measured. Grey: the model as it is."

@@ -10,6 +10,7 @@
 
 #include <bags/Material.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace {
@@ -72,12 +73,15 @@ struct Diagnosed {
 
 // Measured data from the stand-in with `effect` on (a finer step as the model-form
 // difference), then the diagnosis against the stand-in as the scenario gives it.
-Diagnosed diagnoseStandIn(const std::string& effect, const std::vector<double>& values) {
+// Several effects at once: each name with its values.
+using EffectValues = std::vector<std::pair<std::string, std::vector<double>>>;
+
+Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true) {
     const Rig rig;
     bags::LoadTestOptions truth = rig.options;
     truth.displacementStep *= 0.5;
     diagnose::RigEffects rigTruth;
-    if (!effect.empty())
+    for (const auto& [effect, values] : effects)
         diagnose::applyEffect(*diagnose::findEffect(effect), values, rig.options.gasMasses,
                               rigTruth, truth);
     diagnose::SynthesisOptions so;
@@ -96,9 +100,14 @@ Diagnosed diagnoseStandIn(const std::string& effect, const std::vector<double>& 
     wo.loadTo = 15.0;
     d.where = diagnose::calcWhere(d.tests, wo);
     diagnose::CalibrationOptions co;
+    co.pairGate = pairGate;
     d.which = diagnose::calibrateCandidates(data, rig.options, none, base, d.tests, d.where,
                                             simulateStandIn, co);
     return d;
+}
+
+Diagnosed diagnoseStandIn(const std::string& effect, const std::vector<double>& values) {
+    return diagnoseStandIn(effect.empty() ? EffectValues{} : EffectValues{{effect, values}});
 }
 
 const diagnose::CandidateResult& findCandidate(const diagnose::WhichReport& w,
@@ -234,4 +243,75 @@ TEST(Diagnosis, ASmallLagIsJudgedOnTheGapBeyondTheUncertainty) {
     EXPECT_GT(c.excessShrink, 0.9);
     EXPECT_LT(c.shrink, c.excessShrink);
     EXPECT_NEAR(c.parameters[0], 1.0, 0.2);
+}
+
+TEST(Diagnosis, TwoEffectsAtOnceAreBothNamed) {
+    // The pressure sensor (lag 3 s, offset 200 Pa) and the machine's compliance (0.5 mm/N): the
+    // compliance carries the force's gap, which the sensor cannot touch, so one at a time only
+    // the compliance is found; the pair stage fits the two together and names both.
+    const Diagnosed d = diagnoseStandIn(
+        EffectValues{{"pressure-sensor", {3.0, 200.0}}, {"machine-compliance", {0.5e-3}}});
+    EXPECT_EQ(d.which.candidates.front().effect, "machine-compliance");
+    EXPECT_TRUE(d.which.pairStageRan) << d.which.pairStageReason;
+    ASSERT_GE(d.which.pairChosen, 0) << d.which.reason;
+    const diagnose::PairResult& p = d.which.pairs[d.which.pairChosen];
+    EXPECT_TRUE(p.refined && p.accepted);
+    ASSERT_EQ(d.which.verdictEffects.size(), 2u) << d.which.verdict;
+    EXPECT_EQ(d.which.verdict, "machine-compliance + pressure-sensor");
+    EXPECT_EQ(d.which.verdictEffects[0], "machine-compliance");
+    EXPECT_EQ(d.which.verdictEffects[1], "pressure-sensor");
+    // Both parameter sets come back: compliance, then lag and offset.
+    ASSERT_EQ(p.result.parameters.size(), 3u);
+    EXPECT_NEAR(p.result.parameters[0], 0.5e-3, 0.05e-3);
+    EXPECT_NEAR(p.result.parameters[1], 3.0, 0.3);
+    EXPECT_NEAR(p.result.parameters[2], 200.0, 20.0);
+    EXPECT_EQ(p.result.parameterStdDev.size(), 3u);
+    EXPECT_EQ(p.result.folds.size(), 3u);
+    // The pair explains what the compliance leaves, beyond the threshold and the penalty.
+    EXPECT_EQ(p.against, "machine-compliance");
+    EXPECT_GT(p.shrinkOverSingle, 0.5 + p.extraPenalty);
+    EXPECT_NEAR(p.extraPenalty, 0.1, 1e-12);  // two parameters added
+    EXPECT_LT(p.result.excessAfter, d.which.candidates.front().excessAfter);
+    // The bed's compliance is the machine's on these channels: its pair with the sensor is
+    // named confusable with the one named.
+    const std::pair<std::string, std::string> twin = {"machine-compliance + pressure-sensor",
+                                                      "bed-compliance + pressure-sensor"};
+    EXPECT_NE(std::find(d.which.confusablePairs.begin(), d.which.confusablePairs.end(), twin),
+              d.which.confusablePairs.end());
+}
+
+TEST(Diagnosis, ASingleEffectGetsNoSecond) {
+    for (const auto& [effect, values] :
+         EffectValues{{"pressure-sensor", {3.0, 200.0}}, {"flowmeter-bias", {0.1e-3}},
+                      {"machine-compliance", {0.5e-3}}, {"pressure-sensor", {1.0, 30.0}}}) {
+        // The pair stage stops at its gate: the single leaves every channel within twice its
+        // validation uncertainty. Without the gate, pairs are tried, and none is accepted.
+        const Diagnosed d = diagnoseStandIn(effect, values);
+        EXPECT_FALSE(d.which.pairStageRan) << effect << ": " << d.which.pairStageReason;
+        const Diagnosed u = diagnoseStandIn(EffectValues{{effect, values}}, false);
+        EXPECT_TRUE(u.which.pairStageRan) << effect;
+        EXPECT_FALSE(u.which.pairs.empty()) << effect;
+        EXPECT_EQ(u.which.pairChosen, -1) << effect << ": " << u.which.reason;
+        EXPECT_EQ(u.which.verdict, d.which.verdict);
+        EXPECT_EQ(d.which.pairChosen, -1) << effect << ": " << d.which.reason;
+        ASSERT_EQ(d.which.verdictEffects.size(), 1u) << effect << ": " << d.which.verdict;
+        EXPECT_EQ(d.which.verdictEffects[0], d.which.verdict);
+        for (const auto& p : d.which.pairs) EXPECT_FALSE(p.accepted) << effect << ": " << p.why;
+    }
+}
+
+TEST(Diagnosis, NoEffectTriesNoPair) {
+    const Diagnosed d = diagnoseStandIn("", {});
+    EXPECT_FALSE(d.which.pairStageRan);
+    EXPECT_TRUE(d.which.pairs.empty());
+    EXPECT_TRUE(d.which.verdictEffects.empty());
+    EXPECT_EQ(d.which.pairSimulations, 0);
+}
+
+TEST(Diagnosis, AnEffectOutsideTheLibraryIsNotExplainedByAPair) {
+    const Diagnosed d = diagnoseStandIn("load-cell-gain", {0.10});
+    EXPECT_TRUE(d.which.pairStageRan) << d.which.pairStageReason;
+    EXPECT_FALSE(d.which.pairs.empty());
+    EXPECT_EQ(d.which.pairChosen, -1) << d.which.reason;
+    EXPECT_TRUE(d.which.verdictEffects.empty());
 }

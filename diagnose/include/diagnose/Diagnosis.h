@@ -11,7 +11,9 @@
 ///
 /// Which: calibrateCandidates() fits each effect of the library (Effects.h) on the training
 /// tests, leaving one gas mass out in turn, and ranks the effects by how much they shrink the
-/// gap beyond the validation uncertainty on the held-out test, with a penalty per parameter; decideVerdict() names the effect,
+/// gap beyond the validation uncertainty on the held-out test, with a penalty per parameter;
+/// then, when the best leaves a channel beyond twice its validation uncertainty, fits the best
+/// few jointly with each other candidate (the pair stage); the verdict names one effect, two,
 /// `none` or `unexplained`.
 
 #include <diagnose/Effects.h>
@@ -142,6 +144,15 @@ struct CalibrationOptions {
     double explainThreshold = 0.5;
     std::vector<std::string> candidates;  ///< effect names; empty: the library (Effect::inLibrary)
     int threads = 1;             ///< simulations run at once
+    /// The pair stage (docs/diagnosis.md#two-effects-at-once): the best singles taken as a
+    /// pair's first member, and how many of the pairs screened are fitted in full.
+    bool pairs = true;
+    /// False: the pair stage runs whenever the gap is beyond the uncertainty, even when the best
+    /// single leaves every channel within twice its validation uncertainty (checks of the rule
+    /// that accepts a pair).
+    bool pairGate = true;
+    int pairFirstMembers = 2;
+    int pairsRefined = 3;
 };
 
 struct FoldResult {
@@ -189,13 +200,49 @@ struct CandidateResult {
     std::vector<TestComparison> fitted;
 };
 
+/// Two effects fitted at once (both parameter sets), as a single candidate is: its
+/// CandidateResult's effect is "first + second", its parameters the first's then the second's.
+struct PairResult {
+    std::string first, second;  ///< the first is one of the best singles
+    /// Screen: the least-squares cost on all tests with the first at its single fit and the
+    /// second scanned (the cheap look that chooses which pairs are fitted in full).
+    double screenCost = 0.0;
+    std::vector<double> screenParameters;  ///< where that cost was found [SI]
+    bool refined = false;  ///< fitted in full (folds and all tests); else screened only
+    CandidateResult result;  ///< when refined
+    /// Against the single it is judged by (the one of the best single, the first and the
+    /// second that leaves least to gain): the held-out gap beyond the uncertainty that single
+    /// leaves, the share of it the pair removes, the penalty for the parameters the pair adds,
+    /// and their difference (gain); accepted when the gain and the pair's own score both reach
+    /// the threshold of a single.
+    std::string against;
+    double singleExcessAfter = 0.0;
+    double shrinkOverSingle = 0.0;
+    double extraPenalty = 0.0;
+    double gain = 0.0;
+    bool accepted = false;
+    std::string why;  ///< one sentence
+};
+
 struct WhichReport {
     std::vector<CandidateResult> candidates;  ///< ranked, best first
+    /// The pair stage: whether it ran and why (not), the pairs tried (refined first, by gain;
+    /// then the screened), the one named (the accepted pair of largest gain: index into pairs,
+    /// -1 if none), the load tests the stage ran.
+    bool pairStageRan = false;
+    std::string pairStageReason;
+    std::vector<PairResult> pairs;
+    int pairChosen = -1;
+    int pairSimulations = 0;  ///< load tests the pair stage ran (screen and fits)
+    /// The effects the verdict names: none for `none` and `unexplained`, one, or two.
+    std::vector<std::string> verdictEffects;
     std::string verdict;   ///< an effect name, "none" or "unexplained"
     std::string reason;    ///< one sentence
     /// Pairs of effects whose scores are both above the threshold and whose shrinks beyond the
     /// uncertainty are within 0.1 of each other: these data do not tell them apart.
     std::vector<std::pair<std::string, std::string>> confusable;
+    /// Accepted pairs (as "first + second") whose gains are within 0.1 of the named pair's.
+    std::vector<std::pair<std::string, std::string>> confusablePairs;
 };
 
 /// Calibrates each candidate with leave-one-test-out folds (needs two tests or more).
