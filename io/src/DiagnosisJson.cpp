@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <sstream>
 
 namespace io {
@@ -92,6 +93,31 @@ std::string formatMetrics(const diagnose::CandidateResult& c, const diagnose::Wh
            << "}";
     }
     return os.str() + "}";
+}
+
+// The held-out gaps of a candidate or pair: before and after, whole and beyond the
+// uncertainty, their shrinks and the score.
+std::string formatGaps(const diagnose::CandidateResult& c) {
+    return "\"heldout_before\": " + num(c.heldoutBefore) + ", \"heldout_after\": " +
+           num(c.heldoutAfter) + ", \"shrink\": " + num(c.shrink, "%.4f") +
+           ", \"excess_before\": " + num(c.excessBefore) + ", \"excess_after\": " +
+           num(c.excessAfter) + ", \"excess_shrink\": " + num(c.excessShrink, "%.4f") +
+           ", \"score\": " + num(c.score, "%.4f");
+}
+
+// Per fold: the test held out, the parameters fitted without it, the gaps before and after.
+std::string formatFolds(const diagnose::CandidateResult& c,
+                        const std::function<std::string(const std::vector<double>&)>& parameters) {
+    std::ostringstream os;
+    os << "[";
+    for (size_t k = 0; k < c.folds.size(); ++k) {
+        const auto& f = c.folds[k];
+        os << (k ? ", " : "") << "{\"held_out_test\": " << f.heldOut + 1
+           << ", \"parameters\": " << parameters(f.parameters) << ", \"before\": " << num(f.before)
+           << ", \"after\": " << num(f.after) << ", \"excess_before\": " << num(f.excessBefore)
+           << ", \"excess_after\": " << num(f.excessAfter) << "}";
+    }
+    return os.str() + "]";
 }
 
 // The stiffness curve beside the simulated one, stiffness in N/mm.
@@ -188,21 +214,10 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
             const diagnose::Effect* e = diagnose::findEffect(c.effect);
             os << "    {\"rank\": " << i + 1 << ", \"effect\": " << str(c.effect)
                << ", \"parameters\": " << formatParameters(e, c.parameters, &c.parameterStdDev)
-               << ", \"heldout_before\": " << num(c.heldoutBefore) << ", \"heldout_after\": "
-               << num(c.heldoutAfter) << ", \"shrink\": " << num(c.shrink, "%.4f")
-               << ", \"excess_before\": " << num(c.excessBefore) << ", \"excess_after\": "
-               << num(c.excessAfter) << ", \"excess_shrink\": " << num(c.excessShrink, "%.4f")
-               << ", \"score\": " << num(c.score, "%.4f") << ", \"simulations\": " << c.simulations
-               << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": [";
-            for (size_t k = 0; k < c.folds.size(); ++k) {
-                const auto& f = c.folds[k];
-                os << (k ? ", " : "") << "{\"held_out_test\": " << f.heldOut + 1
-                   << ", \"parameters\": " << formatParameters(e, f.parameters, nullptr)
-                   << ", \"before\": " << num(f.before) << ", \"after\": " << num(f.after)
-                   << ", \"excess_before\": " << num(f.excessBefore)
-                   << ", \"excess_after\": " << num(f.excessAfter) << "}";
-            }
-            os << "]}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
+               << ", " << formatGaps(c) << ", \"simulations\": " << c.simulations
+               << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": "
+               << formatFolds(c, [&](const std::vector<double>& v) { return formatParameters(e, v, nullptr); });
+            os << "}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
         }
         os << "  ],\n";
         const diagnose::CandidateResult* best =
@@ -231,26 +246,16 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
                << ", \"screen_parameters\": " << formatPairParameters(p, p.screenParameters, nullptr);
             if (p.refined) {
                 os << ",\n     \"parameters\": " << formatPairParameters(p, c.parameters, &c.parameterStdDev)
-                   << ", \"heldout_before\": " << num(c.heldoutBefore) << ", \"heldout_after\": "
-                   << num(c.heldoutAfter) << ", \"shrink\": " << num(c.shrink, "%.4f")
-                   << ", \"excess_before\": " << num(c.excessBefore) << ", \"excess_after\": "
-                   << num(c.excessAfter) << ", \"excess_shrink\": " << num(c.excessShrink, "%.4f")
-                   << ", \"score\": " << num(c.score, "%.4f")
+                   << ", " << formatGaps(c)
                    << ",\n     \"against\": " << str(p.against)
                    << ", \"single_excess_after\": " << num(p.singleExcessAfter)
                    << ", \"shrink_over_single\": " << num(p.shrinkOverSingle, "%.4f")
                    << ", \"extra_penalty\": " << num(p.extraPenalty, "%.4f")
                    << ", \"gain\": " << num(p.gain, "%.4f")
-                   << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": [";
-                for (size_t k = 0; k < c.folds.size(); ++k) {
-                    const auto& f = c.folds[k];
-                    os << (k ? ", " : "") << "{\"held_out_test\": " << f.heldOut + 1
-                       << ", \"parameters\": " << formatPairParameters(p, f.parameters, nullptr)
-                       << ", \"before\": " << num(f.before) << ", \"after\": " << num(f.after)
-                       << ", \"excess_before\": " << num(f.excessBefore)
-                       << ", \"excess_after\": " << num(f.excessAfter) << "}";
-                }
-                os << "]";
+                   << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": "
+                   << formatFolds(c, [&](const std::vector<double>& v) {
+                          return formatPairParameters(p, v, nullptr);
+                      });
             }
             os << ", \"simulations\": " << c.simulations
                << ", \"accepted\": " << (p.accepted ? "true" : "false") << ", \"why\": " << str(p.why) << "}";
