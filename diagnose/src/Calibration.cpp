@@ -245,7 +245,7 @@ std::vector<std::vector<double>> makeGrid(int params, int points) {
 
 // The least-squares cost at each of the points (scaled), their simulations run at once when
 // the effects change the bag.
-std::vector<double> scanCosts(Evaluator& e, const std::vector<std::vector<double>>& points,
+std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<double>>& points,
                               const SampleSet& s, double fr, double pr, const CalibrationOptions& o) {
     std::vector<double> costs(points.size(), INFINITY);
     if (e.changesTheBag()) {
@@ -274,7 +274,7 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
     const SampleSet s = makeSamples(baseline, train);
     const int np = e.getParameterCount();
     const std::vector<std::vector<double>> grid = starts.empty() ? makeGrid(np, o.gridPoints) : starts;
-    const std::vector<double> costs = scanCosts(e, grid, s, fr, pr, o);
+    const std::vector<double> costs = calcScanCosts(e, grid, s, fr, pr, o);
     const size_t best = std::min_element(costs.begin(), costs.end()) - costs.begin();
     Fit fit;
     fit.x = grid[best];
@@ -330,7 +330,7 @@ struct GapScale {
 // Fits the evaluator's parameters with leave-one-test-out folds and on all tests, and measures
 // the held-out gap before and after. `starts(h)`: the scan's start points for the fit without
 // test h (h = -1: all tests); empty, the coarse grid.
-CandidateResult evaluateCandidate(Evaluator& e, const std::string& name, int n,
+CandidateResult calibrateCandidate(Evaluator& e, const std::string& name, int n,
                                   const std::vector<TestComparison>& baseline, const GapScale& g,
                                   const CalibrationOptions& o,
                                   const std::function<std::vector<std::vector<double>>(int)>& starts) {
@@ -416,7 +416,7 @@ std::vector<std::vector<double>> makePairStarts(const Evaluator& e, const std::v
 // Judges a fitted pair against the singles it must beat (the best single, and each member
 // alone): the share of the held-out gap beyond the uncertainty that single leaves which the
 // pair removes, less the penalty per parameter the pair adds; the least of these is its gain.
-void judgePair(PairResult& p, const WhichReport& r, const CalibrationOptions& o) {
+void calcPairGain(PairResult& p, const WhichReport& r, const CalibrationOptions& o) {
     const CandidateResult& pair = p.result;
     p.gain = INFINITY;
     for (const CandidateResult* s : {&r.candidates.front(), findSingle(r, p.first), findSingle(r, p.second)}) {
@@ -448,7 +448,7 @@ void judgePair(PairResult& p, const WhichReport& r, const CalibrationOptions& o)
 // beyond twice its validation uncertainty held out, the best singles are each fitted jointly
 // with every other candidate (screened cheaply first, the best few fitted in full), and a pair
 // is named when it explains at least the threshold's share of what the singles leave.
-void runPairStage(WhichReport& report, const MeasuredData& data, const bags::LoadTestOptions& base,
+void calibratePairs(WhichReport& report, const MeasuredData& data, const bags::LoadTestOptions& base,
                   const RigEffects& baseRig, const bags::LoadTestResult& baseResult,
                   const std::vector<TestComparison>& baseline, const WhereReport& where,
                   const Simulator& simulate, const CalibrationOptions& o, SimulationCache& cache,
@@ -514,7 +514,7 @@ void runPairStage(WhichReport& report, const MeasuredData& data, const bags::Loa
             const std::vector<std::vector<double>> starts =
                 makePairStarts(e, a.parameters, b.parameters, o.gridPoints);
             const std::vector<double> costs =
-                scanCosts(e, starts, makeSamples(baseline, all), g.forceRange, g.pressureRange, o);
+                calcScanCosts(e, starts, makeSamples(baseline, all), g.forceRange, g.pressureRange, o);
             const size_t k = std::min_element(costs.begin(), costs.end()) - costs.begin();
             p.screenCost = costs[k];
             p.screenParameters = e.toValues(starts[k].data());
@@ -535,12 +535,12 @@ void runPairStage(WhichReport& report, const MeasuredData& data, const bags::Loa
         const CandidateResult& a = *findSingle(report, p.first);
         const CandidateResult& b = *findSingle(report, p.second);
         Evaluator& e = *evaluators[order[r]];
-        p.result = evaluateCandidate(e, p.first + " + " + p.second, n, baseline, g, o, [&](int h) {
+        p.result = calibrateCandidate(e, p.first + " + " + p.second, n, baseline, g, o, [&](int h) {
             return h < 0 ? makePairStarts(e, a.parameters, b.parameters, o.gridPoints)
                          : makePairStarts(e, a.folds[h].parameters, b.folds[h].parameters, o.gridPoints);
         });
         p.refined = true;
-        judgePair(p, report, o);
+        calcPairGain(p, report, o);
     }
     for (size_t i = 0; i < report.pairs.size(); ++i) {
         report.pairs[i].result.simulations = evaluators[i]->getSimulations();
@@ -581,7 +581,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                                              effect.name) == o.candidates.end())
             continue;
         Evaluator e(data, base, baseRig, baseResult, {&effect}, simulate, cache);
-        report.candidates.push_back(evaluateCandidate(
+        report.candidates.push_back(calibrateCandidate(
             e, effect.name, n, baseline, g, o, [](int) { return std::vector<std::vector<double>>(); }));
     }
     std::stable_sort(report.candidates.begin(), report.candidates.end(),
@@ -628,7 +628,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                               : std::string());
     }
 
-    runPairStage(report, data, base, baseRig, baseResult, baseline, where, simulate, o, cache, g);
+    calibratePairs(report, data, base, baseRig, baseResult, baseline, where, simulate, o, cache, g);
     if (report.pairChosen >= 0) {
         const PairResult& p = report.pairs[report.pairChosen];
         const std::string single = report.verdict;
