@@ -357,12 +357,14 @@ int run(const Args& a) {
                     std::cout << "  " << p.result.effect << ": shrink "
                               << fmt("%.1f %%", 100 * p.result.excessShrink)
                               << " beyond the uncertainty, score " << fmt("%.3f", p.result.score)
-                              << "; " << p.why << (p.accepted ? ": accepted" : ": not accepted") << "\n";
+                              << "; " << p.why << (p.accepted ? ": accepted" : ": not accepted")
+                              << "\n";
                 else
                     std::cout << "  " << p.first << " + " << p.second << ": screened (cost "
                               << fmt("%.4g", p.screenCost) << ")\n";
             for (const auto& p : which->confusablePairs)
-                std::cout << "  confusable on these data: " << p.first << " and " << p.second << "\n";
+                std::cout << "  confusable on these data: " << p.first << " and " << p.second
+                          << "\n";
         }
     }
 

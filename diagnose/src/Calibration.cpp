@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <atomic>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -51,8 +51,13 @@ class Evaluator {
     Evaluator(const MeasuredData& data, const bags::LoadTestOptions& base, const RigEffects& rig,
               const bags::LoadTestResult& baseResult, std::vector<const Effect*> effects,
               const Simulator& simulate, SimulationCache& cache)
-        : m_data(data), m_base(base), m_rig(rig), m_baseResult(baseResult),
-          m_effects(std::move(effects)), m_simulate(simulate), m_cache(cache) {
+        : m_data(data),
+          m_base(base),
+          m_rig(rig),
+          m_baseResult(baseResult),
+          m_effects(std::move(effects)),
+          m_simulate(simulate),
+          m_cache(cache) {
         for (const MeasuredTest& t : data.tests) m_readings.push_back(t.gasMass);
         for (const Effect* e : m_effects)
             for (const EffectParameter& p : e->parameters) m_parameters.push_back(&p);
@@ -95,7 +100,8 @@ class Evaluator {
         size_t k = 0;
         for (const Effect* e : m_effects) {
             const size_t np = e->parameters.size();
-            applyEffect(*e, std::vector<double>(v.begin() + k, v.begin() + k + np), m_readings, rig, o);
+            applyEffect(*e, std::vector<double>(v.begin() + k, v.begin() + k + np), m_readings, rig,
+                        o);
             k += np;
         }
         std::shared_ptr<const bags::LoadTestResult> r;
@@ -246,7 +252,8 @@ std::vector<std::vector<double>> makeGrid(int params, int points) {
 // The least-squares cost at each of the points (scaled), their simulations run at once when
 // the effects change the bag.
 std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<double>>& points,
-                              const SampleSet& s, double fr, double pr, const CalibrationOptions& o) {
+                                  const SampleSet& s, double fr, double pr,
+                                  const CalibrationOptions& o) {
     std::vector<double> costs(points.size(), INFINITY);
     if (e.changesTheBag()) {
         std::vector<std::string> errors(points.size());
@@ -261,7 +268,8 @@ std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<do
         for (const std::string& err : errors)
             if (!err.empty()) throw std::runtime_error(err);  // e.g. an interrupt
     } else {
-        for (size_t i = 0; i < points.size(); ++i) costs[i] = calcCost(e, points[i].data(), s, fr, pr);
+        for (size_t i = 0; i < points.size(); ++i)
+            costs[i] = calcCost(e, points[i].data(), s, fr, pr);
     }
     return costs;
 }
@@ -273,7 +281,8 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
               bool covariance, const std::vector<std::vector<double>>& starts = {}) {
     const SampleSet s = makeSamples(baseline, train);
     const int np = e.getParameterCount();
-    const std::vector<std::vector<double>> grid = starts.empty() ? makeGrid(np, o.gridPoints) : starts;
+    const std::vector<std::vector<double>> grid =
+        starts.empty() ? makeGrid(np, o.gridPoints) : starts;
     const std::vector<double> costs = calcScanCosts(e, grid, s, fr, pr, o);
     const size_t best = std::min_element(costs.begin(), costs.end()) - costs.begin();
     Fit fit;
@@ -330,10 +339,10 @@ struct GapScale {
 // Fits the evaluator's parameters with leave-one-test-out folds and on all tests, and measures
 // the held-out gap before and after. `starts(h)`: the scan's start points for the fit without
 // test h (h = -1: all tests); empty, the coarse grid.
-CandidateResult calibrateCandidate(Evaluator& e, const std::string& name, int n,
-                                  const std::vector<TestComparison>& baseline, const GapScale& g,
-                                  const CalibrationOptions& o,
-                                  const std::function<std::vector<std::vector<double>>(int)>& starts) {
+CandidateResult calibrateCandidate(
+    Evaluator& e, const std::string& name, int n, const std::vector<TestComparison>& baseline,
+    const GapScale& g, const CalibrationOptions& o,
+    const std::function<std::vector<std::vector<double>>(int)>& starts) {
     const double fr = g.forceRange, pr = g.pressureRange, fu = g.forceUncertainty,
                  pu = g.pressureUncertainty;
     CandidateResult cr;
@@ -371,7 +380,8 @@ CandidateResult calibrateCandidate(Evaluator& e, const std::string& name, int n,
     if (!e.compare(full.x.data(), cr.fitted)) cr.fitted.clear();
     const int np = e.getParameterCount();
     for (int i = 0; i < np; ++i)
-        cr.parameterStdDev.push_back(full.sdX[i] * (e.getParameter(i).upper - e.getParameter(i).lower));
+        cr.parameterStdDev.push_back(full.sdX[i] *
+                                     (e.getParameter(i).upper - e.getParameter(i).lower));
     cr.heldoutBefore = sumBefore / n;
     cr.heldoutAfter = sumAfter / n;
     cr.shrink = cr.heldoutBefore > 0.0 ? 1.0 - cr.heldoutAfter / cr.heldoutBefore : 0.0;
@@ -399,7 +409,8 @@ bool areConfusable(const WhichReport& r, const std::string& a, const std::string
 
 // The points a pair's scan starts from: the first member at its single fit (`first`, SI) with
 // the second over its coarse grid, and with the second at its own single fit.
-std::vector<std::vector<double>> makePairStarts(const Evaluator& e, const std::vector<double>& first,
+std::vector<std::vector<double>> makePairStarts(const Evaluator& e,
+                                                const std::vector<double>& first,
                                                 const std::vector<double>& second, int gridPoints) {
     const std::vector<double> x1 = e.toScaled(first);
     std::vector<std::vector<double>> starts;
@@ -408,7 +419,8 @@ std::vector<std::vector<double>> makePairStarts(const Evaluator& e, const std::v
         x.insert(x.end(), x2.begin(), x2.end());
         starts.push_back(x);
     };
-    for (const std::vector<double>& x2 : makeGrid(static_cast<int>(second.size()), gridPoints)) add(x2);
+    for (const std::vector<double>& x2 : makeGrid(static_cast<int>(second.size()), gridPoints))
+        add(x2);
     add(e.toScaled(second, first.size()));
     return starts;
 }
@@ -419,10 +431,12 @@ std::vector<std::vector<double>> makePairStarts(const Evaluator& e, const std::v
 void calcPairGain(PairResult& p, const WhichReport& r, const CalibrationOptions& o) {
     const CandidateResult& pair = p.result;
     p.gain = INFINITY;
-    for (const CandidateResult* s : {&r.candidates.front(), findSingle(r, p.first), findSingle(r, p.second)}) {
+    for (const CandidateResult* s :
+         {&r.candidates.front(), findSingle(r, p.first), findSingle(r, p.second)}) {
         if (!s) continue;
-        const double extra = o.parameterPenalty *
-                             std::max<double>(0.0, double(pair.parameters.size()) - double(s->parameters.size()));
+        const double extra =
+            o.parameterPenalty *
+            std::max<double>(0.0, double(pair.parameters.size()) - double(s->parameters.size()));
         const double shrink = s->excessAfter > 0.0 && std::isfinite(pair.excessAfter)
                                   ? 1.0 - pair.excessAfter / s->excessAfter
                                   : -INFINITY;
@@ -436,9 +450,11 @@ void calcPairGain(PairResult& p, const WhichReport& r, const CalibrationOptions&
     }
     const bool gains = p.gain >= o.explainThreshold, explains = pair.score >= o.explainThreshold;
     p.accepted = gains && explains;
-    p.why = "removes " + fmt("%.0f", 100 * p.shrinkOverSingle) + " % of the held-out gap beyond "
-            "the uncertainty that " + p.against + " alone leaves (" + fmt("%.4f", p.singleExcessAfter) +
-            " -> " + fmt("%.4f", pair.excessAfter) + "), less " + fmt("%.2f", p.extraPenalty) +
+    p.why = "removes " + fmt("%.0f", 100 * p.shrinkOverSingle) +
+            " % of the held-out gap beyond "
+            "the uncertainty that " +
+            p.against + " alone leaves (" + fmt("%.4f", p.singleExcessAfter) + " -> " +
+            fmt("%.4f", pair.excessAfter) + "), less " + fmt("%.2f", p.extraPenalty) +
             " for the parameters it adds: " + fmt("%.3f", p.gain) + (gains ? " >= " : " < ") +
             fmt("%g", o.explainThreshold) + "; its own score " + fmt("%.3f", pair.score) +
             (explains ? " >= " : " < ") + fmt("%g", o.explainThreshold);
@@ -448,18 +464,20 @@ void calcPairGain(PairResult& p, const WhichReport& r, const CalibrationOptions&
 // beyond twice its validation uncertainty held out, the best singles are each fitted jointly
 // with every other candidate (screened cheaply first, the best few fitted in full), and a pair
 // is named when it explains at least the threshold's share of what the singles leave.
-void calibratePairs(WhichReport& report, const MeasuredData& data, const bags::LoadTestOptions& base,
-                  const RigEffects& baseRig, const bags::LoadTestResult& baseResult,
-                  const std::vector<TestComparison>& baseline, const WhereReport& where,
-                  const Simulator& simulate, const CalibrationOptions& o, SimulationCache& cache,
-                  const GapScale& g) {
+void calibratePairs(WhichReport& report, const MeasuredData& data,
+                    const bags::LoadTestOptions& base, const RigEffects& baseRig,
+                    const bags::LoadTestResult& baseResult,
+                    const std::vector<TestComparison>& baseline, const WhereReport& where,
+                    const Simulator& simulate, const CalibrationOptions& o, SimulationCache& cache,
+                    const GapScale& g) {
     const int n = static_cast<int>(data.tests.size());
     if (!o.pairs) {
         report.pairStageReason = "not run: switched off";
         return;
     }
     if (where.withinValidation) {
-        report.pairStageReason = "not run: every channel is within twice its validation uncertainty";
+        report.pairStageReason =
+            "not run: every channel is within twice its validation uncertainty";
         return;
     }
     if (report.candidates.size() < 2) {
@@ -480,7 +498,8 @@ void calibratePairs(WhichReport& report, const MeasuredData& data, const bags::L
     }
     if (best.heldoutMetricsAfter.empty()) left = "a fold of " + best.effect + " failed";
     if (left.empty() && o.pairGate) {
-        report.pairStageReason = "not run: " + best.effect + " leaves every channel within twice its "
+        report.pairStageReason = "not run: " + best.effect +
+                                 " leaves every channel within twice its "
                                  "validation uncertainty, held out";
         return;
     }
@@ -491,7 +510,8 @@ void calibratePairs(WhichReport& report, const MeasuredData& data, const bags::L
     // The pairs: each of the best singles with every other candidate, but not with one it is
     // confusable with (on these data the two are one effect).
     std::vector<std::unique_ptr<Evaluator>> evaluators;
-    const int firsts = std::min<int>(o.pairFirstMembers, static_cast<int>(report.candidates.size()));
+    const int firsts =
+        std::min<int>(o.pairFirstMembers, static_cast<int>(report.candidates.size()));
     for (int f = 0; f < firsts; ++f) {
         const CandidateResult& a = report.candidates[f];
         if (!(a.excessShrink > 0.0)) continue;
@@ -506,15 +526,16 @@ void calibratePairs(WhichReport& report, const MeasuredData& data, const bags::L
             p.second = b.effect;
             evaluators.push_back(std::make_unique<Evaluator>(
                 data, base, baseRig, baseResult,
-                std::vector<const Effect*>{findEffect(a.effect), findEffect(b.effect)}, simulate, cache));
+                std::vector<const Effect*>{findEffect(a.effect), findEffect(b.effect)}, simulate,
+                cache));
             // Screen on all tests: the first at its single fit, the second scanned.
             Evaluator& e = *evaluators.back();
             std::vector<int> all(n);
             for (int i = 0; i < n; ++i) all[i] = i;
             const std::vector<std::vector<double>> starts =
                 makePairStarts(e, a.parameters, b.parameters, o.gridPoints);
-            const std::vector<double> costs =
-                calcScanCosts(e, starts, makeSamples(baseline, all), g.forceRange, g.pressureRange, o);
+            const std::vector<double> costs = calcScanCosts(e, starts, makeSamples(baseline, all),
+                                                            g.forceRange, g.pressureRange, o);
             const size_t k = std::min_element(costs.begin(), costs.end()) - costs.begin();
             p.screenCost = costs[k];
             p.screenParameters = e.toValues(starts[k].data());
@@ -537,7 +558,8 @@ void calibratePairs(WhichReport& report, const MeasuredData& data, const bags::L
         Evaluator& e = *evaluators[order[r]];
         p.result = calibrateCandidate(e, p.first + " + " + p.second, n, baseline, g, o, [&](int h) {
             return h < 0 ? makePairStarts(e, a.parameters, b.parameters, o.gridPoints)
-                         : makePairStarts(e, a.folds[h].parameters, b.folds[h].parameters, o.gridPoints);
+                         : makePairStarts(e, a.folds[h].parameters, b.folds[h].parameters,
+                                          o.gridPoints);
         });
         p.refined = true;
         calcPairGain(p, report, o);
@@ -547,10 +569,11 @@ void calibratePairs(WhichReport& report, const MeasuredData& data, const bags::L
         report.pairSimulations += evaluators[i]->getSimulations();
     }
     // Refined pairs first, by gain; then the screened, by their screen's cost.
-    std::stable_sort(report.pairs.begin(), report.pairs.end(), [](const PairResult& x, const PairResult& y) {
-        if (x.refined != y.refined) return x.refined;
-        return x.refined ? x.gain > y.gain : x.screenCost < y.screenCost;
-    });
+    std::stable_sort(report.pairs.begin(), report.pairs.end(),
+                     [](const PairResult& x, const PairResult& y) {
+                         if (x.refined != y.refined) return x.refined;
+                         return x.refined ? x.gain > y.gain : x.screenCost < y.screenCost;
+                     });
     // The pair named: the accepted one with the largest gain (the first, as they are sorted).
     for (size_t i = 0; i < report.pairs.size() && report.pairChosen < 0; ++i)
         if (report.pairs[i].accepted) report.pairChosen = static_cast<int>(i);
@@ -568,7 +591,8 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
     GapScale g;
     for (const ChannelSummary& c : where.channels) {
         if (c.channel == "force") g.forceRange = c.range, g.forceUncertainty = c.validation;
-        if (c.channel == "pressure") g.pressureRange = c.range, g.pressureUncertainty = c.validation;
+        if (c.channel == "pressure")
+            g.pressureRange = c.range, g.pressureUncertainty = c.validation;
     }
     if (!(g.forceRange > 0.0) || !(g.pressureRange > 0.0))
         throw std::invalid_argument("the measured force and pressure must vary to be compared");
@@ -581,8 +605,9 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                                              effect.name) == o.candidates.end())
             continue;
         Evaluator e(data, base, baseRig, baseResult, {&effect}, simulate, cache);
-        report.candidates.push_back(calibrateCandidate(
-            e, effect.name, n, baseline, g, o, [](int) { return std::vector<std::vector<double>>(); }));
+        report.candidates.push_back(calibrateCandidate(e, effect.name, n, baseline, g, o, [](int) {
+            return std::vector<std::vector<double>>();
+        }));
     }
     std::stable_sort(report.candidates.begin(), report.candidates.end(),
                      [](const CandidateResult& a, const CandidateResult& b) {
@@ -600,7 +625,8 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
     auto confusableWith = [&](const std::string& effect) {
         std::string others;
         for (const auto& [a, b] : report.confusable)
-            if (a == effect || b == effect) others += (others.empty() ? "" : ", ") + (a == effect ? b : a);
+            if (a == effect || b == effect)
+                others += (others.empty() ? "" : ", ") + (a == effect ? b : a);
         return others;
     };
     const CandidateResult* best = report.candidates.empty() ? nullptr : &report.candidates[0];
@@ -634,14 +660,16 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
         const std::string single = report.verdict;
         report.verdict = p.first + " + " + p.second;
         report.verdictEffects = {p.first, p.second};
-        report.reason = "the two at once shrink the held-out gap beyond the validation uncertainty by " +
-                        fmt("%.0f", 100 * p.result.excessShrink) + " % (from " +
-                        fmt("%.4f", p.result.excessBefore) + " to " + fmt("%.4f", p.result.excessAfter) +
-                        "; the whole gap by " + fmt("%.0f", 100 * p.result.shrink) + " %); the pair " +
-                        p.why + " (the single stage's verdict: " + single + ")";
+        report.reason =
+            "the two at once shrink the held-out gap beyond the validation uncertainty by " +
+            fmt("%.0f", 100 * p.result.excessShrink) + " % (from " +
+            fmt("%.4f", p.result.excessBefore) + " to " + fmt("%.4f", p.result.excessAfter) +
+            "; the whole gap by " + fmt("%.0f", 100 * p.result.shrink) + " %); the pair " + p.why +
+            " (the single stage's verdict: " + single + ")";
         for (const std::string& m : {p.first, p.second}) {
             const std::string others = confusableWith(m);
-            if (!others.empty()) report.reason += "; " + m + " confusable with " + others + " on these data";
+            if (!others.empty())
+                report.reason += "; " + m + " confusable with " + others + " on these data";
         }
         // Other accepted pairs that explain about as much: these data do not tell them apart.
         std::string others;
@@ -651,7 +679,8 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                 others += (others.empty() ? "" : ", ") + report.pairs[i].result.effect;
                 report.confusablePairs.push_back({p.result.effect, report.pairs[i].result.effect});
             }
-        if (!others.empty()) report.reason += "; the pair is confusable with " + others + " on these data";
+        if (!others.empty())
+            report.reason += "; the pair is confusable with " + others + " on these data";
     } else if (report.pairStageRan) {
         report.reason += "; no pair of effects explains what is left (the pair stage names none)";
     }

@@ -58,7 +58,8 @@ std::string formatPairParameters(const diagnose::PairResult& p, const std::vecto
         const diagnose::Effect* e = diagnose::findEffect(name);
         for (size_t i = 0; e && i < e->parameters.size() && k < v.size(); ++i, ++k) {
             const diagnose::EffectParameter& q = e->parameters[i];
-            os << (k ? ", " : "") << str(name + "." + q.name) << ": {\"value\": " << num(v[k] / q.siPerUnit);
+            os << (k ? ", " : "") << str(name + "." + q.name)
+               << ": {\"value\": " << num(v[k] / q.siPerUnit);
             if (sd && k < sd->size()) os << ", \"std_dev\": " << num((*sd)[k] / q.siPerUnit);
             os << ", \"unit\": " << str(q.unit) << "}";
         }
@@ -98,10 +99,12 @@ std::string formatMetrics(const diagnose::CandidateResult& c, const diagnose::Wh
 // The held-out gaps of a candidate or pair: before and after, whole and beyond the
 // uncertainty, their shrinks and the score.
 std::string formatGaps(const diagnose::CandidateResult& c) {
-    return "\"heldout_before\": " + num(c.heldoutBefore) + ", \"heldout_after\": " +
-           num(c.heldoutAfter) + ", \"shrink\": " + num(c.shrink, "%.4f") +
-           ", \"excess_before\": " + num(c.excessBefore) + ", \"excess_after\": " +
-           num(c.excessAfter) + ", \"excess_shrink\": " + num(c.excessShrink, "%.4f") +
+    return "\"heldout_before\": " + num(c.heldoutBefore) +
+           ", \"heldout_after\": " + num(c.heldoutAfter) +
+           ", \"shrink\": " + num(c.shrink, "%.4f") +
+           ", \"excess_before\": " + num(c.excessBefore) +
+           ", \"excess_after\": " + num(c.excessAfter) +
+           ", \"excess_shrink\": " + num(c.excessShrink, "%.4f") +
            ", \"score\": " + num(c.score, "%.4f");
 }
 
@@ -215,8 +218,10 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
             os << "    {\"rank\": " << i + 1 << ", \"effect\": " << str(c.effect)
                << ", \"parameters\": " << formatParameters(e, c.parameters, &c.parameterStdDev)
                << ", " << formatGaps(c) << ", \"simulations\": " << c.simulations
-               << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": "
-               << formatFolds(c, [&](const std::vector<double>& v) { return formatParameters(e, v, nullptr); });
+               << ",\n     \"heldout_metrics\": " << formatMetrics(c, w)
+               << ",\n     \"folds\": " << formatFolds(c, [&](const std::vector<double>& v) {
+                      return formatParameters(e, v, nullptr);
+                  });
             os << "}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
         }
         os << "  ],\n";
@@ -242,23 +247,24 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
             const diagnose::CandidateResult& c = p.result;
             os << (i ? "," : "") << "\n    {\"effects\": [" << str(p.first) << ", " << str(p.second)
                << "], \"refined\": " << (p.refined ? "true" : "false")
-               << ", \"screen_cost\": " << num(p.screenCost)
-               << ", \"screen_parameters\": " << formatPairParameters(p, p.screenParameters, nullptr);
+               << ", \"screen_cost\": " << num(p.screenCost) << ", \"screen_parameters\": "
+               << formatPairParameters(p, p.screenParameters, nullptr);
             if (p.refined) {
-                os << ",\n     \"parameters\": " << formatPairParameters(p, c.parameters, &c.parameterStdDev)
-                   << ", " << formatGaps(c)
-                   << ",\n     \"against\": " << str(p.against)
+                os << ",\n     \"parameters\": "
+                   << formatPairParameters(p, c.parameters, &c.parameterStdDev) << ", "
+                   << formatGaps(c) << ",\n     \"against\": " << str(p.against)
                    << ", \"single_excess_after\": " << num(p.singleExcessAfter)
                    << ", \"shrink_over_single\": " << num(p.shrinkOverSingle, "%.4f")
                    << ", \"extra_penalty\": " << num(p.extraPenalty, "%.4f")
                    << ", \"gain\": " << num(p.gain, "%.4f")
-                   << ",\n     \"heldout_metrics\": " << formatMetrics(c, w) << ",\n     \"folds\": "
-                   << formatFolds(c, [&](const std::vector<double>& v) {
+                   << ",\n     \"heldout_metrics\": " << formatMetrics(c, w)
+                   << ",\n     \"folds\": " << formatFolds(c, [&](const std::vector<double>& v) {
                           return formatPairParameters(p, v, nullptr);
                       });
             }
             os << ", \"simulations\": " << c.simulations
-               << ", \"accepted\": " << (p.accepted ? "true" : "false") << ", \"why\": " << str(p.why) << "}";
+               << ", \"accepted\": " << (p.accepted ? "true" : "false")
+               << ", \"why\": " << str(p.why) << "}";
         }
         os << "]},\n  \"verdict\": " << str(which->verdict) << ",\n  \"verdict_effects\": [";
         for (size_t i = 0; i < which->verdictEffects.size(); ++i)

@@ -50,9 +50,9 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
                                       const diagnose::WhichReport* which) {
     // The curves with the verdict's fit: the pair named, else the best single.
     const diagnose::CandidateResult* best =
-        which && which->pairChosen >= 0 ? &which->pairs[which->pairChosen].result
+        which && which->pairChosen >= 0       ? &which->pairs[which->pairChosen].result
         : which && !which->candidates.empty() ? &which->candidates.front()
-                                               : nullptr;
+                                              : nullptr;
     std::ostringstream os;
     os << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>bagsim diagnosis: "
        << esc(info.measuredFolder) << "</title><style>body{font-family:sans-serif;margin:2em;}"
@@ -119,18 +119,21 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
                 for (const std::string& name : {p.first, p.second}) {
                     const diagnose::Effect* e = diagnose::findEffect(name);
                     for (size_t i = 0; e && i < e->parameters.size() && k < v.size(); ++i, ++k)
-                        params += (k ? ", " : "") + name + "." + e->parameters[i].name + " " +
-                                  num(v[k] / e->parameters[i].siPerUnit) +
-                                  (e->parameters[i].unit.empty() ? "" : " " + e->parameters[i].unit);
+                        params +=
+                            (k ? ", " : "") + name + "." + e->parameters[i].name + " " +
+                            num(v[k] / e->parameters[i].siPerUnit) +
+                            (e->parameters[i].unit.empty() ? "" : " " + e->parameters[i].unit);
                 }
                 os << "<tr><td>" << esc(p.first + " + " + p.second) << "</td><td>"
                    << (p.refined ? "yes" : "screened") << "</td><td>"
                    << (p.refined ? num(100 * p.result.excessShrink, "%.1f") + " %" : "-")
                    << "</td><td>"
-                   << (p.refined ? num(100 * p.shrinkOverSingle, "%.1f") + " % (" + esc(p.against) + ")"
-                                 : "-")
+                   << (p.refined
+                           ? num(100 * p.shrinkOverSingle, "%.1f") + " % (" + esc(p.against) + ")"
+                           : "-")
                    << "</td><td>" << (p.refined ? num(p.gain, "%.3f") : "-") << "</td><td>"
-                   << (p.accepted ? "accepted" : "no") << "</td><td>" << esc(params) << "</td></tr>";
+                   << (p.accepted ? "accepted" : "no") << "</td><td>" << esc(params)
+                   << "</td></tr>";
             }
             os << "</table>";
         }

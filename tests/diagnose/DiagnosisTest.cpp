@@ -3,12 +3,10 @@
 // gives "measured" data with one effect on, and the diagnosis must find where the gap lies,
 // which effect it is, and its parameters; the no-effect case must be called none and an effect
 // outside the library unexplained.
-#include <gtest/gtest.h>
-
+#include <bags/Material.h>
 #include <diagnose/Diagnosis.h>
 #include <diagnose/Synthesis.h>
-
-#include <bags/Material.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -281,9 +279,10 @@ TEST(Diagnosis, TwoEffectsAtOnceAreBothNamed) {
 }
 
 TEST(Diagnosis, ASingleEffectGetsNoSecond) {
-    for (const auto& [effect, values] :
-         EffectValues{{"pressure-sensor", {3.0, 200.0}}, {"flowmeter-bias", {0.1e-3}},
-                      {"machine-compliance", {0.5e-3}}, {"pressure-sensor", {1.0, 30.0}}}) {
+    for (const auto& [effect, values] : EffectValues{{"pressure-sensor", {3.0, 200.0}},
+                                                     {"flowmeter-bias", {0.1e-3}},
+                                                     {"machine-compliance", {0.5e-3}},
+                                                     {"pressure-sensor", {1.0, 30.0}}}) {
         // The pair stage stops at its gate: the single leaves every channel within twice its
         // validation uncertainty. Without the gate, pairs are tried, and none is accepted.
         const Diagnosed d = diagnoseStandIn(effect, values);

@@ -208,7 +208,7 @@ struct PairResult {
     /// second scanned (the cheap look that chooses which pairs are fitted in full).
     double screenCost = 0.0;
     std::vector<double> screenParameters;  ///< where that cost was found [SI]
-    bool refined = false;  ///< fitted in full (folds and all tests); else screened only
+    bool refined = false;    ///< fitted in full (folds and all tests); else screened only
     CandidateResult result;  ///< when refined
     /// Against the single it is judged by (the one of the best single, the first and the
     /// second that leaves least to gain): the held-out gap beyond the uncertainty that single
