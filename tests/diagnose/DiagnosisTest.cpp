@@ -3,10 +3,12 @@
 // gives "measured" data with one effect on, and the diagnosis must find where the gap lies,
 // which effect it is, and its parameters; the no-effect case must be called none and an effect
 // outside the library unexplained.
-#include <bags/Material.h>
+#include <gtest/gtest.h>
+
 #include <diagnose/Diagnosis.h>
 #include <diagnose/Synthesis.h>
-#include <gtest/gtest.h>
+
+#include <bags/Material.h>
 
 #include <algorithm>
 #include <cmath>
