@@ -132,7 +132,12 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                                         : std::string("frictionless"));
         std::cerr << "\n  " << cosim::toString(sc.options.coupling.scheme) << " coupling ("
                   << cosim::toString(sc.options.coupling.acceleration) << "), macro step "
-                  << io::formatSignificant(sc.options.coupling.macroStep, "ms") << "; settle "
+                  << (sc.options.coupling.adaptive
+                          ? "adaptive " + io::formatSignificant(sc.options.coupling.minMacroStep, "ms") +
+                                " to " + io::formatSignificant(sc.options.coupling.maxMacroStep, "ms") +
+                                fmt(", accuracy %g x the tolerance", sc.options.coupling.stepAccuracy)
+                          : io::formatSignificant(sc.options.coupling.macroStep, "ms"))
+                  << "; settle "
                   << fmt("%g s", sc.settleTime) << ", then " << fmt("%g s", sc.duration) << "\n";
         for (const io::GasCommandText& g : sc.gasText)
             std::cerr << "  gas from " << fmt("%g s", g.at) << " after the settle: " << g.who
@@ -400,6 +405,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             sc.gas.apply(t, bags);
             double limit = std::min(end, sc.gas.findNextChange(t));
             if (!settled) limit = std::min(limit, sc.settleTime);
+            // Adaptive steps land on the output times too (fixed ones do as multiples of them).
+            if (sc.options.coupling.adaptive) limit = std::min(limit, nextOutput);
             if (sc.controller) {
                 cosim::ControlInputs in;
                 in.time = poa->getTime();

@@ -174,6 +174,10 @@ int main(int argc, char** argv) {
         o.bag.selfContact ? "on" : "off", o.bag.warmStart ? "on" : "off", cosim::toString(o.coupling.scheme).c_str(),
         cosim::toString(o.coupling.acceleration).c_str(), o.coupling.macroStep * 1e3,
         o.coupling.threads, sc.settleTime, sc.duration, loadAverage().c_str());
+    if (o.coupling.adaptive)
+        std::printf("  adaptive macro step: %.2f to %.1f ms, accuracy %g x the tolerance, %d passes aimed at\n",
+                    o.coupling.minMacroStep * 1e3, o.coupling.maxMacroStep * 1e3,
+                    o.coupling.stepAccuracy, o.coupling.targetPasses);
 
     const double tBuild = now();
     cosim::PatientOnArray poa(sc.patient, sc.options);
@@ -209,18 +213,28 @@ int main(int argc, char** argv) {
         w.p = minus(coupling.getProfile(), at);
     };
     double windowStart = 0.0;
+    int redone = 0, cuts = 0;
+    double smallest = INFINITY, largest = 0.0;
     try {
         while (poa.getTime() < end - 1e-9) {
             const double t = poa.getTime() + 1e-9;
             sc.gas.apply(t, bags);
-            // As bagsim run steps: ended early only at a gas command's start and the end.
-            const cosim::StepSummary st = poa.stepUntil(std::min(end, sc.gas.findNextChange(t)));
+            // As bagsim run steps: ended early at a gas command's start, the settle's end and
+            // the end (not at output times: bench_cosim writes none).
+            double limit = std::min(end, sc.gas.findNextChange(t));
+            if (t < sc.settleTime) limit = std::min(limit, sc.settleTime);
+            const cosim::StepSummary st = poa.stepUntil(limit);
             const double tn = poa.getTime();
+            redone += st.redone;
+            cuts += st.cuts;
+            smallest = std::min(smallest, st.macroStep);
+            largest = std::max(largest, st.macroStep);
             if (trace)
-                std::printf("step %.4f s dt %.2f ms passes %d cuts %d mismatch %.3g N of %.4g N, "
-                            "%d Newton, F/W %+.4f %%, travel %.3g mm\n",
-                            tn, 1e3 * st.macroStep, st.iterations, st.cuts, st.residual,
-                            st.wrenchNorm, st.bagIterations,
+                std::printf("step %.4f s dt %.2f ms passes %d cuts %d redone %d mismatch %.3g N of "
+                            "%.4g N, first pass %.3g N (tolerance %.3g N), %d Newton, F/W %+.4f %%, "
+                            "travel %.3g mm\n",
+                            tn, 1e3 * st.macroStep, st.iterations, st.cuts, st.redone, st.residual,
+                            st.wrenchNorm, st.firstResidual, st.tolerance, st.bagIterations,
                             100.0 * (poa.calcBagForce() - weight) / weight, 1e3 * st.shapeTravel);
             const bool phaseEnd = (ph == 0 && tn >= sc.settleTime - 1e-9) || tn >= end - 1e-9;
             if (tn >= windowStart + window - 1e-9 || phaseEnd) {
@@ -278,6 +292,8 @@ int main(int argc, char** argv) {
                     arrayBags.c_str(), all.participantSeconds[i],
                     all.participantIterations[i]);
     }
+    std::printf("steps: %d committed (%.2f to %.2f ms), %d redone for accuracy, %d cut on failure\n",
+                coupling.getNumSteps(), 1e3 * smallest, 1e3 * largest, redone, cuts);
     std::printf("  the bags carry %.2f N of his %.2f N (%+.3f %%); load average at end: %s\n",
                 poa.calcBagForce(), weight, 100.0 * (poa.calcBagForce() - weight) / weight,
                 loadAverage().c_str());

@@ -91,6 +91,15 @@ void CouplingOptions::validate() const {
     if (!(minMacroStep > 0.0 && minMacroStep <= macroStep))
         invalid("minMacroStep", minMacroStep, "a positive step no larger than macroStep");
     if (growAfter < 1) invalid("growAfter", growAfter, "1 or more");
+    if (adaptive) {
+        if (!(maxMacroStep >= macroStep) || !std::isfinite(maxMacroStep))
+            invalid("maxMacroStep", maxMacroStep, "a step no smaller than macroStep [s]");
+        if (!(stepAccuracy > 0.0) || !std::isfinite(stepAccuracy))
+            invalid("stepAccuracy", stepAccuracy, "a positive multiple of the tolerance");
+        if (targetPasses < 2) invalid("targetPasses", targetPasses, "2 or more");
+        if (!(maxGrowth > 1.0 && maxGrowth <= 10.0))
+            invalid("maxGrowth", maxGrowth, "1 < factor <= 10");
+    }
     if (threads < 0) invalid("threads", threads, "0 (one per core) or more");
     if (!(skipTravel >= 0.0) || !std::isfinite(skipTravel))
         invalid("skipTravel", skipTravel, "0 (never skip) or a positive length [m]");
@@ -309,6 +318,45 @@ struct Coupling::Impl {
         body.rollback();
         for (Participant* p : participants) p->rollback();
     }
+
+    StepSummary runStep(double t, double dt, double tEnd, bool judge, bool& rejected);
+
+    // The order in dt of a step's accuracy measure, taken as 1 for every scheme: a held
+    // load's change over the step (explicit; the first implicit pass) is first order; the
+    // linearisation's miss would be second order for a smooth bag, but every node that enters
+    // or leaves contact within the step adds a force the tangent did not know, in proportion
+    // to its travel (measured at the patient's landing: a miss of 1-5 N at 1 ms steps, tens
+    // of N at 40 ms). Taking the lower order shrinks enough at once and grows cautiously.
+    static constexpr double kMeasureOrder = 1.0;
+
+    // The adaptive step's measure over its target (1: on target): the first pass's
+    // |H(x) - x| over stepAccuracy times the coupling tolerance.
+    double calcAccuracyRatio(const StepSummary& s) const {
+        return s.firstResidual / (options.stepAccuracy * s.tolerance);
+    }
+
+    // The factor from a step of summary s to the next: the measure brought to half its
+    // target at its order (it scatters by a factor of a few from step to step at the
+    // patient's landing, so aiming at the target itself had a step in four redone), the
+    // passes of the iterated schemes to targetPasses (first order), bounded by 0.2 and
+    // maxGrowth.
+    double calcStepFactor(const StepSummary& s) const {
+        constexpr double safety = 0.5, smallest = 0.2;
+        const double ratio = calcAccuracyRatio(s);
+        double f = ratio > 0.0 ? safety * std::pow(ratio, -1.0 / kMeasureOrder) : options.maxGrowth;
+        const bool iterated =
+            options.scheme == Scheme::Implicit || options.scheme == Scheme::TangentImplicit;
+        if (iterated && s.iterations > options.targetPasses)
+            f = std::min(f, double(options.targetPasses - 1) / double(s.iterations - 1));
+        return std::clamp(f, smallest, options.maxGrowth);
+    }
+
+    // Time restarts at t with steps of dt (Coupling::getTime() == t).
+    void restartAt(double t, double dt) {
+        baseTime = t;
+        stepsSinceBase = 0;
+        options.macroStep = dt;
+    }
 };
 
 Coupling::Coupling(BodyParticipant& body, std::vector<Participant*> participants,
@@ -379,10 +427,22 @@ void Coupling::initialize() {
 StepSummary Coupling::step() {
     Impl& m = *m_impl;
     if (!m.initialized) throw std::logic_error("Coupling::step: initialize() first");
+    const double dt = m.options.macroStep;
+    bool rejected = false;
+    const StepSummary s =
+        m.runStep(getTime(), dt, m.baseTime + (m.stepsSinceBase + 1) * dt, false, rejected);
+    ++m.stepsSinceBase;
+    return s;
+}
+
+// One attempt of a macro step from t to tEnd = t + dt (see Coupling::step()); commits it
+// unless `judge` and its accuracy measure is above its target (calcAccuracyRatio()) while dt
+// is above the smallest step: then every side is rolled back and `rejected` set.
+StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge, bool& rejected) {
+    Impl& m = *this;
     const CouplingOptions& o = m.options;
-    const double dt = o.macroStep;
-    const double tEnd = m.baseTime + (m.stepsSinceBase + 1) * dt;
-    if (m.beforeStep) m.beforeStep(getTime(), dt);
+    rejected = false;
+    if (m.beforeStep) m.beforeStep(t, dt);
     const bool linearised = m.isLinearised();
     const size_t nl = m.links.size(), np = m.participants.size();
     StepSummary sum;
@@ -447,6 +507,10 @@ StepSummary Coupling::step() {
         const Eigen::VectorXd r = Hx - m.pack(seen);
         sum.residual = r.norm();
         sum.wrenchNorm = Hx.norm();
+        if (k == 0) {
+            sum.firstResidual = sum.residual;
+            sum.tolerance = o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance;
+        }
         if (o.scheme == Scheme::Explicit || o.scheme == Scheme::Tangent) break;
         if (sum.residual <= o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance) break;
         if (k + 1 >= o.maxIterations) {
@@ -461,32 +525,103 @@ StepSummary Coupling::step() {
         }
         x = m.accelerator->next(x, linearised ? Eigen::VectorXd(x + r) : Hx);
     }
+    sum.macroStep = dt;
+    if (judge) {
+        sum.accuracyRatio = m.calcAccuracyRatio(sum);
+        if (sum.accuracyRatio > 1.0 && dt > o.minMacroStep * (1.0 + 1e-9)) {
+            m.rollbackAll();
+            rejected = true;
+            return sum;
+        }
+    }
     m.accelerator->endStep();
     // The tangents at the new state, of the participants whose linearisation missed (all of
     // those advanced when tangentTolerance is 0).
-    std::vector<Mat6> t = m.T;
+    std::vector<Mat6> tangents = m.T;
     if (linearised) {
         std::vector<char> which(np, 0);
         for (size_t p = 0; p < np; ++p)
             which[p] = !skip[p] && (!(o.tangentTolerance > 0.0) || firstMiss[p] > o.tangentTolerance);
-        m.refreshTangents(which, t);
+        m.refreshTangents(which, tangents);
     }
     m.body.commit();
     for (size_t p = 0; p < np; ++p)
         if (!skip[p]) m.participants[p]->commit();
     m.W = w;
-    m.T = t;
+    m.T = tangents;
     // A skipped participant's links keep their linearisation about its last poses.
     for (size_t i = 0; i < nl; ++i)
         if (!skip[m.links[i].participant])
             m.X0[i] = m.body.getShapeState(m.links[i].bodyShape).X_GS;
     ++m.steps;
-    ++m.stepsSinceBase;
-    sum.macroStep = dt;
     return sum;
 }
 
-StepSummary Coupling::stepAdaptive() {
+StepSummary Coupling::stepAdaptive(double until) {
+    return m_impl->options.adaptive ? stepAccurate(until) : stepFixed(until);
+}
+
+StepSummary Coupling::stepFixed(double until) {
+    Impl& m = *m_impl;
+    const double t = getTime(), dt = m.options.macroStep;
+    if (t + dt <= until + 1e-12 * std::max(1.0, std::abs(until))) return stepFixed();
+    setMacroStep(until - t);
+    const StepSummary s = stepFixed();
+    if (s.cuts == 0) setMacroStep(dt);
+    return s;
+}
+
+StepSummary Coupling::stepAccurate(double until) {
+    Impl& m = *m_impl;
+    if (!m.initialized) throw std::logic_error("Coupling::stepAdaptive: initialize() first");
+    const CouplingOptions& o = m.options;
+    const double t = getTime();
+    const double left = until - t;
+    if (!(left > 0.0)) throw std::invalid_argument("Coupling::stepAdaptive: until is not ahead");
+    double h = o.macroStep;  // the step proposed
+    int cuts = 0, redone = 0;
+    for (;;) {
+        // Land on `until`, never leaving a sliver before it.
+        double dt = h;
+        const bool lands = dt >= left - 1e-12 * std::max(1.0, std::abs(until));
+        if (lands)
+            dt = left;
+        else if (dt > 0.5 * left)
+            dt = 0.5 * left;
+        const double tEnd = lands ? until : t + dt;
+        m.restartAt(t, dt);
+        bool rejected = false;
+        StepSummary s;
+        try {
+            s = m.runStep(t, dt, tEnd, true, rejected);
+        } catch (const bags::NumericalError&) {
+            m.restartAt(t, h);
+            if (0.5 * dt < o.minMacroStep) throw;
+            h = 0.5 * dt;
+            ++cuts;
+            continue;
+        }
+        const double f = m.calcStepFactor(s);
+        if (rejected) {
+            h = std::max(o.minMacroStep, dt * std::min(f, 0.9));
+            ++redone;
+            continue;
+        }
+        // The next step: grown or shrunk from this one; a step shortened to land (or split)
+        // does not shrink the proposal unless its measure asks for it; no growth right after
+        // a step was redone or cut.
+        double next = f >= 1.0 ? std::max(h, dt * f) : dt * f;
+        if (cuts + redone > 0) next = std::min(next, dt);
+        next = std::clamp(next, o.minMacroStep, o.maxMacroStep);
+        m.restartAt(tEnd, next);
+        s.time = tEnd;
+        s.cuts = cuts;
+        s.redone = redone;
+        return s;
+    }
+}
+
+StepSummary Coupling::stepFixed() {
     Impl& m = *m_impl;
     int cuts = 0;
     for (;;) {

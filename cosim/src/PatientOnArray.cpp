@@ -246,13 +246,7 @@ PatientOnArray::~PatientOnArray() = default;
 StepSummary PatientOnArray::step() { return m_impl->coupling->stepAdaptive(); }
 
 StepSummary PatientOnArray::stepUntil(double limit) {
-    Coupling& c = *m_impl->coupling;
-    const double t = c.getTime(), dt = c.getOptions().macroStep;
-    if (t + dt <= limit + 1e-12 * std::max(1.0, std::abs(limit))) return c.stepAdaptive();
-    c.setMacroStep(limit - t);
-    const StepSummary s = c.stepAdaptive();
-    if (s.cuts == 0) c.setMacroStep(dt);
-    return s;
+    return m_impl->coupling->stepAdaptive(limit);
 }
 double PatientOnArray::getTime() const { return m_impl->coupling->getTime(); }
 

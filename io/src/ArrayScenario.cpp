@@ -2,6 +2,7 @@
 #include <bags/MaterialFit.h>
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayScenario.h>
+#include <io/InputError.h>
 #include <io/PatientScenario.h>
 #include <io/ReducedBagFile.h>
 
@@ -323,20 +324,54 @@ void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
 
 // ----------------------------------------------------------------------------------- coupling
 
+// coupling.macro_step: a time (the fixed step, halved only where a step fails) or `adaptive`
+// (the step follows each step's accuracy between min_macro_step and max_macro_step,
+// docs/cosim.md#the-schemes).
+void readMacroStep(const ScenarioNode& s, cosim::CouplingOptions& c) {
+    c.adaptive = s.has("macro_step") && s.get("macro_step").isScalar() &&
+                 s.get("macro_step").asString() == "adaptive";
+    if (!c.adaptive) {
+        for (const char* key : {"max_macro_step", "step_accuracy"})
+            if (s.has(key))
+                s.fail(key, "only applies with macro_step: adaptive; valid: leave it out or "
+                            "set macro_step: adaptive");
+        try {
+            c.macroStep = s.getQuantity("macro_step", D::Time, 0.01);
+        } catch (const InputError&) {
+            if (!s.get("macro_step").isScalar()) throw;
+            s.fail("macro_step", "'" + s.get("macro_step").asString() +
+                                     "' is not valid; valid: a time such as 10 ms, or adaptive");
+        }
+        checkBetween(s, "macro_step", c.macroStep, 1e-5, 0.1, "ms");
+        c.minMacroStep = s.getQuantity("min_macro_step", D::Time, 1e-5);
+        checkBetween(s, "min_macro_step", c.minMacroStep, 1e-7, c.macroStep, "ms",
+                     "at most the macro step");
+        return;
+    }
+    c.maxMacroStep = s.getQuantity("max_macro_step", D::Time, 0.04);
+    checkBetween(s, "max_macro_step", c.maxMacroStep, 1e-5, 0.1, "ms");
+    c.minMacroStep = s.getQuantity("min_macro_step", D::Time, 1e-3);
+    checkBetween(s, "min_macro_step", c.minMacroStep, 1e-7, c.maxMacroStep, "ms",
+                 "at most max_macro_step");
+    c.macroStep = c.minMacroStep;  // the first step: grown while the steps are accurate
+    c.stepAccuracy = s.getNumber("step_accuracy", 10.0);
+    if (!(c.stepAccuracy >= 0.1 && c.stepAccuracy <= 1e4))
+        s.fail("step_accuracy", fmtNumber(c.stepAccuracy) +
+                                    " is not valid; valid: 0.1 to 10000 (multiples of the "
+                                    "coupling tolerance), e.g. 10");
+}
+
 void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
-    s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step",
-                     "relative_tolerance", "absolute_tolerance", "max_iterations", "threads",
-                     "body_accuracy", "tangent_tolerance", "skip_travel"});
+    s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step", "max_macro_step",
+                     "step_accuracy", "relative_tolerance", "absolute_tolerance",
+                     "max_iterations", "threads", "body_accuracy", "tangent_tolerance",
+                     "skip_travel"});
     cosim::CouplingOptions& c = o.coupling;
     c.scheme = cosim::parseScheme(s.getChoice("scheme", {"explicit", "implicit", "tangent", "tangent-implicit"},
                                               "implicit"));
     c.acceleration = cosim::parseAcceleration(
         s.getChoice("acceleration", {"constant", "aitken", "iqn-ils"}, "iqn-ils"));
-    c.macroStep = s.getQuantity("macro_step", D::Time, 0.01);
-    checkBetween(s, "macro_step", c.macroStep, 1e-5, 0.1, "ms");
-    c.minMacroStep = s.getQuantity("min_macro_step", D::Time, 1e-5);
-    checkBetween(s, "min_macro_step", c.minMacroStep, 1e-7, c.macroStep, "ms",
-                 "at most the macro step");
+    readMacroStep(s, c);
     c.relativeTolerance = s.getNumber("relative_tolerance", 1e-6);
     if (!(c.relativeTolerance > 0.0 && c.relativeTolerance < 1.0))
         s.fail("relative_tolerance", "must lie between 0 and 1, e.g. 1e-6");

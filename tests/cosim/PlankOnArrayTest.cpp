@@ -7,6 +7,7 @@
 #include <cosim/Coupling.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -28,9 +29,12 @@ struct PlankRun {
     Eigen::Matrix3Xd x0, x1;       // the bags' positions at the end
     double seconds = 0.0;
     int passes = 0;
+    std::vector<double> steps;  // [s] adaptive: every step taken
 };
 
-PlankRun run(bool parallel, Threading threading = Threading::PerCall) {
+// The plank released just touching, coupled for 0.3 s: 60 fixed steps of 5 ms, or with
+// `adaptive` accuracy-driven steps (1 to 40 ms) ending at every 50 ms.
+PlankRun run(bool parallel, Threading threading = Threading::PerCall, bool adaptive = false) {
     bags::DoubleWedgeParams g;
     g.meshSize = 0.020;
     ArrayLayout layout;
@@ -76,12 +80,27 @@ PlankRun run(bool parallel, Threading threading = Threading::PerCall) {
     o.parallel = parallel;
     o.threads = 2;
     o.threading = threading;
+    if (adaptive) {
+        o.adaptive = true;
+        o.minMacroStep = o.macroStep = 1e-3;
+        o.maxMacroStep = 0.04;
+        o.stepAccuracy = 100.0;
+    }
     std::vector<Participant*> ps{parts[0].get(), parts[1].get()};
     Coupling c(*plank.body, ps, {Link{plank.shape, 0, 0}, Link{plank.extraShape, 1, 0}}, o);
     c.initialize();
     PlankRun r;
     const auto start = std::chrono::steady_clock::now();  // the coupled steps only
-    for (int i = 0; i < 60; ++i) r.passes += c.step().iterations;
+    if (adaptive) {
+        for (int k = 1; k <= 6; ++k)
+            while (c.getTime() < k * 0.05) {
+                const StepSummary st = c.stepAdaptive(k * 0.05);
+                r.passes += st.iterations;
+                r.steps.push_back(st.macroStep);
+            }
+    } else {
+        for (int i = 0; i < 60; ++i) r.passes += c.step().iterations;
+    }
     r.depth = zTouch - plank.getZ();
     for (int b = 0; b < 2; ++b) r.bagForce.push_back(c.getLinkWrench(b).force.z());
     r.x0 = parts[0]->getAirbag().getPositions();
@@ -116,4 +135,33 @@ TEST(PlankOnArray, TwoBagsInParallelCarryThePlanksWeightAndMatchTheSerialRunBitF
     EXPECT_EQ((par.x1 - ser.x1).cwiseAbs().maxCoeff(), 0.0);
     EXPECT_EQ(omp.bagForce, ser.bagForce);
     EXPECT_EQ((omp.x0 - ser.x0).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(PlankOnArray, AccuracyDrivenStepsAgreeWithTheFixedStepAndGiveTheSameBitsOnTwoThreads) {
+    // The same plank, implicit IQN-ILS, with the step chosen by each step's accuracy (first
+    // pass's residual, passes; 1 to 40 ms, stepAccuracy 100). Reference: the fixed 5 ms run
+    // above. At rest (0.3 s) the depth within 0.5 % of the fixed run's and each bag's force
+    // within 0.5 % of the weight of it; fewer steps; the step grown to 40 ms by then; and the
+    // run on two threads the serial run's bits, steps included (the controller reads only
+    // what the bags return).
+    const PlankRun fixed = run(false);
+    const PlankRun ser = run(false, Threading::PerCall, true);
+    const PlankRun par = run(true, Threading::PerCall, true);
+    std::printf(
+        "plank, adaptive: %zu steps (%.2f passes a step, %.3g to %.3g ms) against 60 fixed; "
+        "depth %.4f mm against %.4f mm; bags %.3f + %.3f N against %.3f + %.3f N\n",
+        ser.steps.size(), double(ser.passes) / ser.steps.size(),
+        1e3 * *std::min_element(ser.steps.begin(), ser.steps.end()),
+        1e3 * *std::max_element(ser.steps.begin(), ser.steps.end()), 1e3 * ser.depth,
+        1e3 * fixed.depth, ser.bagForce[0], ser.bagForce[1], fixed.bagForce[0],
+        fixed.bagForce[1]);
+    EXPECT_NEAR(ser.depth, fixed.depth, 0.005 * fixed.depth);
+    for (int b = 0; b < 2; ++b) EXPECT_NEAR(ser.bagForce[b], fixed.bagForce[b], 0.005 * kWeight);
+    EXPECT_LT(ser.steps.size(), 60u);
+    EXPECT_EQ(*std::max_element(ser.steps.begin(), ser.steps.end()), 0.04);
+    EXPECT_EQ(par.steps, ser.steps);
+    EXPECT_EQ(par.depth, ser.depth);
+    EXPECT_EQ(par.bagForce, ser.bagForce);
+    EXPECT_EQ((par.x0 - ser.x0).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ((par.x1 - ser.x1).cwiseAbs().maxCoeff(), 0.0);
 }

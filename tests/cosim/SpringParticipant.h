@@ -2,7 +2,9 @@
 // A test double for a bag: each shape is held by a linear spring-like law,
 // W(X) = W_ref + K d(X_ref, X) (d: rotation vector and translation from X_ref, Ground), with
 // the exact tangent K (or K scaled by tangentScale, a stand-in for a bag whose tangent is off).
-// It counts its advances and tangents, can be told to fail one, and to say it is steady.
+// It counts its advances and tangents, can be told to fail one, and to say it is steady; a
+// one-sided spring pushes only while its shape lies below X_ref (contact: no pull, no tangent
+// above it).
 #include <cosim/Participant.h>
 
 #include <vector>
@@ -39,10 +41,13 @@ class SpringParticipant : public Participant {
         const Eigen::AngleAxisd aa(Eigen::Matrix3d(X.linear() * s.X_ref.linear().transpose()));
         Vec6 d;
         d << aa.angle() * aa.axis(), X.translation() - s.X_ref.translation();
+        if (oneSided && d(5) >= 0.0) return ShapeWrench();
         return ShapeWrench::fromVector(s.W_ref + s.K * d);
     }
     Mat6 calcWrenchTangent(int shape) const override {
         ++tangents;
+        if (oneSided && m_pose.at(shape).translation().z() >= m_springs.at(shape).X_ref.translation().z())
+            return Mat6::Zero();
         return tangentScale * m_springs.at(shape).K;
     }
     bool isSteady() const override { return steady; }
@@ -53,6 +58,7 @@ class SpringParticipant : public Participant {
     mutable int tangents = 0;   // calcWrenchTangent() calls
     double tangentScale = 1.0;  // the tangent reported, as a multiple of the true one
     bool steady = false;        // isSteady()
+    bool oneSided = false;      // pushes only below X_ref (z)
 
   private:
     std::vector<Spring> m_springs;

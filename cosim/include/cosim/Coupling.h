@@ -33,6 +33,7 @@
 /// end pose) is reported in the same measure.
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -93,11 +94,26 @@ struct CouplingOptions {
     /// untouched bag of a patient at rest then costs nothing. 0: every participant is
     /// advanced every step.
     double skipTravel = 0.0;
-    /// stepAdaptive(): the smallest step a failing step is halved to [s].
+    /// stepAdaptive(): the smallest step a failing step is halved to [s] (adaptive: also the
+    /// smallest step the accuracy control chooses).
     double minMacroStep = 1e-6;
     /// stepAdaptive(): steps in a row that must succeed before the step is doubled again
     /// (never beyond the largest step, the macroStep the coupling was built with).
     int growAfter = 4;
+    /// stepAdaptive(): the step follows the accuracy of each step (docs/cosim.md, "Adaptive
+    /// macro step") between minMacroStep and maxMacroStep, macroStep being the first step;
+    /// false: the step is the user's, halved only when it fails (growAfter).
+    bool adaptive = false;
+    double maxMacroStep = 0.04;  ///< [s] adaptive: the largest step
+    /// [-] adaptive: the step's accuracy measure aimed at, as a multiple of the coupling
+    /// tolerance relativeTolerance |H| + absoluteTolerance of its first pass: the linearised
+    /// schemes' miss, the hold schemes' change of the interface wrench over the step. A step
+    /// whose measure exceeds it is redone smaller; one well inside it lets the next one grow.
+    double stepAccuracy = 10.0;
+    /// adaptive, implicit and tangent-implicit: passes a step aimed at; a step that needed
+    /// more makes the next one smaller (never redone for it: it converged).
+    int targetPasses = 4;
+    double maxGrowth = 2.0;  ///< adaptive: the largest factor from one step to the next
     void validate() const;  ///< throws std::invalid_argument naming the option
 };
 
@@ -123,6 +139,13 @@ struct StepSummary {
     double macroStep = 0.0;    ///< [s] the step taken
     int cuts = 0;              ///< stepAdaptive(): halvings before this step succeeded
     double shapeTravel = 0.0;  ///< [m] the largest travel of a linked shape's origin
+    double firstResidual = 0.0;  ///< [N] |H(x) - x| of the first pass (scaled as above)
+    /// [N] the coupling tolerance at the first pass, relativeTolerance |H| + absoluteTolerance
+    double tolerance = 0.0;
+    /// adaptive: the step's measure over its target (CouplingOptions::stepAccuracy); above 1
+    /// only where the step could not be made smaller
+    double accuracyRatio = 0.0;
+    int redone = 0;  ///< adaptive: attempts redone smaller because their measure was above 1
 };
 
 /// Where a coupling's wall time went, summed over the steps since the last resetProfile()
@@ -160,10 +183,17 @@ class Coupling {
     StepSummary step();
     /// One macro step that is halved, down to minMacroStep, while it fails (a participant
     /// that cannot follow, implicit iterations that do not converge, a shape that would
-    /// travel more than maxShapeTravel), and doubled again after growAfter steps in a row
-    /// succeed, up to the macroStep the coupling was built with.
+    /// travel more than maxShapeTravel), and ends at `until` [s] at the latest.
+    /// Fixed (CouplingOptions::adaptive false): the step is doubled again after growAfter
+    /// steps in a row succeed, up to the macroStep the coupling was built with; a step
+    /// shortened to end at `until` leaves the step size as it was unless it had to be cut.
+    /// Adaptive: the step follows each step's accuracy measure (a step above its target is
+    /// redone smaller from the checkpoint; the next step grows by up to maxGrowth while the
+    /// measure is well inside it), and a step that reaches `until` ends exactly there
+    /// (getTime() == until); one that would leave less than its own size before `until` is
+    /// split into two equal ones.
     /// @throws bags::NumericalError once even minMacroStep fails (sides rolled back).
-    StepSummary stepAdaptive();
+    StepSummary stepAdaptive(double until = std::numeric_limits<double>::infinity());
     /// Changes the macro step from the next step on (time keeps counting from the last one).
     void setMacroStep(double dt);
     /// A function called at the start of every attempt of a macro step (a step cut and tried
@@ -194,6 +224,9 @@ class Coupling {
     void loadState(bags::StateReader& r);
 
   private:
+    StepSummary stepFixed();  // the fixed step, halved on failure
+    StepSummary stepFixed(double until);
+    StepSummary stepAccurate(double until);
     struct Impl;
     std::unique_ptr<Impl> m_impl;
 };

@@ -101,9 +101,9 @@ class PatientOnArray {
 
     /// One macro step, halved while it fails (Coupling::stepAdaptive()).
     StepSummary step();
-    /// One macro step as step(), shortened if needed so it ends at `limit` [s] at the latest
-    /// (a gas command's start, the run's end); the step size is restored afterwards unless the
-    /// shortened step itself had to be cut.
+    /// One macro step as step(), ending at `limit` [s] at the latest (a gas command's start,
+    /// the run's end; Coupling::stepAdaptive(limit)): a fixed step shortened to end there is
+    /// restored afterwards unless it had to be cut; an adaptive one ends exactly at `limit`.
     StepSummary stepUntil(double limit);
     double getTime() const;  ///< [s] since the release
 
