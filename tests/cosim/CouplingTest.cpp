@@ -517,7 +517,7 @@ TEST(Coupling, TheAccuracyDrivenStepShrinksAtTheImpactGrowsInFlightAndAtRestAndL
     // = 0.005). The adaptive step (0.1 to 20 ms, stepAccuracy 100 times a tolerance of about
     // 0.01 N) must follow it at every output time (every 50 ms, each reached exactly) within
     // 5 % of m g / k for the implicit scheme (first order, as at fixed steps above; measured
-    // 3.3 %) and 0.5 % for tangent-implicit (measured 0.04 %), in under a fifth of its steps;
+    // 2.1 %) and 0.5 % for tangent-implicit (measured 0.04 %), in under a fifth of its steps;
     // take its smallest step while the block first presses the spring (half a damped period,
     // 66 ms, from the impact), under a tenth of the largest, redoing at least one step; and
     // reach its largest step (within the output times' split) in free fall before the impact

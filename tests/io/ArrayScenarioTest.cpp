@@ -229,3 +229,41 @@ TEST(ArrayScenario, GroupErrorsAreLocatedInTheirGroup) {
     EXPECT_NE(c.getMessage().find("column 2 does not exist; valid: 0 to 1"), std::string::npos)
         << c.what();
 }
+
+TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreLocated) {
+    const io::PatientOnArrayScenario plain = read(kBase);
+    EXPECT_FALSE(plain.options.coupling.adaptive);
+    EXPECT_DOUBLE_EQ(plain.options.coupling.macroStep, 0.01);
+    auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
+    const io::PatientOnArrayScenario a = read(with("macro_step: adaptive"));
+    EXPECT_TRUE(a.options.coupling.adaptive);
+    EXPECT_DOUBLE_EQ(a.options.coupling.minMacroStep, 1e-3);
+    EXPECT_DOUBLE_EQ(a.options.coupling.macroStep, 1e-3);  // the first step
+    EXPECT_DOUBLE_EQ(a.options.coupling.maxMacroStep, 0.04);
+    EXPECT_DOUBLE_EQ(a.options.coupling.stepAccuracy, 10.0);
+    const io::PatientOnArrayScenario b = read(
+        with("macro_step: adaptive, min_macro_step: 2 ms, max_macro_step: 20 ms, step_accuracy: 50"));
+    EXPECT_DOUBLE_EQ(b.options.coupling.minMacroStep, 2e-3);
+    EXPECT_DOUBLE_EQ(b.options.coupling.maxMacroStep, 0.02);
+    EXPECT_DOUBLE_EQ(b.options.coupling.stepAccuracy, 50.0);
+    struct Bad {
+        const char* coupling;
+        const char* key;
+        const char* valid;
+    };
+    for (const Bad& bad :
+         {Bad{"macro_step: fast", "coupling.macro_step", "valid: a time such as 10 ms, or adaptive"},
+          Bad{"macro_step: 10 ms, max_macro_step: 40 ms", "coupling.max_macro_step",
+              "only applies with macro_step: adaptive"},
+          Bad{"step_accuracy: 10", "coupling.step_accuracy", "only applies with macro_step: adaptive"},
+          Bad{"macro_step: adaptive, max_macro_step: 1 s", "coupling.max_macro_step", "valid:"},
+          Bad{"macro_step: adaptive, min_macro_step: 50 ms, max_macro_step: 20 ms",
+              "coupling.min_macro_step", "at most max_macro_step"},
+          Bad{"macro_step: adaptive, step_accuracy: 0", "coupling.step_accuracy",
+              "valid: 0.1 to 10000"}}) {
+        const io::InputError e = readError(with(bad.coupling));
+        EXPECT_EQ(e.getLine(), 16) << bad.coupling;
+        EXPECT_EQ(e.getKey(), bad.key) << e.what();
+        EXPECT_NE(e.getMessage().find(bad.valid), std::string::npos) << e.what();
+    }
+}
