@@ -99,6 +99,8 @@ void CouplingOptions::validate() const {
         if (targetPasses < 2) invalid("targetPasses", targetPasses, "2 or more");
         if (!(maxGrowth > 1.0 && maxGrowth <= 10.0))
             invalid("maxGrowth", maxGrowth, "1 < factor <= 10");
+        if (!(minCutStep > 0.0))
+            invalid("minCutStep", minCutStep, "a positive step [s]");
     }
     if (threads < 0) invalid("threads", threads, "0 (one per core) or more");
     if (!(skipTravel >= 0.0) || !std::isfinite(skipTravel))
@@ -596,7 +598,7 @@ StepSummary Coupling::stepAccurate(double until) {
             s = m.runStep(t, dt, tEnd, true, rejected);
         } catch (const bags::NumericalError&) {
             m.restartAt(t, h);
-            if (0.5 * dt < o.minMacroStep) throw;
+            if (0.5 * dt < std::min(o.minCutStep, o.minMacroStep)) throw;
             h = 0.5 * dt;
             ++cuts;
             continue;

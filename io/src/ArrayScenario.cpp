@@ -354,11 +354,12 @@ void readMacroStep(const ScenarioNode& s, cosim::CouplingOptions& c) {
     checkBetween(s, "min_macro_step", c.minMacroStep, 1e-7, c.maxMacroStep, "ms",
                  "at most max_macro_step");
     c.macroStep = c.minMacroStep;  // the first step: grown while the steps are accurate
-    c.stepAccuracy = s.getNumber("step_accuracy", 10.0);
+    c.minCutStep = 1e-5;  // a failing step is halved as far as a fixed one may be
+    c.stepAccuracy = s.getNumber("step_accuracy", 1000.0);
     if (!(c.stepAccuracy >= 0.1 && c.stepAccuracy <= 1e4))
         s.fail("step_accuracy", fmtNumber(c.stepAccuracy) +
                                     " is not valid; valid: 0.1 to 10000 (multiples of the "
-                                    "coupling tolerance), e.g. 10");
+                                    "coupling tolerance), e.g. 1000");
 }
 
 void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {

@@ -240,7 +240,7 @@ TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreL
     EXPECT_DOUBLE_EQ(a.options.coupling.minMacroStep, 1e-3);
     EXPECT_DOUBLE_EQ(a.options.coupling.macroStep, 1e-3);  // the first step
     EXPECT_DOUBLE_EQ(a.options.coupling.maxMacroStep, 0.04);
-    EXPECT_DOUBLE_EQ(a.options.coupling.stepAccuracy, 10.0);
+    EXPECT_DOUBLE_EQ(a.options.coupling.stepAccuracy, 1000.0);
     const io::PatientOnArrayScenario b = read(
         with("macro_step: adaptive, min_macro_step: 2 ms, max_macro_step: 20 ms, step_accuracy: 50"));
     EXPECT_DOUBLE_EQ(b.options.coupling.minMacroStep, 2e-3);

@@ -109,11 +109,14 @@ struct CouplingOptions {
     /// tolerance relativeTolerance |H| + absoluteTolerance of its first pass: the linearised
     /// schemes' miss, the hold schemes' change of the interface wrench over the step. A step
     /// whose measure exceeds it is redone smaller; one well inside it lets the next one grow.
-    double stepAccuracy = 10.0;
+    double stepAccuracy = 1000.0;
     /// adaptive, implicit and tangent-implicit: passes a step aimed at; a step that needed
     /// more makes the next one smaller (never redone for it: it converged).
     int targetPasses = 4;
     double maxGrowth = 2.0;  ///< adaptive: the largest factor from one step to the next
+    /// [s] adaptive: the smallest step a failing step is halved to (below minMacroStep, which
+    /// bounds only the steps chosen for accuracy: a bag that cannot follow may need less).
+    double minCutStep = 1e-5;
     void validate() const;  ///< throws std::invalid_argument naming the option
 };
 
