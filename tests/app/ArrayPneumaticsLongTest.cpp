@@ -39,10 +39,18 @@ TEST(ArrayPneumaticsRun, TheCoarseTurnRunsItsSequenceAndComesBack) {
     EXPECT_TRUE(back);
     const Csv verdict = readCsv(out / "verdict.csv");
     for (const auto& r : verdict.rows) {
-        if (r.at(0) == "target tilt reached") EXPECT_EQ(r.at(1), "ok");
-        if (r.at(0) == "back to supine") EXPECT_EQ(r.at(1), "ok");
-        if (r.at(0) == "slid or rolled toward the edge") EXPECT_EQ(r.at(1), "ok") << r.at(4);
-        if (r.at(0) == "fell through or off the bags") EXPECT_EQ(r.at(1), "ok") << r.at(4);
+        if (r.at(0) == "target tilt reached") {
+            EXPECT_EQ(r.at(1), "ok");
+        }
+        if (r.at(0) == "back to supine") {
+            EXPECT_EQ(r.at(1), "ok");
+        }
+        if (r.at(0) == "slid or rolled toward the edge") {
+            EXPECT_EQ(r.at(1), "ok") << r.at(4);
+        }
+        if (r.at(0) == "fell through or off the bags") {
+            EXPECT_EQ(r.at(1), "ok") << r.at(4);
+        }
     }
     // Back near level at the end.
     const Csv tilt = readCsv(out / "tilt.csv");

@@ -70,9 +70,15 @@ TEST(ArrayPneumaticsRun, AShortTurnMovesGasThroughTheValvesAndWritesTheNewFiles)
         if (std::stod(r.at(0)) < tEnd - 1e-9) continue;
         const int column = std::stoi(r.at(bag)) % 7;
         const double m = std::stod(r.at(mass));
-        if (column >= 4) EXPECT_GT(m, 4.501) << "bag " << r.at(bag);
-        if (column <= 2) EXPECT_LT(m, 4.499) << "bag " << r.at(bag);
-        if (column == 3) EXPECT_NEAR(m, 4.5, 1e-9) << "bag " << r.at(bag);
+        if (column >= 4) {
+            EXPECT_GT(m, 4.501) << "bag " << r.at(bag);
+        }
+        if (column <= 2) {
+            EXPECT_LT(m, 4.499) << "bag " << r.at(bag);
+        }
+        if (column == 3) {
+            EXPECT_NEAR(m, 4.5, 1e-9) << "bag " << r.at(bag);
+        }
     }
     for (const auto& r : pneu.rows) {
         if (std::stod(r.at(0)) < tEnd - 1e-9) continue;

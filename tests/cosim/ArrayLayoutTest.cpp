@@ -59,10 +59,11 @@ TEST(ArrayLayout, PlacesEveryBagInItsCellFacingItsRowsWayWithoutOverlap) {
                         (p.array() <= b.footprintMax.array() + 1e-12).all())
                 << "bag " << b.index << " node " << n;
             for (const ArrayBag& o : bags)
-                if (o.index != b.index)
+                if (o.index != b.index) {
                     ASSERT_FALSE((p.array() > o.footprintMin.array() + 1e-9).all() &&
                                  (p.array() < o.footprintMax.array() - 1e-9).all())
                         << "bag " << b.index << " node " << n << " inside bag " << o.index;
+                }
         }
         const Eigen::Vector2d cell = 0.5 * (b.footprintMin + b.footprintMax);
         EXPECT_NEAR(cell.x(), a.centre.x() + (b.row - 5.5) * a.rowPitch, 1e-12);

@@ -160,7 +160,9 @@ TEST(PneumaticControl, AValveScheduleRepeatsWithItsPeriodOddAndEvenAlternating) 
         const double start = st.t - kDt;  // the step's start decides
         const bool want = start >= 1.0 - 1e-9 && std::fmod(start - 1.0 + 1e-9, 0.4) < 0.2;
         EXPECT_EQ(st.aFills, want) << "step from " << start << " s";
-        if (start >= 1.0 - 1e-9) EXPECT_EQ(st.bVents, want) << "step from " << start << " s";
+        if (start >= 1.0 - 1e-9) {
+            EXPECT_EQ(st.bVents, want) << "step from " << start << " s";
+        }
     }
     // 5 switch times (1.0, 1.2, 1.4, 1.6, 1.8), two channels each.
     EXPECT_EQ(events.size(), 10u);

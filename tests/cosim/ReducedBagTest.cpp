@@ -126,8 +126,9 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
             (bag.getDepth(0) > depth ? lo : hi) = p.z();
         }
         ASSERT_NEAR(bag.getDepth(0), depth, 1e-6);
-        if (depth > 0.02)  // its underside is below the board: the penalty acts
+        if (depth > 0.02) {  // its underside is below the board: the penalty acts
             ASSERT_LT(bag.getPressurePoints().row(2).minCoeff(), -1e-3);
+        }
         bag.commit();
         const Mat6 T = bag.calcWrenchTangent(0);
         Mat6 fd;
