@@ -1290,7 +1290,13 @@ Eigen::Matrix<double, 6, 6> Airbag::calcShapeWrenchTangent(int shape) const {
 
 std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
     const std::vector<int>& shapes) const {
+    return calcShapeWrenchTangents(shapes, nullptr);
+}
+
+std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
+    const std::vector<int>& shapes, bool* filmHeld) const {
     const Impl& m = *m_impl;
+    if (filmHeld) *filmHeld = false;
     // B = d(grad E)/dq at fixed x; the bag re-equilibrates, dx/dq = -K^-1 B, hence
     // dW/dq = dW/dq|_x - (dW/dx) K^-1 B, and frictionless W = -dE_c/dq so dW/dx = -B^T.
     // One K for every shape's B.
@@ -1302,7 +1308,14 @@ std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
     Eigen::MatrixXd B(3 * m.mesh.getNumNodes(), 6 * pressing.size());
     for (size_t j = 0; j < pressing.size(); ++j)
         B.middleCols<6>(6 * j) = m.calcContactPoseDerivative(shapes[pressing[j]], &T[pressing[j]]);
-    const Eigen::MatrixXd Y = solveTangent(*m.model, m.x, B);
+    Eigen::MatrixXd Y;
+    try {
+        Y = solveTangent(*m.model, m.x, B);
+    } catch (const NumericalError&) {
+        if (!filmHeld) throw;
+        *filmHeld = true;  // T holds dW/dq at fixed nodes
+        return T;
+    }
     for (size_t j = 0; j < pressing.size(); ++j) {
         const RigidContact& c = *m.shapes.at(shapes[pressing[j]]).contact;
         // Frictionless, dW/dx = -B^T (the wrench is minus the contact energy's derivative by

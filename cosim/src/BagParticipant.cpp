@@ -39,12 +39,22 @@ ShapeWrench BagParticipant::calcWrench(int shape) const {
 }
 
 Mat6 BagParticipant::calcWrenchTangent(int shape) const {
-    return m_bag->calcShapeWrenchTangent(shape);
+    return calcWrenchTangents({shape}).front();
 }
 
 std::vector<Mat6> BagParticipant::calcWrenchTangents(const std::vector<int>& shapes) const {
-    return m_bag->calcShapeWrenchTangents(shapes);
+    // A bag whose tangent is not positive definite (at or past a limit point, or held by the
+    // stabilisation springs) has no re-equilibrated answer to a small move: the body gets the
+    // film-held tangent, the contact's own stiffness (the stiff side: a linearised load that
+    // over-resists, never one that pulls the body in). The implicit schemes' passes correct
+    // the load; the one-pass tangent scheme keeps it for that step.
+    bool filmHeld = false;
+    std::vector<Mat6> T = m_bag->calcShapeWrenchTangents(shapes, &filmHeld);
+    if (filmHeld) ++m_filmHeldTangents;
+    return T;
 }
+
+int BagParticipant::getNumFilmHeldTangents() const { return m_filmHeldTangents; }
 
 Eigen::VectorXd BagParticipant::calcContactPressure(int shape) const {
     return m_bag->calcShapeContactPressure(shape);

@@ -261,6 +261,13 @@ public:
     /// zero without a solve (if none does, nothing is factored).
     std::vector<Eigen::Matrix<double, 6, 6>> calcShapeWrenchTangents(
         const std::vector<int>& shapes) const;
+    /// As calcShapeWrenchTangents(), but where the bag's tangent is not positive definite (a
+    /// state at or past a limit point, e.g. one held by the stabilisation springs) each
+    /// pressing shape gets the film-held tangent dW/dq at fixed nodes (the contact's own
+    /// stiffness: the bag's stiffest answer, no re-equilibration) and *filmHeld is set,
+    /// instead of a throw.
+    std::vector<Eigen::Matrix<double, 6, 6>> calcShapeWrenchTangents(
+        const std::vector<int>& shapes, bool* filmHeld) const;
     /// Contact pressure [Pa] per mesh node from this shape.
     Eigen::VectorXd calcShapeContactPressure(int shape) const;
     /// Force [N] on the bed board (Ground).

@@ -26,8 +26,11 @@ class BagParticipant : public Bag {
     void rollback() override;
     ShapeWrench calcWrench(int shape) const override;
     Mat6 calcWrenchTangent(int shape) const override;
-    /// The airbag's calcShapeWrenchTangents(): one factorisation for all the shapes.
+    /// The airbag's calcShapeWrenchTangents(): one factorisation for all the shapes. Where
+    /// the bag's tangent is not positive definite, the film-held tangents (counted).
     std::vector<Mat6> calcWrenchTangents(const std::vector<int>& shapes) const override;
+    /// How many calcWrenchTangents() calls gave film-held tangents (not saved in checkpoints).
+    int getNumFilmHeldTangents() const;
     Eigen::VectorXd calcContactPressure(int shape) const override;
     /// The airbag's gas is still (bags::Airbag::isGasStill()).
     bool isSteady() const override;
@@ -56,6 +59,7 @@ class BagParticipant : public Bag {
     int m_maxCuts;
     bags::AdvanceSummary m_last;
     mutable Eigen::VectorXd m_areas;  // the mesh's nodal areas, made on first use
+    mutable int m_filmHeldTangents = 0;
 };
 
 }  // namespace cosim
