@@ -139,16 +139,30 @@ double calcEnergy(const BlockSystem& block, const BagParticipant& bag) {
     return 0.5 * block.mass * v * v + block.mass * kGravity * block.getZ() + acc.energy;
 }
 
-CosimRun runCosim(const CouplingOptions& o, int steps, double k, double zeta) {
-    const auto start = std::chrono::steady_clock::now();
+// The block released from rest just touching the bag under it, on a damper of ratio zeta (for
+// the stiffness k), coupled to the bag by `o` and initialized.
+struct CoupledBlock {
     BlockBag b;
     const Vec3 touch = b.touch;
     const double m = kWeight / kGravity;
-    BlockSystem block(m, 2.0 * zeta * std::sqrt(k * m), kGravity, touch.x(), touch.y());
-    block.start(touch.z());
-    BagParticipant bag(std::move(b.bag));
-    Coupling c(*block.body, {&bag}, {Link{block.shape, 0, 0}}, o);
-    c.initialize();
+    BlockSystem block;
+    BagParticipant bag;
+    Coupling c;
+    CoupledBlock(const CouplingOptions& o, double k, double zeta)
+        : block(m, 2.0 * zeta * std::sqrt(k * m), kGravity, touch.x(), touch.y()),
+          bag((block.start(touch.z()), std::move(b.bag))),
+          c(*block.body, {&bag}, {Link{block.shape, 0, 0}}, o) {
+        c.initialize();
+    }
+};
+
+CosimRun runCosim(const CouplingOptions& o, int steps, double k, double zeta) {
+    const auto start = std::chrono::steady_clock::now();
+    CoupledBlock run(o, k, zeta);
+    const Vec3& touch = run.touch;
+    BlockSystem& block = run.block;
+    BagParticipant& bag = run.bag;
+    Coupling& c = run.c;
     CosimRun r;
     r.energy.push_back(calcEnergy(block, bag));  // at t = 0
     for (int i = 0; i < steps; ++i) {
@@ -562,14 +576,10 @@ struct OutputRun {
 
 OutputRun runToOutputs(const CouplingOptions& o, int outputs, double every, double k,
                        double zeta) {
-    BlockBag b;
-    const Vec3 touch = b.touch;
-    const double m = kWeight / kGravity;
-    BlockSystem block(m, 2.0 * zeta * std::sqrt(k * m), kGravity, touch.x(), touch.y());
-    block.start(touch.z());
-    BagParticipant bag(std::move(b.bag));
-    Coupling c(*block.body, {&bag}, {Link{block.shape, 0, 0}}, o);
-    c.initialize();
+    CoupledBlock run(o, k, zeta);
+    const Vec3& touch = run.touch;
+    BlockSystem& block = run.block;
+    Coupling& c = run.c;
     OutputRun r;
     for (int i = 1; i <= outputs; ++i) {
         const double until = i * every;
