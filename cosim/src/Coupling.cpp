@@ -509,20 +509,20 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
         const Eigen::VectorXd r = Hx - m.pack(seen);
         sum.residual = r.norm();
         sum.wrenchNorm = Hx.norm();
+        const double tolerance = o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance;
         if (k == 0) {
             sum.firstResidual = sum.residual;
-            sum.tolerance = o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance;
+            sum.tolerance = tolerance;
         }
         if (o.scheme == Scheme::Explicit || o.scheme == Scheme::Tangent) break;
-        if (sum.residual <= o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance) break;
+        if (sum.residual <= tolerance) break;
         if (k + 1 >= o.maxIterations) {
             m.rollbackAll();
             std::ostringstream s;
             s << "Coupling: the implicit iterations did not converge in " << o.maxIterations
               << " iterations at t = " << tEnd << " s (macro step " << m.steps
               << "): |H(x) - x| = " << sum.residual << " N against a tolerance of "
-              << o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance
-              << " N; cut the macro step or raise maxIterations";
+              << tolerance << " N; cut the macro step or raise maxIterations";
             throw bags::NumericalError(s.str(), tEnd - dt, m.steps);
         }
         x = m.accelerator->next(x, linearised ? Eigen::VectorXd(x + r) : Hx);
