@@ -236,6 +236,19 @@ int main(int argc, char** argv) {
                             tn, 1e3 * st.macroStep, st.iterations, st.cuts, st.redone, st.residual,
                             st.wrenchNorm, st.firstResidual, st.tolerance, st.bagIterations,
                             100.0 * (poa.calcBagForce() - weight) / weight, 1e3 * st.shapeTravel);
+            if (trace && st.firstWorstLink >= 0) {
+                // Where the step's miss was: the link (segment on bag) worst at the first and
+                // the last pass.
+                auto name = [&](int link) {
+                    if (size_t(link) >= poa.getPairs().size()) return "link " + std::to_string(link);
+                    const cosim::ShapeBagPair& pr = poa.getPairs()[size_t(link)];
+                    return std::string(body::getSegmentName(body::Segment(pr.shape))) + " on bag " +
+                           std::to_string(pr.bag);
+                };
+                std::printf("     worst link: first pass %s (%.3g N), last pass %s (%.3g N)\n",
+                            name(st.firstWorstLink).c_str(), st.firstWorstMiss,
+                            name(st.lastWorstLink).c_str(), st.lastWorstMiss);
+            }
             const bool phaseEnd = (ph == 0 && tn >= sc.settleTime - 1e-9) || tn >= end - 1e-9;
             if (tn >= windowStart + window - 1e-9 || phaseEnd) {
                 close(current, windowStart, wallWindow, cpuWindow, atWindow);

@@ -479,6 +479,73 @@ struct Airbag::Impl {
             model->updGas(bagGases[b][i]).setMass(m * V[i] / Vsum, V[i]);
     }
     // Adds dm [kg] to bag b's gas bodies in proportion to their volumes at x.
+    // Gas [kg] the flows set let into bag b over dt from the current state (Airbag::calcGasInflow).
+    double calcGasInflow(int b, double dt) const {
+        double dm = massFlow[b] * dt;
+        if (hasTarget[b]) {
+            const double left = targetMass[b] - bagMass(b);
+            dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
+        }
+        return dm;
+    }
+    // d(grad E)/d m_b at x [3N]: minus the gas's nodal force per unit of mass added to bag b
+    // as addBagGasMass() adds it (p_i V_i / (m_i Vsum) dV_i/dx over its gas bodies: each
+    // body's absolute pressure scales with its mass at its volume, GasChamber::transferMass).
+    Eigen::VectorXd calcGasMassDerivative(int b) const {
+        Eigen::VectorXd d = Eigen::VectorXd::Zero(3 * mesh.getNumNodes()), grad;
+        double Vsum = 0.0;
+        const std::vector<double> V = calcGasVolumes(b, &Vsum);
+        for (size_t i = 0; i < V.size(); ++i) {
+            const GasChamber& gas = model->getGas(bagGases[b][i]);
+            if (!(gas.getMass() > 0.0)) continue;
+            model->calcGasVolume(bagGases[b][i], x, &grad);
+            d -= gas.calcPressure(V[i]) * V[i] / (gas.getMass() * Vsum) * grad;
+        }
+        return d;
+    }
+    // The wrench linearisation of `shapes` at x (Airbag::calcShapeWrenchLinearisation()); the
+    // gas columns only if `gas`; film-held tangents where the bag's tangent is not positive
+    // definite if `allowFilmHeld`, else the NumericalError.
+    // B = d(grad E)/dq at fixed x; the bag re-equilibrates, dx/dq = -K^-1 B, hence
+    // dW/dq = dW/dq|_x - (dW/dx) K^-1 B, and frictionless W = -dE_c/dq so dW/dx = -B^T. The
+    // gas likewise: dx/dm_b = -K^-1 d(grad E)/dm_b, dW/dm_b = (dW/dx) dx/dm_b. One K for all.
+    Airbag::WrenchLinearisation linearise(const std::vector<int>& which, bool gas,
+                                          bool allowFilmHeld) const {
+        Airbag::WrenchLinearisation lin;
+        lin.pose.assign(which.size(), Eigen::Matrix<double, 6, 6>::Zero());
+        if (gas) lin.gas.assign(which.size(), Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, numBags));
+        std::vector<int> pressing;  // indices into `which`
+        for (size_t k = 0; k < which.size(); ++k)
+            if (shapes.at(which[k]).contact->getNumActive(x) > 0) pressing.push_back(int(k));
+        if (pressing.empty()) return lin;
+        const int nPose = 6 * int(pressing.size());
+        Eigen::MatrixXd B(3 * mesh.getNumNodes(), nPose + (gas ? numBags : 0));
+        for (size_t j = 0; j < pressing.size(); ++j)
+            B.middleCols<6>(6 * j) = calcContactPoseDerivative(which[pressing[j]], &lin.pose[pressing[j]]);
+        if (gas)
+            for (int b = 0; b < numBags; ++b) B.col(nPose + b) = calcGasMassDerivative(b);
+        Eigen::MatrixXd Y;
+        try {
+            Y = solveTangent(*model, x, B);
+        } catch (const NumericalError&) {
+            if (!allowFilmHeld) throw;
+            lin.filmHeld = true;  // pose: dW/dq at fixed nodes; gas: zero
+            return lin;
+        }
+        for (size_t j = 0; j < pressing.size(); ++j) {
+            const RigidContact& c = *shapes.at(which[pressing[j]]).contact;
+            // Frictionless, dW/dx = -B^T (the wrench is minus the contact energy's derivative by
+            // the pose); with friction the tangential force is a law, and dW/dx is its own.
+            Eigen::Matrix<double, 6, Eigen::Dynamic> dWdx;
+            if (c.isConservative())
+                dWdx = -B.middleCols<6>(6 * j).transpose();
+            else
+                dWdx = c.calcWrenchNodeDerivative(x);
+            lin.pose[pressing[j]] -= dWdx * Y.middleCols<6>(6 * j);
+            if (gas) lin.gas[pressing[j]] = -dWdx * Y.rightCols(numBags);
+        }
+        return lin;
+    }
     void addBagGasMass(int b, double dm) {
         if (dm == 0.0) return;
         double Vsum = 0.0;
@@ -818,14 +885,7 @@ struct Airbag::Impl {
             *warmed = false;
             try {
                 // Gas in or out of each bag over the step, at the volumes of the start of the step.
-                for (int b = 0; b < numBags; ++b) {
-                    double dm = massFlow[b] * dt;
-                    if (hasTarget[b]) {
-                        const double left = targetMass[b] - bagMass(b);
-                        dm = std::abs(dm) >= std::abs(left) ? left : std::copysign(std::abs(dm), left);
-                    }
-                    addBagGasMass(b, dm);
-                }
+                for (int b = 0; b < numBags; ++b) addBagGasMass(b, calcGasInflow(b, dt));
                 leak(dt);
                 const bool heat = spec.gas.heatTimeConstant > 0.0 && dt > 0.0;
                 const std::vector<GasChamber> heatStart = heat ? copyGases() : std::vector<GasChamber>();
@@ -1295,37 +1355,17 @@ std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
 
 std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
     const std::vector<int>& shapes, bool* filmHeld) const {
-    const Impl& m = *m_impl;
-    if (filmHeld) *filmHeld = false;
-    // B = d(grad E)/dq at fixed x; the bag re-equilibrates, dx/dq = -K^-1 B, hence
-    // dW/dq = dW/dq|_x - (dW/dx) K^-1 B, and frictionless W = -dE_c/dq so dW/dx = -B^T.
-    // One K for every shape's B.
-    std::vector<Eigen::Matrix<double, 6, 6>> T(shapes.size(), Eigen::Matrix<double, 6, 6>::Zero());
-    std::vector<int> pressing;  // indices into `shapes`
-    for (size_t k = 0; k < shapes.size(); ++k)
-        if (m.shapes.at(shapes[k]).contact->getNumActive(m.x) > 0) pressing.push_back(int(k));
-    if (pressing.empty()) return T;
-    Eigen::MatrixXd B(3 * m.mesh.getNumNodes(), 6 * pressing.size());
-    for (size_t j = 0; j < pressing.size(); ++j)
-        B.middleCols<6>(6 * j) = m.calcContactPoseDerivative(shapes[pressing[j]], &T[pressing[j]]);
-    Eigen::MatrixXd Y;
-    try {
-        Y = solveTangent(*m.model, m.x, B);
-    } catch (const NumericalError&) {
-        if (!filmHeld) throw;
-        *filmHeld = true;  // T holds dW/dq at fixed nodes
-        return T;
-    }
-    for (size_t j = 0; j < pressing.size(); ++j) {
-        const RigidContact& c = *m.shapes.at(shapes[pressing[j]]).contact;
-        // Frictionless, dW/dx = -B^T (the wrench is minus the contact energy's derivative by
-        // the pose); with friction the tangential force is a law, and dW/dx is its own.
-        if (c.isConservative())
-            T[pressing[j]] += B.middleCols<6>(6 * j).transpose() * Y.middleCols<6>(6 * j);
-        else
-            T[pressing[j]] -= c.calcWrenchNodeDerivative(m.x) * Y.middleCols<6>(6 * j);
-    }
-    return T;
+    Airbag::WrenchLinearisation lin = m_impl->linearise(shapes, false, filmHeld != nullptr);
+    if (filmHeld) *filmHeld = lin.filmHeld;
+    return std::move(lin.pose);
+}
+
+Airbag::WrenchLinearisation Airbag::calcShapeWrenchLinearisation(const std::vector<int>& shapes) const {
+    return m_impl->linearise(shapes, true, true);
+}
+
+double Airbag::calcGasInflow(int bag, double dt) const {
+    return m_impl->calcGasInflow(checkBag(bag), dt);
 }
 
 Eigen::VectorXd Airbag::calcShapeContactPressure(int shape) const {

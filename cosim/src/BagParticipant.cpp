@@ -54,6 +54,19 @@ std::vector<Mat6> BagParticipant::calcWrenchTangents(const std::vector<int>& sha
     return T;
 }
 
+Participant::WrenchLinearisation BagParticipant::calcWrenchLinearisation(
+    const std::vector<int>& shapes) const {
+    bags::Airbag::WrenchLinearisation b = m_bag->calcShapeWrenchLinearisation(shapes);
+    if (b.filmHeld) ++m_filmHeldTangents;
+    return {std::move(b.pose), std::move(b.gas)};
+}
+
+Eigen::VectorXd BagParticipant::calcGasInflow(double dt) const {
+    Eigen::VectorXd dm(m_bag->getNumBags());
+    for (int b = 0; b < m_bag->getNumBags(); ++b) dm(b) = m_bag->calcGasInflow(b, dt);
+    return dm;
+}
+
 int BagParticipant::getNumFilmHeldTangents() const { return m_filmHeldTangents; }
 
 Eigen::VectorXd BagParticipant::calcContactPressure(int shape) const {

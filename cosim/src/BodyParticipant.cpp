@@ -58,7 +58,9 @@ struct BodyParticipant::Shape {
     ShapeWrench W0;
     Mat6 T = Mat6::Zero();
     Eigen::Isometry3d X0 = Eigen::Isometry3d::Identity();
-    bool loaded = false;  ///< W0 or T not zero; an unloaded shape adds nothing
+    Vec6 rate = Vec6::Zero();  ///< the load's rate over the step [(N m, N)/s]
+    double t0 = 0.0;           ///< [s] when the rate starts (the checkpoint's time)
+    bool loaded = false;  ///< W0, T or rate not zero; an unloaded shape adds nothing
 };
 
 namespace {
@@ -70,9 +72,10 @@ Eigen::Isometry3d calcShapePose(const SimTK::SimbodyMatterSubsystem& matter,
     return toEigen(mobod.getBodyTransform(state) * s.X_BS);
 }
 
-// W0 + T d(X0, X), torque about the shape's origin (Ground).
-Vec6 calcLoad(const BodyParticipant::Shape& s, const Eigen::Isometry3d& X_GS) {
+// W0 + T d(X0, X) + rate (t - t0), torque about the shape's origin (Ground).
+Vec6 calcLoad(const BodyParticipant::Shape& s, const Eigen::Isometry3d& X_GS, double t) {
     Vec6 w = s.W0.asVector();
+    if (!s.rate.isZero(0.0)) w += s.rate * (t - s.t0);
     if (!s.T.isZero(0.0)) {
         Vec6 d;
         const Eigen::AngleAxisd aa(Eigen::Matrix3d(X_GS.linear() * s.X0.linear().transpose()));
@@ -96,7 +99,7 @@ class CouplingForce : public SimTK::Force::Custom::Implementation {
             const SimTK::MobilizedBody& mobod = m_matter.getMobilizedBody(s.body);
             const SimTK::Transform& X_GB = mobod.getBodyTransform(state);
             const SimTK::Transform X_GS = X_GB * s.X_BS;
-            const Vec6 w = calcLoad(s, toEigen(X_GS));
+            const Vec6 w = calcLoad(s, toEigen(X_GS), state.getTime());
             SimTK::Vec3 force = vecToSimTK(Vec3(w.tail<3>()));
             if (m_damping > 0.0)
                 force -= m_damping * s.W0.force.norm() *
@@ -168,13 +171,15 @@ void BodyParticipant::initialize(const SimTK::State& state) {
 }
 
 void BodyParticipant::setShapeLoad(int shape, const ShapeWrench& W0, const Mat6& T,
-                                   const Eigen::Isometry3d& X0) {
+                                   const Eigen::Isometry3d& X0, const Vec6& rate) {
     m_impl->shape(shape);
     Shape& s = (*m_impl->shapes)[shape];
     s.W0 = W0;
     s.T = T;
     s.X0 = X0;
-    s.loaded = !(W0.asVector().isZero(0.0) && T.isZero(0.0));
+    s.rate = rate;
+    s.t0 = m_impl->checkpoint.getTime();
+    s.loaded = !(W0.asVector().isZero(0.0) && T.isZero(0.0) && rate.isZero(0.0));
 }
 
 void BodyParticipant::advanceTo(double time) {
@@ -233,7 +238,7 @@ ShapeState BodyParticipant::getShapeState(int shape) const {
 ShapeWrench BodyParticipant::calcShapeLoad(int shape) const {
     const Shape& s = m_impl->shape(shape);
     return ShapeWrench::fromVector(
-        calcLoad(s, calcShapePose(m_impl->matter(), m_impl->current, s)));
+        calcLoad(s, calcShapePose(m_impl->matter(), m_impl->current, s), m_impl->current.getTime()));
 }
 
 const SimTK::State& BodyParticipant::getState() const { return m_impl->current; }
@@ -279,6 +284,8 @@ void BodyParticipant::saveState(bags::StateWriter& w) const {
         w.mat(s.W0.torque), w.mat(s.W0.force);
         w.mat(s.T);
         w.pose(s.X0);
+        w.mat(s.rate);
+        w.pod(s.t0);
     }
 }
 
@@ -299,6 +306,11 @@ void BodyParticipant::loadState(bags::StateReader& r) {
         r.mat(T);
         s.T = T;
         s.X0 = r.pose();
+        Vec6 rate;
+        r.mat(rate);
+        s.rate = rate;
+        r.pod(s.t0);
+        s.loaded = !(s.W0.asVector().isZero(0.0) && s.T.isZero(0.0) && s.rate.isZero(0.0));
     }
     m_impl->system.realize(m_impl->checkpoint, SimTK::Stage::Velocity);
     m_impl->system.realize(m_impl->current, SimTK::Stage::Velocity);

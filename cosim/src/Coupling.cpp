@@ -109,6 +109,8 @@ void CouplingOptions::validate() const {
         invalid("tangentTolerance", tangentTolerance, "0 (every step) or a positive force [N]");
 }
 
+using GasDerivative = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
 struct Coupling::Impl {
     BodyParticipant& body;
     std::vector<Participant*> participants;
@@ -118,6 +120,7 @@ struct Coupling::Impl {
     std::vector<std::vector<int>> linksOf;  // per participant
     std::vector<ShapeWrench> W;             // per link, at the checkpoint
     std::vector<Mat6> T;
+    std::vector<GasDerivative> G;  // per link: d wrench / d gas inputs of its participant
     std::vector<Eigen::Isometry3d> X0;
     double baseTime = 0.0;  // time when the macro step was last set
     int stepsSinceBase = 0;
@@ -252,10 +255,11 @@ struct Coupling::Impl {
         return total;
     }
 
-    // The tangents of the participants marked in `which`, at their current states, into t
-    // (per link); the others' entries are left as they are. Throws with everything rolled
-    // back if one fails.
-    void refreshTangents(const std::vector<char>& which, std::vector<Mat6>& t) {
+    // The tangents (and with gasTangent the gas derivatives) of the participants marked in
+    // `which`, at their current states, into t and g (per link); the others' entries are left
+    // as they are. Throws with everything rolled back if one fails.
+    void refreshTangents(const std::vector<char>& which, std::vector<Mat6>& t,
+                         std::vector<GasDerivative>& g) {
         const int np = int(participants.size());
         std::vector<std::exception_ptr> errors(np);
         std::vector<double> busy(np, 0.0);
@@ -266,8 +270,17 @@ struct Coupling::Impl {
             try {
                 std::vector<int> shapes;
                 for (int i : linksOf[p]) shapes.push_back(links[i].shape);
-                const std::vector<Mat6> tp = participants[p]->calcWrenchTangents(shapes);
-                for (size_t k = 0; k < shapes.size(); ++k) t[linksOf[p][k]] = tp.at(k);
+                if (options.gasTangent) {
+                    Participant::WrenchLinearisation lp =
+                        participants[p]->calcWrenchLinearisation(shapes);
+                    for (size_t k = 0; k < shapes.size(); ++k) {
+                        t[linksOf[p][k]] = lp.pose.at(k);
+                        g[linksOf[p][k]] = lp.gas.empty() ? GasDerivative(6, 0) : lp.gas.at(k);
+                    }
+                } else {
+                    const std::vector<Mat6> tp = participants[p]->calcWrenchTangents(shapes);
+                    for (size_t k = 0; k < shapes.size(); ++k) t[linksOf[p][k]] = tp.at(k);
+                }
             } catch (...) {
                 errors[p] = std::current_exception();
             }
@@ -416,7 +429,9 @@ void Coupling::initialize() {
     m.body.rollback();
     m.advanceParticipants(0.0, m.W);
     m.T.assign(m.links.size(), Mat6::Zero());
-    if (m.isLinearised()) m.refreshTangents(std::vector<char>(m.participants.size(), 1), m.T);
+    m.G.assign(m.links.size(), GasDerivative(6, 0));
+    if (m.isLinearised())
+        m.refreshTangents(std::vector<char>(m.participants.size(), 1), m.T, m.G);
     for (Participant* p : m.participants) p->commit();
     m.X0.resize(m.links.size());
     for (size_t i = 0; i < m.links.size(); ++i)
@@ -454,6 +469,16 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
     // Implicit: x is the held load; tangent-implicit: x is the correction added to the
     // linearised load (zero: the tangent scheme's prediction).
     Eigen::VectorXd x = linearised ? Eigen::VectorXd::Zero(6 * nl) : m.pack(m.W);
+    // The gas's share of the linearised load: its rate over the step per link (the
+    // derivative times the gas the participant lets in over the step).
+    std::vector<Vec6> gasRate(nl, Vec6::Zero());
+    if (linearised && o.gasTangent && dt > 0.0)
+        for (size_t p = 0; p < np; ++p) {
+            if (m.linksOf[p].empty()) continue;
+            const Eigen::VectorXd dm = m.participants[p]->calcGasInflow(dt);
+            for (int i : m.linksOf[p])
+                if (m.G[i].cols() > 0 && m.G[i].cols() == dm.size()) gasRate[i] = m.G[i] * dm / dt;
+        }
     std::vector<ShapeWrench> w, seen(nl);
     std::vector<char> skip;          // participants left standing (skipTravel)
     std::vector<double> firstMiss;   // per participant: the linearisation's miss, first pass
@@ -466,7 +491,7 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
                 ShapeWrench w0 = m.W[i];
                 w0.torque += xi.torque;
                 w0.force += xi.force;
-                m.body.setShapeLoad(m.links[i].bodyShape, w0, m.T[i], m.X0[i]);
+                m.body.setShapeLoad(m.links[i].bodyShape, w0, m.T[i], m.X0[i], gasRate[i]);
             } else {
                 m.body.setShapeLoad(m.links[i].bodyShape, xi);
             }
@@ -509,6 +534,19 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
         const Eigen::VectorXd r = Hx - m.pack(seen);
         sum.residual = r.norm();
         sum.wrenchNorm = Hx.norm();
+        sum.lastWorstLink = -1;
+        sum.lastWorstMiss = 0.0;
+        for (size_t i = 0; i < nl; ++i) {
+            const double ri = r.segment<6>(6 * i).norm();
+            if (ri > sum.lastWorstMiss || sum.lastWorstLink < 0) {
+                sum.lastWorstLink = int(i);
+                sum.lastWorstMiss = ri;
+            }
+        }
+        if (k == 0) {
+            sum.firstWorstLink = sum.lastWorstLink;
+            sum.firstWorstMiss = sum.lastWorstMiss;
+        }
         const double tolerance = o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance;
         if (k == 0) {
             sum.firstResidual = sum.residual;
@@ -540,17 +578,19 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
     // The tangents at the new state, of the participants whose linearisation missed (all of
     // those advanced when tangentTolerance is 0).
     std::vector<Mat6> tangents = m.T;
+    std::vector<GasDerivative> gasDerivatives = m.G;
     if (linearised) {
         std::vector<char> which(np, 0);
         for (size_t p = 0; p < np; ++p)
             which[p] = !skip[p] && (!(o.tangentTolerance > 0.0) || firstMiss[p] > o.tangentTolerance);
-        m.refreshTangents(which, tangents);
+        m.refreshTangents(which, tangents, gasDerivatives);
     }
     m.body.commit();
     for (size_t p = 0; p < np; ++p)
         if (!skip[p]) m.participants[p]->commit();
     m.W = w;
     m.T = tangents;
+    m.G = std::move(gasDerivatives);
     // A skipped participant's links keep their linearisation about its last poses.
     for (size_t i = 0; i < nl; ++i)
         if (!skip[m.links[i].participant])
@@ -665,6 +705,7 @@ double Coupling::getTime() const {
 int Coupling::getNumSteps() const { return m_impl->steps; }
 ShapeWrench Coupling::getLinkWrench(int link) const { return m_impl->W.at(link); }
 const Mat6& Coupling::getLinkTangent(int link) const { return m_impl->T.at(link); }
+const GasDerivative& Coupling::getLinkGasDerivative(int link) const { return m_impl->G.at(link); }
 const CouplingOptions& Coupling::getOptions() const { return m_impl->options; }
 const CouplingProfile& Coupling::getProfile() const { return m_impl->profile; }
 void Coupling::resetProfile() { m_impl->profile = CouplingProfile(); }
@@ -681,6 +722,7 @@ void Coupling::saveState(bags::StateWriter& w) const {
         w.mat(m.W[i].torque), w.mat(m.W[i].force);
         w.mat(m.T[i]);
         w.pose(m.X0[i]);
+        w.mat(m.G[i]);
     }
     m.accelerator->saveState(w);
 }
@@ -703,6 +745,10 @@ void Coupling::loadState(bags::StateReader& r) {
         r.mat(T);
         m.T[i] = T;
         m.X0[i] = r.pose();
+        GasDerivative G;
+        r.mat(G);
+        if (G.rows() != 6) bags::StateReader::mismatch("rows of a link's gas derivative", size_t(G.rows()), 6);
+        m.G[i] = G;
     }
     m.accelerator->loadState(r);
 }

@@ -366,7 +366,7 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step", "max_macro_step",
                      "step_accuracy", "relative_tolerance", "absolute_tolerance",
                      "max_iterations", "threads", "body_accuracy", "tangent_tolerance",
-                     "skip_travel"});
+                     "skip_travel", "gas_tangent"});
     cosim::CouplingOptions& c = o.coupling;
     c.scheme = cosim::parseScheme(s.getChoice("scheme", {"explicit", "implicit", "tangent", "tangent-implicit"},
                                               "implicit"));
@@ -394,6 +394,7 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
                  "0: recomputed every step");
     c.skipTravel = s.getQuantity("skip_travel", D::Length, 0.0);
     checkBetween(s, "skip_travel", c.skipTravel, 0.0, 0.01, "mm", "0: every bag every step");
+    c.gasTangent = s.getBool("gas_tangent", true);
     o.integrator.accuracy = s.getNumber("body_accuracy", 1e-6);
     if (!(o.integrator.accuracy > 0.0 && o.integrator.accuracy < 1e-2))
         s.fail("body_accuracy", "must lie between 0 and 0.01, e.g. 1e-6");

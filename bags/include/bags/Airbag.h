@@ -268,6 +268,25 @@ public:
     /// instead of a throw.
     std::vector<Eigen::Matrix<double, 6, 6>> calcShapeWrenchTangents(
         const std::vector<int>& shapes, bool* filmHeld) const;
+    /// The shapes' wrenches linearised at the current state in their poses and in the bags'
+    /// gas: what calcShapeWrenchTangents(shapes, filmHeld) gives, and per shape the
+    /// derivative of its wrench by each bag's gas mass, with one factorisation for all.
+    struct WrenchLinearisation {
+        /// Per shape, d wrench / d pose (calcShapeWrenchTangents()).
+        std::vector<Eigen::Matrix<double, 6, 6>> pose;
+        /// Per shape, 6 x getNumBags(): column b is d wrench / d m_b [N m/kg, N/kg], the
+        /// shapes held and the bag re-equilibrated, the gas added to bag b as advance()'s
+        /// flows add it (shared among its gas bodies by volume, each keeping its temperature).
+        std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> gas;
+        /// The bag's tangent was not positive definite: film-held pose tangents, and zero
+        /// gas columns (at fixed nodes the wrench does not see the gas).
+        bool filmHeld = false;
+    };
+    WrenchLinearisation calcShapeWrenchLinearisation(const std::vector<int>& shapes) const;
+    /// Gas mass [kg] the flows set (setMassFlow(), setTargetMass()) let into bag b (negative:
+    /// out) over an advance(dt) from the current state: the flow times dt, at most what is
+    /// left to a target. Leakage, orifices and heat are not counted.
+    double calcGasInflow(int bag, double dt) const;
     /// Contact pressure [Pa] per mesh node from this shape.
     Eigen::VectorXd calcShapeContactPressure(int shape) const;
     /// Force [N] on the bed board (Ground).

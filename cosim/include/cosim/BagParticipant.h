@@ -29,7 +29,13 @@ class BagParticipant : public Bag {
     /// The airbag's calcShapeWrenchTangents(): one factorisation for all the shapes. Where
     /// the bag's tangent is not positive definite, the film-held tangents (counted).
     std::vector<Mat6> calcWrenchTangents(const std::vector<int>& shapes) const override;
-    /// How many calcWrenchTangents() calls gave film-held tangents (not saved in checkpoints).
+    /// The airbag's calcShapeWrenchLinearisation(): per shape a gas column per bag of the
+    /// module (film-held tangents counted as above).
+    WrenchLinearisation calcWrenchLinearisation(const std::vector<int>& shapes) const override;
+    /// The airbag's calcGasInflow() per bag of the module.
+    Eigen::VectorXd calcGasInflow(double dt) const override;
+    /// How many calcWrenchTangents() and calcWrenchLinearisation() calls gave film-held
+    /// tangents (not saved in checkpoints).
     int getNumFilmHeldTangents() const;
     Eigen::VectorXd calcContactPressure(int shape) const override;
     /// The airbag's gas is still (bags::Airbag::isGasStill()).

@@ -12,9 +12,11 @@
 ///     read getShapeState() at the end of the step; commit() makes the state reached the
 ///     checkpoint, rollback() returns to it (an implicit scheme repeats 4 from the checkpoint).
 ///
-/// The load on a shape inside the step is W(X) = W0 + T * d(X0, X): a zero-order hold when
-/// T = 0, the bag's tangent linearisation about X0 otherwise; d is the small rotation
-/// (rotation vector of R_GS R_GS0^T, Ground) and translation of the shape's origin from X0.
+/// The load on a shape inside the step is W(X, t) = W0 + T * d(X0, X) + R (t - t0): a
+/// zero-order hold when T = 0 and R = 0, the bag's tangent linearisation about X0 otherwise;
+/// d is the small rotation (rotation vector of R_GS R_GS0^T, Ground) and translation of the
+/// shape's origin from X0; R is the load's rate from the bag's gas over the step (t0 the
+/// checkpoint's time).
 /// W's torque is about the shape's origin, as the bags give it; it is moved to the body origin
 /// when applied. The force adds no potential energy to the system's.
 
@@ -68,9 +70,11 @@ class BodyParticipant {
     /// The initial state (topology realized); it becomes the checkpoint.
     void initialize(const SimTK::State& state);
 
-    /// The load on `shape` during the coming advance: W0 + T * d(X0, X). T zero: a hold.
+    /// The load on `shape` during the coming advance: W0 + T * d(X0, X) + rate (t - t0),
+    /// rate [(N m, N)/s] as ShapeWrench, t0 the checkpoint's time. T and rate zero: a hold.
     void setShapeLoad(int shape, const ShapeWrench& W0, const Mat6& T = Mat6::Zero(),
-                      const Eigen::Isometry3d& X0 = Eigen::Isometry3d::Identity());
+                      const Eigen::Isometry3d& X0 = Eigen::Isometry3d::Identity(),
+                      const Vec6& rate = Vec6::Zero());
     /// Integrates from the checkpoint to `time` [s] under the set loads.
     /// @throws std::runtime_error naming the time if Simbody's integrator fails.
     void advanceTo(double time);

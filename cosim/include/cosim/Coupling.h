@@ -19,10 +19,10 @@
 ///    is what the bags return at the body's end poses. Iterations stop when
 ///    |H(x) - x| <= relativeTolerance |H(x)| + absoluteTolerance (2-norms over every link),
 ///    the next x from an Accelerator (constant relaxation, Aitken or IQN-ILS).
-///  - Tangent: the body integrates under W(t) + T(t) d(X(t), X) (the bags' wrench linearised
-///    in the shape's pose by its tangent, inside the body's own step through a
-///    Force::Custom); the bags then advance to the end poses and return W and T there. One
-///    pass.
+///  - Tangent: the body integrates under W(t) + T(t) d(X(t), X) + G(t) dm (s - t) / dt (the
+///    bags' wrench linearised in the shape's pose by its tangent and in the gas dm the bag
+///    takes in over the step, inside the body's own step through a Force::Custom); the bags
+///    then advance to the end poses and return W, T and G there. One pass.
 ///  - Tangent-implicit: the tangent scheme's pass repeated from the checkpoint while the bags'
 ///    wrench at the end poses misses the linearised load: the unknown x is a correction c
 ///    added to it (W(t) + c + T(t) d), iterated by the accelerator to the implicit scheme's
@@ -86,6 +86,12 @@ struct CouplingOptions {
     /// last ones are kept (they only shape the load inside the step: the wrench at each
     /// step's end is the participant's own). 0: recomputed every step.
     double tangentTolerance = 0.0;
+    /// Tangent schemes: the linearised load also follows the gas each participant lets in or
+    /// out over the step (Participant::calcWrenchLinearisation()'s gas derivatives times its
+    /// calcGasInflow(), ramped over the step), so that a bag being filled or let down is
+    /// predicted as well as one being pressed. false: the poses only (the gas's effect is
+    /// left to the next step, or to tangent-implicit's passes).
+    bool gasTangent = true;
     /// [m] Tangent scheme: a participant that is steady (Participant::isSteady(), no gas
     /// flowing) and whose linked shapes have all moved less than this since it was last
     /// advanced (translation of the origin plus rotation angle times Link::reach) is not
@@ -149,6 +155,10 @@ struct StepSummary {
     /// only where the step could not be made smaller
     double accuracyRatio = 0.0;
     int redone = 0;  ///< adaptive: attempts redone smaller because their measure was above 1
+    /// The link whose |H(x) - x| was largest at the first and at the last pass (-1: no
+    /// links), and that link's share [N] (scaled as above): where a step's passes go.
+    int firstWorstLink = -1, lastWorstLink = -1;
+    double firstWorstMiss = 0.0, lastWorstMiss = 0.0;
 };
 
 /// Where a coupling's wall time went, summed over the steps since the last resetProfile()
@@ -211,6 +221,9 @@ class Coupling {
     ShapeWrench getLinkWrench(int link) const;
     /// Its tangent (Tangent scheme only; zero otherwise).
     const Mat6& getLinkTangent(int link) const;
+    /// Its derivative by the participant's gas inputs [(N m, N)/kg] (tangent schemes with
+    /// gasTangent; 6 x 0 otherwise).
+    const Eigen::Matrix<double, 6, Eigen::Dynamic>& getLinkGasDerivative(int link) const;
     const CouplingOptions& getOptions() const;
     /// Where the time went since construction or the last resetProfile().
     const CouplingProfile& getProfile() const;
@@ -219,7 +232,7 @@ class Coupling {
     // --- checkpoints (bags/StateStream.h), between steps
     /// Writes the coupling's own state: time and step count, the current and largest macro
     /// step and the successes in a row (stepAdaptive()), every link's wrench, tangent and
-    /// linearisation pose, the accelerator's memory. The body and the participants are
+    /// linearisation pose and gas derivative, the accelerator's memory. The body and the participants are
     /// written by their owner.
     void saveState(bags::StateWriter& w) const;
     /// Reads what saveState() wrote into a coupling built the same way and initialized.

@@ -92,6 +92,25 @@ class Participant {
         for (int s : shapes) t.push_back(calcWrenchTangent(s));
         return t;
     }
+    /// The wrenches linearised in the shapes' poses and in the gas the participant takes in.
+    struct WrenchLinearisation {
+        std::vector<Mat6> pose;  ///< per shape, as calcWrenchTangents()
+        /// Per shape, 6 x (the participant's gas inputs, calcGasInflow()): d wrench / d m_k
+        /// [N m/kg, N/kg], the shapes held. Empty: linearised in the poses only.
+        std::vector<Eigen::Matrix<double, 6, Eigen::Dynamic>> gas;
+    };
+    /// At the current state, the shapes' wrench tangents and their derivatives by the gas
+    /// (one factorisation for both). The default: calcWrenchTangents(), no gas.
+    virtual WrenchLinearisation calcWrenchLinearisation(const std::vector<int>& shapes) const {
+        return {calcWrenchTangents(shapes), {}};
+    }
+    /// Gas [kg] per gas input (the columns of WrenchLinearisation::gas) that an advance(dt)
+    /// from the current state lets in (negative: out) with the flows now set. Default: none
+    /// (empty).
+    virtual Eigen::VectorXd calcGasInflow(double dt) const {
+        (void)dt;
+        return Eigen::VectorXd();
+    }
     /// True when nothing but the shapes' poses changes what advance() finds (no gas flows
     /// in the coming steps): the coupling may then leave the participant standing while its
     /// shapes stay near where it last solved (CouplingOptions::skipTravel). Default: false.
