@@ -147,8 +147,9 @@ namespace {
 // committed, every node in contact holds a friction anchor where it touches (friction acts
 // from the step after first touch); a committed `sideways` move then loads the stick springs
 // (slipping where they reach mu f_n).
-double checkWrenchTangent(double friction, const Vec3& sideways, double tolerance,
-                          Eigen::Matrix<double, 6, 6>* tangent) {
+// The ellipsoid pressed 12 mm into a bag solved tightly (for finite differences), committed;
+// then moved `sideways` and committed again (the friction anchors set where it first touched).
+std::unique_ptr<PressedBag> pressTightly(double friction, const Vec3& sideways) {
     AirbagSpec spec = coarseSpec();
     spec.forceTolerance = 1e-7;
     spec.solver.absoluteTolerance = 1e-9;
@@ -156,18 +157,26 @@ double checkWrenchTangent(double friction, const Vec3& sideways, double toleranc
     spec.selfContact = false;
     RigidContact::Options contact;
     contact.friction = friction;
-    PressedBag p(spec, 4.5e-3, contact);
-    Airbag& bag = *p.bag;
-    bag.setShapePose(p.shape, p.pose(0.012));
+    auto p = std::make_unique<PressedBag>(spec, 4.5e-3, contact);
+    Airbag& bag = *p->bag;
+    Eigen::Isometry3d X = p->pose(0.012);
+    bag.setShapePose(p->shape, X);
     EXPECT_TRUE(bag.advance(0.0).converged);
     bag.commit();
     if (sideways.norm() > 0.0) {
-        Eigen::Isometry3d X1 = p.pose(0.012);
-        X1.translation() += sideways;
-        bag.setShapePose(p.shape, X1);
+        X.translation() += sideways;
+        bag.setShapePose(p->shape, X);
         EXPECT_TRUE(bag.advance(0.0).converged);
         bag.commit();
     }
+    return p;
+}
+
+double checkWrenchTangent(double friction, const Vec3& sideways, double tolerance,
+                          Eigen::Matrix<double, 6, 6>* tangent) {
+    const std::unique_ptr<PressedBag> pressed = pressTightly(friction, sideways);
+    PressedBag& p = *pressed;
+    Airbag& bag = *p.bag;
     const Eigen::Matrix<double, 6, 6> T = bag.calcShapeWrenchTangent(p.shape);
     const Eigen::Isometry3d X0 = bag.getShapePose(p.shape);
     Eigen::Matrix<double, 6, 6> fd;
@@ -253,25 +262,9 @@ namespace {
 // of equilibria re-solved with gas let in and out over a step (the flow path advance() takes),
 // the shape held; returns the error relative to the derivative's largest entry.
 double checkGasDerivative(double friction, const Vec3& sideways, Eigen::Matrix<double, 6, 1>* dWdm) {
-    AirbagSpec spec = coarseSpec();
-    spec.forceTolerance = 1e-7;
-    spec.solver.absoluteTolerance = 1e-9;
-    spec.solver.relativeTolerance = 1e-12;
-    spec.selfContact = false;
-    RigidContact::Options contact;
-    contact.friction = friction;
-    PressedBag p(spec, 4.5e-3, contact);
+    const std::unique_ptr<PressedBag> pressed = pressTightly(friction, sideways);
+    PressedBag& p = *pressed;
     Airbag& bag = *p.bag;
-    Eigen::Isometry3d X = p.pose(0.012);
-    bag.setShapePose(p.shape, X);
-    EXPECT_TRUE(bag.advance(0.0).converged);
-    bag.commit();
-    if (sideways.norm() > 0.0) {
-        X.translation() += sideways;
-        bag.setShapePose(p.shape, X);
-        EXPECT_TRUE(bag.advance(0.0).converged);
-        bag.commit();
-    }
     const Airbag::WrenchLinearisation lin = bag.calcShapeWrenchLinearisation({p.shape});
     EXPECT_FALSE(lin.filmHeld);
     EXPECT_EQ(lin.gas.at(0).cols(), 1);
