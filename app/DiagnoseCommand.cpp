@@ -59,7 +59,7 @@ const char* kHelp =
     "  --candidates LIST   effects to calibrate (default: the library, pressure-sensor,\n"
     "                      flowmeter-bias, gas-temperature, machine-compliance,\n"
     "                      block-friction, leakage, heat-exchange, bed-compliance,\n"
-    "                      viscoelasticity, fabric-anisotropy;\n"
+    "                      viscoelasticity, fabric-anisotropy, soft-tissue;\n"
     "                      load-cell-gain is kept out of it on purpose)\n"
     "  --threads N         simulations run at once (default 1)\n"
     "  --quiet             print only the verdict\n"

@@ -4,6 +4,11 @@
 //   onsetGap = 0:  phi(g) = k g^2 / 2 for g < 0                (C1 energy)
 //   onsetGap = w:  phi'' ramps linearly from 0 at g = w/2 to k at g = -w/2 (C2 energy, cubic
 //                  in the ramp); below -w/2 the force is exactly k g, as without smoothing.
+// Tissue layer (tissueThickness h > 0): the node's penetration -g is shared between the
+//   layer's compression c and the penalty, in series: the penalty sees the gap g + c, and c
+//   balances it, A sigma(c) = -phi'(g + c) (A the nodal reference area). The energy is
+//   Phi(g) = phi(g + c) + A w(c), c minimising it: Phi' = phi'(g + c) (envelope theorem) and
+//   Phi'' = phi'' A sigma' / (phi'' + A sigma'), the two springs in series.
 // Friction: an elastic stick spring k_t = stickStiffnessRatio * k to an anchor on the surface
 // (stored in the shape frame, so it rides with the shape), capped at mu * f_n (slip).
 
@@ -11,6 +16,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -20,12 +26,45 @@ namespace bags {
 
 namespace {
 
-/// Normal penalty potential phi(g) with its first and second derivatives.
+/// Normal penalty potential phi(g) with its first and second derivatives; with a tissue
+/// layer, the layer and the penalty in series.
 struct NormalLaw {
     double k;
     double width;  // onsetGap [m]
+    double area = 0.0;       // nodal reference area [m^2]
+    double thickness = 0.0;  // tissue layer [m], 0: none
+    double modulus = 0.0;    // [Pa]
     /// Returns false when the node is not in contact (phi = phi' = phi'' = 0).
     bool eval(double g, double& phi, double& dphi, double& ddphi) const {
+        if (thickness <= 0.0) return evalPenalty(g, phi, dphi, ddphi);
+        if (!evalPenalty(g, phi, dphi, ddphi)) return false;
+        // r(c) = A sigma(c) + phi'(g + c) rises from phi'(g) <= 0 at c = 0 to A sigma > 0 where
+        // the penalty lets go (c = activationDistance - g): safeguarded Newton in that bracket.
+        double lo = 0.0, hi = activationDistance() - g, c = 0.0;
+        TissueStress t;
+        for (int it = 0; it < 100; ++it) {
+            t = calcTissueStress(c, thickness, modulus);
+            evalPenalty(g + c, phi, dphi, ddphi);
+            const double r = area * t.sigma + dphi;
+            if (r < 0.0) lo = c; else hi = c;
+            const double dr = area * t.dsigma + ddphi;
+            double next = c - r / dr;
+            if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+            if (std::abs(next - c) <= 1e-14 * thickness || hi - lo <= 1e-14 * thickness) {
+                c = next;
+                break;
+            }
+            c = next;
+        }
+        t = calcTissueStress(c, thickness, modulus);
+        evalPenalty(g + c, phi, dphi, ddphi);
+        const double kl = area * t.dsigma;
+        phi += area * t.energy;
+        ddphi = ddphi > 0.0 ? ddphi * kl / (ddphi + kl) : 0.0;
+        return true;
+    }
+    bool evalPenalty(double g, double& phi, double& dphi, double& ddphi) const {
+        phi = dphi = ddphi = 0.0;
         if (width <= 0.0) {
             if (g >= 0.0) return false;
             phi = 0.5 * k * g * g;
@@ -75,9 +114,33 @@ void RigidContact::Options::validate() const {
     if (!(onsetGap >= 0.0) || !std::isfinite(onsetGap))
         throw std::invalid_argument("RigidContact option onsetGap must be >= 0 [m], got " +
                                     std::to_string(onsetGap));
+    if (!(tissueThickness >= 0.0) || !std::isfinite(tissueThickness))
+        throw std::invalid_argument("RigidContact option tissueThickness must be >= 0 [m], got " +
+                                    std::to_string(tissueThickness));
+    if (tissueThickness > 0.0 ? !(tissueModulus > 0.0) || !std::isfinite(tissueModulus)
+                              : tissueModulus != 0.0)
+        throw std::invalid_argument(
+            "RigidContact options tissueThickness and tissueModulus go together: both > 0 "
+            "(a layer) or both 0 (none), got " + std::to_string(tissueThickness) + " m and " +
+            std::to_string(tissueModulus) + " Pa");
     if (minNodesForThreads < 1)
         throw std::invalid_argument("RigidContact option minNodesForThreads must be >= 1, got " +
                                     std::to_string(minNodesForThreads));
+}
+
+TissueStress calcTissueStress(double c, double h, double E) {
+    TissueStress t;
+    const double cm = (1.0 - kTissueMinStretch) * h;  // where the linear continuation starts
+    const double l = 1.0 - std::min(c, cm) / h;
+    t.sigma = E / 3.0 * (1.0 / (l * l) - l);
+    t.dsigma = E / (3.0 * h) * (2.0 / (l * l * l) + 1.0);
+    t.energy = E * h / 6.0 * (l * l + 2.0 / l - 3.0);
+    if (c > cm) {
+        const double e = c - cm;
+        t.energy += t.sigma * e + 0.5 * t.dsigma * e * e;
+        t.sigma += t.dsigma * e;
+    }
+    return t;
 }
 
 struct RigidContact::Impl {
@@ -89,7 +152,10 @@ struct RigidContact::Impl {
     std::vector<Vec3> anchor_S;    // friction anchor on the surface, shape frame
     std::vector<char> hasAnchor;
 
-    NormalLaw law(int j) const { return NormalLaw{opt.pressurePenalty * area[j], opt.onsetGap}; }
+    NormalLaw law(int j) const {
+        return NormalLaw{opt.pressurePenalty * area[j], opt.onsetGap, area[j],
+                         opt.tissueThickness, opt.tissueModulus};
+    }
 
     /// Fast rejection of nodes certainly out of reach of the shape.
     bool isFar(const Vec3& p) const {

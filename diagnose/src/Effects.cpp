@@ -66,6 +66,14 @@ const std::vector<Effect>& getEffects() {
            "membrane.anisotropy.warp and .weft (each this times the film's Young's modulus "
            "3 mu)"}},
          true},
+        {"soft-tissue",
+         "a compliant layer between the block and the film (soft tissue over bone, a pad on the "
+         "indenter): a Winkler layer that stiffens as it bottoms out, in series with the contact",
+         {{"thickness", "mm", 1e-3, kMinTissueThickness, kMaxTissueThickness, 15e-3,
+           "contact.block.tissue.thickness"},
+          {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 50e3,
+           "contact.block.tissue.modulus"}},
+         true},
         {"load-cell-gain",
          "the load cell reads the force times 1 + gain (a calibration error)",
          {{"gain", "", 1.0, -RigEffects::kMaxLoadCellGain, RigEffects::kMaxLoadCellGain, 0.05,
@@ -138,6 +146,9 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
             options.material = std::make_shared<bags::FabricMaterial>(matrix.clone(), yarns);
         else
             options.material = matrix.clone();
+    } else if (effect.name == "soft-tissue") {
+        options.blockContact.tissueThickness = values[0];
+        options.blockContact.tissueModulus = values[1];
     } else if (effect.name == "block-friction") {
         options.blockContact.friction = values[0];
     } else {

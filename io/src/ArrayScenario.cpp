@@ -3,6 +3,7 @@
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayScenario.h>
 #include <io/InputError.h>
+#include <io/LoadTestScenario.h>
 #include <io/PatientScenario.h>
 #include <io/ReducedBagFile.h>
 
@@ -118,7 +119,7 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 
 void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
-                     "contact_penalty", "body_friction", "model", "calibration"});
+                     "contact_penalty", "body_friction", "body_tissue", "model", "calibration"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -147,6 +148,9 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         s.fail("body_friction", fmtNumber(sc.options.contact.friction) +
                                     " is not valid; valid: 0 (frictionless) to 2, e.g. 0.4 "
                                     "(skin or cotton on a fabric or film: 0.3-0.5)");
+    // Soft tissue between the segments' bones and the films: the segments' shapes are the
+    // skin, the layer lies inside them (docs/contact.md#soft-tissue). None by default.
+    if (s.has("body_tissue")) readTissueLayer(s.getSection("body_tissue"), sc.options.contact);
     // The seed's Yeoh fit of its tensile test, 0.2 mm film (scenarios/seed-load-test.yaml).
     b.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     b.threads = 1;  // bags run in parallel, one per thread
@@ -156,6 +160,11 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         s.fail("body_friction",
                fmtNumber(sc.options.contact.friction) + " is not valid with model: reduced (the reduced bag carries normal force "
                    "only); valid: 0, or model: finite-element");
+    if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&
+        sc.options.contact.hasTissue())
+        s.fail("body_tissue", "is not valid with model: reduced (the reduced bag's contact law "
+                              "is its own, fitted with bare shapes); valid: leave it out, or "
+                              "model: finite-element");
 }
 
 // -------------------------------------------------------------------------------------- array

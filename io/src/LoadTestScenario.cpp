@@ -647,8 +647,13 @@ void readContact(const ScenarioNode& s, bags::LoadTestOptions& o) {
     readContactKeys(s, o.floorContact);
     for (const char* shape : {"block", "floor"}) {
         const ScenarioNode sub = s.getSection(shape, false);
-        sub.checkKeys({}, kContactKeys);
-        readContactKeys(sub, std::string(shape) == "block" ? o.blockContact : o.floorContact);
+        const bool block = std::string(shape) == "block";
+        // A layer on the block (a pad on the indenter, soft tissue); the bed board is bare.
+        std::vector<std::string> subKeys = kContactKeys;
+        if (block) subKeys.push_back("tissue");
+        sub.checkKeys({}, subKeys);
+        readContactKeys(sub, block ? o.blockContact : o.floorContact);
+        if (block && sub.has("tissue")) readTissueLayer(sub.getSection("tissue"), o.blockContact);
     }
     o.selfContact = s.getBool("self", o.selfContact);
 }
@@ -781,6 +786,21 @@ void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
 }
 
 }  // namespace
+
+void readTissueLayer(const ScenarioNode& s, bags::RigidContact::Options& c) {
+    s.checkKeys({"thickness", "modulus"}, {});
+    c.tissueThickness = s.getQuantity("thickness", D::Length);
+    c.tissueModulus = s.getQuantity("modulus", D::Pressure);
+    checkRange(s, "thickness", c.tissueThickness, kMinTissueThickness, true, kMaxTissueThickness,
+               true, "mm", "soft tissue over bone is about 5-40 mm");
+    checkRange(s, "modulus", c.tissueModulus, kMinTissueModulus, true, kMaxTissueModulus, true,
+               "kPa", "soft tissue's effective compressive modulus is about 10-200 kPa");
+    try {
+        c.validate();
+    } catch (const std::invalid_argument& e) {
+        failFromLibrary(s, e.what());
+    }
+}
 
 double estimateNumNodes(const bags::DoubleWedgeParams& g) {
     const double ax = g.calcApexX();

@@ -707,3 +707,141 @@ TEST(RigidContact, OptionsValidateRejectsBadValues) {
     EXPECT_THROW(bags::RigidContact(mesh, {0, 4}, *plane, bags::RigidContact::Options()),
                  std::invalid_argument);
 }
+
+// ------------------------------------------------------------------------------ tissue layer
+
+TEST(TissueLayer, StressIsTheEnergysSlopeAndStiffnessIsItsC1Derivative) {
+    const double h = 0.015, E = 5e4, d = 1e-8;
+    // Through the neo-Hookean range and past the linear continuation at 80 % compression.
+    for (double c : {1e-4, 2e-3, 6e-3, 1.1e-2, 0.8 * h - 1e-6, 0.8 * h + 1e-6, 1.4e-2, 2e-2}) {
+        const bags::TissueStress t = bags::calcTissueStress(c, h, E);
+        const bags::TissueStress p = bags::calcTissueStress(c + d, h, E);
+        const bags::TissueStress m = bags::calcTissueStress(c - d, h, E);
+        const double w = 2 * d;
+        // Central differences, 1e-6 relative to the larger of the values (truncation ~ 1e-10).
+        EXPECT_NEAR((p.energy - m.energy) / w, t.sigma, 1e-6 * (t.sigma + E * 1e-3)) << c;
+        EXPECT_NEAR((p.sigma - m.sigma) / w, t.dsigma, 1e-5 * t.dsigma) << c;
+    }
+    // At no compression: no stress, the Winkler stiffness E / h.
+    EXPECT_EQ(bags::calcTissueStress(0.0, h, E).sigma, 0.0);
+    EXPECT_NEAR(bags::calcTissueStress(0.0, h, E).dsigma, E / h, 1e-12 * E / h);
+    // Continuous in value and slope where the continuation starts (C1: the energy is C2).
+    const double cm = (1 - bags::kTissueMinStretch) * h;
+    const bags::TissueStress a = bags::calcTissueStress(cm - 1e-12, h, E);
+    const bags::TissueStress b = bags::calcTissueStress(cm + 1e-12, h, E);
+    EXPECT_NEAR(a.sigma, b.sigma, 1e-6 * a.sigma);
+    EXPECT_NEAR(a.dsigma, b.dsigma, 1e-6 * a.dsigma);
+}
+
+TEST(TissueLayer, GradientAndHessianMatchFiniteDifferencesOnEveryShape) {
+    const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
+    std::mt19937 rng(29);
+    // Penetrations through small strain, the stiffening range, the continuation past 80 % of
+    // the 15 mm layer (12 mm) and out of contact.
+    const std::vector<double> gaps = {-5e-4, -3e-3, -8e-3, -1.3e-2, 2e-3, -1e-4, -1.6e-2, 4e-4,
+                                      -6e-3};
+    for (double onset : {0.0, 1e-3}) {
+        auto shapes = makeAllShapes();
+        for (size_t k = 0; k < shapes.size(); ++k) {
+            const auto& s = shapes[k];
+            bags::RigidContact::Options o;
+            o.onsetGap = onset;
+            o.tissueThickness = 0.015;
+            o.tissueModulus = 5e4;
+            bags::RigidContact contact(mesh, allNodes(mesh), *s, o);
+            const Eigen::Matrix3Xd x = placeNodes(*s, kindOf(k), mesh, gaps, rng);
+            auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
+                contact.addEnergy(xx, acc);
+            };
+            const Evaluated ev = evaluate(add, x);
+            Eigen::VectorXd gFd;
+            Eigen::MatrixXd hFd;
+            finiteDifferences(add, x, 1e-8, gFd, hFd);
+            // Forces ~ 0.05-3 N, stiffness ~ 1e2-1e3 N/m: FD error ~ 1e-7 relative.
+            EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm()) << s->getName() << onset;
+            EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm()) << s->getName() << onset;
+            EXPECT_GT(ev.grad.norm(), 0.05) << s->getName();
+            // The layer softens the contact: less force than the bare penalty at every node.
+            bags::RigidContact::Options bare;
+            bare.onsetGap = onset;
+            bags::RigidContact rigid(mesh, allNodes(mesh), *s, bare);
+            const Eigen::VectorXd pl = contact.calcNodalPressure(x);
+            const Eigen::VectorXd pr = rigid.calcNodalPressure(x);
+            for (int i = 0; i < mesh.getNumNodes(); ++i) EXPECT_LE(pl[i], pr[i]) << i;
+        }
+    }
+}
+
+TEST(TissueLayer, WrenchTangentsMatchFiniteDifferencesWithFriction) {
+    // The node derivative of the wrench (the body's tangent) and the stick tangent with a layer.
+    const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
+    auto plane = bags::makePlane();
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = Vec3(0, 0, 4e-3);  // 4 mm into a 10 mm layer
+    plane->setPose(X);
+    bags::RigidContact::Options o;
+    o.friction = 0.5;
+    o.tissueThickness = 0.01;
+    o.tissueModulus = 3e4;
+    bags::RigidContact contact(mesh, allNodes(mesh), *plane, o);
+    Eigen::Matrix3Xd x = mesh.X;
+    contact.commitStep(x);  // anchors where the nodes touch
+    x.row(0).array() += 1e-6;  // a small tangential offset: stick
+    auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
+        contact.addEnergy(xx, acc);
+    };
+    const Evaluated ev = evaluate(add, x);
+    Eigen::VectorXd gFd;
+    Eigen::MatrixXd hFd;
+    finiteDifferences(add, x, 1e-9, gFd, hFd);
+    EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm());
+    // The wrench's node derivative is -(d grad / d x) summed into force and torque rows.
+    const Eigen::MatrixXd D = contact.calcWrenchNodeDerivative(x);
+    Eigen::MatrixXd Dfd(6, 3 * mesh.getNumNodes());
+    for (int c = 0; c < 3 * mesh.getNumNodes(); ++c) {
+        Eigen::Matrix3Xd xp = x, xm = x;
+        xp(c % 3, c / 3) += 1e-8;
+        xm(c % 3, c / 3) -= 1e-8;
+        Vec3 Fp, Tp, Fm, Tm;
+        contact.calcWrenchOnShape(xp, &Fp, &Tp);
+        contact.calcWrenchOnShape(xm, &Fm, &Tm);
+        Dfd.col(c) << (Tp - Tm) / 2e-8, (Fp - Fm) / 2e-8;
+    }
+    EXPECT_LT((D - Dfd).norm(), 1e-5 * D.norm());
+    EXPECT_GT(D.norm(), 10.0);
+}
+
+TEST(TissueLayer, FlatPunchCompressesTheLayerByForceTimesThicknessOverModulusTimesArea) {
+    // A flat rigid punch (the plane) with a layer pressed uniformly into a flat patch: every
+    // node carries the same pressure p = F / A; the penalty takes p / pressurePenalty of the
+    // penetration, the layer the rest, c = delta - p / pressurePenalty. Reference: the
+    // neo-Hookean law's inverse (1e-9), and at small strain the Winkler layer c = F h / (E A).
+    const double s = 0.005, h = 0.015, E = 5e4;
+    const bags::Mesh mesh = bagstest::makeGridMesh(11, 7, s, Vec3(-0.02, 0.01, 0.0));
+    const double area = 10 * s * 6 * s;
+    auto plane = bags::makePlane();
+    bags::RigidContact::Options o;
+    o.tissueThickness = h;
+    o.tissueModulus = E;
+    bags::RigidContact contact(mesh, allNodes(mesh), *plane, o);
+    for (double delta : {2e-4, 1e-3, 5e-3}) {
+        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+        X.translation() = Vec3(0, 0, delta);
+        plane->setPose(X);
+        Vec3 F, T;
+        contact.calcWrenchOnShape(mesh.X, &F, &T);
+        const double p = -F.z() / area;
+        const Eigen::VectorXd pn = contact.calcNodalPressure(mesh.X);
+        for (int i = 0; i < mesh.getNumNodes(); ++i) EXPECT_NEAR(pn[i], p, 1e-9 * p);
+        const double c = delta - p / o.pressurePenalty;
+        const double l = 1 - c / h;
+        EXPECT_NEAR(E / 3 * (1 / (l * l) - l), p, 1e-9 * p) << delta;
+        // Winkler: c = F h / (E A), to the law's first nonlinear term (relative c / h: the
+        // Winkler value is 1 + 1.07 c / h of it at 5 % strain, 1 + 1.43 c / h at 23 %).
+        const double winkler = -F.z() * h / (E * area);
+        EXPECT_NEAR(c, winkler, 1.5 * (c / h) * c) << delta;
+        if (delta == 2e-4) {
+            EXPECT_NEAR(c, winkler, 0.015 * c);  // 1 % strain: within 1.5 %
+        }
+    }
+}

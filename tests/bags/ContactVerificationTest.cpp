@@ -108,15 +108,27 @@ struct PressResult {
     double p0 = 0.0, p = 0.0;  // [Pa] gauge before and after pressing
     ContactAreas area;
     double pContactInterior = 0.0;  // [Pa] contact force / deformed area inside the patch
+    double interiorAreaStretch = 0.0;  // deformed / reference area of the patch's interior nodes
+    double interiorHeight = 0.0;       // [m] mean height of the interior contact nodes
 };
+
+// The stiff contact of the plate tests.
+RigidContact::Options stiffContact() {
+    RigidContact::Options co;  // frictionless
+    co.pressurePenalty = 1e9;
+    return co;
+}
 
 // Inflates the 10 mm-mesh bag to kGauge (prescribed pressure; then sealed as a fixed mass of
 // isothermal air when withGas) and presses the plate 15 mm below the top in 10 steps. The
 // penalty is stiff (1e9 Pa/m: 1-2 um penetration) so that "in contact" is sharp: with the
 // default 1e7 Pa/m the nodes of the first free ring, only 0.2 mm below the plate, sit within
 // the penetration depth of 0.1 mm of being counted.
-PressResult pressPlate(bool withGas) {
-    const double meshSize = 0.010, delta = 0.015;
+// A contact co other than stiffContact() (a layer on the plate) and a plate pressed deeper by
+// extraDepth may be given.
+PressResult pressPlate(bool withGas, const RigidContact::Options& co = stiffContact(),
+                       double extraDepth = 0.0) {
+    const double meshSize = 0.010, delta = 0.015 + extraDepth;
     const int n = 10;
     PressResult r;
     MembraneModel model = makeBag(meshSize);
@@ -137,8 +149,6 @@ PressResult pressPlate(bool withGas) {
     const double zTop = topHeight(x);
     const double hz = 0.02;
     auto plate = makeBox(Vec3(kLx, kLx, hz));
-    RigidContact::Options co;  // frictionless
-    co.pressurePenalty = 1e9;
     auto contact = std::make_shared<RigidContact>(mesh, freeNodes(mesh), *plate, co);
     model.addRigidContact(contact);
     SolverOptions so;
@@ -168,13 +178,19 @@ PressResult pressPlate(bool withGas) {
         }
     }
     const Eigen::VectorXd a0 = mesh.calcNodalAreas();
-    double sumF = 0.0, sumA = 0.0;
+    double sumF = 0.0, sumA = 0.0, sumA0 = 0.0, sumZ = 0.0;
+    int count = 0;
     for (int i = 0; i < mesh.getNumNodes(); ++i)
         if (interior[i] && pc(i) > 0) {
             sumF += pc(i) * a0(i);
             sumA += aDef(i);
+            sumA0 += a0(i);
+            sumZ += x(2, i);
+            ++count;
         }
     r.pContactInterior = sumA > 0 ? sumF / sumA : 0.0;
+    r.interiorAreaStretch = sumA0 > 0 ? sumA / sumA0 : 0.0;
+    r.interiorHeight = count > 0 ? sumZ / count : 0.0;
     return r;
 }
 
@@ -227,6 +243,52 @@ TEST(ContactVerification, FlatPlateOnFixedGasMassRaisesPressureAndCarriesItTimes
         << "F " << r.force << " N, p " << r.p << " Pa, A_half " << r.area.halfMax << " m^2 (A_full "
         << r.area.full << ", A_any " << r.area.any << ")";
     EXPECT_LT(r.force, r.p * r.area.any) << "F above p A_any " << r.p * r.area.any;
+}
+
+// A compliant layer on the plate (soft tissue or a pad: RigidContact::Options::tissueThickness,
+// docs/contact.md#soft-tissue) in series with the film. Where the film lies flat on the plate
+// the contact pressure is the gas's gauge pressure p (above), so the layer is compressed by the
+// same c everywhere in the patch, c solving sigma(c) = p s (the law per reference area, s the
+// film's areal stretch there), which at small strain is the Winkler layer's c = p s h / E
+// = F h / (E A), A the patch's reference area. The plate's rigid core pressed c deeper than the
+// bare plate then leaves the film as the bare plate does: the same force and the same height
+// of the patch. This holds where the film's bending length over the layer, sqrt(T h / E)
+// (T the film's tension, tens of N/m here), is small against the patch (80 mm): at E / h =
+// 1e7 Pa/m about 2-3 mm. Measured (10 mm layer, 100 kPa, p = 1000 Pa, 10 mm mesh): s = 1.0345,
+// c = 0.1017 mm (Winkler 0.1034 mm); force 6.1481 N layered against 6.1360 N bare (+0.20 %),
+// patch height within 0.5 um, interior contact pressure 997.3 Pa (-0.27 %). A softer layer
+// (10 kPa over 10 mm, 1e6 Pa/m: some 10 mm) does not lie flat: the film curves over it near the
+// patch's edge, the patch grows (A_full 7.13e-3 against 5.07e-3 m^2) and the plate carries
+// 4.6 % more than the bare one at c = 0.935 mm deeper, the interior pressure 927 Pa.
+// Tolerances: force 1 %, height 2 um (2 % of c; without the layer's compression the film would
+// lie 0.1 mm lower), interior pressure 0.5 %.
+TEST(ContactVerification, ALayerOnTheFlatPlateIsCompressedByTheGaugePressureOverItsStiffness) {
+    const double h = 0.010, E = 1e5;
+    const PressResult bare = pressPlate(false);
+    const double ps = bare.p * bare.interiorAreaStretch;  // the layer's pressure per ref. area
+    // The law's inverse by bisection (independent of the contact's own series solve).
+    double lo = 0.0, hi = h;
+    for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (calcTissueStress(mid, h, E).sigma < ps ? lo : hi) = mid;
+    }
+    const double c = 0.5 * (lo + hi);
+    RigidContact::Options co = stiffContact();
+    co.tissueThickness = h;
+    co.tissueModulus = E;
+    const PressResult layered = pressPlate(false, co, c);
+    recordPress(layered);
+    ::testing::Test::RecordProperty("area_stretch", std::to_string(bare.interiorAreaStretch));
+    ::testing::Test::RecordProperty("compression_m", std::to_string(c));
+    ::testing::Test::RecordProperty("winkler_compression_m", std::to_string(ps * h / E));
+    ::testing::Test::RecordProperty("bare_force_N", std::to_string(bare.force));
+    ::testing::Test::RecordProperty("height_difference_m",
+                                    std::to_string(layered.interiorHeight - bare.interiorHeight));
+    EXPECT_GT(c, 0.05e-3);  // the layer matters: 50 times the penalty's 1 um
+    EXPECT_NEAR(c, ps * h / E, 1.5 * (c / h) * c) << "Winkler, to the first nonlinear term";
+    EXPECT_NEAR(layered.force, bare.force, 0.01 * bare.force) << "c " << c;
+    EXPECT_NEAR(layered.interiorHeight, bare.interiorHeight, 2e-6) << "c " << c;
+    EXPECT_NEAR(layered.pContactInterior, layered.p, 0.005 * layered.p);
 }
 
 TEST(ContactVerification, FrictionlessLoadUnloadCycleReturnsItsWork) {

@@ -188,3 +188,29 @@ TEST(Effects, FabricAnisotropyAddsBalancedYarnsAndZeroLeavesTheFilm) {
         EXPECT_NE(std::string(e.what()).find("valid: 0 to 3"), std::string::npos) << e.what();
     }
 }
+
+// Soft tissue as a candidate: a layer on the block (its thickness and modulus), the bed board
+// left bare; outside the bounds (5-40 mm, 10-200 kPa) it is refused naming them.
+TEST(Effects, SoftTissuePutsALayerOnTheBlockOnly) {
+    const diagnose::Effect* effect = diagnose::findEffect("soft-tissue");
+    ASSERT_NE(effect, nullptr);
+    EXPECT_TRUE(effect->changesTheBag);
+    EXPECT_TRUE(effect->inLibrary);
+    ASSERT_EQ(effect->parameters.size(), 2u);
+    bags::LoadTestOptions o;
+    diagnose::RigEffects rig;
+    diagnose::applyEffect(*effect, {0.015, 50e3}, {}, rig, o);
+    EXPECT_EQ(o.blockContact.tissueThickness, 0.015);
+    EXPECT_EQ(o.blockContact.tissueModulus, 50e3);
+    EXPECT_FALSE(o.floorContact.hasTissue());
+    EXPECT_NO_THROW(o.blockContact.validate());
+    EXPECT_TRUE(rig.isNone());
+    try {
+        diagnose::applyEffect(*effect, {0.015, 300e3}, {}, rig, o);
+        ADD_FAILURE() << "300 kPa accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("valid: 10 to 200 kPa"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(diagnose::applyEffect(*effect, {0.002, 50e3}, {}, rig, o), std::invalid_argument);
+}

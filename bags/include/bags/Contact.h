@@ -72,7 +72,10 @@ std::unique_ptr<RigidShape> makeCapsule(double radius, double halfLength);
 
 /// Penalty contact of a set of membrane nodes with one rigid shape, with regularised Coulomb
 /// friction. Penalty stiffness per node = pressurePenalty * nodal reference area, so the
-/// contact pressure at a node is pressurePenalty * penetration [Pa].
+/// contact pressure at a node is pressurePenalty * penetration [Pa]. With a tissue layer
+/// (Options::tissueThickness) the penetration is shared between the layer's compression c and
+/// the penalty: p = pressurePenalty * (penetration - c) = sigma(c), sigma the layer's law
+/// (calcTissueStress).
 class RigidContact {
 public:
     struct Options {
@@ -81,6 +84,13 @@ public:
         double stickStiffnessRatio = 1.0;  ///< tangential / normal penalty
         double onsetGap = 0.0;          ///< [m] smoothing width of the contact onset (0: C1 quadratic)
         int minNodesForThreads = 50000; ///< evaluate nodes with OpenMP from this many nodes on
+        /// A compliant layer on the shape (soft tissue over bone, a pad on an indenter), inside
+        /// its surface: the surface is the layer's unloaded outside, the rigid core lies
+        /// tissueThickness below it. 0 (with tissueModulus 0): no layer, the shape is rigid.
+        /// The layer is a Winkler bed in series with the penalty (docs/contact.md#soft-tissue).
+        double tissueThickness = 0.0;  ///< [m] layer thickness h
+        double tissueModulus = 0.0;    ///< [Pa] its effective compressive (Young's) modulus E
+        bool hasTissue() const { return tissueThickness > 0.0; }
         void validate() const;          ///< throws std::invalid_argument naming the option
     };
     RigidContact(const Mesh& mesh, std::vector<int> nodes, const RigidShape& shape,
@@ -120,6 +130,19 @@ private:
     struct Impl;
     std::shared_ptr<Impl> m_impl;
 };
+
+/// The tissue layer's law per unit reference area, a compressed neo-Hookean (incompressible)
+/// block in uniaxial stress, lambda = 1 - c / h: sigma = (E / 3)(lambda^-2 - lambda) [Pa],
+/// E c / h at small c, stiffening as the layer bottoms out; below lambda = kTissueMinStretch
+/// continued linearly (C1), so that Newton's trial states past the core stay finite.
+struct TissueStress {
+    double sigma = 0.0;   ///< compressive stress [Pa]
+    double dsigma = 0.0;  ///< d sigma / d c [Pa/m]
+    double energy = 0.0;  ///< stored energy per unit area, the integral of sigma dc [J/m^2]
+};
+inline constexpr double kTissueMinStretch = 0.2;
+/// The layer's stress, stiffness and energy at compression c [m] (c >= 0).
+TissueStress calcTissueStress(double compression, double thickness, double modulus);
 
 /// Membrane-membrane contact of a mesh with itself (top wall meeting bottom wall, folds):
 /// node-to-triangle penalty with a thickness offset, broad phase by spatial hashing.

@@ -57,9 +57,22 @@ inline constexpr double kMaxViscoelasticTime = 120.0;  ///< [s]
 /// lowers them; beyond, the scenario's isotropic law would no longer be the film's matrix.
 inline constexpr double kMaxYarnStiffnessRatio = 3.0;
 
+/// Bounds of the soft-tissue candidate (docs/diagnosis.md#soft-tissue): a layer of soft
+/// tissue over bone of 5-40 mm (over the sacrum and heels a few mm to 15 mm, over the buttocks
+/// and the back's muscles up to about 40 mm) with an effective compressive modulus of 10-200
+/// kPa (indentation of skin, fat and muscle in vivo: relaxed fat and muscle near 10-30 kPa,
+/// loaded and tensed tissue up to 100-200 kPa); the same range covers a foam or rubber pad on an
+/// indenter. The thinnest, stiffest layer (200 kPa over 5 mm, 4e7 Pa/m) is close to no layer
+/// in series with the penalty (1e7 Pa/m); there is no "off" value inside the bounds.
+inline constexpr double kMinTissueThickness = 5e-3;  ///< [m]
+inline constexpr double kMaxTissueThickness = 40e-3; ///< [m]
+inline constexpr double kMinTissueModulus = 10e3;    ///< [Pa]
+inline constexpr double kMaxTissueModulus = 200e3;   ///< [Pa]
+
 /// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
 /// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance,
-/// viscoelasticity, fabric-anisotropy (the library), load-cell-gain (kept out of it).
+/// viscoelasticity, fabric-anisotropy, soft-tissue (the library), load-cell-gain (kept out of
+/// it).
 const std::vector<Effect>& getEffects();
 /// The effect of that name, or nullptr.
 const Effect* findEffect(const std::string& name);
@@ -72,7 +85,8 @@ std::string listEffectNames();
 /// options.gas.temperature is raised by its offset; leakage and heat exchange set
 /// options.gas.leakConductance and .heatTimeConstant; bed-compliance rig.bedCompliance;
 /// viscoelasticity options.prony, one term; fabric-anisotropy wraps options.material in a
-/// bags::FabricMaterial whose warp and weft moduli are both the ratio times 3 mu, angle 0).
+/// bags::FabricMaterial whose warp and weft moduli are both the ratio times 3 mu, angle 0;
+/// soft-tissue sets options.blockContact.tissueThickness and .tissueModulus).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,

@@ -81,4 +81,15 @@ std::string readScenarioKind(const ScenarioFile& file);
 /// key or value, or a value beyond a limit.
 LoadTestScenario readLoadTestScenario(const ScenarioFile& file);
 
+/// Reads a compliant layer on a rigid shape, `{thickness: 15 mm, modulus: 50 kPa}` (soft tissue,
+/// a pad; bags::RigidContact::Options::tissueThickness and tissueModulus), both keys required:
+/// thickness in [kMinTissueThickness, kMaxTissueThickness], modulus in [kMinTissueModulus,
+/// kMaxTissueModulus]. Used by the load test's `contact.block.tissue` and the patient's
+/// `bag.body_tissue`. @throws InputError naming the key and what is valid.
+void readTissueLayer(const ScenarioNode& s, bags::RigidContact::Options& c);
+inline constexpr double kMinTissueThickness = 0.5e-3;  ///< [m]
+inline constexpr double kMaxTissueThickness = 0.2;     ///< [m]
+inline constexpr double kMinTissueModulus = 1e3;       ///< [Pa]
+inline constexpr double kMaxTissueModulus = 100e6;     ///< [Pa]
+
 }  // namespace io
