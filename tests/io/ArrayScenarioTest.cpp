@@ -121,6 +121,26 @@ TEST(ArrayScenario, TheBodyOnTheFilmsIsFrictionlessByDefaultAndTakesACoulombCoef
     }
 }
 
+TEST(ArrayScenario, TheBodysShapesTakeASoftTissueLayer) {
+    EXPECT_FALSE(read(kBase).options.contact.hasTissue());
+    auto with = [](const std::string& value) {
+        std::string t = kBase;
+        t.replace(t.find("bag: {mesh_size: 30 mm}"), 23,
+                  "bag: {mesh_size: 30 mm, body_tissue: " + value + "}");
+        return t;
+    };
+    const io::PatientOnArrayScenario sc = read(with("{thickness: 20 mm, modulus: 30 kPa}"));
+    EXPECT_DOUBLE_EQ(sc.options.contact.tissueThickness, 0.02);
+    EXPECT_DOUBLE_EQ(sc.options.contact.tissueModulus, 3e4);
+    const io::InputError e = readError(with("{thickness: 20 mm, modulus: 0 kPa}"));
+    EXPECT_EQ(e.getLine(), 3);
+    EXPECT_EQ(e.getKey(), "bag.body_tissue.modulus");
+    EXPECT_NE(e.getMessage().find("10-200 kPa"), std::string::npos) << e.what();
+    const io::InputError e2 = readError(with("{modulus: 30 kPa}"));
+    EXPECT_EQ(e2.getKey(), "bag.body_tissue");
+    EXPECT_NE(e2.getMessage().find("thickness"), std::string::npos) << e2.what();
+}
+
 TEST(ArrayScenario, NeighbourContactIsOffByDefaultAndNeedsTheBagsSelfContact) {
     const io::PatientOnArrayScenario plain = read(kBase);
     EXPECT_FALSE(plain.options.neighbourContact);

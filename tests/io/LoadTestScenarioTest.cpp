@@ -327,6 +327,32 @@ TEST(LoadTestScenario, ContactSubsectionsOverrideSharedKeys) {
     EXPECT_FALSE(sc.options.selfContact);
 }
 
+// A layer on the block (soft tissue, a pad): both keys, in range, on the block only.
+TEST(LoadTestScenario, TheBlockTakesATissueLayerWithItsThicknessAndModulus) {
+    const io::LoadTestScenario none = io::readLoadTestScenario(ScenarioFile::parse(kBase, "c.yaml"));
+    EXPECT_FALSE(none.options.blockContact.hasTissue());
+    const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
+        kBase + "contact: {block: {tissue: {thickness: 15 mm, modulus: 50 kPa}}}\n", "c.yaml"));
+    EXPECT_DOUBLE_EQ(sc.options.blockContact.tissueThickness, 0.015);
+    EXPECT_DOUBLE_EQ(sc.options.blockContact.tissueModulus, 5e4);
+    EXPECT_FALSE(sc.options.floorContact.hasTissue());
+    const InputError e = errorFor(kBase + "contact: {block: {tissue: {thickness: 15 mm}}}\n");
+    EXPECT_EQ(e.getKey(), "contact.block.tissue") << e.what();
+    EXPECT_NE(std::string(e.what()).find("modulus"), std::string::npos) << e.what();
+    EXPECT_EQ(e.getLine(), 16);
+    const InputError e2 =
+        errorFor(kBase + "contact: {block: {tissue: {thickness: 0.3 m, modulus: 50 kPa}}}\n");
+    EXPECT_EQ(e2.getKey(), "contact.block.tissue.thickness");
+    EXPECT_NE(std::string(e2.what()).find("5-40 mm"), std::string::npos) << e2.what();
+    const InputError e3 =
+        errorFor(kBase + "contact: {block: {tissue: {thickness: 15 mm, modulus: -5 kPa}}}\n");
+    EXPECT_EQ(e3.getKey(), "contact.block.tissue.modulus");
+    // The bed board is bare: a layer there is an unknown key.
+    const InputError e4 =
+        errorFor(kBase + "contact: {floor: {tissue: {thickness: 15 mm, modulus: 50 kPa}}}\n");
+    EXPECT_EQ(e4.getKey(), "contact.floor.tissue") << e4.what();
+}
+
 TEST(LoadTestScenario, FitMaterialFormPointsToTheMembraneSection) {
     const InputError e = errorFor(kBase + "material: {model: yeoh, C10: \"31.6 MPa\"}\n");
     EXPECT_EQ(e.getLine(), 16);
