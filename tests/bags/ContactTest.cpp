@@ -740,6 +740,7 @@ TEST(TissueLayer, GradientAndHessianMatchFiniteDifferencesOnEveryShape) {
     // the 15 mm layer (12 mm) and out of contact.
     const std::vector<double> gaps = {-5e-4, -3e-3, -8e-3, -1.3e-2, 2e-3, -1e-4, -1.6e-2, 4e-4,
                                       -6e-3};
+    double gradErr = 0.0, hessErr = 0.0;
     for (double onset : {0.0, 1e-3}) {
         auto shapes = makeAllShapes();
         for (size_t k = 0; k < shapes.size(); ++k) {
@@ -761,6 +762,8 @@ TEST(TissueLayer, GradientAndHessianMatchFiniteDifferencesOnEveryShape) {
             EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm()) << s->getName() << onset;
             EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm()) << s->getName() << onset;
             EXPECT_GT(ev.grad.norm(), 0.05) << s->getName();
+            gradErr = std::max(gradErr, (ev.grad - gFd).norm() / ev.grad.norm());
+            hessErr = std::max(hessErr, (ev.hess - hFd).norm() / ev.hess.norm());
             // The layer softens the contact: less force than the bare penalty at every node.
             bags::RigidContact::Options bare;
             bare.onsetGap = onset;
@@ -770,6 +773,8 @@ TEST(TissueLayer, GradientAndHessianMatchFiniteDifferencesOnEveryShape) {
             for (int i = 0; i < mesh.getNumNodes(); ++i) EXPECT_LE(pl[i], pr[i]) << i;
         }
     }
+    bagstest::recordFigure("tissue_grad_fd_rel_err", gradErr);
+    bagstest::recordFigure("tissue_hess_fd_rel_err", hessErr);
 }
 
 TEST(TissueLayer, WrenchTangentsMatchFiniteDifferencesWithFriction) {
@@ -809,6 +814,8 @@ TEST(TissueLayer, WrenchTangentsMatchFiniteDifferencesWithFriction) {
     }
     EXPECT_LT((D - Dfd).norm(), 1e-5 * D.norm());
     EXPECT_GT(D.norm(), 10.0);
+    bagstest::recordFigure("tissue_stick_hess_fd_rel_err", (ev.hess - hFd).norm() / ev.hess.norm());
+    bagstest::recordFigure("tissue_wrench_node_derivative_rel_err", (D - Dfd).norm() / D.norm());
 }
 
 TEST(TissueLayer, FlatPunchCompressesTheLayerByForceTimesThicknessOverModulusTimesArea) {
