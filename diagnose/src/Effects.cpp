@@ -69,9 +69,11 @@ const std::vector<Effect>& getEffects() {
         {"soft-tissue",
          "a compliant layer between the block and the film (soft tissue over bone, a pad on the "
          "indenter): a Winkler layer that stiffens as it bottoms out, in series with the contact",
-         {{"thickness", "mm", 1e-3, kMinTissueThickness, kMaxTissueThickness, 15e-3,
+         // The default is a stiff layer (a rubber pad, tensed tissue: 2e7 Pa/m): softer ones
+         // need a finer mesh than the tiny rig's 25 mm (docs/contact.md#contact-law).
+         {{"thickness", "mm", 1e-3, kMinTissueThickness, kMaxTissueThickness, 10e-3,
            "contact.block.tissue.thickness"},
-          {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 50e3,
+          {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 200e3,
            "contact.block.tissue.modulus"}},
          true},
         {"load-cell-gain",

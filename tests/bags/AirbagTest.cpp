@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -146,10 +148,12 @@ namespace {
 // relative to the block's largest entry, and checks it against `tolerance`. Pressed and
 // committed, every node in contact holds a friction anchor where it touches (friction acts
 // from the step after first touch); a committed `sideways` move then loads the stick springs
-// (slipping where they reach mu f_n).
+// (slipping where they reach mu f_n). `tissue` (thickness [m], modulus [Pa]) puts a compliant
+// layer on the ellipsoid.
 // The ellipsoid pressed 12 mm into a bag solved tightly (for finite differences), committed;
 // then moved `sideways` and committed again (the friction anchors set where it first touched).
-std::unique_ptr<PressedBag> pressTightly(double friction, const Vec3& sideways) {
+std::unique_ptr<PressedBag> pressTightly(double friction, const Vec3& sideways,
+                                         const std::pair<double, double>& tissue = {0.0, 0.0}) {
     AirbagSpec spec = coarseSpec();
     spec.forceTolerance = 1e-7;
     spec.solver.absoluteTolerance = 1e-9;
@@ -157,6 +161,8 @@ std::unique_ptr<PressedBag> pressTightly(double friction, const Vec3& sideways) 
     spec.selfContact = false;
     RigidContact::Options contact;
     contact.friction = friction;
+    contact.tissueThickness = tissue.first;
+    contact.tissueModulus = tissue.second;
     auto p = std::make_unique<PressedBag>(spec, 4.5e-3, contact);
     Airbag& bag = *p->bag;
     Eigen::Isometry3d X = p->pose(0.012);
@@ -173,8 +179,9 @@ std::unique_ptr<PressedBag> pressTightly(double friction, const Vec3& sideways) 
 }
 
 double checkWrenchTangent(double friction, const Vec3& sideways, double tolerance,
-                          Eigen::Matrix<double, 6, 6>* tangent) {
-    const std::unique_ptr<PressedBag> pressed = pressTightly(friction, sideways);
+                          Eigen::Matrix<double, 6, 6>* tangent,
+                          const std::pair<double, double>& tissue = {0.0, 0.0}) {
+    const std::unique_ptr<PressedBag> pressed = pressTightly(friction, sideways, tissue);
     PressedBag& p = *pressed;
     Airbag& bag = *p.bag;
     const Eigen::Matrix<double, 6, 6> T = bag.calcShapeWrenchTangent(p.shape);
@@ -229,6 +236,25 @@ TEST(Airbag, WrenchTangentMatchesFiniteDifferencesOfReSolvedEquilibria) {
     // The vertical stiffness the shape feels is positive and well below the contact penalty
     // over the contact patch (the bag, not the penalty, governs it).
     EXPECT_LT(T(5, 5), 0.0);  // pushing down (+z translation raises it; force falls)
+}
+
+TEST(Airbag, WrenchTangentWithATissueLayerMatchesFiniteDifferencesOfReSolvedEquilibria) {
+    // A 10 mm layer of 200 kPa on the ellipsoid (RigidContact::Options::tissueThickness): the
+    // tangent the body gets carries the layer in series with the bag, frictionless and stuck
+    // with friction 0.5; tolerances as without the layer. The layer softens what the shape
+    // feels: its vertical stiffness is below the bare shape's. Measured: worst block errors
+    // 9.0e-7 (frictionless) and 1.4e-7 (stuck); vertical stiffness 5509 N/m against 6257 N/m.
+    Eigen::Matrix<double, 6, 6> bare, T, Tf;
+    checkWrenchTangent(0.0, Vec3::Zero(), 1e-4, &bare);
+    const double plain = checkWrenchTangent(0.0, Vec3::Zero(), 1e-4, &T, {0.010, 2e5});
+    const double stick = checkWrenchTangent(0.5, Vec3::Zero(), 1e-5, &Tf, {0.010, 2e5});
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.2e / %.2e", plain, stick);
+    RecordProperty("worst_block_error_plain_stick", buf);
+    RecordProperty("vertical_stiffness_bare", std::to_string(-bare(5, 5)));
+    RecordProperty("vertical_stiffness_layer", std::to_string(-T(5, 5)));
+    EXPECT_LT(T(5, 5), 0.0);
+    EXPECT_GT(T(5, 5), bare(5, 5));
 }
 
 TEST(Airbag, WrenchTangentWithFrictionMatchesFiniteDifferencesOfReSolvedEquilibria) {
