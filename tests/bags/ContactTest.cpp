@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
 
 using bags::Mat3;
@@ -377,16 +378,25 @@ std::vector<int> allNodes(const bags::Mesh& m) {
 
 }  // namespace
 
-TEST(RigidContact, GradientAndHessianMatchFiniteDifferencesWithoutFriction) {
+namespace {
+
+/// The frictionless contact's gradient and Hessian against central differences on every shape,
+/// onset 0 and 1 mm, nodes at the given gaps (tolerances 1e-6 / 1e-5 relative: FD truncation
+/// and round-off ~ 1e-7); `options` gives the rest of the law. Each case's gradient must
+/// exceed minGrad [N] (the contact really active); `perCase` runs on each case's contact and x.
+/// Returns the largest relative errors (gradient, Hessian).
+std::pair<double, double> checkContactDerivatives(
+    const bags::RigidContact::Options& options, const std::vector<double>& gaps,
+    std::mt19937& rng, double minGrad,
+    const std::function<void(const bags::RigidShape&, double, const Eigen::Matrix3Xd&,
+                             const bags::RigidContact&)>& perCase = {}) {
     const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
-    std::mt19937 rng(17);
-    const std::vector<double> gaps = {-2e-3, -5e-4, -1e-4, -1e-3, 3e-3, -3e-4, 1e-4, -6e-4, -1.5e-3};
     double gradErr = 0.0, hessErr = 0.0;
     for (double onset : {0.0, 1e-3}) {
         auto shapes = makeAllShapes();
         for (size_t k = 0; k < shapes.size(); ++k) {
             const auto& s = shapes[k];
-            bags::RigidContact::Options o;
+            bags::RigidContact::Options o = options;
             o.onsetGap = onset;
             bags::RigidContact contact(mesh, allNodes(mesh), *s, o);
             EXPECT_TRUE(contact.isConservative());
@@ -398,16 +408,27 @@ TEST(RigidContact, GradientAndHessianMatchFiniteDifferencesWithoutFriction) {
             Eigen::VectorXd gFd;
             Eigen::MatrixXd hFd;
             finiteDifferences(add, x, 1e-8, gFd, hFd);
-            // Forces ~ 1-20 N, stiffness ~ 1e3 N/m; FD truncation + round-off ~ 1e-7 relative.
-            EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm()) << s->getName();
-            EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm()) << s->getName();
-            EXPECT_GT(ev.grad.norm(), 0.1) << s->getName();  // the contact is really active
+            EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm()) << s->getName() << onset;
+            EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm()) << s->getName() << onset;
+            EXPECT_GT(ev.grad.norm(), minGrad) << s->getName();
             gradErr = std::max(gradErr, (ev.grad - gFd).norm() / ev.grad.norm());
             hessErr = std::max(hessErr, (ev.hess - hFd).norm() / ev.hess.norm());
+            if (perCase) perCase(*s, onset, x, contact);
         }
     }
-    bagstest::recordFigure("rigid_grad_fd_rel_err", gradErr);
-    bagstest::recordFigure("rigid_hess_fd_rel_err", hessErr);
+    return {gradErr, hessErr};
+}
+
+}  // namespace
+
+TEST(RigidContact, GradientAndHessianMatchFiniteDifferencesWithoutFriction) {
+    std::mt19937 rng(17);
+    // Forces ~ 1-20 N, stiffness ~ 1e3 N/m.
+    const auto err = checkContactDerivatives(
+        bags::RigidContact::Options(), {-2e-3, -5e-4, -1e-4, -1e-3, 3e-3, -3e-4, 1e-4, -6e-4, -1.5e-3},
+        rng, 0.1);
+    bagstest::recordFigure("rigid_grad_fd_rel_err", err.first);
+    bagstest::recordFigure("rigid_hess_fd_rel_err", err.second);
 }
 
 TEST(RigidContact, SmoothOnsetIsC2AndExactBeyondHalfWidth) {
@@ -734,47 +755,27 @@ TEST(TissueLayer, StressIsTheEnergysSlopeAndStiffnessIsItsC1Derivative) {
 }
 
 TEST(TissueLayer, GradientAndHessianMatchFiniteDifferencesOnEveryShape) {
-    const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
     std::mt19937 rng(29);
-    // Penetrations through small strain, the stiffening range, the continuation past 80 % of
-    // the 15 mm layer (12 mm) and out of contact.
-    const std::vector<double> gaps = {-5e-4, -3e-3, -8e-3, -1.3e-2, 2e-3, -1e-4, -1.6e-2, 4e-4,
-                                      -6e-3};
-    double gradErr = 0.0, hessErr = 0.0;
-    for (double onset : {0.0, 1e-3}) {
-        auto shapes = makeAllShapes();
-        for (size_t k = 0; k < shapes.size(); ++k) {
-            const auto& s = shapes[k];
-            bags::RigidContact::Options o;
-            o.onsetGap = onset;
-            o.tissueThickness = 0.015;
-            o.tissueModulus = 5e4;
-            bags::RigidContact contact(mesh, allNodes(mesh), *s, o);
-            const Eigen::Matrix3Xd x = placeNodes(*s, kindOf(k), mesh, gaps, rng);
-            auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
-                contact.addEnergy(xx, acc);
-            };
-            const Evaluated ev = evaluate(add, x);
-            Eigen::VectorXd gFd;
-            Eigen::MatrixXd hFd;
-            finiteDifferences(add, x, 1e-8, gFd, hFd);
-            // Forces ~ 0.05-3 N, stiffness ~ 1e2-1e3 N/m: FD error ~ 1e-7 relative.
-            EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm()) << s->getName() << onset;
-            EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm()) << s->getName() << onset;
-            EXPECT_GT(ev.grad.norm(), 0.05) << s->getName();
-            gradErr = std::max(gradErr, (ev.grad - gFd).norm() / ev.grad.norm());
-            hessErr = std::max(hessErr, (ev.hess - hFd).norm() / ev.hess.norm());
-            // The layer softens the contact: less force than the bare penalty at every node.
-            bags::RigidContact::Options bare;
-            bare.onsetGap = onset;
-            bags::RigidContact rigid(mesh, allNodes(mesh), *s, bare);
-            const Eigen::VectorXd pl = contact.calcNodalPressure(x);
-            const Eigen::VectorXd pr = rigid.calcNodalPressure(x);
-            for (int i = 0; i < mesh.getNumNodes(); ++i) EXPECT_LE(pl[i], pr[i]) << i;
-        }
-    }
-    bagstest::recordFigure("tissue_grad_fd_rel_err", gradErr);
-    bagstest::recordFigure("tissue_hess_fd_rel_err", hessErr);
+    bags::RigidContact::Options o;
+    o.tissueThickness = 0.015;
+    o.tissueModulus = 5e4;
+    // The layer softens the contact: less pressure than the bare penalty's at every node.
+    auto softer = [](const bags::RigidShape& s, double onset, const Eigen::Matrix3Xd& x,
+                     const bags::RigidContact& contact) {
+        bags::RigidContact::Options bare;
+        bare.onsetGap = onset;
+        const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
+        bags::RigidContact rigid(mesh, allNodes(mesh), s, bare);
+        const Eigen::VectorXd pl = contact.calcNodalPressure(x);
+        const Eigen::VectorXd pr = rigid.calcNodalPressure(x);
+        for (int i = 0; i < x.cols(); ++i) EXPECT_LE(pl[i], pr[i]) << s.getName() << " " << i;
+    };
+    // Overlaps through small strain, the stiffening range, the continuation past 80 % of the
+    // 15 mm layer (12 mm) and out of contact; forces ~ 0.05-3 N, stiffness ~ 1e2-1e3 N/m.
+    const auto err = checkContactDerivatives(
+        o, {-5e-4, -3e-3, -8e-3, -1.3e-2, 2e-3, -1e-4, -1.6e-2, 4e-4, -6e-3}, rng, 0.05, softer);
+    bagstest::recordFigure("tissue_grad_fd_rel_err", err.first);
+    bagstest::recordFigure("tissue_hess_fd_rel_err", err.second);
 }
 
 TEST(TissueLayer, WrenchTangentsMatchFiniteDifferencesWithFriction) {
