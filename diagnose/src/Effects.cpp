@@ -149,8 +149,9 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
         else
             options.material = matrix.clone();
     } else if (effect.name == "soft-tissue") {
-        options.blockContact.tissueThickness = values[0];
-        options.blockContact.tissueModulus = values[1];
+        const bool layer = values[0] > 0.0;  // 0: no layer, the model as it is
+        options.blockContact.tissueThickness = layer ? values[0] : 0.0;
+        options.blockContact.tissueModulus = layer ? values[1] : 0.0;
     } else if (effect.name == "block-friction") {
         options.blockContact.friction = values[0];
     } else {

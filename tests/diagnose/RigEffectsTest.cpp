@@ -190,7 +190,8 @@ TEST(Effects, FabricAnisotropyAddsBalancedYarnsAndZeroLeavesTheFilm) {
 }
 
 // Soft tissue as a candidate: a layer on the block (its thickness and modulus), the bed board
-// left bare; outside the bounds (5-40 mm, 10-200 kPa) it is refused naming them.
+// left bare; a thickness of 0 is no layer; outside the bounds (0-40 mm, 10-200 kPa) it is
+// refused naming them.
 TEST(Effects, SoftTissuePutsALayerOnTheBlockOnly) {
     const diagnose::Effect* effect = diagnose::findEffect("soft-tissue");
     ASSERT_NE(effect, nullptr);
@@ -212,5 +213,10 @@ TEST(Effects, SoftTissuePutsALayerOnTheBlockOnly) {
         EXPECT_NE(std::string(e.what()).find("valid: 10 to 200 kPa"), std::string::npos)
             << e.what();
     }
-    EXPECT_THROW(diagnose::applyEffect(*effect, {0.002, 50e3}, {}, rig, o), std::invalid_argument);
+    EXPECT_THROW(diagnose::applyEffect(*effect, {0.045, 50e3}, {}, rig, o), std::invalid_argument);
+    // A thickness of 0 is no layer: the candidate contains the model as it is.
+    diagnose::applyEffect(*effect, {0.0, 50e3}, {}, rig, o);
+    EXPECT_FALSE(o.blockContact.hasTissue());
+    EXPECT_EQ(o.blockContact.tissueModulus, 0.0);
+    EXPECT_NO_THROW(o.blockContact.validate());
 }
