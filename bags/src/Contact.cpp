@@ -46,7 +46,10 @@ struct NormalLaw {
             t = calcTissueStress(c, thickness, modulus);
             evalPenalty(g + c, phi, dphi, ddphi);
             const double r = area * t.sigma + dphi;
-            if (r < 0.0) lo = c; else hi = c;
+            if (r < 0.0)
+                lo = c;
+            else
+                hi = c;
             const double dr = area * t.dsigma + ddphi;
             double next = c - r / dr;
             if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
@@ -121,8 +124,8 @@ void RigidContact::Options::validate() const {
                               : tissueModulus != 0.0)
         throw std::invalid_argument(
             "RigidContact options tissueThickness and tissueModulus go together: both > 0 "
-            "(a layer) or both 0 (none), got " + std::to_string(tissueThickness) + " m and " +
-            std::to_string(tissueModulus) + " Pa");
+            "(a layer) or both 0 (none), got " +
+            std::to_string(tissueThickness) + " m and " + std::to_string(tissueModulus) + " Pa");
     if (minNodesForThreads < 1)
         throw std::invalid_argument("RigidContact option minNodesForThreads must be >= 1, got " +
                                     std::to_string(minNodesForThreads));
@@ -153,8 +156,8 @@ struct RigidContact::Impl {
     std::vector<char> hasAnchor;
 
     NormalLaw law(int j) const {
-        return NormalLaw{opt.pressurePenalty * area[j], opt.onsetGap, area[j],
-                         opt.tissueThickness, opt.tissueModulus};
+        return NormalLaw{opt.pressurePenalty * area[j], opt.onsetGap, area[j], opt.tissueThickness,
+                         opt.tissueModulus};
     }
 
     /// Fast rejection of nodes certainly out of reach of the shape.

@@ -162,9 +162,10 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
                    "only); valid: 0, or model: finite-element");
     if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&
         sc.options.contact.hasTissue())
-        s.fail("body_tissue", "is not valid with model: reduced (the reduced bag's contact law "
-                              "is its own, fitted with bare shapes); valid: leave it out, or "
-                              "model: finite-element");
+        s.fail("body_tissue",
+               "is not valid with model: reduced (the reduced bag's contact law "
+               "is its own, fitted with bare shapes); valid: leave it out, or "
+               "model: finite-element");
 }
 
 // -------------------------------------------------------------------------------------- array

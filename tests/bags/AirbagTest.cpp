@@ -3,18 +3,16 @@
 // imperfection, and results that do not depend on the number of threads.
 #include <bags/Airbag.h>
 #include <bags/MaterialFit.h>
-
 #include <gtest/gtest.h>
 
-#include <utility>
-
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
-#include <algorithm>
 
 using namespace bags;
 

@@ -2,15 +2,14 @@
 // term (penalty, friction, wrench, pressure). References: analytic geometry, central finite
 // differences, dense sampling of the surface, and the penalty law p = pressurePenalty * overlap.
 
-#include "ContactTestUtil.h"
-
 #include <bags/Contact.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 #include <random>
+
+#include "ContactTestUtil.h"
 
 using bags::Mat3;
 using bags::Vec3;
@@ -386,8 +385,8 @@ namespace {
 /// exceed minGrad [N] (the contact really active); `perCase` runs on each case's contact and x.
 /// Returns the largest relative errors (gradient, Hessian).
 std::pair<double, double> checkContactDerivatives(
-    const bags::RigidContact::Options& options, const std::vector<double>& gaps,
-    std::mt19937& rng, double minGrad,
+    const bags::RigidContact::Options& options, const std::vector<double>& gaps, std::mt19937& rng,
+    double minGrad,
     const std::function<void(const bags::RigidShape&, double, const Eigen::Matrix3Xd&,
                              const bags::RigidContact&)>& perCase = {}) {
     const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
@@ -425,8 +424,8 @@ TEST(RigidContact, GradientAndHessianMatchFiniteDifferencesWithoutFriction) {
     std::mt19937 rng(17);
     // Forces ~ 1-20 N, stiffness ~ 1e3 N/m.
     const auto err = checkContactDerivatives(
-        bags::RigidContact::Options(), {-2e-3, -5e-4, -1e-4, -1e-3, 3e-3, -3e-4, 1e-4, -6e-4, -1.5e-3},
-        rng, 0.1);
+        bags::RigidContact::Options(),
+        {-2e-3, -5e-4, -1e-4, -1e-3, 3e-3, -3e-4, 1e-4, -6e-4, -1.5e-3}, rng, 0.1);
     bagstest::recordFigure("rigid_grad_fd_rel_err", err.first);
     bagstest::recordFigure("rigid_hess_fd_rel_err", err.second);
 }
@@ -791,7 +790,7 @@ TEST(TissueLayer, WrenchTangentsMatchFiniteDifferencesWithFriction) {
     o.tissueModulus = 3e4;
     bags::RigidContact contact(mesh, allNodes(mesh), *plane, o);
     Eigen::Matrix3Xd x = mesh.X;
-    contact.commitStep(x);  // anchors where the nodes touch
+    contact.commitStep(x);     // anchors where the nodes touch
     x.row(0).array() += 1e-6;  // a small tangential offset: stick
     auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
         contact.addEnergy(xx, acc);

@@ -329,7 +329,8 @@ TEST(LoadTestScenario, ContactSubsectionsOverrideSharedKeys) {
 
 // A layer on the block (soft tissue, a pad): both keys, in range, on the block only.
 TEST(LoadTestScenario, TheBlockTakesATissueLayerWithItsThicknessAndModulus) {
-    const io::LoadTestScenario none = io::readLoadTestScenario(ScenarioFile::parse(kBase, "c.yaml"));
+    const io::LoadTestScenario none =
+        io::readLoadTestScenario(ScenarioFile::parse(kBase, "c.yaml"));
     EXPECT_FALSE(none.options.blockContact.hasTissue());
     const io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
         kBase + "contact: {block: {tissue: {thickness: 15 mm, modulus: 50 kPa}}}\n", "c.yaml"));

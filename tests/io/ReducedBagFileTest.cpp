@@ -137,7 +137,8 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
               0.0);
     // Nor a soft-tissue layer: the reduced bag's contact law is its own.
     const io::InputError e7 = expectInputError([&] {
-        readWith("30 mm", "reduced", shipped + ", body_tissue: {thickness: 20 mm, modulus: 30 kPa}");
+        readWith("30 mm", "reduced",
+                 shipped + ", body_tissue: {thickness: 20 mm, modulus: 30 kPa}");
     });
     EXPECT_EQ(e7.getKey(), "bag.body_tissue");
     EXPECT_NE(std::string(e7.what()).find("model: reduced"), std::string::npos) << e7.what();

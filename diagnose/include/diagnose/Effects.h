@@ -57,20 +57,20 @@ inline constexpr double kMaxViscoelasticTime = 120.0;  ///< [s]
 /// lowers them; beyond, the scenario's isotropic law would no longer be the film's matrix.
 inline constexpr double kMaxYarnStiffnessRatio = 3.0;
 
-/// Bounds of the soft-tissue candidate (docs/diagnosis.md#soft-tissue): a layer of soft
-/// tissue over bone of up to 40 mm (5-40 mm where there is some) (over the sacrum and heels a few mm to 15 mm, over the buttocks
-/// and the back's muscles up to about 40 mm) with an effective compressive modulus of 10-200
-/// kPa (indentation of skin, fat and muscle in vivo: relaxed fat and muscle near 10-30 kPa,
-/// loaded and tensed tissue up to 100-200 kPa); the same range covers a foam or rubber pad on an
-/// indenter. The thickness's bound starts at 0, no layer (bone, a bare indenter: the model as it
-/// is), so that the candidate contains the model: as the thickness falls to 0 at any modulus
+/// Bounds of the soft-tissue candidate (docs/diagnosis.md#soft-tissue). Soft tissue over bone
+/// is 5-40 mm thick (over the sacrum and heels a few mm to 15 mm, over the buttocks and the
+/// back's muscles up to about 40 mm) with an effective compressive modulus of 10-200 kPa
+/// (indentation of skin, fat and muscle in vivo: relaxed fat and muscle near 10-30 kPa, loaded
+/// and tensed tissue up to 100-200 kPa); the same range covers a foam or rubber pad on an
+/// indenter. The thickness's bound starts at 0, no layer (bone, a bare indenter: the model as
+/// it is), so that the candidate contains the model: as the thickness falls to 0 at any modulus
 /// the layer's compression falls to 0 with it. Without it the thinnest, stiffest layer (200 kPa
 /// over 5 mm, 4e7 Pa/m in series with the penalty's 1e7 Pa/m) is still far from none on a taut
 /// bag at 20 kPa, and the candidate could not return to the model on data without a layer.
-inline constexpr double kMinTissueThickness = 0.0;  ///< [m]
-inline constexpr double kMaxTissueThickness = 40e-3; ///< [m]
-inline constexpr double kMinTissueModulus = 10e3;    ///< [Pa]
-inline constexpr double kMaxTissueModulus = 200e3;   ///< [Pa]
+inline constexpr double kMinTissueThickness = 0.0;    ///< [m]
+inline constexpr double kMaxTissueThickness = 40e-3;  ///< [m]
+inline constexpr double kMinTissueModulus = 10e3;     ///< [Pa]
+inline constexpr double kMaxTissueModulus = 200e3;    ///< [Pa]
 
 /// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
 /// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance,
