@@ -408,6 +408,16 @@ struct Airbag::Impl {
         s->time = time;
         return s;
     }
+    // Some contact has the regularised friction law (its history then holds a slip length).
+    bool hasRegularisedFriction() const {
+        auto regularised = [](const RigidContact& c) {
+            return c.getOptions().friction > 0.0 &&
+                   c.getOptions().frictionLaw == RigidContact::FrictionLaw::Regularised;
+        };
+        for (const Shape& sh : shapes)
+            if (regularised(*sh.contact)) return true;
+        return bedContact && regularised(*bedContact);
+    }
     void writeSnapshot(StateWriter& w, const Snapshot& s) const {
         w.mat(s.x);
         w.pod(std::uint64_t(s.gases.size()));
@@ -417,6 +427,10 @@ struct Airbag::Impl {
             w.pod(std::uint64_t(h.anchor_S.size()));
             for (const Vec3& a : h.anchor_S) w.pod(a.x()), w.pod(a.y()), w.pod(a.z());
             w.vec(h.hasAnchor);
+        }
+        if (hasRegularisedFriction()) {  // only then: other bags' checkpoints are as before
+            w.tag("slip");
+            for (const RigidContact::History& h : s.history) w.pod(h.slipLength);
         }
         if (model->hasProny()) {  // only then: checkpoints of an elastic bag are as before
             w.tag("viscous");
@@ -447,6 +461,10 @@ struct Airbag::Impl {
                 a = Vec3(ax, ay, az);
             }
             r.vecOfSize(h.hasAnchor, h.anchor_S.size(), "nodes of a contact");
+        }
+        if (hasRegularisedFriction()) {
+            r.tag("slip");
+            for (RigidContact::History& h : s->history) r.pod(h.slipLength);
         }
         if (model->hasProny()) {
             r.tag("viscous");
@@ -810,6 +828,7 @@ struct Airbag::Impl {
             SolveSummary sum;
             double stab = 0.0;
             if (self) self->updateCandidates(x);
+            model->beginContactStep(x, 0.0);  // no time passes: Coulomb's limit
             if (trySolve(&sum, &stab, 3, spec.solver) && recheckCandidates(&sum)) {
                 s = next;
                 solved = true;
@@ -846,8 +865,10 @@ struct Airbag::Impl {
     bool solveSubstep(const std::vector<Eigen::Isometry3d>& from, double s1, double dt,
                       AdvanceSummary* out) {
         const std::shared_ptr<Snapshot> before = snapshot();
-        // The film's step potential over dt (viscoelastic film; restored with `before`).
+        // The film's step potential over dt (viscoelastic film; restored with `before`), and
+        // the slip of the regularised friction measured from here.
         model->beginViscousStep(dt);
+        model->beginContactStep(x, dt);
         // Nothing to solve when no gas moves, the film has no strained viscous branch to relax
         // over the time, and every shape that moves touches the bag neither before nor after: the
         // energy of the state is unchanged, so is the state.
@@ -913,6 +934,7 @@ struct Airbag::Impl {
             out->factorizations += sum.factorizations;
             restore(*before);
             model->beginViscousStep(dt);
+            model->beginContactStep(x, dt);
             for (size_t i = 0; i < shapes.size(); ++i)
                 shapes[i].shape->setPose(interpolatePose(from[i], shapes[i].target, s1));
             ok = attempt(false, &warmed);

@@ -9,8 +9,12 @@
 //   balances it, A sigma(c) = -phi'(g + c) (A the nodal reference area). The energy is
 //   Phi(g) = phi(g + c) + A w(c), c minimising it: Phi' = phi'(g + c) (envelope theorem) and
 //   Phi'' = phi'' A sigma' / (phi'' + A sigma'), the two springs in series.
-// Friction: an elastic stick spring k_t = stickStiffnessRatio * k to an anchor on the surface
-// (stored in the shape frame, so it rides with the shape), capped at mu * f_n (slip).
+// Friction, two laws (Options::frictionLaw), both with an anchor on the surface stored in the
+// shape frame (it rides with the shape) and s = P (p - anchor), P = I - n n^T:
+//   stick-slip:  an elastic stick spring k_t = stickStiffnessRatio * k to the anchor, capped at
+//                mu * f_n (slip); the anchor keeps the spring's offset across commits.
+//   regularised: f_t = -mu f_n s / sqrt(|s|^2 + r^2), r = v_s dt; the anchor is the contact
+//                point at the last commit, so s is the slip over the step.
 
 #include <bags/Contact.h>
 
@@ -97,7 +101,8 @@ struct NodeTerm {
     bool active = false;
     double energy = 0.0;
     Vec3 grad = Vec3::Zero();  // dE/dp = - force on the node
-    Mat3 hess = Mat3::Zero();
+    Mat3 hess = Mat3::Zero();  // what Newton gets: symmetric, without the f_n coupling
+    Mat3 full = Mat3::Zero();  // the exact d grad / dp (evalNode's `full` asked)
     Vec3 closest = Vec3::Zero();
     double normalForce = 0.0;  // f_n >= 0 [N]
 };
@@ -111,6 +116,9 @@ void RigidContact::Options::validate() const {
     if (!(friction >= 0.0) || !std::isfinite(friction))
         throw std::invalid_argument("RigidContact option friction must be >= 0, got " +
                                     std::to_string(friction));
+    if (!(slipVelocity > 0.0) || !std::isfinite(slipVelocity))
+        throw std::invalid_argument("RigidContact option slipVelocity must be > 0 [m/s], got " +
+                                    std::to_string(slipVelocity));
     if (!(stickStiffnessRatio > 0.0) || !std::isfinite(stickStiffnessRatio))
         throw std::invalid_argument("RigidContact option stickStiffnessRatio must be > 0, got " +
                                     std::to_string(stickStiffnessRatio));
@@ -154,6 +162,7 @@ struct RigidContact::Impl {
     std::vector<double> area;      // nodal reference area [m^2] per contact node
     std::vector<Vec3> anchor_S;    // friction anchor on the surface, shape frame
     std::vector<char> hasAnchor;
+    double slipLength = RigidContact::kMinSlipLength;  // [m] r = v_s dt of the regularised law
 
     NormalLaw law(int j) const {
         return NormalLaw{opt.pressurePenalty * area[j], opt.onsetGap, area[j], opt.tissueThickness,
@@ -165,8 +174,10 @@ struct RigidContact::Impl {
         return shape->calcDistanceLowerBound(p) >= 0.5 * opt.onsetGap;
     }
 
-    void evalNode(int j, const Vec3& p, bool wantHess, NodeTerm& out) const {
+    /// The node's term at p; `full` also gives the exact, unsymmetric tangent out.full.
+    void evalNode(int j, const Vec3& p, bool wantHess, NodeTerm& out, bool full = false) const {
         out.active = false;
+        wantHess = wantHess || full;
         if (area[j] <= 0.0 || isFar(p)) return;
         const NormalLaw nl = law(j);
         double g;
@@ -181,28 +192,53 @@ struct RigidContact::Impl {
         out.energy = phi;
         out.grad = dphi * n;
         if (wantHess) out.hess = ddphi * n * n.transpose() + dphi * dn;
-        if (opt.friction > 0.0 && hasAnchor[j]) {
-            const Vec3 a_G = shape->getPose() * anchor_S[j];
-            const Mat3 P = Mat3::Identity() - n * n.transpose();
-            const Vec3 dt = P * (p - a_G);
-            const double r = dt.norm();
-            const double kt = opt.stickStiffnessRatio * nl.k;
-            const double cap = opt.friction * out.normalForce;
-            if (kt * r <= cap) {  // stick: an elastic spring to the anchor
-                out.energy += 0.5 * kt * r * r;
-                out.grad += kt * dt;
-                // d(P (p - a))/dp = P - (n.(p - a)) dn/dp - n dt^T dn/dp (n^T dn/dp = 0): the
-                // projection turns with the normal on a curved shape. The last term is
-                // symmetrised; at dt = 0 (a node where its anchor was set) this is exact.
-                if (wantHess) {
-                    const Mat3 c = n * (dt.transpose() * dn);
-                    out.hess += kt * (P - n.dot(p - a_G) * dn - 0.5 * (c + c.transpose()));
-                }
-            } else {  // slip: force mu f_n against the offset; its dependence on f_n is dropped
-                const Vec3 t = dt / r;
-                out.energy += cap * (r - 0.5 * cap / kt);
-                out.grad += cap * t;
-                if (wantHess) out.hess += (cap / r) * (P - t * t.transpose());
+        if (full) out.full = out.hess;
+        if (!(opt.friction > 0.0 && hasAnchor[j])) return;
+        const Vec3 a_G = shape->getPose() * anchor_S[j];
+        const Mat3 P = Mat3::Identity() - n * n.transpose();
+        const Vec3 q = p - a_G;
+        const Vec3 d_t = P * q;
+        const double cap = opt.friction * out.normalForce;
+        // d(P q)/dp = P - (n.q) dn/dp - n d_t^T dn/dp (n^T dn/dp = 0): the projection turns with
+        // the normal on a curved shape. Newton gets its last term symmetrised; at d_t = 0 (a
+        // node where its anchor was set) that is exact.
+        Mat3 ddt, ddtSym;
+        if (wantHess) {
+            const Mat3 cn = n * (d_t.transpose() * dn);
+            ddt = P - n.dot(q) * dn - cn;
+            ddtSym = P - n.dot(q) * dn - 0.5 * (cn + cn.transpose());
+        }
+        // The friction force's dependence on f_n: d(mu f_n)/dp = -mu phi'' n, entering as
+        // (dE_t/d cap) (d cap/dp)^T; unsymmetric, so only in the exact tangent.
+        const Vec3 dcap = -opt.friction * ddphi * n;
+        if (opt.frictionLaw == FrictionLaw::Regularised) {
+            const double r = slipLength;
+            const double rho = std::sqrt(d_t.squaredNorm() + r * r);
+            out.energy += cap * (rho - r);  // the frozen-f_n potential (a convex function of s)
+            out.grad += (cap / rho) * d_t;
+            if (wantHess) {
+                // d(s / rho)/ds = (I - s s^T / rho^2) / rho: stiffness cap r^2 / rho^3 along s.
+                const Mat3 W = (Mat3::Identity() - d_t * d_t.transpose() / (rho * rho)) / rho;
+                out.hess += cap * 0.5 * (W * ddtSym + (W * ddtSym).transpose());
+                if (full) out.full += cap * W * ddt + (d_t / rho) * dcap.transpose();
+            }
+            return;
+        }
+        const double r = d_t.norm();
+        const double kt = opt.stickStiffnessRatio * nl.k;
+        if (kt * r <= cap) {  // stick: an elastic spring to the anchor
+            out.energy += 0.5 * kt * r * r;
+            out.grad += kt * d_t;
+            if (wantHess) out.hess += kt * ddtSym;
+            if (full) out.full += kt * ddt;
+        } else {  // slip: force mu f_n against the offset; Newton's tangent drops its f_n coupling
+            const Vec3 t = d_t / r;
+            out.energy += cap * (r - 0.5 * cap / kt);
+            out.grad += cap * t;
+            if (wantHess) out.hess += (cap / r) * (P - t * t.transpose());
+            if (full) {
+                const Mat3 W = (Mat3::Identity() - t * t.transpose()) / r;
+                out.full += cap * W * ddt + t * dcap.transpose();
             }
         }
     }
@@ -261,8 +297,35 @@ void RigidContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) 
 
 bool RigidContact::isConservative() const { return m_impl->opt.friction == 0.0; }
 
+void RigidContact::beginStep(const Eigen::Matrix3Xd& x, double dt) {
+    Impl& m = *m_impl;
+    if (!(dt >= 0.0) || !std::isfinite(dt))
+        throw std::invalid_argument("RigidContact::beginStep: dt must be >= 0 [s], got " +
+                                    std::to_string(dt));
+    if (m.opt.friction == 0.0 || m.opt.frictionLaw != FrictionLaw::Regularised) return;
+    m.slipLength = std::max(m.opt.slipVelocity * dt, kMinSlipLength);
+    const Eigen::Isometry3d X_SG = m.shape->getPose().inverse();
+    for (size_t j = 0; j < m.nodes.size(); ++j) {
+        if (!m.hasAnchor[j]) continue;
+        Vec3 c;
+        m.shape->calcSignedDistance(x.col(m.nodes[j]), &c, nullptr);
+        m.anchor_S[j] = X_SG * c;
+    }
+}
+
+std::vector<Mat3> RigidContact::calcNodeTangents(const Eigen::Matrix3Xd& x) const {
+    const Impl& m = *m_impl;
+    std::vector<Mat3> out(m.nodes.size(), Mat3::Zero());
+    NodeTerm t;
+    for (size_t j = 0; j < m.nodes.size(); ++j) {
+        m.evalNode(static_cast<int>(j), x.col(m.nodes[j]), true, t, true);
+        if (t.active) out[j] = t.full;
+    }
+    return out;
+}
+
 RigidContact::History RigidContact::getHistory() const {
-    return History{m_impl->anchor_S, m_impl->hasAnchor};
+    return History{m_impl->anchor_S, m_impl->hasAnchor, m_impl->slipLength};
 }
 
 void RigidContact::setHistory(const History& h) {
@@ -270,6 +333,7 @@ void RigidContact::setHistory(const History& h) {
         throw std::invalid_argument("RigidContact::setHistory: history of another contact set");
     m_impl->anchor_S = h.anchor_S;
     m_impl->hasAnchor = h.hasAnchor;
+    m_impl->slipLength = h.slipLength;
 }
 
 void RigidContact::commitStep(const Eigen::Matrix3Xd& x) {
@@ -291,6 +355,8 @@ void RigidContact::commitStep(const Eigen::Matrix3Xd& x) {
             m.hasAnchor[j] = 1;
             continue;
         }
+        // Regularised: the anchor stays at the step's start until beginStep().
+        if (m.opt.frictionLaw == FrictionLaw::Regularised) continue;
         const Vec3 a_G = m.shape->getPose() * m.anchor_S[j];
         const Vec3 dt = (Mat3::Identity() - n * n.transpose()) * (p - a_G);
         const double r = dt.norm();
@@ -372,5 +438,7 @@ int RigidContact::getNumActive(const Eigen::Matrix3Xd& x) const {
 const std::vector<int>& RigidContact::getNodes() const { return m_impl->nodes; }
 
 const RigidShape& RigidContact::getShape() const { return *m_impl->shape; }
+
+const RigidContact::Options& RigidContact::getOptions() const { return m_impl->opt; }
 
 }  // namespace bags

@@ -238,6 +238,10 @@ bool MembraneModel::isConservative() const {
     return true;
 }
 
+void MembraneModel::beginContactStep(const Eigen::Matrix3Xd& x, double dt) {
+    for (auto& c : m_contacts) c->beginStep(x, dt);
+}
+
 void MembraneModel::commitStep(const Eigen::Matrix3Xd& x) {
     for (auto& c : m_contacts) c->commitStep(x);
 }

@@ -119,7 +119,8 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 
 void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
-                     "contact_penalty", "body_friction", "body_tissue", "model", "calibration"});
+                     "contact_penalty", "body_friction", "friction_law", "slip_velocity",
+                     "body_tissue", "model", "calibration"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -151,6 +152,19 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     // Soft tissue between the segments' bones and the films: the segments' shapes are the
     // skin, the layer lies inside them (docs/contact.md#soft-tissue). None by default.
     if (s.has("body_tissue")) readTissueLayer(s.getSection("body_tissue"), sc.options.contact);
+    // How the friction force follows the slip (docs/contact.md#contact-law): the elastic stick
+    // spring capped at mu f_n, or Coulomb regularised by the slip rate over the step.
+    const std::string law = s.getChoice("friction_law", {"stick-slip", "regularised"}, "stick-slip");
+    sc.options.contact.frictionLaw = law == "regularised"
+                                         ? bags::RigidContact::FrictionLaw::Regularised
+                                         : bags::RigidContact::FrictionLaw::StickSlip;
+    if (s.has("slip_velocity") && law != "regularised")
+        s.fail("slip_velocity", "is the regularised law's; valid only with friction_law: "
+                                "regularised (this file's law: " + law + ")");
+    sc.options.contact.slipVelocity =
+        s.getQuantity("slip_velocity", D::Velocity, sc.options.contact.slipVelocity);
+    checkBetween(s, "slip_velocity", sc.options.contact.slipVelocity, 1e-5, 1.0, "mm/s",
+                 "below the body's sliding speeds, e.g. 2 mm/s as the bed board's");
     // The seed's Yeoh fit of its tensile test, 0.2 mm film (scenarios/seed-load-test.yaml).
     b.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
     b.threads = 1;  // bags run in parallel, one per thread

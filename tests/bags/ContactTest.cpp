@@ -624,6 +624,131 @@ TEST(RigidContact, SlipTangentIsExactForTangentialMotionOnPlane) {
     EXPECT_NEAR(Vec3(-ev.grad.segment<3>(12)).head<2>().norm(), 0.3 * 1.0, 1e-12);
 }
 
+TEST(RigidContact, FullFrictionTangentMatchesFiniteDifferencesForBothLawsOnEveryShape) {
+    // calcNodeTangents() is the exact derivative of each node's force law, the coupling of the
+    // friction force to the normal force (mu t (d f_n/dp)^T) and the curvature terms included.
+    // Nodes pressed 0.5-2 mm at smooth points of every shape, anchored, then dragged along the
+    // surface by 5 um to 1 mm: with the regularised law (slip length v_s dt = 20 um) from the
+    // viscous range to full sliding, with the stick-slip law (stick up to mu f_n / k_t = 0.25-
+    // 1 mm) in stick and in slip. Against central differences of the gradient (step 1 nm):
+    // per node block, relative to the block (FD error ~ (h / 5 um)^2 ~ 1e-7).
+    const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
+    std::mt19937 rng(29);
+    const std::vector<double> gaps = {-2e-3, -5e-4, -1e-3, -1.5e-3, -7e-4, -1.2e-3, -8e-4, -2e-3, -6e-4};
+    const std::vector<double> drags = {5e-6, 2e-5, 1e-4, 1e-3, 3e-5, 4e-4, 8e-6, 2e-4, 6e-5};
+    double worst = 0.0, coupling = 0.0;
+    for (auto law : {bags::RigidContact::FrictionLaw::Regularised,
+                     bags::RigidContact::FrictionLaw::StickSlip}) {
+        auto shapes = makeAllShapes();
+        for (size_t k = 0; k < shapes.size(); ++k) {
+            const auto& s = shapes[k];
+            bags::RigidContact::Options o;
+            o.friction = 0.5;
+            o.frictionLaw = law;
+            bags::RigidContact contact(mesh, allNodes(mesh), *s, o);
+            const Eigen::Matrix3Xd x0 = placeNodes(*s, kindOf(k), mesh, gaps, rng);
+            contact.commitStep(x0);        // anchors where the nodes touch
+            contact.beginStep(x0, 0.01);   // a 10 ms step: slip length 20 um
+            Eigen::Matrix3Xd x = x0;
+            std::uniform_real_distribution<double> angle(0.0, 6.283);
+            for (int i = 0; i < mesh.getNumNodes(); ++i) {
+                Vec3 n;
+                s->calcSignedDistance(x0.col(i), nullptr, &n);
+                const Vec3 a = n.unitOrthogonal(), b = n.cross(a);
+                const double th = angle(rng);
+                x.col(i) += drags[i] * (std::cos(th) * a + std::sin(th) * b);
+            }
+            auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
+                contact.addEnergy(xx, acc);
+            };
+            Eigen::VectorXd gFd;
+            Eigen::MatrixXd hFd;
+            finiteDifferences(add, x, 1e-9, gFd, hFd);
+            const std::vector<Mat3> T = contact.calcNodeTangents(x);
+            ASSERT_EQ(T.size(), static_cast<size_t>(mesh.getNumNodes()));
+            for (int i = 0; i < mesh.getNumNodes(); ++i) {
+                const Mat3 f = hFd.block<3, 3>(3 * i, 3 * i);
+                const double err = (T[i] - f).norm() / f.norm();
+                EXPECT_LT(err, 1e-5) << s->getName() << " node " << i << " drag " << drags[i]
+                                     << (law == bags::RigidContact::FrictionLaw::Regularised
+                                             ? " regularised" : " stick-slip")
+                                     << "\nexact\n" << T[i] << "\nFD\n" << f;
+                worst = std::max(worst, err);
+                // The f_n coupling: its size against the block's (leaving it out fails).
+                Vec3 nn;
+                s->calcSignedDistance(x.col(i), nullptr, &nn);
+                coupling = std::max(coupling, (f * nn - (nn.dot(f * nn)) * nn).norm() / f.norm());
+            }
+        }
+    }
+    EXPECT_GT(coupling, 0.1);  // the friction force does follow the normal force
+    bagstest::recordFigure("friction_full_tangent_fd_rel_err", worst);
+}
+
+TEST(RigidContact, RegularisedFrictionIsViscousBelowTheSlipVelocityAndCoulombAbove) {
+    // One node pressed 1 mm into a plane (f_n = 1 N), mu = 0.3, v_s = 2 mm/s; the plane slides
+    // under the held node at v over a step dt, so the node slips by -v dt on it. The law:
+    // f_t = mu f_n v / sqrt(v^2 + v_s^2) against the slip: viscous, slope mu f_n / v_s, well
+    // below v_s (v = 0.01 v_s: 0.99995 of the slope), mu f_n well above it (v = 20 v_s:
+    // 0.99875 mu f_n; v = 100 v_s: 0.99995). The same v over a step 10 times shorter gives the
+    // same force (a rate law, not a slip-length law).
+    const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
+    auto plane = bags::makePlane();
+    bags::RigidContact::Options o;
+    o.friction = 0.3;
+    o.frictionLaw = bags::RigidContact::FrictionLaw::Regularised;
+    o.slipVelocity = 2e-3;
+    bags::RigidContact contact(mesh, {4}, *plane, o);
+    const double fn = 1e7 * 1e-4 * 1e-3, muN = 0.3 * fn, vs = 2e-3;
+    Eigen::Matrix3Xd x = mesh.X;
+    x.col(4) = Vec3(0.01, 0.01, -1e-3);
+    auto forceX = [&]() {
+        bags::EnergyAccumulator acc(mesh.getNumNodes());
+        contact.addEnergy(x, acc);
+        EXPECT_NEAR(-acc.grad(14), fn, 1e-12);
+        EXPECT_NEAR(acc.grad(13), 0.0, 1e-12);
+        return -acc.grad(12);
+    };
+    auto drag = [&](double v, double dt) {  // the plane moves by -v dt under the node
+        plane->setPose(Eigen::Isometry3d::Identity());
+        contact.commitStep(x);  // touched: anchored
+        contact.beginStep(x, dt);
+        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+        X.translation() = Vec3(-v * dt, 0.0, 0.0);
+        plane->setPose(X);
+        return forceX();  // the node slipped +v dt on the plane: the force points back, -x
+    };
+    for (double dt : {0.01, 0.001}) {
+        for (double v : {0.01 * vs, 0.1 * vs, vs, 20.0 * vs, 100.0 * vs}) {
+            const double f = drag(v, dt);
+            const double exact = -muN * v / std::sqrt(v * v + vs * vs);
+            EXPECT_NEAR(f, exact, 1e-12 * muN) << "v " << v << " dt " << dt;
+            if (v <= 0.01 * vs) EXPECT_NEAR(f / v, -muN / vs, 1e-4 * muN / vs);  // viscous
+            if (v >= 20.0 * vs) EXPECT_NEAR(f, -muN, 2e-3 * muN);                  // Coulomb
+            if (v >= 100.0 * vs) EXPECT_NEAR(f, -muN, 1e-4 * muN);
+        }
+    }
+    // The committed state keeps its step's force until the next step begins; that step's
+    // slip starts from zero; a restored history brings back the step's slip length.
+    const double f = drag(vs, 0.01);
+    const bags::RigidContact::History h = contact.getHistory();
+    contact.commitStep(x);
+    EXPECT_EQ(forceX(), f);
+    contact.beginStep(x, 0.001);
+    EXPECT_NEAR(forceX(), 0.0, 1e-9 * muN);
+    contact.setHistory(h);
+    EXPECT_EQ(forceX(), f);
+    // No time (a quasi-static ramp): Coulomb's rate-independent limit, mu f_n at 1 um of slip
+    // (slip length 10 nm: 0.99995).
+    plane->setPose(Eigen::Isometry3d::Identity());
+    contact.beginStep(x, 0.0);
+    x(0, 4) += 1e-6;
+    EXPECT_NEAR(forceX(), -muN, 1e-4 * muN);
+    EXPECT_THROW(contact.beginStep(x, -1.0), std::invalid_argument);
+    o.slipVelocity = 0.0;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+}
+
 TEST(RigidContact, WrenchIsReactionOfNodalForcesAndMatchesEnergyRate) {
     const bags::Mesh mesh = bagstest::makeGridMesh(4, 4, 0.01, Vec3::Zero());
     std::mt19937 rng(23);

@@ -141,6 +141,43 @@ TEST(ArrayScenario, TheBodysShapesTakeASoftTissueLayer) {
     EXPECT_NE(e2.getMessage().find("thickness"), std::string::npos) << e2.what();
 }
 
+TEST(ArrayScenario, FrictionLawIsStickSlipByDefaultAndSlipVelocityBelongsToTheRegularisedLaw) {
+    auto with = [](const std::string& keys) {
+        std::string t = kBase;
+        t.replace(t.find("bag: {mesh_size: 30 mm}"), 23,
+                  "bag: {mesh_size: 30 mm, body_friction: 0.4" + keys + "}");
+        return t;
+    };
+    using Law = bags::RigidContact::FrictionLaw;
+    EXPECT_EQ(read(with("")).options.contact.frictionLaw, Law::StickSlip);
+    const io::PatientOnArrayScenario reg = read(with(", friction_law: regularised"));
+    EXPECT_EQ(reg.options.contact.frictionLaw, Law::Regularised);
+    EXPECT_DOUBLE_EQ(reg.options.contact.slipVelocity, 2e-3);
+    EXPECT_DOUBLE_EQ(
+        read(with(", friction_law: regularised, slip_velocity: 5 mm/s")).options.contact.slipVelocity,
+        5e-3);
+    {
+        const io::InputError e = readError(with(", friction_law: viscous"));
+        EXPECT_EQ(e.getLine(), 3);
+        EXPECT_EQ(e.getKey(), "bag.friction_law");
+        EXPECT_NE(e.getMessage().find("regularised"), std::string::npos) << e.what();
+    }
+    {
+        const io::InputError e = readError(with(", slip_velocity: 2 mm/s"));
+        EXPECT_EQ(e.getKey(), "bag.slip_velocity");
+        EXPECT_NE(e.getMessage().find("valid only with friction_law: regularised"),
+                  std::string::npos) << e.what();
+    }
+    for (const char* bad : {"0 mm/s", "-1 mm/s", "2 m/s"}) {
+        const io::InputError e =
+            readError(with(std::string(", friction_law: regularised, slip_velocity: ") + bad));
+        EXPECT_EQ(e.getLine(), 3);
+        EXPECT_EQ(e.getKey(), "bag.slip_velocity");
+        EXPECT_NE(e.getMessage().find("valid: in [0.01 mm/s, 1000 mm/s]"), std::string::npos)
+            << e.what();
+    }
+}
+
 TEST(ArrayScenario, NeighbourContactIsOffByDefaultAndNeedsTheBagsSelfContact) {
     const io::PatientOnArrayScenario plain = read(kBase);
     EXPECT_FALSE(plain.options.neighbourContact);

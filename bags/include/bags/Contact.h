@@ -2,7 +2,8 @@
 /// @file Contact of membrane nodes with rigid analytic shapes (penalty, Coulomb friction) and
 /// of the membrane with itself.
 ///
-/// Order of calls in a load step: set the shapes' poses, then, inside the Newton loop,
+/// Order of calls in a load step: beginStep(x, dt) at the committed state (the regularised
+/// friction law measures the slip from there), set the shapes' poses, then, inside the Newton loop,
 /// addEnergy() for every trial x; once the step has converged, commitStep(x) (friction
 /// anchors move with the slip). Results (forces on the rigid shape, nodal pressures) are read
 /// with calc...() at the converged x.
@@ -78,10 +79,22 @@ std::unique_ptr<RigidShape> makeCapsule(double radius, double halfLength);
 /// (calcTissueStress).
 class RigidContact {
 public:
+    /// How the tangential force follows the slip (docs/contact.md).
+    enum class FrictionLaw {
+        /// An elastic stick spring (stickStiffnessRatio) to an anchor, capped at mu f_n; the
+        /// anchor keeps the spring's offset from step to step.
+        StickSlip,
+        /// Coulomb regularised by the slip rate over the step: f_t = -mu f_n s / sqrt(|s|^2 +
+        /// (v_s dt)^2), s the film's slip on the shape since the last commit, dt the step time
+        /// (setStepTime), v_s = slipVelocity. Viscous below v_s, mu f_n above.
+        Regularised
+    };
     struct Options {
         double pressurePenalty = 1e7;  ///< [Pa/m]: 1 mm penetration carries 10 kPa
         double friction = 0.0;         ///< Coulomb coefficient (0 = frictionless)
-        double stickStiffnessRatio = 1.0;  ///< tangential / normal penalty
+        FrictionLaw frictionLaw = FrictionLaw::StickSlip;  ///< the tangential law
+        double slipVelocity = 2e-3;    ///< [m/s] v_s of the regularised law
+        double stickStiffnessRatio = 1.0;  ///< tangential / normal penalty (stick-slip law)
         double onsetGap = 0.0;          ///< [m] smoothing width of the contact onset (0: C1 quadratic)
         int minNodesForThreads = 50000; ///< evaluate nodes with OpenMP from this many nodes on
         /// A compliant layer on the shape (soft tissue over bone, a pad on an indenter), inside
@@ -99,6 +112,20 @@ public:
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     /// True when friction is on: the term is then not a potential (solver uses residual norms).
     bool isConservative() const;
+    /// Starts a step of dt [s] from x (the committed state, the shape at its pose at the
+    /// step's start). Regularised law: each anchored node's anchor goes to its contact point
+    /// at x, so the slip is measured over the step, and the slip length becomes v_s dt
+    /// (kMinSlipLength at least; dt = 0, a change with no time such as a quasi-static ramp,
+    /// is Coulomb's rate-independent limit). Stick-slip law: nothing. Until the next call the
+    /// committed state keeps the force of the step that reached it.
+    void beginStep(const Eigen::Matrix3Xd& x, double dt);
+    /// [m] floor of the regularised law's slip length v_s dt.
+    static constexpr double kMinSlipLength = 1e-8;
+    /// d(dE/dp)/dp of each node of the contact set at x (3 x 3 per node, zero out of contact):
+    /// the exact derivative of the force law, not symmetric with friction (the coupling of
+    /// the friction force to the normal force, mu t (d f_n/dp)^T, and the curvature terms).
+    /// addEnergy() adds its symmetric part without the f_n coupling (docs/contact.md).
+    std::vector<Mat3> calcNodeTangents(const Eigen::Matrix3Xd& x) const;
     /// Accepts x as converged: friction anchors follow the slip.
     void commitStep(const Eigen::Matrix3Xd& x);
     /// The friction history (anchors) committed so far, to be restored when a step that has
@@ -106,6 +133,7 @@ public:
     struct History {
         std::vector<Vec3> anchor_S;
         std::vector<char> hasAnchor;
+        double slipLength = kMinSlipLength;  ///< [m] v_s dt of the step (regularised law)
     };
     History getHistory() const;
     /// Restores a history taken from this contact by getHistory().
@@ -126,6 +154,7 @@ public:
     /// The contact node set (mesh node indices) and the shape it touches.
     const std::vector<int>& getNodes() const;
     const RigidShape& getShape() const;
+    const Options& getOptions() const;
 private:
     struct Impl;
     std::shared_ptr<Impl> m_impl;

@@ -190,6 +190,8 @@ public:
 
     /// Dofs that are fixed (support nodes, Mesh::fixedDofs), sorted.
     const std::vector<int>& getFixedDofs() const { return m_fixedDofs; }
+    /// Starts a step of dt [s] from x in every rigid contact (RigidContact::beginStep).
+    void beginContactStep(const Eigen::Matrix3Xd& x, double dt);
     /// Commits contact history at a converged x.
     void commitStep(const Eigen::Matrix3Xd& x);
     /// Snapshot of every rigid contact's friction history, and its restore (abandoned steps).
