@@ -532,6 +532,35 @@ TEST(Airbag, TheGasIsStillUnlessAFlowIsSetOrATargetIsNotReached) {
     EXPECT_FALSE(bag.isGasStill());
 }
 
+namespace {
+// A flat plate (200 x 200 mm, larger than the bag's top) pressed 5 mm onto the coarse wedge
+// inflated to 4.5 g, then pushed along the bag's length in 16 committed steps of 0.5 mm, each
+// advanced over stepTime [s]; the plate's force after each step.
+void pushPlate(const RigidContact::Options& o, double stepTime, std::vector<Vec3>* forces) {
+    AirbagSpec spec = coarseSpec();
+    spec.selfContact = false;
+    Airbag bag(spec);
+    const Mesh& mesh = bag.getMesh();
+    int apex = 0;
+    mesh.X.row(2).maxCoeff(&apex);
+    std::shared_ptr<RigidShape> plate(makeBox(Vec3(0.1, 0.1, 0.01), 0.002));
+    plate->setPose(translation(Vec3(mesh.X(0, apex), 0.0, 0.5)));
+    const int s = bag.addShape(plate, o);
+    bag.inflate(4.5e-3);
+    const double top = bag.getPositions().row(2).maxCoeff();
+    Vec3 c(mesh.X(0, apex), 0.0, top + 0.01 - 0.005);
+    bag.setShapePose(s, translation(c));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    bag.commit();
+    for (int k = 1; k <= 16; ++k) {
+        bag.setShapePose(s, translation(c + Vec3(0.0005 * k, 0.0, 0.0)));
+        ASSERT_TRUE(bag.advance(stepTime).converged) << "push step " << k;
+        bag.commit();
+        forces->push_back(bag.calcShapeWrench(s).force);
+    }
+}
+}  // namespace
+
 TEST(Airbag, AShapePushedSidewaysOnTheFilmSticksThenSlipsAtMuTimesTheNormalForce) {
     // A flat plate (200 x 200 mm, larger than the bag's top, so its rounded edges never touch
     // the film and every contact normal is vertical) pressed 5 mm onto the inflated wedge,
@@ -542,29 +571,9 @@ TEST(Airbag, AShapePushedSidewaysOnTheFilmSticksThenSlipsAtMuTimesTheNormalForce
     // (within 2 %). Without friction the plate feels no horizontal force, and friction 0
     // gives the default options' wrench bit for bit.
     auto run = [](double mu, bool defaultOptions, std::vector<Vec3>* forces) {
-        AirbagSpec spec = coarseSpec();
-        spec.selfContact = false;
-        Airbag bag(spec);
-        const Mesh& mesh = bag.getMesh();
-        int apex = 0;
-        mesh.X.row(2).maxCoeff(&apex);
-        std::shared_ptr<RigidShape> plate(makeBox(Vec3(0.1, 0.1, 0.01), 0.002));
-        plate->setPose(translation(Vec3(mesh.X(0, apex), 0.0, 0.5)));
         RigidContact::Options o;
         if (!defaultOptions) o.friction = mu;
-        const int s = bag.addShape(plate, o);
-        bag.inflate(4.5e-3);
-        const double top = bag.getPositions().row(2).maxCoeff();
-        Vec3 c(mesh.X(0, apex), 0.0, top + 0.01 - 0.005);
-        bag.setShapePose(s, translation(c));
-        ASSERT_TRUE(bag.advance(0.0).converged);
-        bag.commit();
-        for (int k = 1; k <= 16; ++k) {
-            bag.setShapePose(s, translation(c + Vec3(0.0005 * k, 0.0, 0.0)));
-            ASSERT_TRUE(bag.advance(0.0).converged) << "push step " << k;
-            bag.commit();
-            forces->push_back(bag.calcShapeWrench(s).force);
-        }
+        pushPlate(o, 0.0, forces);
     };
     const double mu = 0.4;
     std::vector<Vec3> none, zero, rough;
@@ -604,31 +613,11 @@ TEST(Airbag, APlateDraggedOverTheFilmFeelsTheRegularisedLawsForceAtItsSpeed) {
     // the bound 0.025 mu F_v. Both reach their bound after 8 mm (within 0.5 %; measured: to
     // 4 digits from 4.5 and 1 mm on).
     auto run = [](double stepTime, std::vector<Vec3>* forces) {
-        AirbagSpec spec = coarseSpec();
-        spec.selfContact = false;
-        Airbag bag(spec);
-        const Mesh& mesh = bag.getMesh();
-        int apex = 0;
-        mesh.X.row(2).maxCoeff(&apex);
-        std::shared_ptr<RigidShape> plate(makeBox(Vec3(0.1, 0.1, 0.01), 0.002));
-        plate->setPose(translation(Vec3(mesh.X(0, apex), 0.0, 0.5)));
         RigidContact::Options o;
         o.friction = 0.4;
         o.frictionLaw = RigidContact::FrictionLaw::Regularised;
         o.slipVelocity = 2e-3;
-        const int s = bag.addShape(plate, o);
-        bag.inflate(4.5e-3);
-        const double top = bag.getPositions().row(2).maxCoeff();
-        Vec3 c(mesh.X(0, apex), 0.0, top + 0.01 - 0.005);
-        bag.setShapePose(s, translation(c));
-        ASSERT_TRUE(bag.advance(0.0).converged);
-        bag.commit();
-        for (int k = 1; k <= 16; ++k) {
-            bag.setShapePose(s, translation(c + Vec3(0.0005 * k, 0.0, 0.0)));
-            ASSERT_TRUE(bag.advance(stepTime).converged) << "drag step " << k;
-            bag.commit();
-            forces->push_back(bag.calcShapeWrench(s).force);
-        }
+        pushPlate(o, stepTime, forces);
     };
     const double mu = 0.4, vs = 2e-3;
     for (double stepTime : {0.01, 10.0}) {
