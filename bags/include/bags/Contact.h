@@ -85,8 +85,8 @@ public:
         /// anchor keeps the spring's offset from step to step.
         StickSlip,
         /// Coulomb regularised by the slip rate over the step: f_t = -mu f_n s / sqrt(|s|^2 +
-        /// (v_s dt)^2), s the film's slip on the shape since the last commit, dt the step time
-        /// (setStepTime), v_s = slipVelocity. Viscous below v_s, mu f_n above.
+        /// (v_s dt)^2), s the film's slip on the shape since the step began and dt its time
+        /// (beginStep), v_s = slipVelocity. Viscous below v_s, mu f_n above.
         Regularised
     };
     struct Options {
