@@ -16,6 +16,8 @@ using bags::Vec3;
 using bagstest::evaluate;
 using bagstest::Evaluated;
 using bagstest::finiteDifferences;
+using bagstest::DifferencedContact;
+using bagstest::differenceContact;
 
 namespace {
 
@@ -400,13 +402,10 @@ std::pair<double, double> checkContactDerivatives(
             bags::RigidContact contact(mesh, allNodes(mesh), *s, o);
             EXPECT_TRUE(contact.isConservative());
             const Eigen::Matrix3Xd x = placeNodes(*s, kindOf(k), mesh, gaps, rng);
-            auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
-                contact.addEnergy(xx, acc);
-            };
-            const Evaluated ev = evaluate(add, x);
-            Eigen::VectorXd gFd;
-            Eigen::MatrixXd hFd;
-            finiteDifferences(add, x, 1e-8, gFd, hFd);
+            const DifferencedContact dc = differenceContact(contact, x, 1e-8);
+            const Evaluated& ev = dc.ev;
+            const Eigen::VectorXd& gFd = dc.gradFd;
+            const Eigen::MatrixXd& hFd = dc.hessFd;
             EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm()) << s->getName() << onset;
             EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm()) << s->getName() << onset;
             EXPECT_GT(ev.grad.norm(), minGrad) << s->getName();
@@ -582,13 +581,10 @@ TEST(RigidContact, StickTangentMatchesFiniteDifferencesOnPlane) {
     Eigen::Matrix3Xd x = x0;
     for (int i = 0; i < mesh.getNumNodes(); ++i)  // small drags: all stick
         x.col(i) += plane->getPose().linear() * Vec3(1e-4 * std::sin(i), 1e-4 * std::cos(i), 0);
-    auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
-        contact.addEnergy(xx, acc);
-    };
-    const Evaluated ev = evaluate(add, x);
-    Eigen::VectorXd gFd;
-    Eigen::MatrixXd hFd;
-    finiteDifferences(add, x, 1e-8, gFd, hFd);
+    const DifferencedContact dc = differenceContact(contact, x, 1e-8);
+    const Evaluated& ev = dc.ev;
+    const Eigen::VectorXd& gFd = dc.gradFd;
+    const Eigen::MatrixXd& hFd = dc.hessFd;
     // In stick the friction term is an energy: exact on a plane (FD error ~ 1e-7 relative).
     EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm());
     EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm());
@@ -609,13 +605,9 @@ TEST(RigidContact, SlipTangentIsExactForTangentialMotionOnPlane) {
     contact.commitStep(x);
     x(0, 4) += 0.8e-3;  // slip: k_t u = 0.8 N > mu f_n = 0.3 N
     x(1, 4) += 0.5e-3;
-    auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
-        contact.addEnergy(xx, acc);
-    };
-    const Evaluated ev = evaluate(add, x);
-    Eigen::VectorXd gFd;
-    Eigen::MatrixXd hFd;
-    finiteDifferences(add, x, 1e-9, gFd, hFd);
+    const DifferencedContact dc = differenceContact(contact, x, 1e-9);
+    const Evaluated& ev = dc.ev;
+    const Eigen::MatrixXd& hFd = dc.hessFd;
     const Eigen::Matrix<double, 3, 2> h = ev.hess.block<3, 2>(12, 12);
     const Eigen::Matrix<double, 3, 2> f = hFd.block<3, 2>(12, 12);
     // Tangent of the capped force ~ mu f_n / |d_t| ~ 320 N/m; FD error ~ 1e-6 relative.
@@ -723,9 +715,15 @@ TEST(RigidContact, RegularisedFrictionIsViscousBelowTheSlipVelocityAndCoulombAbo
             const double f = drag(v, dt);
             const double exact = -muN * v / std::sqrt(v * v + vs * vs);
             EXPECT_NEAR(f, exact, 1e-12 * muN) << "v " << v << " dt " << dt;
-            if (v <= 0.01 * vs) EXPECT_NEAR(f / v, -muN / vs, 1e-4 * muN / vs);  // viscous
-            if (v >= 20.0 * vs) EXPECT_NEAR(f, -muN, 2e-3 * muN);                  // Coulomb
-            if (v >= 100.0 * vs) EXPECT_NEAR(f, -muN, 1e-4 * muN);
+            if (v <= 0.01 * vs) {  // viscous
+                EXPECT_NEAR(f / v, -muN / vs, 1e-4 * muN / vs);
+            }
+            if (v >= 20.0 * vs) {  // Coulomb
+                EXPECT_NEAR(f, -muN, 2e-3 * muN);
+            }
+            if (v >= 100.0 * vs) {
+                EXPECT_NEAR(f, -muN, 1e-4 * muN);
+            }
         }
     }
     // The committed state keeps its step's force until the next step begins; that step's
@@ -917,13 +915,9 @@ TEST(TissueLayer, WrenchTangentsMatchFiniteDifferencesWithFriction) {
     Eigen::Matrix3Xd x = mesh.X;
     contact.commitStep(x);     // anchors where the nodes touch
     x.row(0).array() += 1e-6;  // a small tangential offset: stick
-    auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
-        contact.addEnergy(xx, acc);
-    };
-    const Evaluated ev = evaluate(add, x);
-    Eigen::VectorXd gFd;
-    Eigen::MatrixXd hFd;
-    finiteDifferences(add, x, 1e-9, gFd, hFd);
+    const DifferencedContact dc = differenceContact(contact, x, 1e-9);
+    const Evaluated& ev = dc.ev;
+    const Eigen::MatrixXd& hFd = dc.hessFd;
     EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm());
     // The wrench's node derivative is -(d grad / d x) summed into force and torque rows.
     const Eigen::MatrixXd D = contact.calcWrenchNodeDerivative(x);

@@ -81,4 +81,22 @@ inline void finiteDifferences(const std::function<void(const Eigen::Matrix3Xd&,
     }
 }
 
+/// A contact law at x and its central differences with step h [m]: the energy, gradient and
+/// Hessian the law assembles (ev) against the differences of its energy and gradient.
+struct DifferencedContact {
+    Evaluated ev;
+    Eigen::VectorXd gradFd;
+    Eigen::MatrixXd hessFd;
+};
+template <class Contact>
+DifferencedContact differenceContact(const Contact& contact, const Eigen::Matrix3Xd& x, double h) {
+    auto add = [&](const Eigen::Matrix3Xd& xx, bags::EnergyAccumulator& acc) {
+        contact.addEnergy(xx, acc);
+    };
+    DifferencedContact d;
+    d.ev = evaluate(add, x);
+    finiteDifferences(add, x, h, d.gradFd, d.hessFd);
+    return d;
+}
+
 }  // namespace bagstest
