@@ -287,6 +287,16 @@ TEST(ArrayScenario, GroupErrorsAreLocatedInTheirGroup) {
         << c.what();
 }
 
+TEST(ArrayScenario, TheGasInTheLinearisationIsOnByDefaultAndCanBeSwitchedOff) {
+    auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
+    EXPECT_TRUE(read(kBase).options.coupling.gasTangent);
+    EXPECT_FALSE(read(with("scheme: tangent-implicit, gas_tangent: false")).options.coupling.gasTangent);
+    const io::InputError e = readError(with("gas_tangent: maybe"));
+    EXPECT_EQ(e.getLine(), 16);
+    EXPECT_EQ(e.getKey(), "coupling.gas_tangent");
+    EXPECT_NE(e.getMessage().find("true or false"), std::string::npos) << e.what();
+}
+
 TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreLocated) {
     const io::PatientOnArrayScenario plain = read(kBase);
     EXPECT_FALSE(plain.options.coupling.adaptive);
