@@ -496,7 +496,6 @@ struct Airbag::Impl {
         for (size_t i = 0; i < V.size(); ++i)
             model->updGas(bagGases[b][i]).setMass(m * V[i] / Vsum, V[i]);
     }
-    // Adds dm [kg] to bag b's gas bodies in proportion to their volumes at x.
     // Gas [kg] the flows set let into bag b over dt from the current state (Airbag::calcGasInflow).
     double calcGasInflow(int b, double dt) const {
         double dm = massFlow[b] * dt;
@@ -564,6 +563,7 @@ struct Airbag::Impl {
         }
         return lin;
     }
+    // Adds dm [kg] to bag b's gas bodies in proportion to their volumes at x.
     void addBagGasMass(int b, double dm) {
         if (dm == 0.0) return;
         double Vsum = 0.0;

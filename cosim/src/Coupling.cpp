@@ -270,16 +270,13 @@ struct Coupling::Impl {
             try {
                 std::vector<int> shapes;
                 for (int i : linksOf[p]) shapes.push_back(links[i].shape);
-                if (options.gasTangent) {
-                    Participant::WrenchLinearisation lp =
-                        participants[p]->calcWrenchLinearisation(shapes);
-                    for (size_t k = 0; k < shapes.size(); ++k) {
-                        t[linksOf[p][k]] = lp.pose.at(k);
-                        g[linksOf[p][k]] = lp.gas.empty() ? GasDerivative(6, 0) : lp.gas.at(k);
-                    }
-                } else {
-                    const std::vector<Mat6> tp = participants[p]->calcWrenchTangents(shapes);
-                    for (size_t k = 0; k < shapes.size(); ++k) t[linksOf[p][k]] = tp.at(k);
+                const Participant::WrenchLinearisation lp =
+                    options.gasTangent
+                        ? participants[p]->calcWrenchLinearisation(shapes)
+                        : Participant::WrenchLinearisation{participants[p]->calcWrenchTangents(shapes), {}};
+                for (size_t k = 0; k < shapes.size(); ++k) {
+                    t[linksOf[p][k]] = lp.pose.at(k);
+                    g[linksOf[p][k]] = lp.gas.empty() ? GasDerivative(6, 0) : lp.gas.at(k);
                 }
             } catch (...) {
                 errors[p] = std::current_exception();

@@ -656,6 +656,7 @@ struct FillRun {
     int passes = 0;
     double depth = 0.0;  // [m] below touching, at the end
     double gasMass = 0.0;  // [kg] at the end
+    Eigen::Matrix<double, 6, Eigen::Dynamic> gasDerivative;  // the link's, at the end
 };
 
 FillRun fillUnderTheBlock(Scheme scheme, bool gasTangent, double flow, int steps, double dt = 0.01) {
@@ -672,6 +673,7 @@ FillRun fillUnderTheBlock(Scheme scheme, bool gasTangent, double flow, int steps
     }
     r.depth = run.touch.z() - run.block.getZ();
     r.gasMass = run.bag.getGasMass();
+    r.gasDerivative = run.c.getLinkGasDerivative(0);
     return r;
 }
 
@@ -693,6 +695,11 @@ TEST(BlockOnBag, TheGasTangentPredictsTheLoadOfABagBeingFilled) {
         worstOn = std::max(worstOn, on.miss[i]);
     }
     EXPECT_NEAR(on.gasMass, kGasMass + 20 * 0.01 * flow, 1e-12);
+    // The link carries the bag's d wrench / d gas mass (one bag: one column), and more gas
+    // pushes the block up; linearised in the poses only it carries none.
+    ASSERT_EQ(on.gasDerivative.cols(), 1);
+    EXPECT_GT(on.gasDerivative(5, 0), 0.0);
+    EXPECT_EQ(off.gasDerivative.cols(), 0);
     const FillRun offI = fillUnderTheBlock(Scheme::TangentImplicit, false, flow, 20);
     const FillRun onI = fillUnderTheBlock(Scheme::TangentImplicit, true, flow, 20);
     const FillRun fine = fillUnderTheBlock(Scheme::TangentImplicit, true, flow, 200, 0.001);
