@@ -12,59 +12,20 @@
 #include <fstream>
 #include <sstream>
 
+#include "ChannelCsv.h"
+
 namespace io {
 
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string trim(const std::string& s) {
-    const size_t b = s.find_first_not_of(" \t\r\"");
-    if (b == std::string::npos) return "";
-    const size_t e = s.find_last_not_of(" \t\r\"");
-    return s.substr(b, e - b + 1);
-}
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
-std::vector<std::string> splitCsv(const std::string& line) {
-    std::vector<std::string> cells;
-    std::string cell;
-    std::istringstream is(line);
-    while (std::getline(is, cell, ',')) cells.push_back(trim(cell));
-    if (!line.empty() && line.back() == ',') cells.push_back("");
-    return cells;
-}
-
-// "force_N" / "force [N]" / "force (N)" -> {"force", "N"}; no unit -> {name, ""}.
-std::pair<std::string, std::string> splitHeader(const std::string& h) {
-    for (const char open : {'[', '('}) {
-        const size_t p = h.find(open);
-        if (p != std::string::npos) {
-            const char close = open == '[' ? ']' : ')';
-            const size_t q = h.find(close, p);
-            return {trim(h.substr(0, p)), trim(h.substr(p + 1, q == std::string::npos ? q : q - p - 1))};
-        }
-    }
-    const size_t u = h.rfind('_');  // the unit follows the last '_': gas_mass_g
-    if (u == std::string::npos) return {trim(h), ""};
-    return {trim(h.substr(0, u)), trim(h.substr(u + 1))};
-}
-
-std::string listUnits(Dimension d) {
-    std::string s;
-    for (const UnitInfo& u : getUnits(d)) s += (s.empty() ? "" : ", ") + u.symbol;
-    return s;
-}
-
-std::string fmt(const char* f, double v) {
-    char b[64];
-    std::snprintf(b, sizeof b, f, v);
-    return b;
-}
+using csv::fmt;
+using csv::listUnits;
+using csv::lower;
+using csv::splitCsv;
+using csv::splitHeader;
+using csv::trim;
 
 std::string formatMass(double kg) { return fmt("%.4g", kg * 1e3) + " g"; }
 
@@ -395,15 +356,7 @@ std::vector<std::string> writeMeasuredData(const std::string& folder,
     const fs::path dir(folder);
     std::vector<std::string> names;
     auto write = [&](const std::string& name, const std::string& text) {
-        const fs::path f = dir / name;
-        const fs::path tmp = dir / (name + ".tmp");
-        {
-            std::ofstream o(tmp);
-            o << text;
-            if (!o.flush()) throw std::runtime_error(f.string() + ": write failed");
-        }
-        fs::rename(tmp, f);
-        names.push_back(name);
+        csv::writeFolderFile(dir, name, text, names);
     };
     write("scenario.yaml", scenarioText);
     std::ostringstream m;

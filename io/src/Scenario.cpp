@@ -118,10 +118,18 @@ std::string readInputFile(const std::string& path, std::uintmax_t maxBytes,
         const std::string reason = std::strerror(errno);
         throw InputError(path, 0, "", "cannot read the " + what + " (" + reason + ")");
     }
-    // Read at most one byte past the limit, so a file that grows while read still ends.
-    std::string text(static_cast<size_t>(maxBytes) + 1, '\0');
+    // Read at most one byte past the limit, so a file that grows while read still ends; the
+    // buffer starts at the file's size (not the limit: a 256 MiB limit would cost its zeroing).
+    const size_t limitBytes = static_cast<size_t>(maxBytes) + 1;
+    std::string text(ec ? limitBytes : std::min(limitBytes, static_cast<size_t>(size) + 1), '\0');
     in.read(&text[0], static_cast<std::streamsize>(text.size()));
-    text.resize(static_cast<size_t>(in.gcount()));
+    size_t got = static_cast<size_t>(in.gcount());
+    while (got == text.size() && text.size() < limitBytes) {  // it grew: read on
+        text.resize(std::min(limitBytes, 2 * text.size()));
+        in.read(&text[got], static_cast<std::streamsize>(text.size() - got));
+        got += static_cast<size_t>(in.gcount());
+    }
+    text.resize(got);
     if (text.size() > maxBytes)
         throw InputError(path, 0, "", "grew past the limit while read; " + limit);
     return text;
