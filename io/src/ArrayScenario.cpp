@@ -120,7 +120,7 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
                      "contact_penalty", "body_friction", "friction_law", "slip_velocity",
-                     "body_tissue", "model", "calibration"});
+                     "body_tissue", "model", "calibration", "bending_stiffness"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -167,6 +167,9 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
                  "below the body's sliding speeds, e.g. 2 mm/s as the bed board's");
     // The seed's Yeoh fit of its tensile test, 0.2 mm film (scenarios/seed-load-test.yaml).
     b.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    // The film's bending stiffness (docs/materials.md#bending-stiffness-of-the-film): what
+    // gives slack film a stiffness of its own (docs/cosim.md#slack-bags-and-the-films-bending).
+    b.bendingStiffness = readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness, 0.0);
     b.threads = 1;  // bags run in parallel, one per thread
     readReducedBagKeys(s, sc.options, fileName);
     if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&

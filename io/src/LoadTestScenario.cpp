@@ -473,18 +473,10 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
         if (yarns.isOn())  // both moduli 0: the isotropic film, as without the key
             o.material = std::make_shared<bags::FabricMaterial>(o.material->clone(), yarns);
     }
-    // The film's bending stiffness: a moment, `plate` (the homogeneous film's plate value from
-    // the material and thickness, also when the key is absent) or 0 (off).
-    const std::string bending = getRaw(s, "bending_stiffness");
-    if (bending.empty() || bending == "plate") {
-        o.bendingStiffness = bags::calcPlateBendingStiffness(*o.material, o.thickness);
-    } else if (bending == "0") {
-        o.bendingStiffness = 0.0;
-    } else {
-        o.bendingStiffness = s.getQuantity("bending_stiffness", D::Moment);
-        checkRange(s, "bending_stiffness", o.bendingStiffness, 0, true, 1.0, false, "N m",
-                   "or plate: the film's plate value; 0 switches bending off");
-    }
+    // The film's bending stiffness: the plate value also when the key is absent.
+    o.bendingStiffness =
+        readBendingStiffness(s, "bending_stiffness", *o.material, o.thickness,
+                             bags::calcPlateBendingStiffness(*o.material, o.thickness));
 }
 
 // -------------------------------------------------------------------------------------- gas
@@ -786,6 +778,19 @@ void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
 }
 
 }  // namespace
+
+double readBendingStiffness(const ScenarioNode& s, const std::string& key,
+                            const bags::MembraneMaterial& material, double thickness,
+                            double absent) {
+    const std::string raw = getRaw(s, key);
+    if (raw.empty()) return absent;
+    if (raw == "plate") return bags::calcPlateBendingStiffness(material, thickness);
+    if (raw == "0") return 0.0;
+    const double stiffness = s.getQuantity(key, D::Moment);
+    checkRange(s, key, stiffness, 0, true, 1.0, false, "N m",
+               "or plate: the film's plate value; 0 switches bending off");
+    return stiffness;
+}
 
 void readTissueLayer(const ScenarioNode& s, bags::RigidContact::Options& c) {
     s.checkKeys({"thickness", "modulus"}, {});

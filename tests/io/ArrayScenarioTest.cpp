@@ -287,6 +287,27 @@ TEST(ArrayScenario, GroupErrorsAreLocatedInTheirGroup) {
         << c.what();
 }
 
+TEST(ArrayScenario, TheFilmsBendingStiffnessIsAMomentThePlateValueOrOff) {
+    auto with = [](const std::string& keys) {
+        std::string t = kBase;
+        t.replace(t.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm" + keys + "}");
+        return t;
+    };
+    // The seed's film, 0.2 mm: E t^3 / (12 (1 - nu^2)) = 1.685e-4 N m (docs/materials.md).
+    const double plate = 1.685e-4;
+    EXPECT_EQ(read(kBase).options.bag.bendingStiffness, 0.0);
+    EXPECT_NEAR(read(with(", bending_stiffness: plate")).options.bag.bendingStiffness, plate,
+                1e-3 * plate);
+    EXPECT_EQ(read(with(", bending_stiffness: 0")).options.bag.bendingStiffness, 0.0);
+    EXPECT_DOUBLE_EQ(read(with(", bending_stiffness: 0.05 N mm")).options.bag.bendingStiffness,
+                     5e-5);
+    for (const char* bad : {"stiff", "-1 N mm", "2 N m", "5 mm"}) {
+        const io::InputError e = readError(with(std::string(", bending_stiffness: ") + bad));
+        EXPECT_EQ(e.getLine(), 3) << bad;
+        EXPECT_EQ(e.getKey(), "bag.bending_stiffness") << bad;
+    }
+}
+
 TEST(ArrayScenario, TheGasInTheLinearisationIsOnByDefaultAndCanBeSwitchedOff) {
     auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
     EXPECT_TRUE(read(kBase).options.coupling.gasTangent);
