@@ -1,4 +1,5 @@
 // Reading the patient-on-array scenario kind.
+#include <bags/Bending.h>
 #include <bags/MaterialFit.h>
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayScenario.h>
@@ -167,9 +168,12 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
                  "below the body's sliding speeds, e.g. 2 mm/s as the bed board's");
     // The seed's Yeoh fit of its tensile test, 0.2 mm film (scenarios/seed-load-test.yaml).
     b.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
-    // The film's bending stiffness (docs/materials.md#bending-stiffness-of-the-film): what
-    // gives slack film a stiffness of its own (docs/cosim.md#slack-bags-and-the-films-bending).
-    b.bendingStiffness = readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness, 0.0);
+    // The film's bending stiffness (docs/materials.md#bending-stiffness-of-the-film), the plate
+    // value unless set, as in the load test: it gives slack film a stiffness of its own
+    // (docs/cosim.md#slack-film-and-the-films-bending).
+    b.bendingStiffness =
+        readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness,
+                             bags::calcPlateBendingStiffness(*b.material, b.thickness));
     b.threads = 1;  // bags run in parallel, one per thread
     readReducedBagKeys(s, sc.options, fileName);
     if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&
