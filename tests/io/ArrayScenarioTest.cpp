@@ -1,6 +1,8 @@
 // The patient-on-array scenario kind (io::readPatientOnArrayScenario): the shipped scenarios
 // read into SI, and located errors (file, line, key, what is valid) for overlapping bags, a
 // patient off the array, gas commands that name no bags or mix their kinds, and wrong units.
+#include <cosim/BagParticipant.h>
+#include <cosim/PatientOnArray.h>
 #include <gtest/gtest.h>
 #include <io/ArrayScenario.h>
 #include <io/InputError.h>
@@ -305,6 +307,15 @@ TEST(ArrayScenario, TheFilmsBendingStiffnessIsAMomentThePlateValueOrOff) {
         const io::InputError e = readError(with(std::string(", bending_stiffness: ") + bad));
         EXPECT_EQ(e.getLine(), 3) << bad;
         EXPECT_EQ(e.getKey(), "bag.bending_stiffness") << bad;
+    }
+    // The value reaches every coupled bag the run builds.
+    const io::PatientOnArrayScenario sc = read(kBase);
+    const cosim::PatientOnArray poa(sc.patient, sc.options);
+    ASSERT_GT(poa.getBagIndices().size(), 0u);
+    for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
+        const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa.getBag(int(b)));
+        ASSERT_NE(fe, nullptr);
+        EXPECT_EQ(fe->getAirbag().getSpec().bendingStiffness, sc.options.bag.bendingStiffness) << b;
     }
 }
 
