@@ -9,6 +9,7 @@
 #include <io/InputError.h>
 #include <io/LoadTestScenario.h>
 #include <io/MeasuredData.h>
+#include <io/PatientMeasuredData.h>
 #include <io/Units.h>
 
 #include <chrono>
@@ -27,6 +28,7 @@
 #include "Commands.h"
 #include "DiagnoseShared.h"
 #include "Interrupt.h"
+#include "PatientCoSim.h"
 
 namespace bagsim::app {
 
@@ -62,7 +64,14 @@ const char* kHelp =
     "                      viscoelasticity, fabric-anisotropy, soft-tissue;\n"
     "                      load-cell-gain is kept out of it on purpose)\n"
     "  --threads N         simulations run at once (default 1)\n"
+    "  --windows N         a patient's data: the time windows the folds leave out (default 3)\n"
     "  --quiet             print only the verdict\n"
+    "\n"
+    "A patient's data (manifest protocol kind: patient-on-array) are compared with a\n"
+    "co-simulation of their scenario: the mat by body region, the tilt, each bag's sensor,\n"
+    "by time window; the candidates (default bag-pressure-sensor and mat-gain, those the data\n"
+    "have channels for; also film-friction, gas-mass-bias, soft-tissue, each trial value a\n"
+    "co-simulation) are fitted on all windows but one and judged on the one left out.\n"
     "\n"
     "exit status: 0 diagnosed, 1 a simulation failed, 2 bad input, 130/143 interrupted.\n";
 
@@ -71,6 +80,7 @@ struct Args {
     bool force = false, whereOnly = false, quiet = false;
     std::vector<std::string> candidates;
     int threads = 1;
+    int windows = 3;  ///< a patient's data: the time windows of the folds
 };
 
 Args parseArgs(int argc, char** argv) {
@@ -94,16 +104,17 @@ Args parseArgs(int argc, char** argv) {
         } else if (arg == "--candidates") {
             std::istringstream is(value());
             std::string e;
-            while (std::getline(is, e, ',')) {
-                if (!diagnose::findEffect(e))
-                    throw UsageError("--candidates: '" + e + "' is not an effect of the library; "
-                                     "valid: " + diagnose::listEffectNames());
-                a.candidates.push_back(e);
-            }
+            while (std::getline(is, e, ',')) a.candidates.push_back(e);
+        } else if (arg == "--windows") {
+            const std::string v = value();
+            if (v.empty() || v.find_first_not_of("0123456789") != std::string::npos ||
+                std::stoi(v) < 2 || std::stoi(v) > 20)
+                throw UsageError("--windows '" + v + "' is not valid; valid: 2 to 20");
+            a.windows = std::stoi(v);
         } else
             throw UsageError("unknown option '" + arg +
                              "'; valid: --measured, --out, --force, --where-only, --candidates, "
-                             "--threads, --quiet, --help");
+                             "--threads, --windows, --quiet, --help");
     }
     if (a.measured.empty()) throw UsageError("--measured DIR is required");
     if (a.out.empty()) {
@@ -181,6 +192,17 @@ void printStiffness(const diagnose::StiffnessComparison& k, std::ostream& out) {
 }
 
 int run(const Args& a) {
+    if (io::readMeasuredKind(a.measured) != "") {
+        PatientDiagnoseArgs p;
+        p.measured = a.measured, p.out = a.out, p.commandLine = a.commandLine;
+        p.force = a.force, p.whereOnly = a.whereOnly, p.quiet = a.quiet;
+        p.candidates = a.candidates, p.windows = a.windows;
+        return runPatientDiagnosis(p);
+    }
+    for (const std::string& e : a.candidates)
+        if (!diagnose::findEffect(e))
+            throw UsageError("--candidates: '" + e + "' is not an effect of the library; valid: " +
+                             diagnose::listEffectNames());
     const auto start = std::chrono::steady_clock::now();
     const diagnose::MeasuredData data = io::readMeasuredData(a.measured);
     io::LoadTestScenario sc = io::readMeasuredScenario(data);
@@ -208,15 +230,7 @@ int run(const Args& a) {
     info.scenarioFile = data.scenarioFile;
     info.program = std::string("bagsim ") + bagsim::kVersion;
     info.commandLine = a.commandLine;
-    auto write = [&](const std::string& name, const std::string& text) {
-        const fs::path f = out / name, tmp = out / (name + ".tmp");
-        {
-            std::ofstream o(tmp);
-            o << text;
-            if (!o.flush()) throw std::runtime_error("cannot write " + f.string());
-        }
-        fs::rename(tmp, f);
-    };
+    auto write = [&](const std::string& name, const std::string& text) { writeOutputFile(out, name, text); };
     // A measured stiffness curve: its masses in turn, let down from the largest as in the
     // seed's test, loading only. A curve that stops or gives no stiffness is a finding, not a
     // failure of the diagnosis.

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <iostream>
 
 #include "Interrupt.h"
@@ -99,6 +100,16 @@ void claimOutputFolder(const fs::path& dir, bool force, const std::vector<std::s
     fs::create_directories(dir, ec);
     if (!fs::is_directory(dir, ec))
         throw io::InputError(dir.string(), 0, "", "cannot create the output folder (" + ec.message() + ")");
+}
+
+void writeOutputFile(const fs::path& dir, const std::string& name, const std::string& text) {
+    const fs::path f = dir / name, tmp = dir / (name + ".tmp");
+    {
+        std::ofstream o(tmp);
+        o << text;
+        if (!o.flush()) throw std::runtime_error("cannot write " + f.string());
+    }
+    fs::rename(tmp, f);
 }
 
 }  // namespace bagsim::app

@@ -46,3 +46,11 @@ void claimOutputFolder(const std::filesystem::path& dir, bool force,
                        const std::vector<std::string>& owned);
 
 }  // namespace bagsim::app
+
+namespace bagsim::app {
+
+/// Writes `name` into the output folder through a temporary file renamed into place.
+/// @throws std::runtime_error if it cannot be written.
+void writeOutputFile(const std::filesystem::path& dir, const std::string& name, const std::string& text);
+
+}  // namespace bagsim::app

@@ -4,14 +4,19 @@
 // parameters go only to the label file.
 #include <bags/LoadTest.h>
 #include <diagnose/Effects.h>
+#include <diagnose/PatientDiagnosis.h>
 #include <diagnose/Synthesis.h>
+#include <io/ArrayScenario.h>
 #include <io/InputError.h>
 #include <io/LoadTestScenario.h>
 #include <io/MeasuredData.h>
+#include <io/PatientMeasuredData.h>
 #include <io/Scenario.h>
 #include <io/Units.h>
 
+#include <chrono>
 #include <cmath>
+#include <functional>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -25,6 +30,7 @@
 #include "Commands.h"
 #include "DiagnoseShared.h"
 #include "Interrupt.h"
+#include "PatientCoSim.h"
 
 namespace bagsim::app {
 
@@ -79,6 +85,20 @@ const char* kHelp =
     "  --force              replace earlier output of this command\n"
     "  --quiet              print only the summary\n"
     "\n"
+    "\n"
+    "A patient-on-array scenario (docs/diagnosis.md#a-patient-on-the-array) gives a patient's\n"
+    "data instead: a pressure mat, a tilt sensor (pelvis, thorax) and every simulated bag's\n"
+    "pressure sensor, from a truth co-simulation at half the scenario's macro step (kept in\n"
+    "LABEL.truth-run/, beside the label). Its effects:\n"
+    "  bag-pressure-sensor  lag [0.1 s], offset [0.5 kPa] (the bags' sensors)\n"
+    "  mat-gain             gain [0.1] (the mat reads the pressure times 1 + gain)\n"
+    "  film-friction        friction [0.4] (bag.body_friction)\n"
+    "  gas-mass-bias        offset [0.2 g] (the bags hold array.gas_mass plus this)\n"
+    "  soft-tissue          thickness [20 mm], modulus [30 kPa] (bag.body_tissue)\n"
+    "  --noise mat=0.5mmHg, tilt=0.1deg, pressure=0.05kPa (the defaults), or none;\n"
+    "  --sample-interval T (tilt and bag sensors, default 0.02 s), --mat-interval T (the\n"
+    "  mat's frames, default 0.1 s).\n"
+    "\n"
     "exit status: 0 written, 1 the truth run failed, 2 bad input, 130/143 interrupted.\n";
 
 /// The truth's imperfection seed is the scenario's plus this.
@@ -88,7 +108,8 @@ struct Args {
     std::string scenario, effect, out, labelOut;
     std::vector<std::string> params, noise;
     std::uint64_t seed = 1;
-    std::string sampleInterval = "0.5 s";
+    std::string sampleInterval;  ///< "" the kind's default (0.5 s rig, 0.02 s patient)
+    std::string matInterval = "0.1 s";
     bool force = false, quiet = false;
 };
 
@@ -109,6 +130,7 @@ Args parseArgs(int argc, char** argv) {
                 throw UsageError("--seed '" + v + "' is not valid; valid: a whole number >= 0");
             a.seed = s;
         } else if (arg == "--sample-interval") a.sampleInterval = value();
+        else if (arg == "--mat-interval") a.matInterval = value();
         else if (arg == "--out") a.out = value();
         else if (arg == "--label-out") a.labelOut = value();
         else if (arg == "--force") a.force = true;
@@ -116,11 +138,12 @@ Args parseArgs(int argc, char** argv) {
         else
             throw UsageError("unknown option '" + arg +
                              "'; valid: --scenario, --effect, --param, --noise, --seed, "
-                             "--sample-interval, --out, --label-out, --force, --quiet, --help");
+                             "--sample-interval, --mat-interval, --out, --label-out, --force, --quiet, --help");
     }
     if (a.scenario.empty()) throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
     if (a.effect.empty())
-        throw UsageError("--effect is required; valid: none, " + diagnose::listEffectNames());
+        throw UsageError("--effect is required; valid: none, " + diagnose::listEffectNames() +
+                         " (a patient-on-array scenario: " + diagnose::listPatientEffectNames() + ")");
     if (a.out.empty()) throw UsageError("--out DIR is required");
     if (a.labelOut.empty()) throw UsageError("--label-out FILE is required");
     if (fs::exists(a.labelOut) && !a.force)
@@ -213,26 +236,26 @@ std::vector<std::vector<double>> parseParams(const std::vector<const diagnose::E
     return v;
 }
 
-void parseNoise(const std::vector<std::string>& given, diagnose::SynthesisOptions& o) {
+// One channel's noise option: its name, dimension and where its value goes [SI].
+struct NoiseChannel {
+    const char* name;
+    io::Dimension d;
+    double* value;
+};
+
+void parseNoise(const std::vector<std::string>& given, const std::vector<NoiseChannel>& chans) {
+    std::string names, example;
+    for (const NoiseChannel& c : chans) names += (names.empty() ? "" : ", ") + std::string(c.name);
     for (const std::string& g : given) {
         if (g == "none") {
-            o.displacementNoise = o.forceNoise = o.pressureNoise = o.massNoise = 0.0;
+            for (const NoiseChannel& c : chans) *c.value = 0.0;
             continue;
         }
         const size_t eq = g.find('=');
         const std::string ch = g.substr(0, eq);
         const std::string text = eq == std::string::npos ? "" : g.substr(eq + 1);
-        struct Ch {
-            const char* name;
-            io::Dimension d;
-            double* value;
-        };
-        const Ch chans[] = {{"displacement", io::Dimension::Length, &o.displacementNoise},
-                            {"force", io::Dimension::Force, &o.forceNoise},
-                            {"pressure", io::Dimension::Pressure, &o.pressureNoise},
-                            {"mass", io::Dimension::Mass, &o.massNoise}};
         bool found = false;
-        for (const Ch& c : chans)
+        for (const NoiseChannel& c : chans)
             if (ch == c.name) {
                 found = true;
                 try {
@@ -244,35 +267,160 @@ void parseNoise(const std::vector<std::string>& given, diagnose::SynthesisOption
             }
         if (!found || eq == std::string::npos)
             throw UsageError("--noise '" + g +
-                             "' is not valid; valid: none, or CHANNEL=VALUE with CHANNEL one of "
-                             "displacement, force, pressure, mass (e.g. force=0.01N)");
+                             "' is not valid; valid: none, or CHANNEL=VALUE with CHANNEL one of " +
+                             names + " (e.g. " + chans[0].name + "=...)");
     }
 }
 
-int run(const Args& a) {
-    // The effects and their parameters.
+void parseNoise(const std::vector<std::string>& given, diagnose::SynthesisOptions& o) {
+    parseNoise(given, {{"displacement", io::Dimension::Length, &o.displacementNoise},
+                       {"force", io::Dimension::Force, &o.forceNoise},
+                       {"pressure", io::Dimension::Pressure, &o.pressureNoise},
+                       {"mass", io::Dimension::Mass, &o.massNoise}});
+}
+
+// The effects named by --effect (none: empty), from `find`'s library.
+std::vector<const diagnose::Effect*> parseEffects(
+    const Args& a, const std::function<const diagnose::Effect*(const std::string&)>& find,
+    const std::string& valid) {
     std::vector<const diagnose::Effect*> effects;
     if (a.effect != "none") {
         std::istringstream is(a.effect);
         std::string name;
         while (std::getline(is, name, ',')) {
-            const diagnose::Effect* e = diagnose::findEffect(name);
-            if (!e)
-                throw UsageError("--effect '" + name + "' is not known; valid: none, " +
-                                 diagnose::listEffectNames());
+            const diagnose::Effect* e = find(name);
+            if (!e) throw UsageError("--effect '" + name + "' is not known; valid: none, " + valid);
             for (const diagnose::Effect* f : effects)
                 if (f == e) throw UsageError("--effect names '" + name + "' twice");
             effects.push_back(e);
         }
     }
     if (effects.empty() && !a.params.empty()) throw UsageError("--effect none takes no --param");
+    return effects;
+}
+
+double parseInterval(const std::string& option, const std::string& text) {
+    try {
+        const double v = io::parseQuantity(text, io::Dimension::Time);
+        if (!(v > 0.0)) throw std::invalid_argument("must be greater than 0 s");
+        return v;
+    } catch (const std::exception& e) {
+        throw UsageError(option + " '" + text + "': " + e.what());
+    }
+}
+
+// Writes the label file (through a temporary file): the effect, its parameters and scenario
+// keys, then `lines` (noise, seed, sampling, model form, scenario).
+void writeLabel(const Args& a, const std::vector<const diagnose::Effect*>& effects,
+                const std::vector<std::string>& shownParams, const std::string& lines) {
+    std::ostringstream label;
+    label << "# Label of the synthetic measured data in " << a.out
+          << " (bagsim synth-measurement): what the truth run had that the data do not say.\n"
+          << "effect: " << a.effect << "\n";
+    if (!effects.empty()) {
+        label << "parameters:\n";
+        for (const std::string& s : shownParams) label << "  " << s << "\n";
+        label << "scenario_keys: [";
+        bool first = true;
+        for (const diagnose::Effect* e : effects)
+            for (const auto& p : e->parameters) {
+                label << (first ? "" : ", ") << p.scenarioKey;
+                first = false;
+            }
+        label << "]\n";
+    }
+    label << lines;
+    const std::string tmp = a.labelOut + ".tmp";
+    std::ofstream f(tmp);
+    f << label.str();
+    if (!f.flush()) throw std::runtime_error(a.labelOut + ": cannot write");
+    f.close();
+    fs::rename(tmp, a.labelOut);
+}
+
+// A patient-on-array scenario: the truth co-simulation and the patient's channels.
+int runPatient(const Args& a, const io::ScenarioFile& file) {
+    const std::vector<const diagnose::Effect*> effects =
+        parseEffects(a, diagnose::findPatientEffect, diagnose::listPatientEffectNames());
+    std::vector<std::string> shownParams;
+    const std::vector<std::vector<double>> values = parseParams(effects, a.params, shownParams);
+    diagnose::PatientSynthesisOptions so;
+    parseNoise(a.noise, {{"mat", io::Dimension::Pressure, &so.matNoise},
+                         {"tilt", io::Dimension::Angle, &so.tiltNoise},
+                         {"pressure", io::Dimension::Pressure, &so.pressureNoise}});
+    so.seed = a.seed;
+    so.sampleInterval = parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.02 s" : a.sampleInterval);
+    so.matInterval = parseInterval("--mat-interval", a.matInterval);
+
+    const io::PatientOnArrayScenario sc = io::readPatientOnArrayScenario(file);
+    diagnose::PatientInstruments inst;
+    io::ScenarioFile truth = file;
+    for (size_t i = 0; i < effects.size(); ++i) {
+        try {
+            if (effects[i]->changesTheBag) {
+                for (const auto& [key, value] :
+                     diagnose::getPatientEffectOverrides(*effects[i], values[i], sc.options.layout.gasMass))
+                    truth.applyOverride(key, value);
+            } else {
+                diagnose::applyPatientInstrumentEffect(*effects[i], values[i], inst);
+            }
+        } catch (const std::invalid_argument& e) {
+            throw UsageError(std::string("--param: ") + e.what());
+        }
+    }
+    const std::string half = formatHalfMacroStep(sc);
+    truth.applyOverride("coupling.macro_step", half);
+    const std::string modelForm = "macro step " + half + " (the scenario's " +
+                                  io::formatSignificant(sc.options.coupling.macroStep, "ms") + ")";
+    const fs::path out(a.out);
+    claimOutputFolder(out, a.force,
+                      {io::kMeasuredManifest, "scenario.yaml", "mat.csv", "tilt.csv", "bag*-pressure.csv"});
+    const std::string truthDir = a.labelOut + ".truth-run";
+    if (!a.quiet)
+        std::cerr << "bagsim synth-measurement: truth co-simulation of " << a.scenario << " ("
+                  << fmt("%g s", sc.getEndTime()) << ", " << modelForm << ") in " << truthDir << "\n";
+    const auto start = std::chrono::steady_clock::now();
+    const diagnose::PatientChannels run = runCoSimulation(truth, truthDir);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    diagnose::PatientMeasurement data;
+    data.channels = diagnose::synthesizePatientChannels(run, inst, so);
+    data.protocol.settleTime = sc.settleTime;
+    data.protocol.duration = sc.duration;
+    data.description = "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
+    io::writePatientMeasuredData(out.string(), data, file.getText(),
+                                 "# Measured data of a patient on the array (docs/measured-data.md), "
+                                 "synthesised by\n# bagsim synth-measurement from a truth "
+                                 "co-simulation of scenario.yaml.\n");
+    writeLabel(a, effects, shownParams,
+               "noise: {mat: " + fmt("%g", so.matNoise / 133.322387415) + " mmHg, tilt: " +
+                   fmt("%g", so.tiltNoise * 180.0 / 3.14159265358979323846) + " deg, pressure: " +
+                   fmt("%g", so.pressureNoise * 1e-3) + " kPa}\nseed: " + std::to_string(a.seed) +
+                   "\nsample_interval: " + fmt("%g", so.sampleInterval) + " s\nmat_interval: " +
+                   fmt("%g", so.matInterval) + " s\nmodel_form: \"" + modelForm +
+                   "\"\ntruth_run: " + truthDir + "\nscenario: " + a.scenario + "\n");
+    std::cout << "measured data in " << a.out << "/: " << data.channels.mat.time.size()
+              << " mat frames, " << data.channels.tilt.time.size() << " tilt samples, "
+              << data.channels.bags.size() << " bag sensors (truth co-simulation "
+              << fmt("%.1f", seconds) << " s); label in " << a.labelOut << "\n";
+    return 0;
+}
+
+int run(const Args& a) {
+    {
+        const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
+        if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) return runPatient(a, file);
+    }
+    // The effects and their parameters.
+    const std::vector<const diagnose::Effect*> effects =
+        parseEffects(a, diagnose::findEffect, diagnose::listEffectNames());
     std::vector<std::string> shownParams;
     const std::vector<std::vector<double>> values = parseParams(effects, a.params, shownParams);
     diagnose::SynthesisOptions so;
     parseNoise(a.noise, so);
     so.seed = a.seed;
+    so.sampleInterval = parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.5 s" : a.sampleInterval);
     try {
-        so.sampleInterval = io::parseQuantity(a.sampleInterval, io::Dimension::Time);
         so.validate();
     } catch (const std::exception& e) {
         throw UsageError("--sample-interval '" + a.sampleInterval + "': " + e.what());
@@ -342,37 +490,15 @@ int run(const Args& a) {
                           "# Measured data of the seed's rig (docs/measured-data.md), synthesised by\n"
                           "# bagsim synth-measurement from a truth simulation of scenario.yaml.\n");
 
-    std::ostringstream label;
-    label << "# Label of the synthetic measured data in " << a.out
-          << " (bagsim synth-measurement): what the truth run had that the data do not say.\n"
-          << "effect: " << a.effect << "\n";
-    if (!effects.empty()) {
-        label << "parameters:\n";
-        for (const std::string& s : shownParams) label << "  " << s << "\n";
-        label << "scenario_keys: [";
-        bool first = true;
-        for (const diagnose::Effect* e : effects)
-            for (const auto& p : e->parameters) {
-                label << (first ? "" : ", ") << p.scenarioKey;
-                first = false;
-            }
-        label << "]\n";
-    }
-    label << "noise: {displacement: " << fmt("%g", so.displacementNoise * 1e3) << " mm, force: "
+    std::ostringstream lines;
+    lines << "noise: {displacement: " << fmt("%g", so.displacementNoise * 1e3) << " mm, force: "
           << fmt("%g", so.forceNoise) << " N, pressure: " << fmt("%g", so.pressureNoise * 1e-3)
           << " kPa, mass: " << fmt("%g", so.massNoise * 1e3) << " g}\n"
           << "seed: " << a.seed << "\n"
           << "sample_interval: " << fmt("%g", so.sampleInterval) << " s\n"
           << "model_form: \"" << modelForm << "\"\n"
           << "scenario: " << a.scenario << "\n";
-    {
-        const std::string tmp = a.labelOut + ".tmp";
-        std::ofstream f(tmp);
-        f << label.str();
-        if (!f.flush()) throw std::runtime_error(a.labelOut + ": cannot write");
-        f.close();
-        fs::rename(tmp, a.labelOut);
-    }
+    writeLabel(a, effects, shownParams, lines.str());
     size_t samples = 0;
     for (const auto& t : data.tests) samples += t.time.size();
     std::cout << "measured data in " << a.out << "/: " << data.tests.size() << " tests, "

@@ -1,4 +1,5 @@
 #include <diagnose/Diagnosis.h>
+#include <diagnose/Signatures.h>
 
 #include <algorithm>
 #include <cmath>
@@ -27,73 +28,6 @@ struct Branch {
         d.push_back(di), f.push_back(fi), p.push_back(pi);
     }
 };
-
-// y(x) clamped to the end values beyond the range (for a record's own time base).
-double interpolateClamped(const std::vector<double>& x, const std::vector<double>& y, double xq) {
-    if (xq <= x.front()) return y.front();
-    if (xq >= x.back()) return y.back();
-    return interpolate(x, y, xq);
-}
-
-double mean(const std::vector<double>& v) {
-    return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
-}
-
-// Sensor noise from second differences: for white noise of sd s, y[i+1] - 2 y[i] + y[i-1] has
-// sd sqrt(6) s; a smooth signal sampled finely adds little, and the median of their sizes
-// ignores the few samples at a kink (the turning point). Appends the second differences.
-void addSecondDifferences(const std::vector<double>& y, std::vector<double>& dd) {
-    for (size_t i = 1; i + 1 < y.size(); ++i) dd.push_back(std::fabs(y[i + 1] - 2.0 * y[i] + y[i - 1]));
-}
-
-double calcNoise(std::vector<double> dd) {
-    if (dd.empty()) return 0.0;
-    std::nth_element(dd.begin(), dd.begin() + dd.size() / 2, dd.end());
-    // median |N(0, 1)| = 0.6745
-    return dd[dd.size() / 2] / (0.6745 * std::sqrt(6.0));
-}
-
-// Cross-correlation lag [s]: the shift of the simulated series that best matches the
-// measured one (measured behind simulated > 0), on a uniform resampling, with a parabolic
-// refinement of the peak. Also returns the correlation there.
-std::pair<double, double> calcLag(const std::vector<double>& t, const std::vector<double>& m,
-                                  const std::vector<double>& s, double maxLag) {
-    if (t.size() < 8) return {kNaN, kNaN};
-    std::vector<double> dts;
-    for (size_t i = 1; i < t.size(); ++i) dts.push_back(t[i] - t[i - 1]);
-    std::nth_element(dts.begin(), dts.begin() + dts.size() / 2, dts.end());
-    const double dt = dts[dts.size() / 2];
-    if (!(dt > 0.0)) return {kNaN, kNaN};
-    const long n = static_cast<long>((t.back() - t.front()) / dt) + 1;
-    std::vector<double> a(n), b(n);
-    for (long i = 0; i < n; ++i) {
-        const double ti = t.front() + i * dt;
-        a[i] = interpolateClamped(t, m, ti);
-        b[i] = interpolateClamped(t, s, ti);
-    }
-    const double ma = mean(a), mb = mean(b);
-    for (double& v : a) v -= ma;
-    for (double& v : b) v -= mb;
-    const long K = std::min<long>(static_cast<long>(maxLag / dt), n / 4);
-    std::vector<double> c(2 * K + 1, -2.0);
-    for (long k = -K; k <= K; ++k) {
-        double sab = 0.0, saa = 0.0, sbb = 0.0;
-        for (long i = std::max(0L, k); i < std::min(n, n + k); ++i) {
-            sab += a[i] * b[i - k];
-            saa += a[i] * a[i];
-            sbb += b[i - k] * b[i - k];
-        }
-        c[k + K] = saa > 0.0 && sbb > 0.0 ? sab / std::sqrt(saa * sbb) : -2.0;
-    }
-    const long best = std::max_element(c.begin(), c.end()) - c.begin();
-    double shift = double(best - K);
-    if (best > 0 && best < 2 * K) {
-        const double y0 = c[best - 1], y1 = c[best], y2 = c[best + 1];
-        const double den = y0 - 2.0 * y1 + y2;
-        if (den < 0.0) shift += 0.5 * (y0 - y2) / den;
-    }
-    return {shift * dt, c[best]};
-}
 
 }  // namespace
 
@@ -244,27 +178,10 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             }
 
             // Signatures of this test.
-            Signature s;
-            s.channel = name;
+            Signature s = calcSeriesSignature(name, ch.time, ch.measured, ch.simulated, o.maxLag);
             s.test = t.test;
             s.gasMass = t.gasMass;
-            std::vector<double> res(ch.measured.size());
-            for (size_t i = 0; i < res.size(); ++i) res[i] = ch.measured[i] - ch.simulated[i];
-            s.bias = mean(res);
-            const double ms = mean(ch.simulated), mm = mean(ch.measured), mt = mean(ch.time);
-            double sss = 0.0, ssm = 0.0, stt = 0.0, str = 0.0;
-            for (size_t i = 0; i < res.size(); ++i) {
-                sss += (ch.simulated[i] - ms) * (ch.simulated[i] - ms);
-                ssm += (ch.simulated[i] - ms) * (ch.measured[i] - mm);
-                stt += (ch.time[i] - mt) * (ch.time[i] - mt);
-                str += (ch.time[i] - mt) * (res[i] - s.bias);
-            }
-            s.scale = sss > 0.0 ? ssm / sss - 1.0 : kNaN;
-            s.drift = stt > 0.0 ? str / stt : kNaN;
-            const auto [lag, corr] = calcLag(ch.time, ch.measured, ch.simulated, o.maxLag);
-            s.lag = lag;
-            s.lagCorrelation = corr;
-            for (size_t i = 1; i < res.size(); ++i) {
+            for (size_t i = 1; i < ch.measured.size(); ++i) {
                 const double dd = ch.displacement[i] - ch.displacement[i - 1];
                 s.loopAreaMeasured += 0.5 * (ch.measured[i] + ch.measured[i - 1]) * dd;
                 s.loopAreaSimulated += 0.5 * (ch.simulated[i] + ch.simulated[i - 1]) * dd;
@@ -283,20 +200,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         r.channels.push_back(cs);
         if (kind != ChannelKind::Mass && cs.range > 0.0)
             nrmse2.push_back(std::pow(cs.rmse / cs.range, 2));
-        for (const std::string& g : order) {
-            const std::vector<double>& v = regimes[g];
-            RegimeStats st;
-            st.channel = name;
-            st.regime = g;
-            st.samples = static_cast<int>(v.size());
-            double ss = 0.0, sum = 0.0, mx = 0.0;
-            for (double x : v) ss += x * x, sum += x, mx = std::max(mx, std::fabs(x));
-            st.rmse = std::sqrt(ss / double(v.size()));
-            st.bias = sum / double(v.size());
-            st.maxError = mx;
-            st.share = sumSq > 0.0 ? ss / sumSq : 0.0;
-            r.regimes.push_back(st);
-        }
+        for (const std::string& g : order) r.regimes.push_back(calcRegimeStats(name, g, regimes[g], sumSq));
     }
     const double sum2 = std::accumulate(nrmse2.begin(), nrmse2.end(), 0.0);
     r.gap = nrmse2.empty() ? 0.0 : std::sqrt(sum2 / double(nrmse2.size()));
@@ -350,33 +254,14 @@ std::vector<double> calcSimulatedRmsDifference(const TestComparison& a, const Te
 std::vector<GapMetrics> calcGapMetrics(const std::vector<TestComparison>& tests) {
     std::vector<GapMetrics> out;
     for (ChannelKind kind : {ChannelKind::Force, ChannelKind::Pressure}) {
-        GapMetrics g;
-        g.channel = getChannelName(kind);
         std::vector<double> d, sim;
-        double sum = 0.0, sum2 = 0.0;
         for (const TestComparison& t : tests)
             for (const ChannelComparison& ch : t.channels) {
                 if (ch.kind != kind) continue;
-                for (size_t i = 0; i < ch.measured.size(); ++i) {
-                    const double e = ch.simulated[i] - ch.measured[i];
-                    sum += e, sum2 += e * e;
-                    g.maxError = std::max(g.maxError, std::fabs(e));
-                    d.push_back(ch.measured[i]);
-                    sim.push_back(ch.simulated[i]);
-                }
+                d.insert(d.end(), ch.measured.begin(), ch.measured.end());
+                sim.insert(sim.end(), ch.simulated.begin(), ch.simulated.end());
             }
-        g.samples = static_cast<int>(d.size());
-        if (!d.empty()) {
-            g.rmse = std::sqrt(sum2 / double(d.size()));
-            g.meanError = sum / double(d.size());
-            // Equal sample counts: the area between the two empirical CDFs is the mean
-            // distance between the sorted samples.
-            std::sort(d.begin(), d.end());
-            std::sort(sim.begin(), sim.end());
-            double area = 0.0;
-            for (size_t i = 0; i < d.size(); ++i) area += std::fabs(d[i] - sim[i]);
-            g.areaMetric = area / double(d.size());
-        }
+        const GapMetrics g = calcPairedMetrics(getChannelName(kind), d, sim);
         out.push_back(g);
     }
     return out;
