@@ -120,8 +120,10 @@ std::vector<std::pair<std::string, std::string>> getPatientEffectOverrides(
     const Effect& effect, const std::vector<double>& v, double statedGasMass) {
     checkBounds(effect, v);
     if (effect.name == "film-friction") return {{"bag.body_friction", fmt("%.9g", v[0])}};
-    if (effect.name == "gas-mass-bias")
+    if (effect.name == "gas-mass-bias") {
+        if (v[0] == 0.0) return {};  // the stated mass: the model as it is
         return {{"array.gas_mass", fmt("%.9g", (statedGasMass + v[0]) * 1e3) + " g"}};
+    }
     if (effect.name == "soft-tissue") {
         // The scenario's layer is at least 0.5 mm thick; thinner is no layer (the model as it is).
         if (v[0] < 0.5e-3) return {};
@@ -417,7 +419,14 @@ double calcPatientGap(const PatientComparison& c, const WhereReport& where,
         }
         if (!k) continue;
         double ms = ss / double(k);
-        if (beyond) ms = std::max(0.0, ms - it->validation * it->validation);
+        // Beyond the uncertainty: as the rig's, the squared RMSE less the squared validation
+        // uncertainty; but a channel the where stage finds consistent (its RMSE within twice
+        // its validation uncertainty over the record) has nothing to explain, and counts only
+        // what goes beyond that (an effect that makes it worse): a channel that hardly moves
+        // (a supine patient's tilt) would otherwise weigh its noise, over few samples, by one
+        // over its small range.
+        const double allowed = it->rmse <= 2.0 * it->validation ? 2.0 * it->validation : it->validation;
+        if (beyond) ms = std::max(0.0, ms - allowed * allowed);
         sum += ms / (it->range * it->range);
         ++n;
     }
@@ -510,8 +519,24 @@ PatientFit fitPatient(PatientEvaluator& e, const Effect& effect, const WhereRepo
         while (i < np && ++idx[i] == axes[i].size()) idx[i++] = 0;
         if (i == np) break;
     }
-    if (effect.changesTheBag) return best;
-    for (int sweep = 0; sweep < 3; ++sweep)
+    if (effect.changesTheBag) {
+        // One parameter: a parabola through the best grid point and its neighbours, and one run
+        // at its vertex (a co-simulation each: no further search).
+        if (np != 1 || points < 3) return best;
+        const std::vector<double>& x = axes[0];
+        size_t k = size_t(std::find(x.begin(), x.end(), best.values[0]) - x.begin());
+        k = std::min(std::max<size_t>(k, 1), x.size() - 2);
+        const double f0 = cost({x[k - 1]}), f1 = cost({x[k]}), f2 = cost({x[k + 1]});
+        const double h = x[k + 1] - x[k], den = f0 - 2.0 * f1 + f2;
+        if (!(den > 0.0)) return best;
+        const double v = std::min(std::max(x[k] + 0.5 * h * (f0 - f2) / den, x.front()), x.back());
+        const double fv = cost({v});
+        if (fv < best.cost) best = {{v}, fv};
+        return best;
+    }
+    // Sweeps until one gains less than 1e-9 of the cost (at most 20).
+    for (int sweep = 0; sweep < 20; ++sweep) {
+        const double before = best.cost;
         for (size_t i = 0; i < np; ++i) {
             const EffectParameter& p = effect.parameters[i];
             const double cell = (p.upper - p.lower) / double(points - 1);
@@ -527,6 +552,8 @@ PatientFit fitPatient(PatientEvaluator& e, const Effect& effect, const WhereRepo
             const double x = f1 < f2 ? x1 : x2, f = std::min(f1, f2);
             if (f < best.cost) best.values[i] = x, best.cost = f;
         }
+        if (!(before - best.cost > 1e-9 * before)) break;
+    }
     return best;
 }
 

@@ -125,7 +125,9 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
                              const std::vector<double>& windowEdges, double maxLag);
 
 /// The gap over the samples whose time lies in the given windows (indices into the windows
-/// that windowEdges bound), beyond the channels' validation uncertainties (as calcGap).
+/// that windowEdges bound); beyond the channels' validation uncertainties (as calcGap), except
+/// that a channel whose RMSE over the record is within twice its validation uncertainty counts
+/// only what goes beyond twice it.
 double calcPatientGap(const PatientComparison& c, const WhereReport& where,
                       const std::vector<double>& windowEdges, const std::vector<int>& windows,
                       bool beyondUncertainty);
@@ -141,7 +143,9 @@ struct PatientCalibrationOptions {
     double parameterPenalty = 0.05;  ///< as CalibrationOptions
     double explainThreshold = 0.5;
     std::vector<std::string> candidates;  ///< names; empty: the instrument effects the data have
-    int gridPoints = 3;  ///< per parameter, for effects that re-run the co-simulation
+    /// Per parameter, for effects that re-run the co-simulation (one parameter: then one more
+    /// run at the vertex of a parabola through the best point and its neighbours).
+    int gridPoints = 5;
     double maxLag = 2.0;  ///< [s]
 };
 
@@ -149,9 +153,10 @@ struct PatientCalibrationOptions {
 /// windowEdges, at least two) and ranks them by the rig's score (the held-out shrink of the gap
 /// beyond the validation uncertainty less the penalty per parameter); the verdict as the
 /// rig's single stage (none, an effect, unexplained; confusable within 0.1). Instrument effects
-/// are fitted exactly on the baseline run (least squares: the mat's gain in closed form, the
-/// sensor's offset in closed form at each lag of a scan refined by golden section); effects
-/// that change the response are scanned over gridPoints values per parameter, each a run.
+/// re-read the baseline run (least squares of the channels' residuals over their ranges on a
+/// grid of 11 values per parameter refined coordinate by coordinate by golden section); effects
+/// that change the response are scanned over gridPoints values per parameter, each a run
+/// (cached: the folds share them), and a one-parameter effect refined by a parabola.
 WhichReport calibratePatientCandidates(const PatientChannels& measured, const PatientChannels& baseline,
                                        const PatientComparison& baseComparison,
                                        const WhereReport& where, const MatRegions& regions,
