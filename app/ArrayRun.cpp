@@ -580,7 +580,6 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         return 1;
     }
     writeReportAfterRun(outPath, quiet);
-    if (control.silent) return 0;
     std::cout << table.str() << "support verdict:\n" << verdictText << "results in " << outPath.string() << "/:\n"
               << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N\n"
               << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm\n"

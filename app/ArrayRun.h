@@ -15,9 +15,6 @@ namespace bagsim::app {
 struct ArrayRunControl {
     bool force = false;  ///< write into a folder that is not empty
     bool quiet = false;
-    /// Prints nothing on success either (no results table at the end): a run made by another
-    /// command (the diagnosis's co-simulations), which says what it found itself.
-    bool silent = false;
     std::string commandLine;
     /// A resumed run: the checkpoint read past its header (readCheckpointHeader()); the
     /// output folder is `out`, the folder of the run that wrote it. Null: a new run.

@@ -11,8 +11,9 @@
 
 namespace bagsim::app {
 
-/// Runs `bagsim run` on the scenario (with its overrides) into `dir` (replaced), quietly, and
-/// reads back its channels (io::readArrayRunChannels).
+/// Runs `bagsim run` on the scenario's file with its overrides (`--set`) into `dir` (replaced),
+/// as a child process (its output in `dir`.log), and reads back its channels
+/// (io::readArrayRunChannels).
 /// @throws Interrupted when interrupted; std::runtime_error when the run fails (naming the
 /// folder, whose summary says why).
 diagnose::PatientChannels runCoSimulation(const io::ScenarioFile& file, const std::string& dir);

@@ -86,17 +86,21 @@ const std::vector<Effect>& getEffects() {
     return effects;
 }
 
-const Effect* findEffect(const std::string& name) {
-    for (const Effect& e : getEffects())
+const Effect* findEffectIn(const std::vector<Effect>& library, const std::string& name) {
+    for (const Effect& e : library)
         if (e.name == name) return &e;
     return nullptr;
 }
 
-std::string listEffectNames() {
+std::string listEffectNamesIn(const std::vector<Effect>& library) {
     std::string s;
-    for (const Effect& e : getEffects()) s += (s.empty() ? "" : ", ") + e.name;
+    for (const Effect& e : library) s += (s.empty() ? "" : ", ") + e.name;
     return s;
 }
+
+const Effect* findEffect(const std::string& name) { return findEffectIn(getEffects(), name); }
+
+std::string listEffectNames() { return listEffectNamesIn(getEffects()); }
 
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,

@@ -97,16 +97,10 @@ const std::vector<Effect>& getPatientEffects() {
 }
 
 const Effect* findPatientEffect(const std::string& name) {
-    for (const Effect& e : getPatientEffects())
-        if (e.name == name) return &e;
-    return nullptr;
+    return findEffectIn(getPatientEffects(), name);
 }
 
-std::string listPatientEffectNames() {
-    std::string s;
-    for (const Effect& e : getPatientEffects()) s += (s.empty() ? "" : ", ") + e.name;
-    return s;
-}
+std::string listPatientEffectNames() { return listEffectNamesIn(getPatientEffects()); }
 
 void applyPatientInstrumentEffect(const Effect& effect, const std::vector<double>& v,
                                   PatientInstruments& inst) {

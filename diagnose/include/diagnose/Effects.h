@@ -77,6 +77,10 @@ inline constexpr double kMaxTissueModulus = 200e3;    ///< [Pa]
 /// viscoelasticity, fabric-anisotropy, soft-tissue (the library), load-cell-gain (kept out of
 /// it).
 const std::vector<Effect>& getEffects();
+/// The effect of that name in a library (this one, or the patient's: PatientDiagnosis.h), or
+/// nullptr; and the library's names joined by ", ".
+const Effect* findEffectIn(const std::vector<Effect>& library, const std::string& name);
+std::string listEffectNamesIn(const std::vector<Effect>& library);
 /// The effect of that name, or nullptr.
 const Effect* findEffect(const std::string& name);
 /// "pressure-sensor, flowmeter-bias, ..." (for messages): all effects.
