@@ -29,6 +29,7 @@ diagnose::PatientChannels runCoSimulation(const io::ScenarioFile& file, const st
     // user would make of the same scenario.
     std::error_code ec;
     std::filesystem::remove_all(dir, ec);
+    std::filesystem::create_directories(std::filesystem::path(dir).parent_path(), ec);
     const std::string log = dir + ".log";
     std::vector<std::string> args = {"bagsim", "run", file.getFileName(), "--out", dir, "--quiet"};
     for (const std::string& o : file.getOverrides()) args.insert(args.end(), {"--set", o});
