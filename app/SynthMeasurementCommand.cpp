@@ -407,10 +407,8 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
 }
 
 int run(const Args& a) {
-    {
-        const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
-        if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) return runPatient(a, file);
-    }
+    const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
+    if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) return runPatient(a, file);
     // The effects and their parameters.
     const std::vector<const diagnose::Effect*> effects =
         parseEffects(a, diagnose::findEffect, diagnose::listEffectNames());
@@ -427,7 +425,6 @@ int run(const Args& a) {
     }
 
     // The scenario as the diagnosis will read it, then the truth's model-form difference.
-    const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
     io::LoadTestScenario sc = io::readLoadTestScenario(file);
     if (!sc.rig.isNone())
         throw io::InputError(a.scenario, file.getRoot().getLine("rig"), "rig",

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "ChannelCsv.h"
+#include "MeasuredManifest.h"
 
 namespace io {
 
@@ -140,7 +141,9 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
     return out;
 }
 
-diagnose::MeasuredData readMeasuredData(const std::string& folder) {
+namespace manifest {
+
+ScenarioFile readManifest(const std::string& folder) {
     const fs::path dir(folder);
     std::error_code ec;
     if (!fs::is_directory(dir, ec))
@@ -153,28 +156,39 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
                          std::string("holds no ") + kMeasuredManifest +
                              "; a measured-data folder needs this manifest (docs/measured-data.md)");
     const std::string mname = manifest.string();
-    const ScenarioFile file =
-        ScenarioFile::parse(readInputFile(mname, kMaxScenarioBytes, "measured-data manifest"), mname);
+    return ScenarioFile::parse(readInputFile(mname, kMaxScenarioBytes, "measured-data manifest"), mname);
+}
+
+std::string readManifestScenario(const ScenarioNode& root, const std::string& folder,
+                                 const std::string& what) {
+    const std::string format = root.getString("format");
+    if (format != kMeasuredFormat)
+        root.fail("format", "\"" + format + "\" is not a format this bagsim reads; valid: \"" +
+                                kMeasuredFormat + "\"");
+    const std::string scen = root.getString("scenario");
+    const fs::path sp = fs::path(scen).is_absolute() ? fs::path(scen) : fs::path(folder) / scen;
+    std::error_code ec;
+    if (!fs::is_regular_file(sp, ec))
+        root.fail("scenario", "\"" + scen + "\": no such file (" + sp.string() + "); valid: " + what +
+                                  " the data correspond to, relative to the folder or absolute");
+    return sp.string();
+}
+
+}  // namespace manifest
+
+diagnose::MeasuredData readMeasuredData(const std::string& folder) {
+    const fs::path dir(folder);
+    std::error_code ec;
+    const ScenarioFile file = manifest::readManifest(folder);
     const ScenarioNode root = file.getRoot();
     root.checkKeys({"format", "scenario", "protocol"}, {"description", "tests", "stiffness"});
     if (!root.has("tests") && !root.has("stiffness"))
         root.fail("lists no 'tests' and no 'stiffness'; valid: a 'tests' list (one entry per gas "
                   "mass), a 'stiffness' curve file, or both (docs/measured-data.md)");
-    const std::string format = root.getString("format");
-    if (format != kMeasuredFormat)
-        root.fail("format", "\"" + format + "\" is not a format this bagsim reads; valid: \"" +
-                                kMeasuredFormat + "\"");
-
     diagnose::MeasuredData data;
     data.folder = folder;
     data.description = root.getString("description", "");
-    const std::string scen = root.getString("scenario");
-    const fs::path sp = fs::path(scen).is_absolute() ? fs::path(scen) : dir / scen;
-    if (!fs::is_regular_file(sp, ec))
-        root.fail("scenario", "\"" + scen + "\": no such file (" + sp.string() +
-                                  "); valid: the scenario file the data correspond to, relative "
-                                  "to the folder or absolute");
-    data.scenarioFile = sp.string();
+    data.scenarioFile = manifest::readManifestScenario(root, folder, "the scenario file");
 
     const ScenarioNode p = root.getSection("protocol");
     p.checkKeys({"block", "rate", "peak_force", "room_temperature"}, {});

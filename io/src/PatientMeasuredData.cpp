@@ -15,6 +15,7 @@
 
 #include "ChannelCsv.h"
 #include "Hdf5.h"
+#include "MeasuredManifest.h"
 #include "ReportPage.h"
 
 namespace io {
@@ -198,30 +199,13 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
 diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder) {
     const fs::path dir(folder);
     std::error_code ec;
-    const fs::path manifest = dir / kMeasuredManifest;
-    if (!fs::is_directory(dir, ec) || !fs::exists(manifest, ec))
-        throw InputError(folder, 0, "",
-                         std::string("holds no ") + kMeasuredManifest +
-                             "; a measured-data folder needs this manifest (docs/measured-data.md)");
-    const std::string mname = manifest.string();
-    const ScenarioFile file =
-        ScenarioFile::parse(readInputFile(mname, kMaxScenarioBytes, "measured-data manifest"), mname);
+    const ScenarioFile file = manifest::readManifest(folder);
     const ScenarioNode root = file.getRoot();
     root.checkKeys({"format", "scenario", "protocol", "channels"}, {"description"});
-    const std::string format = root.getString("format");
-    if (format != kMeasuredFormat)
-        root.fail("format", "\"" + format + "\" is not a format this bagsim reads; valid: \"" +
-                                kMeasuredFormat + "\"");
     diagnose::PatientMeasurement data;
     data.folder = folder;
     data.description = root.getString("description", "");
-    const std::string scen = root.getString("scenario");
-    const fs::path sp = fs::path(scen).is_absolute() ? fs::path(scen) : dir / scen;
-    if (!fs::is_regular_file(sp, ec))
-        root.fail("scenario", "\"" + scen + "\": no such file (" + sp.string() +
-                                  "); valid: the patient-on-array scenario the data correspond "
-                                  "to, relative to the folder or absolute");
-    data.scenarioFile = sp.string();
+    data.scenarioFile = manifest::readManifestScenario(root, folder, "the patient-on-array scenario");
 
     const ScenarioNode p = root.getSection("protocol");
     p.checkKeys({"kind"}, {"settle_time", "duration"});
