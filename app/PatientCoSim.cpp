@@ -80,17 +80,34 @@ diagnose::MatRegions makeMatRegions(const io::PatientOnArrayScenario& sc) {
                            sc.patient.position[1] + reg.centre_W[2], reg.radius});
         m.names.push_back(reg.name);
     }
-    const int elsewhere = int(m.names.size());
-    m.names.push_back("elsewhere");
+    // Elsewhere under him: the segment whose centre of mass is nearest (as regions.csv counts
+    // nodes in no region under their segment's name), within kSegmentReach.
+    constexpr double kSegmentReach = 0.3;  // [m]
+    std::vector<Centre> segments;
+    for (int k = 0; k < body::kSegmentCount; ++k) {
+        const body::SegmentParameters& sp = a.get(static_cast<body::Segment>(k));
+        const SimTK::Vec3 c = sp.p_WO + sp.p_BC;
+        segments.push_back({int(m.names.size()), sc.patient.position[0] + c[1],
+                            sc.patient.position[1] + c[2], kSegmentReach});
+        m.names.push_back(body::getSegmentName(static_cast<body::Segment>(k)));
+    }
+    const int offBody = int(m.names.size());
+    m.names.push_back("off the body");
     const double px = mat.size.x() / mat.rows, py = mat.size.y() / mat.columns;
-    m.sensel.assign(n, elsewhere);
+    m.sensel.assign(n, offBody);
     for (int r = 0; r < mat.rows; ++r)
         for (int c = 0; c < mat.columns; ++c) {
             const double x = mat.origin.x() + (r + 0.5) * px, y = mat.origin.y() + (c + 0.5) * py;
+            int& region = m.sensel[size_t(r) * mat.columns + c];
             double best = std::numeric_limits<double>::infinity();
             for (const Centre& k : centres) {
                 const double d = std::hypot(x - k.x, y - k.y);
-                if (d <= 1.5 * k.r && d / k.r < best) best = d / k.r, m.sensel[size_t(r) * mat.columns + c] = k.region;
+                if (d <= 1.5 * k.r && d / k.r < best) best = d / k.r, region = k.region;
+            }
+            if (region != offBody) continue;
+            for (const Centre& k : segments) {
+                const double d = std::hypot(x - k.x, y - k.y);
+                if (d <= k.r && d < best) best = d, region = k.region;
             }
         }
     return m;

@@ -22,8 +22,9 @@ diagnose::PatientChannels runCoSimulation(const io::ScenarioFile& file, const st
 /// the regions that a supine patient lies on (those on his back: occiput, scapulae, spine,
 /// elbows, sacrum, ischia, calves, heels), projected onto the bed from the standing reference
 /// frame at his position (superior along +x, his right along +y); a sensel goes to the nearest
-/// region centre within 1.5 times its radius, else to "elsewhere". Other postures: one region,
-/// "whole mat".
+/// region centre within 1.5 times its radius, else to the segment whose centre of mass is
+/// nearest within 0.3 m (named as regions.csv names nodes in no region: "thigh_r"), else to
+/// "off the body". Other postures: one region, "whole mat".
 diagnose::MatRegions makeMatRegions(const io::PatientOnArrayScenario& sc);
 
 /// The macro step's text halved ("5 ms" for 10 ms), for a run at half the scenario's step.
