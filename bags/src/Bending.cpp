@@ -15,8 +15,6 @@ namespace {
 
 using Vec12 = Eigen::Matrix<double, 12, 1>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
-using Mat3x12 = Eigen::Matrix<double, 3, 12>;
-using Row12 = Eigen::Matrix<double, 1, 12>;
 
 Mat3 skew(const Vec3& v) {
     Mat3 s;
@@ -40,52 +38,73 @@ double calcPlateBendingStiffness(const MembraneMaterial& material, double thickn
     return calcPlateBendingStiffness(3.0 * material.getInitialShearModulus(), 0.5, thickness);
 }
 
+namespace {
+
+// The hinge angle's derivatives (12: x0, x1, x2, x3) from the edge e = x1 - x0, the wings
+// a = x2 - x0 and b = x3 - x0 and the wing normals NA = e x a, NB = b x e; grad and hess may
+// each be null.
+void calcHingeDerivatives(const Vec3& e, const Vec3& a, const Vec3& b, const Vec3& NA,
+                          const Vec3& NB, Vec12* grad, Mat12* hess) {
+    // Moving a wing along its normal by dz turns the hinge by -dz / (wing height); the edge
+    // nodes take the share that keeps the gradient free of rigid translations and rotations.
+    const double L2 = e.squaredNorm(), L = std::sqrt(L2);
+    const double NA2 = NA.squaredNorm(), NB2 = NB.squaredNorm();
+    const Vec3 uA = NA / NA2, uB = NB / NB2;
+    const Vec3 g2 = -L * uA, g3 = -L * uB;
+    const double alpha2 = a.dot(e) / L2, alpha3 = b.dot(e) / L2;
+    if (grad) *grad << -(1.0 - alpha2) * g2 - (1.0 - alpha3) * g3, -alpha2 * g2 - alpha3 * g3, g2, g3;
+    if (!hess) return;
+
+    // The Hessian as the Jacobian of the gradient above, one 3x3 block per node (column k:
+    // d/dx_k). With s(v) the cross-product matrix, d(NA) = s(e) da - s(a) de and
+    // d(NB) = s(b) de - s(e) db; d(N / |N|^2) = P dN with P = (I - 2 n n^T) / |N|^2.
+    // Columns 1-3 from their formulas, column 0 from translation invariance (the columns of
+    // each row sum to zero).
+    const Vec3 nA = NA / std::sqrt(NA2), nB = NB / std::sqrt(NB2);
+    const Mat3 PA = (Mat3::Identity() - 2.0 * nA * nA.transpose()) / NA2;
+    const Mat3 PB = (Mat3::Identity() - 2.0 * nB * nB.transpose()) / NB2;
+    const Mat3 se = skew(e);
+    const Mat3 LPAse = L * (PA * se).eval(), LPBse = L * (PB * se).eval();
+    // d g2 / dx_k and d g3 / dx_k (g2 = -L uA: dL = e^T de / L).
+    Mat3 Jg2[4], Jg3[4];
+    Jg2[1] = -(uA / L) * e.transpose() + L * (PA * skew(a)).eval();
+    Jg2[2] = -LPAse;
+    Jg2[3].setZero();
+    Jg3[1] = -(uB / L) * e.transpose() - L * (PB * skew(b)).eval();
+    Jg3[2].setZero();
+    Jg3[3] = LPBse;
+    Jg2[0] = -(Jg2[1] + Jg2[2]);
+    Jg3[0] = -(Jg3[1] + Jg3[3]);
+    // d alpha2 / dx_k and d alpha3 / dx_k (alpha2 = a.e / L2).
+    Vec3 ja2[4], ja3[4];
+    ja2[1] = (a - 2.0 * alpha2 * e) / L2;
+    ja2[2] = e / L2;
+    ja2[3].setZero();
+    ja3[1] = (b - 2.0 * alpha3 * e) / L2;
+    ja3[2].setZero();
+    ja3[3] = e / L2;
+    ja2[0] = -(ja2[1] + ja2[2]);
+    ja3[0] = -(ja3[1] + ja3[3]);
+    Mat12 H;
+    for (int k = 0; k < 4; ++k) {
+        const Mat3 t = g2 * ja2[k].transpose() + g3 * ja3[k].transpose();
+        H.block<3, 3>(0, 3 * k) = t - (1.0 - alpha2) * Jg2[k] - (1.0 - alpha3) * Jg3[k];
+        H.block<3, 3>(3, 3 * k) = -t - alpha2 * Jg2[k] - alpha3 * Jg3[k];
+        H.block<3, 3>(6, 3 * k) = Jg2[k];
+        H.block<3, 3>(9, 3 * k) = Jg3[k];
+    }
+    *hess = 0.5 * (H + H.transpose());  // symmetric in exact arithmetic; this evens roundoff
+}
+
+}  // namespace
+
 double calcHingeAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3,
                       Vec12* grad, Mat12* hess) {
     const Vec3 e = x1 - x0, a = x2 - x0, b = x3 - x0;
     const Vec3 NA = e.cross(a), NB = b.cross(e);
-    const double L2 = e.squaredNorm(), L = std::sqrt(L2);
-    const double NA2 = NA.squaredNorm(), NB2 = NB.squaredNorm();
-    const Vec3 nA = NA / std::sqrt(NA2), nB = NB / std::sqrt(NB2);
-    const double theta = std::atan2(nA.cross(nB).dot(e) / L, nA.dot(nB));
-    if (!grad && !hess) return theta;
-
-    // Moving a wing along its normal by dz turns the hinge by -dz / (wing height); the edge
-    // nodes take the share that keeps the gradient free of rigid translations and rotations.
-    const Vec3 uA = NA / NA2, uB = NB / NB2;
-    const Vec3 g2 = -L * uA, g3 = -L * uB;
-    const double alpha2 = a.dot(e) / L2, alpha3 = b.dot(e) / L2;
-    const Vec3 g0 = -(1.0 - alpha2) * g2 - (1.0 - alpha3) * g3;
-    const Vec3 g1 = -alpha2 * g2 - alpha3 * g3;
-    if (grad) *grad << g0, g1, g2, g3;
-    if (!hess) return theta;
-
-    // The Hessian as the Jacobian of the gradient above (columns: x0, x1, x2, x3).
-    const Mat3 I = Mat3::Identity();
-    Mat3x12 Je = Mat3x12::Zero(), Ja = Mat3x12::Zero(), Jb = Mat3x12::Zero();
-    Je.block<3, 3>(0, 0) = -I;
-    Je.block<3, 3>(0, 3) = I;
-    Ja.block<3, 3>(0, 0) = -I;
-    Ja.block<3, 3>(0, 6) = I;
-    Jb.block<3, 3>(0, 0) = -I;
-    Jb.block<3, 3>(0, 9) = I;
-    const Mat3x12 JNA = -skew(a) * Je + skew(e) * Ja;
-    const Mat3x12 JNB = -skew(e) * Jb + skew(b) * Je;
-    const Mat3x12 JuA = ((I - 2.0 * nA * nA.transpose()) / NA2) * JNA;
-    const Mat3x12 JuB = ((I - 2.0 * nB * nB.transpose()) / NB2) * JNB;
-    const Row12 JL = (e / L).transpose() * Je;
-    const Mat3x12 Jg2 = -uA * JL - L * JuA;
-    const Mat3x12 Jg3 = -uB * JL - L * JuB;
-    const Row12 Jalpha2 = (e.transpose() * Ja + a.transpose() * Je) / L2 -
-                          (2.0 * a.dot(e) / (L2 * L2)) * e.transpose() * Je;
-    const Row12 Jalpha3 = (e.transpose() * Jb + b.transpose() * Je) / L2 -
-                          (2.0 * b.dot(e) / (L2 * L2)) * e.transpose() * Je;
-    Mat12 H;
-    H.block<3, 12>(0, 0) = g2 * Jalpha2 - (1.0 - alpha2) * Jg2 + g3 * Jalpha3 - (1.0 - alpha3) * Jg3;
-    H.block<3, 12>(3, 0) = -g2 * Jalpha2 - alpha2 * Jg2 - g3 * Jalpha3 - alpha3 * Jg3;
-    H.block<3, 12>(6, 0) = Jg2;
-    H.block<3, 12>(9, 0) = Jg3;
-    *hess = 0.5 * (H + H.transpose());  // symmetric in exact arithmetic; this evens roundoff
+    const Vec3 nA = NA / std::sqrt(NA.squaredNorm()), nB = NB / std::sqrt(NB.squaredNorm());
+    const double theta = std::atan2(nA.cross(nB).dot(e) / std::sqrt(e.squaredNorm()), nA.dot(nB));
+    if (grad || hess) calcHingeDerivatives(e, a, b, NA, NB, grad, hess);
     return theta;
 }
 
@@ -277,10 +296,14 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
             const Vec12& g = grad[p.hinges[i]];
             for (int k = 0; k < 4; ++k) G.block<1, 3>(i, 3 * p.local[i][k]) += g.segment<3>(3 * k);
         }
-        const Eigen::Matrix<double, 18, 18> K = G.transpose() * p.M * G;
+        // K = G^T M G node block by node block (K_ab = G_a^T (M G)_b; K_ba = K_ab^T).
+        const Eigen::Matrix<double, 3, 18> MG = p.M.lazyProduct(G);
         for (int a = 0; a < p.numNodes; ++a)
-            for (int b = 0; b < p.numNodes; ++b)
-                blocks[p.slots[6 * a + b]] += K.block<3, 3>(3 * a, 3 * b);
+            for (int b = a; b < p.numNodes; ++b) {
+                const Mat3 K = G.middleCols<3>(3 * a).transpose().lazyProduct(MG.middleCols<3>(3 * b));
+                blocks[p.slots[6 * a + b]] += K;
+                if (b != a) blocks[p.slots[6 * b + a]] += K.transpose();
+            }
     }
     acc.energy += energy;
     if (!wantD) return;
@@ -293,8 +316,10 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
                 acc.grad.segment<3>(3 * hg.nodes[k]) += moment[h] * grad[h].segment<3>(3 * k);
         if (!wantH) continue;
         Mat12 H;
-        calcHingeAngle(x.col(hg.nodes[0]), x.col(hg.nodes[1]), x.col(hg.nodes[2]),
-                       x.col(hg.nodes[3]), nullptr, &H);
+        const Vec3 x0 = x.col(hg.nodes[0]);
+        const Vec3 e = x.col(hg.nodes[1]) - x0, a = x.col(hg.nodes[2]) - x0,
+                   b = x.col(hg.nodes[3]) - x0;
+        calcHingeDerivatives(e, a, b, e.cross(a), b.cross(e), nullptr, &H);
         for (int a = 0; a < 4; ++a)
             for (int b = 0; b < 4; ++b)
                 blocks[hg.slots[4 * a + b]] += moment[h] * H.block<3, 3>(3 * a, 3 * b);
