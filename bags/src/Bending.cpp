@@ -219,7 +219,7 @@ DiscreteBending::DiscreteBending(const Mesh& mesh, const BendingOptions& options
     }
 
     // The Hessian's block pattern: every node pair of a plate (a hinge's pairs are among its
-    // plates'), sorted, and each plate's and hinge's slots in it.
+    // plates'), sorted, and each plate's slots in it.
     for (const Plate& p : m_plates)
         for (int a = 0; a < p.numNodes; ++a)
             for (int b = 0; b < p.numNodes; ++b) m_blocks.emplace_back(p.nodes[a], p.nodes[b]);
@@ -235,9 +235,14 @@ DiscreteBending::DiscreteBending(const Mesh& mesh, const BendingOptions& options
             for (int b = 0; b < p.numNodes; ++b)
                 p.slots[6 * a + b] = findSlot(p.nodes[a], p.nodes[b]);
     }
-    for (Hinge& h : m_hinges)
-        for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 4; ++b) h.slots[4 * a + b] = findSlot(h.nodes[a], h.nodes[b]);
+    // Each hinge's angle-curvature term goes with its first plate (every hinge has one: the
+    // triangles of its edge are plates).
+    std::vector<char> owned(m_hinges.size(), 0);
+    for (Plate& p : m_plates)
+        for (int i = 0; i < 3; ++i) {
+            p.ownsHinge[i] = p.hinges[i] >= 0 && !owned[p.hinges[i]];
+            if (p.ownsHinge[i]) owned[p.hinges[i]] = 1;
+        }
 }
 
 double DiscreteBending::calcEnergy(const Eigen::Matrix3Xd& x) const {
@@ -276,11 +281,9 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
         dtheta[h] = d;
     }
 
-    // Pass 2, plates: energy, the moment dE/dtheta of each hinge, and the Hessian's
-    // Gauss-Newton part sum_ij M_ij grad_i grad_j^T.
+    // Pass 2, plates: energy and the moment dE/dtheta of each hinge.
     double energy = 0.0;
     std::vector<double> moment(wantD ? nh : 0, 0.0);
-    std::vector<Mat3> blocks(wantH ? m_blocks.size() : 0, Mat3::Zero());
     for (const Plate& p : m_plates) {
         Vec3 d;
         for (int i = 0; i < 3; ++i) d(i) = p.hinges[i] >= 0 ? dtheta[p.hinges[i]] : 0.0;
@@ -289,7 +292,22 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
         if (!wantD) continue;
         for (int i = 0; i < 3; ++i)
             if (p.hinges[i] >= 0) moment[p.hinges[i]] += Md(i);
-        if (!wantH) continue;
+    }
+    acc.energy += energy;
+    if (!wantD) return;
+
+    // Pass 3, hinges: forces moment * grad theta.
+    if (wantG)
+        for (int h = 0; h < nh; ++h)
+            for (int k = 0; k < 4; ++k)
+                acc.grad.segment<3>(3 * m_hinges[h].nodes[k]) += moment[h] * grad[h].segment<3>(3 * k);
+    if (!wantH) return;
+
+    // Pass 4, plates: the Hessian's Gauss-Newton part sum_ij M_ij grad_i grad_j^T and, for the
+    // hinges the plate owns, the angle-curvature part moment * d2theta, gathered on the plate's
+    // nodes before they go to the node-pair blocks.
+    std::vector<Mat3> blocks(m_blocks.size(), Mat3::Zero());
+    for (const Plate& p : m_plates) {
         Eigen::Matrix<double, 3, 18> G = Eigen::Matrix<double, 3, 18>::Zero();
         for (int i = 0; i < 3; ++i) {
             if (p.hinges[i] < 0) continue;
@@ -298,33 +316,27 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
         }
         // K = G^T M G node block by node block (K_ab = G_a^T (M G)_b; K_ba = K_ab^T).
         const Eigen::Matrix<double, 3, 18> MG = p.M.lazyProduct(G);
+        Mat3 K[36];
         for (int a = 0; a < p.numNodes; ++a)
             for (int b = a; b < p.numNodes; ++b) {
-                const Mat3 K = G.middleCols<3>(3 * a).transpose().lazyProduct(MG.middleCols<3>(3 * b));
-                blocks[p.slots[6 * a + b]] += K;
-                if (b != a) blocks[p.slots[6 * b + a]] += K.transpose();
+                K[6 * a + b] = G.middleCols<3>(3 * a).transpose().lazyProduct(MG.middleCols<3>(3 * b));
+                if (b != a) K[6 * b + a] = K[6 * a + b].transpose();
             }
-    }
-    acc.energy += energy;
-    if (!wantD) return;
-
-    // Pass 3, hinges: forces moment * grad theta and the angle-curvature part of the Hessian.
-    for (int h = 0; h < nh; ++h) {
-        const Hinge& hg = m_hinges[h];
-        if (wantG)
+        for (int i = 0; i < 3; ++i) {
+            if (!p.ownsHinge[i]) continue;
+            const int h = p.hinges[i];
+            const std::array<int, 4>& n = m_hinges[h].nodes;
+            const Vec3 x0 = x.col(n[0]);
+            const Vec3 e = x.col(n[1]) - x0, a = x.col(n[2]) - x0, b = x.col(n[3]) - x0;
+            Mat12 H;
+            calcHingeDerivatives(e, a, b, e.cross(a), b.cross(e), nullptr, &H);
             for (int k = 0; k < 4; ++k)
-                acc.grad.segment<3>(3 * hg.nodes[k]) += moment[h] * grad[h].segment<3>(3 * k);
-        if (!wantH) continue;
-        Mat12 H;
-        const Vec3 x0 = x.col(hg.nodes[0]);
-        const Vec3 e = x.col(hg.nodes[1]) - x0, a = x.col(hg.nodes[2]) - x0,
-                   b = x.col(hg.nodes[3]) - x0;
-        calcHingeDerivatives(e, a, b, e.cross(a), b.cross(e), nullptr, &H);
-        for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 4; ++b)
-                blocks[hg.slots[4 * a + b]] += moment[h] * H.block<3, 3>(3 * a, 3 * b);
+                for (int l = 0; l < 4; ++l)
+                    K[6 * p.local[i][k] + p.local[i][l]] += moment[h] * H.block<3, 3>(3 * k, 3 * l);
+        }
+        for (int a = 0; a < p.numNodes; ++a)
+            for (int b = 0; b < p.numNodes; ++b) blocks[p.slots[6 * a + b]] += K[6 * a + b];
     }
-    if (!wantH) return;
     // Every entry of every block, zeros too: the same triplet sequence every call.
     acc.hess.reserve(acc.hess.size() + 9 * m_blocks.size());
     for (size_t s = 0; s < m_blocks.size(); ++s) {

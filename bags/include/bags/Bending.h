@@ -97,7 +97,6 @@ private:
     struct Hinge {
         std::array<int, 4> nodes;
         double restAngle;
-        std::array<int, 16> slots;   ///< Hessian block slot of node pair (a,b), 4a+b
     };
     struct Plate {                   ///< a triangle with at least one hinge
         std::array<int, 3> hinges;   ///< hinge of edge i (opposite vertex i), -1: free edge
@@ -106,6 +105,7 @@ private:
         std::array<int, 6> nodes;
         std::array<std::array<int, 4>, 3> local;  ///< local node of hinge i's node k
         std::array<int, 36> slots;   ///< Hessian block slot of local pair (a,b), 6a+b
+        std::array<bool, 3> ownsHinge;  ///< adds hinge i's angle-curvature Hessian term
     };
     BendingOptions m_options;
     int m_numNodes = 0;
