@@ -52,14 +52,15 @@ void calcHingeDerivatives(const Vec3& e, const Vec3& a, const Vec3& b, const Vec
     const Vec3 uA = NA / NA2, uB = NB / NB2;
     const Vec3 g2 = -L * uA, g3 = -L * uB;
     const double alpha2 = a.dot(e) / L2, alpha3 = b.dot(e) / L2;
-    if (grad) *grad << -(1.0 - alpha2) * g2 - (1.0 - alpha3) * g3, -alpha2 * g2 - alpha3 * g3, g2, g3;
+    if (grad)
+        *grad << -(1.0 - alpha2) * g2 - (1.0 - alpha3) * g3, -alpha2 * g2 - alpha3 * g3, g2, g3;
     if (!hess) return;
 
     // The Hessian as the Jacobian of the gradient above, one 3x3 block per node (column k:
     // d/dx_k). With s(v) the cross-product matrix, d(NA) = s(e) da - s(a) de and
     // d(NB) = s(b) de - s(e) db; d(N / |N|^2) = P dN with P = (I - 2 n n^T) / |N|^2.
-    // Columns 1-3 from their formulas, column 0 from translation invariance (the columns of
-    // each row sum to zero).
+    // Column blocks 1-3 from their formulas, block 0 from translation invariance (each row's
+    // column blocks sum to zero).
     const Vec3 nA = NA / std::sqrt(NA2), nB = NB / std::sqrt(NB2);
     const Mat3 PA = (Mat3::Identity() - 2.0 * nA * nA.transpose()) / NA2;
     const Mat3 PB = (Mat3::Identity() - 2.0 * nB * nB.transpose()) / NB2;
@@ -300,7 +301,8 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
     if (wantG)
         for (int h = 0; h < nh; ++h)
             for (int k = 0; k < 4; ++k)
-                acc.grad.segment<3>(3 * m_hinges[h].nodes[k]) += moment[h] * grad[h].segment<3>(3 * k);
+                acc.grad.segment<3>(3 * m_hinges[h].nodes[k]) +=
+                    moment[h] * grad[h].segment<3>(3 * k);
     if (!wantH) return;
 
     // Pass 4, plates: the Hessian's Gauss-Newton part sum_ij M_ij grad_i grad_j^T and, for the
@@ -319,7 +321,8 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
         Mat3 K[36];
         for (int a = 0; a < p.numNodes; ++a)
             for (int b = a; b < p.numNodes; ++b) {
-                K[6 * a + b] = G.middleCols<3>(3 * a).transpose().lazyProduct(MG.middleCols<3>(3 * b));
+                K[6 * a + b] =
+                    G.middleCols<3>(3 * a).transpose().lazyProduct(MG.middleCols<3>(3 * b));
                 if (b != a) K[6 * b + a] = K[6 * a + b].transpose();
             }
         for (int i = 0; i < 3; ++i) {
