@@ -39,6 +39,23 @@ inline std::vector<std::string> splitCsv(const std::string& line) {
     return cells;
 }
 
+/// Reads the next line of `in` that holds data, skipping blank lines and '#' comments (an
+/// instrument's preamble) and dropping a trailing CR: its trimmed text and its cells; lineNo
+/// counts every line read (1-based). False at the end of the stream.
+inline bool nextDataLine(std::istream& in, int& lineNo, std::string& trimmed,
+                         std::vector<std::string>& cells) {
+    std::string line;
+    while (std::getline(in, line)) {
+        ++lineNo;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        trimmed = trim(line);
+        if (trimmed.empty() || trimmed[0] == '#') continue;
+        cells = splitCsv(line);
+        return true;
+    }
+    return false;
+}
+
 /// "force_N" / "force [N]" / "force (N)" -> {"force", "N"}; no unit -> {name, ""}.
 inline std::pair<std::string, std::string> splitHeader(const std::string& h) {
     for (const char open : {'[', '('}) {

@@ -23,6 +23,7 @@ namespace {
 
 using csv::fmt;
 using csv::listUnits;
+using csv::nextDataLine;
 using csv::lower;
 using csv::splitCsv;
 using csv::splitHeader;
@@ -54,14 +55,10 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
     std::vector<double> factor(columns.size()), offset(columns.size());
     std::vector<std::string> header;
     std::vector<std::vector<double>> out(columns.size());
-    std::string line;
     int lineNo = 0, headerLine = 0, lastRowLine = 0;
-    while (std::getline(text, line)) {
-        ++lineNo;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        const std::string t = trim(line);
-        if (t.empty() || t[0] == '#') continue;
-        const std::vector<std::string> cells = splitCsv(line);
+    std::string t;
+    std::vector<std::string> cells;
+    while (nextDataLine(text, lineNo, t, cells)) {
         if (header.empty()) {
             header = cells;
             headerLine = lineNo;

@@ -26,6 +26,7 @@ namespace {
 
 using csv::fmt;
 using csv::lower;
+using csv::nextDataLine;
 using csv::splitCsv;
 using csv::splitHeader;
 using csv::trim;
@@ -106,13 +107,9 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
                            " rows of " + std::to_string(m.columns) + " pressures (the 'rows' line)");
         m.pressure.push_back(frame);
     };
-    std::string line;
-    while (std::getline(text, line)) {
-        ++lineNo;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        const std::string t = trim(line);
-        if (t.empty() || t[0] == '#') continue;
-        const std::vector<std::string> cells = splitCsv(line);
+    std::string t;
+    std::vector<std::string> cells;
+    while (nextDataLine(text, lineNo, t, cells)) {
         const std::string first = lower(cells[0]);
         if (step < 2) {
             const char* want = step == 0 ? "rows" : "columns";
