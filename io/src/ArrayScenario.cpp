@@ -1,5 +1,4 @@
 // Reading the patient-on-array scenario kind.
-#include <bags/Bending.h>
 #include <bags/MaterialFit.h>
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayScenario.h>
@@ -171,9 +170,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     // The film's bending stiffness (docs/materials.md#bending-stiffness-of-the-film), the plate
     // value unless set, as in the load test: it gives slack film a stiffness of its own
     // (docs/cosim.md#slack-film-and-the-films-bending).
-    b.bendingStiffness =
-        readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness,
-                             bags::calcPlateBendingStiffness(*b.material, b.thickness));
+    b.bendingStiffness = readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness);
     b.threads = 1;  // bags run in parallel, one per thread
     readReducedBagKeys(s, sc.options, fileName);
     if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&

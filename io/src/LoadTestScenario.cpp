@@ -474,9 +474,7 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
             o.material = std::make_shared<bags::FabricMaterial>(o.material->clone(), yarns);
     }
     // The film's bending stiffness: the plate value also when the key is absent.
-    o.bendingStiffness =
-        readBendingStiffness(s, "bending_stiffness", *o.material, o.thickness,
-                             bags::calcPlateBendingStiffness(*o.material, o.thickness));
+    o.bendingStiffness = readBendingStiffness(s, "bending_stiffness", *o.material, o.thickness);
 }
 
 // -------------------------------------------------------------------------------------- gas
@@ -780,11 +778,9 @@ void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
 }  // namespace
 
 double readBendingStiffness(const ScenarioNode& s, const std::string& key,
-                            const bags::MembraneMaterial& material, double thickness,
-                            double absent) {
+                            const bags::MembraneMaterial& material, double thickness) {
     const std::string raw = getRaw(s, key);
-    if (raw.empty()) return absent;
-    if (raw == "plate") return bags::calcPlateBendingStiffness(material, thickness);
+    if (raw.empty() || raw == "plate") return bags::calcPlateBendingStiffness(material, thickness);
     if (raw == "0") return 0.0;
     const double stiffness = s.getQuantity(key, D::Moment);
     checkRange(s, key, stiffness, 0, true, 1.0, false, "N m",

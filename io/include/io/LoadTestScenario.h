@@ -87,18 +87,17 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file);
 /// kMaxTissueModulus]. Used by the load test's `contact.block.tissue` and the patient's
 /// `bag.body_tissue`. @throws InputError naming the key and what is valid.
 void readTissueLayer(const ScenarioNode& s, bags::RigidContact::Options& c);
-
-/// Reads the film's bending stiffness D [N m] under `key` of s: a moment, `plate` (the
-/// homogeneous film's plate value from `material` and `thickness`,
-/// bags::calcPlateBendingStiffness) or 0 (off); `absent` when s has no such key. Used by the
-/// load test's `membrane.bending_stiffness` and the patient's `bag.bending_stiffness`.
-/// @throws InputError naming the key and what is valid.
-double readBendingStiffness(const ScenarioNode& s, const std::string& key,
-                            const bags::MembraneMaterial& material, double thickness,
-                            double absent);
 inline constexpr double kMinTissueThickness = 0.5e-3;  ///< [m]
 inline constexpr double kMaxTissueThickness = 0.2;     ///< [m]
 inline constexpr double kMinTissueModulus = 1e3;       ///< [Pa]
 inline constexpr double kMaxTissueModulus = 100e6;     ///< [Pa]
+
+/// Reads the film's bending stiffness D [N m] under `key` of s: a moment, `plate` or absent
+/// (the homogeneous film's plate value from `material` and `thickness`,
+/// bags::calcPlateBendingStiffness) or 0 (off). Used by the load test's
+/// `membrane.bending_stiffness` and the patient's `bag.bending_stiffness`.
+/// @throws InputError naming the key and what is valid.
+double readBendingStiffness(const ScenarioNode& s, const std::string& key,
+                            const bags::MembraneMaterial& material, double thickness);
 
 }  // namespace io
