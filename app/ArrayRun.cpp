@@ -78,6 +78,57 @@ void writeFileAtomically(const std::filesystem::path& path, const std::string& d
 
 }  // namespace
 
+namespace {
+
+// A YAML value as one line of text (flow style), for comparison and messages.
+std::string emitFlow(const YAML::Node& n) {
+    YAML::Emitter e;
+    e.SetMapFormat(YAML::Flow);
+    e.SetSeqFormat(YAML::Flow);
+    e << n;
+    return e.c_str();
+}
+
+// The first difference between two scenario trees below `path`, skipping the keys in `free`
+// (dotted paths); "" if none.
+std::string findFirstDifference(const YAML::Node& a, const YAML::Node& b, const std::string& path,
+                                const std::vector<std::string>& free) {
+    auto shown = [](const YAML::Node& n) {
+        return n && !n.IsNull() ? "'" + emitFlow(n) + "'" : std::string("absent");
+    };
+    if (a && b && a.IsMap() && b.IsMap()) {
+        std::vector<std::string> keys;
+        for (const YAML::Node* n : {&a, &b})
+            for (auto it = n->begin(); it != n->end(); ++it) {
+                const std::string k = it->first.as<std::string>();
+                if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
+            }
+        for (const std::string& k : keys) {
+            const std::string p = path.empty() ? k : path + "." + k;
+            if (std::find(free.begin(), free.end(), p) != free.end()) continue;
+            const std::string d = findFirstDifference(a[k], b[k], p, free);
+            if (!d.empty()) return d;
+        }
+        return "";
+    }
+    const bool aHas = a && !a.IsNull(), bHas = b && !b.IsNull();
+    if (aHas != bHas || (aHas && emitFlow(a) != emitFlow(b)))
+        return path + ": " + shown(a) + " here, " + shown(b) + " in the rest state's scenario";
+    return "";
+}
+
+}  // namespace
+
+std::string describeRestDifference(const io::ScenarioFile& run, const io::ScenarioFile& rest) {
+    // What acts only after the settle (the gas schedule, the controller and its network: the
+    // network of a run from rest starts from the bags' gas as it finds it) or only on the
+    // outputs.
+    static const std::vector<std::string> kFree = {"description", "gas",      "control",
+                                                   "pneumatics",  "run.duration", "mat",
+                                                   "output"};
+    return findFirstDifference(run.getRoot().getYaml(), rest.getRoot().getYaml(), "", kFree);
+}
+
 CheckpointHeader readCheckpointHeader(bags::StateReader& r) {
     CheckpointHeader h;
     r.tag("header");
@@ -95,6 +146,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     const bool quiet = control.quiet;
     const std::string& commandLine = control.commandLine;
     bags::StateReader* const resume = control.resume;
+    bags::StateReader* const fromRest = control.fromRest;
     io::PatientOnArrayScenario sc;
     std::filesystem::path outPath;
     std::unique_ptr<io::OutputDir> outDir;
@@ -287,6 +339,29 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         // The caches that shape later roundoff start afresh here, as in a run resumed here.
         poa->resetCaches();
     };
+    // The rest state (docs/output-layout.md#rest-state): written once, when the simulated time
+    // reaches the settle's end; the caches that shape later roundoff start afresh there, as
+    // in a run started from it, so that such a run gives this run's bits.
+    bool restWritten = !(sc.settleTime > 0.0) || fromRest != nullptr;
+    auto saveRestState = [&] {
+        bags::StateWriter w;
+        w.tag("header");
+        w.str(bagsim::kVersion);
+        w.str(file.getFileName());
+        w.str(file.getText());
+        w.pod(std::uint64_t(file.getOverrides().size()));
+        for (const std::string& o : file.getOverrides()) w.str(o);
+        w.pod(poa->getTime());
+        poa->saveState(w);
+        w.tag("end");
+        bags::StateWriter head;
+        head.pod(std::uint64_t(w.getData().size()));
+        head.pod(calcCheckpointHash(w.getData()));
+        writeFileAtomically(outDir->getFile(io::kRestStateFile),
+                            std::string(kRestStateMagic) + head.getData() + w.getData());
+        poa->resetCaches();
+        restWritten = true;
+    };
     auto stop = [&](const std::string& status, const std::string& msg) {
         try {  // the verdict on what was run (the folder stays marked INCOMPLETE)
             writeEvents();
@@ -316,6 +391,20 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         for (size_t i = 0; i < poa->getBagIndices().size(); ++i)
             bags[poa->getBagIndices()[i]] = &poa->updBag(int(i));
         bodySurface = cosim::makeBodySurface(poa->getModel());
+        if (fromRest) {
+            // The body, the bags and the coupling as the settle left them (before the network
+            // is built: it starts from the bags' gas as it finds it).
+            try {
+                poa->loadState(*fromRest);
+                fromRest->tag("end");
+                if (!fromRest->atEnd()) throw bags::StateError("rest state: data after its end");
+            } catch (const bags::StateError& e) {
+                std::cerr << "bagsim: error: cannot start from the rest state in "
+                          << control.fromRestDir << ": " << e.what() << "\n";
+                writer->fail("failed", std::string("rest state refused: ") + e.what());
+                return 2;
+            }
+        }
         if (!resume)
             writer->setShapes(cosim::makeBagSurfaces(*poa), bodySurface.mesh,
                               std::max(sc.outputInterval, end / 60.0), end);
@@ -386,6 +475,23 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             if (!quiet)
                 std::cerr << "  resumed at " << fmt("%.4f s", poa->getTime())
                           << " from the checkpoint\n";
+        } else if (fromRest) {
+            const double t0 = poa->getTime();
+            settled = true;
+            events.push_back({t0, "started from the rest state in " + control.fromRestDir +
+                                      " (the end of its settle)"});
+            writeEvents();
+            outDir->setStatus("running", "the patient on the bags (from the rest state in " +
+                                             control.fromRestDir + fmt(" at %.4f s)", t0));
+            if (!quiet)
+                std::cerr << "  started at " << fmt("%.4f s", t0) << " from the rest state in "
+                          << control.fromRestDir << "\n";
+            record();
+            // The output and checkpoint times of a run from the release, past the start.
+            nextOutput = sc.outputInterval;
+            while (nextOutput <= t0 + 1e-9) nextOutput += sc.outputInterval;
+            if (checkpoints)
+                while (nextCheckpoint <= t0 + 1e-9) nextCheckpoint += sc.checkpointInterval;
         } else {
             events.push_back({0.0, "released onto the bags"});
             writeEvents();
@@ -393,6 +499,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             record();
             nextOutput = sc.outputInterval;
         }
+        // A resumed run wrote its rest state before its checkpoint if the settle had ended.
+        if (resume && poa->getTime() >= sc.settleTime - 1e-9) restWritten = true;
         double lastPrint = wall();
         ProgressEstimate estimate;  // remaining wall time from the last minute's pace
         estimate.add(wall(), poa->getTime());
@@ -463,6 +571,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                               << fmt(" over the last %.0f s)", estimate.getStretch()) << "\n";
                 }
             }
+            if (!restWritten && poa->getTime() >= sc.settleTime - 1e-9) saveRestState();
             if (checkpoints && poa->getTime() >= nextCheckpoint - 1e-9 &&
                 poa->getTime() < end - 1e-9) {
                 while (nextCheckpoint <= poa->getTime() + 1e-9)

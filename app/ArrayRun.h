@@ -19,6 +19,11 @@ struct ArrayRunControl {
     /// A resumed run: the checkpoint read past its header (readCheckpointHeader()); the
     /// output folder is `out`, the folder of the run that wrote it. Null: a new run.
     bags::StateReader* resume = nullptr;
+    /// A run from a rest state (--from-rest): the rest state read past its header; the model
+    /// built from the scenario takes the body's, the bags' and the coupling's state from it
+    /// and runs on from the settle's end. `fromRestDir` names its folder (events, summary).
+    bags::StateReader* fromRest = nullptr;
+    std::string fromRestDir;
     /// [s] simulated: the run stops there as on Ctrl-C, after the macro step that reaches it
     /// (--stop-after, for tests of --resume); negative: never.
     double stopAfter = -1.0;
@@ -52,6 +57,16 @@ inline std::uint64_t calcCheckpointHash(const std::string& data) {
     }
     return h;
 }
+/// A rest-state file: this magic line, then length, hash and data as a checkpoint's; the
+/// data are a checkpoint header (the run that wrote it, the settle's end time), the model's
+/// state (cosim::PatientOnArray::saveState) and an "end" tag.
+inline constexpr const char* kRestStateMagic = "bagsim rest state 1\n";
+/// "" when a run of scenario `run` may start from a rest state written by a run of scenario
+/// `rest` (both with their overrides applied): every key must be the same except those that
+/// act only after the settle or on the outputs (description, gas, control, pneumatics,
+/// run.duration, mat, output). Else the first difference, as "bag.mesh_size: '25 mm' here,
+/// '30 mm' in the rest state's scenario".
+std::string describeRestDifference(const io::ScenarioFile& run, const io::ScenarioFile& rest);
 /// Reads the header of a checkpoint (after the magic line).
 /// @throws bags::StateError if it is not one.
 CheckpointHeader readCheckpointHeader(bags::StateReader& r);

@@ -39,6 +39,7 @@ namespace {
 const char* kHelp =
     "usage: bagsim run SCENARIO.yaml [--out DIR] [--force] [--set KEY=VALUE]...\n"
     "       bagsim run --resume DIR\n"
+    "       bagsim run SCENARIO.yaml --from-rest DIR [--out DIR2] [--set KEY=VALUE]...\n"
     "\n"
     "Runs a scenario and writes its results into an output folder. The scenario kind\n"
     "seed-load-test is the seed study's test rig: one airbag inflated to each gas mass, pressed\n"
@@ -60,6 +61,11 @@ const char* kHelp =
     "                     checkpoint (output.checkpoint_every, 1 s simulated by default), with\n"
     "                     the scenario stored there; its files are cut back to the checkpoint\n"
     "                     and continued, to the same results as a run never stopped\n"
+    "  --from-rest DIR    patient-on-array: start at the end of the settle from the rest state\n"
+    "                     (rest-state.bin) that the run in DIR wrote when its settle ended,\n"
+    "                     instead of releasing the patient again; the scenario must be that\n"
+    "                     run's but for description, gas, control, pneumatics, run.duration,\n"
+    "                     mat and output (docs/output-layout.md#rest-state)\n"
     "  --stop-after TIME  patient-on-array: stop as Ctrl-C would once the simulated time\n"
     "                     reaches TIME (e.g. \"0.3 s\"; for tests of --resume)\n"
     "  -h, --help         this text\n"
@@ -86,6 +92,7 @@ struct Args {
     bool quiet = false;
     bool help = false;
     std::string resume;     // --resume DIR
+    std::string fromRest;   // --from-rest DIR
     std::string stopAfter;  // --stop-after TIME, as written
     std::vector<std::string> sets;
     std::string commandLine;
@@ -115,12 +122,14 @@ Args parseArgs(int argc, char** argv) {
             a.sets.push_back(value("--set"));
         } else if (arg == "--resume" || arg.rfind("--resume=", 0) == 0) {
             a.resume = value("--resume");
+        } else if (arg == "--from-rest" || arg.rfind("--from-rest=", 0) == 0) {
+            a.fromRest = value("--from-rest");
         } else if (arg == "--stop-after" || arg.rfind("--stop-after=", 0) == 0) {
             a.stopAfter = value("--stop-after");
         } else if (arg.rfind("-", 0) == 0 && arg.size() > 1) {
             throw UsageError("unknown option '" + arg +
                              "'; valid: --out DIR, --force, --set KEY=VALUE, --quiet, "
-                             "--resume DIR, --stop-after TIME, --help");
+                             "--resume DIR, --from-rest DIR, --stop-after TIME, --help");
         } else if (a.scenario.empty()) {
             a.scenario = arg;
         } else {
@@ -133,6 +142,15 @@ Args parseArgs(int argc, char** argv) {
                                   std::filesystem::path(a.resume).lexically_normal())
             throw UsageError("--resume " + a.resume + " writes into that folder; --out " + a.out +
                              " does not go with it");
+    }
+    if (!a.fromRest.empty()) {
+        if (!a.resume.empty())
+            throw UsageError("--resume continues a run with its own start; --from-rest does not go "
+                             "with it");
+        if (!a.out.empty() && std::filesystem::path(a.out).lexically_normal() ==
+                                  std::filesystem::path(a.fromRest).lexically_normal())
+            throw UsageError("--out " + a.out + " is the folder of the rest state; a run from "
+                             "rest writes into a folder of its own");
     }
     if (!a.help && a.scenario.empty() && a.resume.empty())
         throw UsageError(
@@ -346,6 +364,70 @@ std::string joinOverrides(const std::vector<std::string>& sets) {
     return s;
 }
 
+// Reads a checkpoint or rest-state file (`magic`, length, hash, then a checkpoint header and
+// the state), checking all of it before anything is touched: into *payload the data after
+// the hash, *header and *scenario (the stored scenario with its overrides). False with the
+// reason in *why. `what` names the file's kind, `cannot` what follows from a bad one, `older`
+// what to do with another version's.
+bool readStateFile(const std::filesystem::path& path, const std::string& magic,
+                   const std::string& what, const std::string& cannot, const std::string& older,
+                   std::string* payload, CheckpointHeader* header, io::ScenarioFile* scenario,
+                   std::string* why) {
+    std::string data;
+    {
+        std::ifstream in(path, std::ios::binary);
+        std::ostringstream s;
+        s << in.rdbuf();
+        data = s.str();
+    }
+    if (data.compare(0, magic.size(), magic) != 0) {
+        *why = path.string() + " is not a bagsim " + what + " (or of another format)";
+        return false;
+    }
+    std::uint64_t length = 0, hash = 0;
+    if (data.size() >= magic.size() + 16) {
+        bags::StateReader head(data.substr(magic.size(), 16));
+        length = head.pod<std::uint64_t>();
+        hash = head.pod<std::uint64_t>();
+    }
+    const size_t have = data.size() < magic.size() + 16 ? 0 : data.size() - magic.size() - 16;
+    if (data.size() < magic.size() + 16 || have != length) {
+        *why = path.string() + " is cut short (" + std::to_string(have) + " of " +
+               std::to_string(length) + " bytes of state); " + cannot;
+        return false;
+    }
+    *payload = data.substr(magic.size() + 16);
+    bags::StateReader reader(*payload);
+    try {
+        *header = readCheckpointHeader(reader);
+    } catch (const bags::StateError& e) {
+        *why = path.string() + ": " + e.what();
+        return false;
+    }
+    if (header->version != bagsim::kVersion) {
+        *why = "its " + what + " was written by bagsim " + header->version + ", this is bagsim " +
+               bagsim::kVersion + "; " + older + " " + header->version +
+               ", or run the scenario again";
+        return false;
+    }
+    if (calcCheckpointHash(*payload) != hash) {
+        *why = path.string() + " is damaged (its data do not match their checksum); " + cannot;
+        return false;
+    }
+    try {
+        *scenario = io::ScenarioFile::parse(header->scenarioText, header->scenarioFile);
+        for (const std::string& o : header->overrides) scenario->applyOverride(o);
+        if (io::readScenarioKind(*scenario) != "patient-on-array") {
+            *why = "its " + what + " is not of a patient-on-array run";
+            return false;
+        }
+    } catch (const io::InputError& e) {
+        *why = "the scenario stored in its " + what + ": " + e.what();
+        return false;
+    }
+    return true;
+}
+
 // bagsim run --resume DIR: the checkpoint's scenario, checked against what was given.
 int runResume(const Args& args, const std::string& stopAfterText) {
     const std::filesystem::path dir(args.resume);
@@ -369,52 +451,14 @@ int runResume(const Args& args, const std::string& stopAfterText) {
     }
     if (!incomplete)
         return refuse("the run there finished (no INCOMPLETE marker); nothing to resume");
-    std::string data;
-    {
-        std::ifstream in(cp, std::ios::binary);
-        std::ostringstream s;
-        s << in.rdbuf();
-        data = s.str();
-    }
-    const std::string magic = kCheckpointMagic;
-    if (data.compare(0, magic.size(), magic) != 0)
-        return refuse(cp.string() + " is not a bagsim checkpoint (or of another format)");
-    // The length and hash of the data, then the data: all of it is checked before anything in
-    // the folder is touched.
-    std::uint64_t length = 0, hash = 0;
-    if (data.size() >= magic.size() + 16) {
-        bags::StateReader head(data.substr(magic.size(), 16));
-        length = head.pod<std::uint64_t>();
-        hash = head.pod<std::uint64_t>();
-    }
-    const size_t have = data.size() < magic.size() + 16 ? 0 : data.size() - magic.size() - 16;
-    if (data.size() < magic.size() + 16 || have != length)
-        return refuse(cp.string() + " is cut short (" + std::to_string(have) + " of " +
-                      std::to_string(length) + " bytes of state); its run cannot be resumed");
-    const std::string payload = data.substr(magic.size() + 16);
-    bags::StateReader reader(payload);
+    std::string payload, why;
     CheckpointHeader header;
-    try {
-        header = readCheckpointHeader(reader);
-    } catch (const bags::StateError& e) {
-        return refuse(cp.string() + ": " + e.what());
-    }
-    if (header.version != bagsim::kVersion)
-        return refuse("its checkpoint was written by bagsim " + header.version + ", this is bagsim " +
-                      bagsim::kVersion + "; resume it with bagsim " + header.version +
-                      ", or run the scenario again");
-    if (calcCheckpointHash(payload) != hash)
-        return refuse(cp.string() + " is damaged (its data do not match their checksum); its run "
-                                    "cannot be resumed");
     io::ScenarioFile file;
-    try {
-        file = io::ScenarioFile::parse(header.scenarioText, header.scenarioFile);
-        for (const std::string& o : header.overrides) file.applyOverride(o);
-        if (io::readScenarioKind(file) != "patient-on-array")
-            return refuse("its checkpoint is not of a patient-on-array run");
-    } catch (const io::InputError& e) {
-        return refuse("the scenario stored in its checkpoint: " + std::string(e.what()));
-    }
+    if (!readStateFile(cp, kCheckpointMagic, "checkpoint", "its run cannot be resumed",
+                       "resume it with bagsim", &payload, &header, &file, &why))
+        return refuse(why);
+    bags::StateReader reader(payload);
+    readCheckpointHeader(reader);  // read above; the model's state follows
     if (!args.scenario.empty()) {
         // A scenario given with --resume must be the one the run was started with.
         io::ScenarioFile given;
@@ -445,6 +489,41 @@ int runResume(const Args& args, const std::string& stopAfterText) {
                   << (header.overrides.empty() ? "" : " and " + joinOverrides(header.overrides))
                   << "\n";
     return runPatientOnArray(file, dir.string(), control);
+}
+
+// bagsim run SCENARIO --from-rest DIR: the rest state in DIR, checked against the scenario.
+int runFromRest(const Args& args, const io::ScenarioFile& file, ArrayRunControl control) {
+    const std::filesystem::path dir(args.fromRest);
+    const std::filesystem::path path = dir / io::kRestStateFile;
+    auto refuse = [&](const std::string& why) {
+        std::cerr << "bagsim: error: cannot start from the rest state in " << dir.string() << ": "
+                  << why << "\n";
+        return 2;
+    };
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec))
+        return refuse("no such folder; --from-rest takes the output folder of a patient-on-array "
+                      "run whose settle ended");
+    if (!std::filesystem::exists(path, ec))
+        return refuse("it holds no rest state (" + std::string(io::kRestStateFile) +
+                      "): a patient-on-array run writes one when its settle ends (run.settle_time "
+                      "> 0); a run stopped before that has none");
+    std::string payload, why;
+    CheckpointHeader header;
+    io::ScenarioFile rest;
+    if (!readStateFile(path, kRestStateMagic, "rest state", "it cannot be started from",
+                       "start from it with bagsim", &payload, &header, &rest, &why))
+        return refuse(why);
+    const std::string diff = describeRestDifference(file, rest);
+    if (!diff.empty())
+        return refuse(args.scenario + " is not the scenario of the run that wrote it (" + diff +
+                      "); only description, gas, control, pneumatics, run.duration, mat and "
+                      "output may differ");
+    bags::StateReader reader(payload);
+    readCheckpointHeader(reader);  // read above; the model's state follows
+    control.fromRest = &reader;
+    control.fromRestDir = dir.string();
+    return runPatientOnArray(file, args.out, control);
 }
 
 int runRunCommand(int argc, char** argv) {
@@ -490,6 +569,9 @@ int runRunCommand(int argc, char** argv) {
         file = io::ScenarioFile::load(args.scenario);
         for (const std::string& s : args.sets) file.applyOverride(s);
         const std::string kind = io::readScenarioKind(file);
+        if (!args.fromRest.empty() && kind != "patient-on-array")
+            throw io::InputError(args.scenario, 0, "kind",
+                                 "--from-rest is for patient-on-array runs only");
         if (stopAfter >= 0.0 && kind != "patient-on-array")
             throw io::InputError(args.scenario, 0, "kind",
                                  "--stop-after is for patient-on-array runs only");
@@ -501,6 +583,7 @@ int runRunCommand(int argc, char** argv) {
             control.quiet = args.quiet;
             control.commandLine = args.commandLine;
             control.stopAfter = stopAfter;
+            if (!args.fromRest.empty()) return runFromRest(args, file, control);
             return runPatientOnArray(file, args.out, control);
         }
         sc = io::readLoadTestScenario(file);

@@ -8,6 +8,7 @@
 #include <bagsim/Version.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -174,4 +175,73 @@ TEST(Resume, PneumaticTurnWithNoisySensorsEndsByteIdentical) {
         << readLog(dir / "resumed.log");
     expectSameCsvFiles(dir / "whole", out);
     EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
+}
+
+namespace {
+
+// The rows of a CSV file (header dropped) whose first column, the time, is at least t0.
+std::string rowsFrom(const fs::path& csv, double t0) {
+    std::istringstream in(readFile(csv));
+    std::string line, out;
+    std::getline(in, line);
+    while (std::getline(in, line))
+        if (std::stod(line.substr(0, line.find(','))) >= t0 - 1e-9) out += line + "\n";
+    return out;
+}
+
+}  // namespace
+
+TEST(FromRest, ATurnFromTheRestStateOfASettleGivesTheWholeRunsBits) {
+    // bagsim run --from-rest (docs/output-layout.md#rest-state). Reference: the run that
+    // settled and turned in one go. A run of the same scenario started from its rest state,
+    // and one started from the rest state of a settle-only run (run.duration 0 s, a free
+    // key), write the same rows of tilt.csv, bags.csv and regions.csv from the settle's end
+    // on, bit for bit. A scenario that differs in the model is refused naming the key, and
+    // leaves no folder.
+    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/from-rest";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string scenario = "\"" + kScenarios + "turn-left-coarse.yaml\"";
+    const std::string settle = " --set run.settle_time='0.06 s' --set output.every='10 ms' --quiet";
+    const std::string sets = settle + " --set run.duration='0.04 s'";
+    auto out = [&](const std::string& name) { return " --out \"" + (dir / name).string() + "\""; };
+    auto from = [&](const std::string& name) {
+        return " --from-rest \"" + (dir / name).string() + "\"";
+    };
+    ASSERT_EQ(runBagsim(scenario + out("whole") + sets, dir / "whole.log"), 0)
+        << readLog(dir / "whole.log");
+    ASSERT_TRUE(fs::exists(dir / "whole" / "rest-state.bin"));
+    ASSERT_EQ(runBagsim(scenario + out("settle") + settle + " --set run.duration='0 s'",
+                        dir / "settle.log"),
+              0)
+        << readLog(dir / "settle.log");
+    ASSERT_EQ(runBagsim(scenario + out("turned") + sets + from("whole"), dir / "turned.log"), 0)
+        << readLog(dir / "turned.log");
+    ASSERT_EQ(runBagsim(scenario + out("turned2") + sets + from("settle"), dir / "turned2.log"), 0)
+        << readLog(dir / "turned2.log");
+    for (const char* csv : {"tilt.csv", "bags.csv", "regions.csv"}) {
+        const std::string whole = rowsFrom(dir / "whole" / csv, 0.06);
+        EXPECT_GT(std::count(whole.begin(), whole.end(), '\n'), 4) << csv;
+        EXPECT_EQ(rowsFrom(dir / "turned" / csv, 0.0), whole) << csv;
+        EXPECT_EQ(rowsFrom(dir / "turned2" / csv, 0.0), whole) << csv;
+    }
+    EXPECT_NE(readFile(dir / "turned" / "events.csv").find("started from the rest state in"),
+              std::string::npos);
+
+    EXPECT_EQ(runBagsim(scenario + out("other") + sets + " --set bag.body_friction=0.4" +
+                            from("settle"),
+                        dir / "other.log"),
+              2);
+    EXPECT_NE(readLog(dir / "other.log")
+                  .find("(bag.body_friction: '0.4' here, absent in the rest state's scenario)"),
+              std::string::npos)
+        << readLog(dir / "other.log");
+    EXPECT_FALSE(fs::exists(dir / "other"));
+    const std::string rest = readFile(dir / "settle" / "rest-state.bin");
+    std::string damaged = rest;
+    damaged[damaged.size() - 20] ^= 1;
+    writeFile(dir / "settle" / "rest-state.bin", damaged);
+    EXPECT_EQ(runBagsim(scenario + out("damaged") + sets + from("settle"), dir / "damaged.log"), 2);
+    EXPECT_NE(readLog(dir / "damaged.log").find("rest-state.bin is damaged"), std::string::npos)
+        << readLog(dir / "damaged.log");
 }

@@ -62,6 +62,9 @@ class OutputDir {
 
 /// The checkpoint a patient-on-array run keeps in its output folder (docs/output-layout.md).
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
+/// The state at the end of a patient-on-array run's settle (docs/output-layout.md#rest-state),
+/// from which `bagsim run --from-rest DIR` starts another run of the same patient and array.
+inline constexpr const char* kRestStateFile = "rest-state.bin";
 
 /// True if a curve stopped on a numerical failure (LoadCurve::failure says "no convergence
 /// ..."): its branch ends early and the run's status is "partial". A curve that bottomed out
