@@ -216,6 +216,20 @@ void ScenarioFile::applyOverride(const std::string& assignment) {
     applyOverride(trimBlanks(assignment.substr(0, eq)), trimBlanks(assignment.substr(eq + 1)));
 }
 
+ScenarioFile::ScenarioFile(const ScenarioFile& other)
+    : m_source(other.m_source ? std::make_shared<Source>(*other.m_source) : nullptr),
+      m_root(YAML::Clone(other.m_root)) {}
+
+ScenarioFile& ScenarioFile::operator=(const ScenarioFile& other) {
+    if (this != &other) {
+        ScenarioFile copy(other);
+        *this = std::move(copy);
+    }
+    return *this;
+}
+
+ScenarioFile::~ScenarioFile() = default;
+
 const std::string& ScenarioFile::getFileName() const { return m_source->fileName; }
 const std::string& ScenarioFile::getText() const { return m_source->text; }
 const std::vector<std::string>& ScenarioFile::getOverrides() const { return m_source->overrides; }

@@ -185,3 +185,22 @@ TEST(Scenario, StemIsFileNameWithoutExtension) {
     EXPECT_EQ(ScenarioFile::parse("kind: a\n", "scenarios/seed-load-test.yaml").getStem(),
               "seed-load-test");
 }
+
+// A copy is its own scenario: the diagnosis copies the data's scenario for each co-simulation
+// and sets its keys (half the macro step, a trial gas mass); the original must not take them.
+TEST(Scenario, OverridesOfACopyLeaveTheOriginal) {
+    const ScenarioFile original = ScenarioFile::parse("kind: x\ncoupling:\n  macro_step: 10 ms\n", "s.yaml");
+    ScenarioFile copy = original;
+    copy.applyOverride("coupling.macro_step", "5 ms");
+    ScenarioFile assigned;
+    assigned = original;
+    assigned.applyOverride("array.gas_mass", "4 g");
+    EXPECT_TRUE(original.getOverrides().empty());
+    EXPECT_EQ(original.getRoot().getSection("coupling").getString("macro_step"), "10 ms");
+    EXPECT_FALSE(original.getRoot().has("array"));
+    EXPECT_EQ(copy.getRoot().getSection("coupling").getString("macro_step"), "5 ms");
+    ASSERT_EQ(copy.getOverrides().size(), 1u);
+    EXPECT_FALSE(copy.getRoot().has("array"));
+    EXPECT_EQ(assigned.getOverrides().size(), 1u);
+    EXPECT_EQ(assigned.getRoot().getSection("coupling").getString("macro_step"), "10 ms");
+}

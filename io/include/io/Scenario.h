@@ -53,6 +53,15 @@ class ScenarioFile {
     /// Parses text as if read from a file called `name` (for tests and generated scenarios).
     static ScenarioFile parse(const std::string& text, const std::string& name);
 
+    /// A copy is a scenario of its own: overrides applied to it leave the original as it was
+    /// (and the original's later overrides leave the copy).
+    ScenarioFile() = default;  ///< empty until assigned a loaded or parsed one
+    ScenarioFile(const ScenarioFile& other);
+    ScenarioFile& operator=(const ScenarioFile& other);
+    ScenarioFile(ScenarioFile&&) noexcept = default;
+    ScenarioFile& operator=(ScenarioFile&&) noexcept = default;
+    ~ScenarioFile();
+
     /// Replaces (or adds) the value at a dotted key path, e.g. ("airbag.mesh_size", "5 mm").
     /// The value is parsed as YAML, so "[3.5 g, 2 g]" is a list. Errors about that key then
     /// point at "--set KEY" instead of a line of the file.
