@@ -7,6 +7,7 @@
 #include <io/Units.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -49,18 +50,25 @@ double parseCell(const std::string& cell, const std::string& file, int line,
     return v;
 }
 
-// The manifest's node at a dotted key of `channels` or `protocol` (for errors found after the
-// manifest was read: against the scenario).
-[[noreturn]] void failAtManifest(const diagnose::PatientMeasurement& data, const std::string& section,
-                                 const std::string& key, const std::string& message) {
+// The manifest's node at a dotted key of `channels`, `protocol` or `overrides`, of the root or
+// (test >= 0) of the manifest's test (for errors found after the manifest was read: against the
+// scenario).
+[[noreturn]] void failAtManifest(const diagnose::PatientMeasurement& data, int test,
+                                 const std::string& section, const std::string& key,
+                                 const std::string& message) {
     const std::string manifest = (fs::path(data.folder) / kMeasuredManifest).string();
     const ScenarioFile m = ScenarioFile::parse(readInputFile(manifest, kMaxScenarioBytes,
                                                              "measured-data manifest"),
                                                manifest);
-    const ScenarioNode root = m.getRoot();
-    if (key.empty() || !root.has(section) || !root.getSection(section).has(key)) root.fail(section, message);
-    root.getSection(section).fail(key, message);
+    ScenarioNode owner = m.getRoot();
+    if (test >= 0) owner = owner.get("tests").getElements().at(size_t(test));
+    if (key.empty() || !owner.has(section) || !owner.getSection(section).has(key)) owner.fail(section, message);
+    owner.getSection(section).fail(key, message);
     throw InputError(manifest, 0, section + "." + key, message);  // not reached
+}
+[[noreturn]] void failAtManifest(const diagnose::PatientMeasurement& data, const std::string& section,
+                                 const std::string& key, const std::string& message) {
+    failAtManifest(data, -1, section, key, message);
 }
 
 }  // namespace
@@ -193,32 +201,16 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
     return m;
 }
 
-diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder) {
-    const fs::path dir(folder);
+namespace {
+
+// The channels of one record: `owner`'s section `channels` (the manifest's root, or a test).
+diagnose::PatientChannels readChannelsSection(const ScenarioNode& owner, const fs::path& dir) {
     std::error_code ec;
-    const ScenarioFile file = manifest::readManifest(folder);
-    const ScenarioNode root = file.getRoot();
-    root.checkKeys({"format", "scenario", "protocol", "channels"}, {"description"});
-    diagnose::PatientMeasurement data;
-    data.folder = folder;
-    data.description = root.getString("description", "");
-    data.scenarioFile = manifest::readManifestScenario(root, folder, "the patient-on-array scenario");
-
-    const ScenarioNode p = root.getSection("protocol");
-    p.checkKeys({"kind"}, {"settle_time", "duration"});
-    p.getChoice("kind", {kPatientMeasuredKind});
-    for (const char* key : {"settle_time", "duration"}) {
-        if (!p.has(key)) continue;
-        const double v = p.getQuantity(key, Dimension::Time);
-        if (!(v >= 0.0)) p.fail(key, "must be zero or more");
-        (std::string(key) == "duration" ? data.protocol.duration : data.protocol.settleTime) = v;
-    }
-
-    const ScenarioNode ch = root.getSection("channels");
+    const ScenarioNode ch = owner.getSection("channels");
     ch.checkKeys({}, {"mat", "tilt", "bag_pressures"});
     if (!ch.has("mat") && !ch.has("tilt"))
-        root.fail("channels", "names no 'mat' and no 'tilt'; valid: a pressure mat's file, a tilt "
-                              "sensor's file, or both (bag_pressures optional)");
+        owner.fail("channels", "names no 'mat' and no 'tilt'; valid: a pressure mat's file, a tilt "
+                               "sensor's file, or both (bag_pressures optional)");
     auto channelPath = [&](const ScenarioNode& node, const char* key) {
         const std::string name = node.getString(key);
         const fs::path f = fs::path(name).is_absolute() ? fs::path(name) : dir / name;
@@ -227,7 +219,7 @@ diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder) 
                                "); valid: a CSV file in the folder (docs/measured-data.md)");
         return f.string();
     };
-    diagnose::PatientChannels& c = data.channels;
+    diagnose::PatientChannels c;
     if (ch.has("mat")) {
         c.matFile = channelPath(ch, "mat");
         c.mat = readMatFramesCsv(c.matFile, c.matFile);
@@ -269,8 +261,136 @@ diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder) 
         std::sort(c.bags.begin(), c.bags.end(),
                   [](const auto& a, const auto& b) { return a.bag < b.bag; });
     }
+    return c;
+}
+
+// A test's name: it names the test's co-simulations' folders, so a plain word.
+bool isTestName(const std::string& n) {
+    if (n.empty() || n.size() > 64 || n[0] == '.' || n[0] == '-') return false;
+    return std::all_of(n.begin(), n.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-' || ch == '_';
+    });
+}
+
+// The scenario keys a test may not change: the protocol's, every test's alike.
+bool isProtocolKey(const std::string& k) {
+    return k == "kind" || k == "run.settle_time" || k == "run.duration" || k == "run" ;
+}
+
+std::vector<diagnose::PatientTest> readTestsSection(const ScenarioNode& root, const fs::path& dir) {
+    const ScenarioNode list = root.get("tests");
+    std::vector<diagnose::PatientTest> tests;
+    std::map<std::string, int> names;  // name, line
+    for (const ScenarioNode& t : list.getElements()) {
+        t.checkKeys({"name", "channels"}, {"overrides"});
+        diagnose::PatientTest test;
+        test.name = t.getString("name");
+        if (!isTestName(test.name))
+            t.fail("name", "\"" + test.name + "\" is not a test's name; valid: 1-64 letters, digits, "
+                           "'.', '-' and '_', not starting with '.' or '-' (it names the test's "
+                           "co-simulations' folders), e.g. gas-4.0g");
+        const auto [it, added] = names.emplace(test.name, t.getLine("name"));
+        if (!added)
+            t.fail("name", "the test \"" + test.name + "\" is named twice (first on line " +
+                               std::to_string(it->second) + "); valid: one name per test");
+        if (t.has("overrides")) {
+            const ScenarioNode o = t.getSection("overrides");
+            if (!o.isMap() && !o.isNull())
+                t.fail("overrides", "must be a section of scenario keys and values, e.g. "
+                                    "{array.gas_mass: 4.0 g}");
+            for (auto kv = o.getYaml().begin(); o.isMap() && kv != o.getYaml().end(); ++kv) {
+                const std::string key = kv->first.as<std::string>();
+                if (isProtocolKey(key))
+                    o.fail(key, "a test cannot change '" + key + "'; valid: any other scenario key "
+                                "(the protocol's settle_time and duration are every test's)");
+                std::string value;
+                if (kv->second.IsScalar()) {
+                    value = kv->second.Scalar();
+                } else {
+                    YAML::Emitter e;
+                    e << YAML::Flow << kv->second;
+                    value = e.c_str();
+                }
+                test.overrides.emplace_back(key, value);
+            }
+        }
+        test.channels = readChannelsSection(t, dir);
+        tests.push_back(std::move(test));
+    }
+    if (tests.empty())
+        root.fail("tests", "is an empty list; valid: one entry per test, each with a name, its "
+                           "overrides and its channels (docs/measured-data.md#several-tests)");
+    return tests;
+}
+
+}  // namespace
+
+diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder) {
+    const fs::path dir(folder);
+    const ScenarioFile file = manifest::readManifest(folder);
+    const ScenarioNode root = file.getRoot();
+    root.checkKeys({"format", "scenario", "protocol"}, {"description", "channels", "tests"});
+    diagnose::PatientMeasurement data;
+    data.folder = folder;
+    data.description = root.getString("description", "");
+    data.scenarioFile = manifest::readManifestScenario(root, folder, "the patient-on-array scenario");
+
+    const ScenarioNode p = root.getSection("protocol");
+    p.checkKeys({"kind"}, {"settle_time", "duration"});
+    p.getChoice("kind", {kPatientMeasuredKind});
+    for (const char* key : {"settle_time", "duration"}) {
+        if (!p.has(key)) continue;
+        const double v = p.getQuantity(key, Dimension::Time);
+        if (!(v >= 0.0)) p.fail(key, "must be zero or more");
+        (std::string(key) == "duration" ? data.protocol.duration : data.protocol.settleTime) = v;
+    }
+    if (root.has("channels") && root.has("tests"))
+        root.fail("tests", "the manifest has both 'channels' and 'tests'; valid: 'channels' for one "
+                           "record, or 'tests' (a list, each test with its own channels)");
+    if (!root.has("channels") && !root.has("tests"))
+        root.fail("channels", "the manifest has neither 'channels' nor 'tests'; valid: 'channels' "
+                              "for one record, or 'tests', a list of records each with its "
+                              "'name', 'overrides' and 'channels' (docs/measured-data.md)");
+    if (root.has("channels")) data.channels = readChannelsSection(root, dir);
+    else data.tests = readTestsSection(root, dir);
     return data;
 }
+
+namespace {
+
+// A record's channels against the scenario it is simulated with (test >= 0: the manifest's test).
+void checkAgainstScenario(const diagnose::PatientMeasurement& data, int test,
+                          const diagnose::PatientChannels& c, const PatientOnArrayScenario& sc) {
+    if (!c.mat.empty() && (c.mat.rows != sc.mat.rows || c.mat.columns != sc.mat.columns))
+        failAtManifest(data, test, "channels", "mat",
+                       "the mat file " + c.matFile + " has " + std::to_string(c.mat.rows) + " x " +
+                           std::to_string(c.mat.columns) + " sensels, the scenario's mat " +
+                           std::to_string(sc.mat.rows) + " x " + std::to_string(sc.mat.columns) +
+                           "; valid: the scenario's mat section (rows, columns) of the mat the "
+                           "data were recorded with");
+    const int nbags = sc.options.layout.rows * sc.options.layout.columns;
+    for (const diagnose::BagPressureChannel& b : c.bags)
+        if (b.bag >= nbags)
+            failAtManifest(data, test, "channels", "bag_pressures",
+                           "bag " + std::to_string(b.bag) + " (" + b.file + ") is not in the array of " +
+                               std::to_string(nbags) + " bags; valid: 0 to " +
+                               std::to_string(nbags - 1));
+    const double end = sc.getEndTime() + 1e-9;
+    auto checkSpan = [&](const std::vector<double>& t, const std::string& key, const std::string& f) {
+        if (t.empty()) return;
+        if (t.front() < -1e-9 || t.back() > end)
+            failAtManifest(data, test, "channels", key,
+                           f + " runs from " + fmt("%g", t.front()) + " s to " + fmt("%g", t.back()) +
+                               " s; valid: samples from the release (0 s) to the run's end, " +
+                               fmt("%g s", sc.getEndTime()) +
+                               " (run.settle_time + run.duration, with the protocol's)");
+    };
+    checkSpan(c.mat.time, "mat", c.matFile);
+    checkSpan(c.tilt.time, "tilt", c.tiltFile);
+    for (const diagnose::BagPressureChannel& b : c.bags) checkSpan(b.pressure.time, "bag_pressures", b.file);
+}
+
+}  // namespace
 
 PatientMeasuredScenario readPatientMeasuredScenario(const diagnose::PatientMeasurement& data) {
     ScenarioFile file = ScenarioFile::load(data.scenarioFile);
@@ -293,55 +413,39 @@ PatientMeasuredScenario readPatientMeasuredScenario(const diagnose::PatientMeasu
                                    " cannot run this protocol: " + e.getMessage());
         throw;
     }
-    const diagnose::PatientChannels& c = data.channels;
-    if (!c.mat.empty() && (c.mat.rows != sc.mat.rows || c.mat.columns != sc.mat.columns))
-        failAtManifest(data, "channels", "mat",
-                       "the mat file " + c.matFile + " has " + std::to_string(c.mat.rows) + " x " +
-                           std::to_string(c.mat.columns) + " sensels, the scenario's mat " +
-                           std::to_string(sc.mat.rows) + " x " + std::to_string(sc.mat.columns) +
-                           "; valid: the scenario's mat section (rows, columns) of the mat the "
-                           "data were recorded with");
-    const int nbags = sc.options.layout.rows * sc.options.layout.columns;
-    for (const diagnose::BagPressureChannel& b : c.bags)
-        if (b.bag >= nbags)
-            failAtManifest(data, "channels", "bag_pressures",
-                           "bag " + std::to_string(b.bag) + " (" + b.file + ") is not in the array of " +
-                               std::to_string(nbags) + " bags; valid: 0 to " +
-                               std::to_string(nbags - 1));
-    const double end = sc.getEndTime() + 1e-9;
-    auto checkSpan = [&](const std::vector<double>& t, const std::string& key, const std::string& f) {
-        if (t.empty()) return;
-        if (t.front() < -1e-9 || t.back() > end)
-            failAtManifest(data, "channels", key,
-                           f + " runs from " + fmt("%g", t.front()) + " s to " + fmt("%g", t.back()) +
-                               " s; valid: samples from the release (0 s) to the run's end, " +
-                               fmt("%g s", sc.getEndTime()) +
-                               " (run.settle_time + run.duration, with the protocol's)");
-    };
-    checkSpan(c.mat.time, "mat", c.matFile);
-    checkSpan(c.tilt.time, "tilt", c.tiltFile);
-    for (const diagnose::BagPressureChannel& b : c.bags) checkSpan(b.pressure.time, "bag_pressures", b.file);
-    return {file, sc};
+    PatientMeasuredScenario out{file, sc, {}};
+    if (data.tests.empty()) {
+        checkAgainstScenario(data, -1, data.channels, sc);
+        return out;
+    }
+    for (size_t i = 0; i < data.tests.size(); ++i) {
+        const diagnose::PatientTest& t = data.tests[i];
+        PatientMeasuredTestScenario ts{t.name, file, {}};
+        try {
+            for (const auto& [k, v] : t.overrides) ts.file.applyOverride(k, v);
+            ts.scenario = readPatientOnArrayScenario(ts.file);
+        } catch (const InputError& e) {
+            for (const auto& [k, v] : t.overrides)
+                if (e.getWhere() == "--set " + k)
+                    failAtManifest(data, int(i), "overrides", k,
+                                   "the test \"" + t.name + "\": " + e.getMessage() +
+                                       "; valid: a key and value of the scenario " + data.scenarioFile +
+                                       " (docs/scenario-reference.md)");
+            throw;
+        }
+        checkAgainstScenario(data, int(i), t.channels, ts.scenario);
+        out.tests.push_back(std::move(ts));
+    }
+    return out;
 }
 
-std::vector<std::string> writePatientMeasuredData(const std::string& folder,
-                                                  const diagnose::PatientMeasurement& data,
-                                                  const std::string& scenarioText,
-                                                  const std::string& comment) {
-    const fs::path dir(folder);
-    std::vector<std::string> names;
-    csv::writeFolderFile(dir, "scenario.yaml", scenarioText, names);
-    const diagnose::PatientChannels& c = data.channels;
-    std::ostringstream m;
-    m << comment << "format: " << kMeasuredFormat << "\n"
-      << "scenario: scenario.yaml\n";
-    if (!data.description.empty()) m << "description: \"" << data.description << "\"\n";
-    m << "protocol:\n  kind: " << kPatientMeasuredKind << "\n";
-    if (data.protocol.settleTime >= 0.0)
-        m << "  settle_time: " << fmt("%.9g", data.protocol.settleTime) << " s\n";
-    if (data.protocol.duration >= 0.0)
-        m << "  duration: " << fmt("%.9g", data.protocol.duration) << " s\n";
-    m << "channels:\n";
+namespace {
+
+// One record's channel files, named with `prefix` ("" or "<test>-"), and its `channels` section
+// of the manifest indented by `indent`.
+void writeChannels(const fs::path& dir, const std::string& prefix, const diagnose::PatientChannels& c,
+                   const std::string& indent, std::ostringstream& m, std::vector<std::string>& names) {
+    m << indent << "channels:\n";
     if (!c.mat.empty()) {
         std::ostringstream o;
         o << "# pressure mat export: " << c.mat.rows << " rows along the bed (row 1 at the foot end) x "
@@ -356,8 +460,8 @@ std::vector<std::string> writePatientMeasuredData(const std::string& folder,
                 o << "\n";
             }
         }
-        csv::writeFolderFile(dir, "mat.csv", o.str(), names);
-        m << "  mat: mat.csv\n";
+        csv::writeFolderFile(dir, prefix + "mat.csv", o.str(), names);
+        m << indent << "  mat: " << prefix << "mat.csv\n";
     }
     if (!c.tilt.empty()) {
         std::ostringstream o;
@@ -369,19 +473,52 @@ std::vector<std::string> writePatientMeasuredData(const std::string& folder,
             if (tho) o << "," << fmt("%.4f", c.tilt.thorax[k] * 180.0 / kPi);
             o << "\n";
         }
-        csv::writeFolderFile(dir, "tilt.csv", o.str(), names);
-        m << "  tilt: tilt.csv\n";
+        csv::writeFolderFile(dir, prefix + "tilt.csv", o.str(), names);
+        m << indent << "  tilt: " << prefix << "tilt.csv\n";
     }
-    if (!c.bags.empty()) m << "  bag_pressures:\n";
+    if (!c.bags.empty()) m << indent << "  bag_pressures:\n";
     for (const diagnose::BagPressureChannel& b : c.bags) {
-        const std::string name = "bag" + std::to_string(b.bag) + "-pressure.csv";
+        const std::string name = prefix + "bag" + std::to_string(b.bag) + "-pressure.csv";
         std::ostringstream o;
         o << "time_s,pressure_kPa\n";
         for (size_t k = 0; k < b.pressure.time.size(); ++k)
             o << fmt("%.4f", b.pressure.time[k]) << "," << fmt("%.5f", b.pressure.value[k] * 1e-3)
               << "\n";
         csv::writeFolderFile(dir, name, o.str(), names);
-        m << "    - {bag: " << b.bag << ", file: " << name << "}\n";
+        m << indent << "    - {bag: " << b.bag << ", file: " << name << "}\n";
+    }
+}
+
+}  // namespace
+
+std::vector<std::string> writePatientMeasuredData(const std::string& folder,
+                                                  const diagnose::PatientMeasurement& data,
+                                                  const std::string& scenarioText,
+                                                  const std::string& comment) {
+    const fs::path dir(folder);
+    std::vector<std::string> names;
+    csv::writeFolderFile(dir, "scenario.yaml", scenarioText, names);
+    std::ostringstream m;
+    m << comment << "format: " << kMeasuredFormat << "\n"
+      << "scenario: scenario.yaml\n";
+    if (!data.description.empty()) m << "description: \"" << data.description << "\"\n";
+    m << "protocol:\n  kind: " << kPatientMeasuredKind << "\n";
+    if (data.protocol.settleTime >= 0.0)
+        m << "  settle_time: " << fmt("%.9g", data.protocol.settleTime) << " s\n";
+    if (data.protocol.duration >= 0.0)
+        m << "  duration: " << fmt("%.9g", data.protocol.duration) << " s\n";
+    if (data.tests.empty()) {
+        writeChannels(dir, "", data.channels, "", m, names);
+    } else {
+        m << "tests:\n";
+        for (const diagnose::PatientTest& t : data.tests) {
+            m << "  - name: " << t.name << "\n";
+            if (!t.overrides.empty()) {
+                m << "    overrides:\n";
+                for (const auto& [k, v] : t.overrides) m << "      " << k << ": " << v << "\n";
+            }
+            writeChannels(dir, t.name + "-", t.channels, "    ", m, names);
+        }
     }
     csv::writeFolderFile(dir, kMeasuredManifest, m.str(), names);
     return names;

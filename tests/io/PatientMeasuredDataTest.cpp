@@ -307,3 +307,144 @@ TEST_F(PatientMeasuredDataTest, WrittenDataReadBackTheSame) {
     EXPECT_EQ(r.channels.bags[1].bag, 17);
     EXPECT_NEAR(r.channels.bags[1].pressure.value[1], 21e3, 1e-2);
 }
+
+// ------------------------------------------------------------------ several tests
+
+namespace {
+
+const std::string kTestsManifest =
+    "format: bagsim-measured-data 1\n"                                                 // 1
+    "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/supine-on-array-coarse.yaml\n"    // 2
+    "protocol:\n"                                                                      // 3
+    "  kind: patient-on-array\n"                                                       // 4
+    "  settle_time: 0.3 s\n"                                                           // 5
+    "tests:\n"                                                                         // 6
+    "  - name: gas-4.0g\n"                                                             // 7
+    "    overrides: {array.gas_mass: 4.0 g}\n"                                         // 8
+    "    channels:\n"                                                                  // 9
+    "      mat: full.csv\n"                                                            // 10
+    "      bag_pressures: [{bag: 17, file: b17.csv}]\n"                                // 11
+    "  - name: gas-5.0g\n"                                                             // 12
+    "    overrides:\n"                                                                 // 13
+    "      array.gas_mass: 5.0 g\n"                                                    // 14
+    "      bag.body_tissue: {thickness: 10 mm, modulus: 50 kPa}\n"                     // 15
+    "    channels:\n"                                                                  // 16
+    "      tilt: tilt.csv\n";                                                          // 17
+
+}  // namespace
+
+TEST_F(PatientMeasuredDataTest, TestsReadWithTheirOverridesAndChannels) {
+    write("full.csv", makeFullMat({0.1, 0.2}));
+    write("measured.yaml", kTestsManifest);
+    const diagnose::PatientMeasurement d = io::readPatientMeasuredData(m_dir.string());
+    EXPECT_TRUE(d.channels.mat.empty());
+    ASSERT_EQ(d.tests.size(), 2u);
+    EXPECT_EQ(d.tests[0].name, "gas-4.0g");
+    ASSERT_EQ(d.tests[0].overrides.size(), 1u);
+    EXPECT_EQ(d.tests[0].overrides[0].first, "array.gas_mass");
+    EXPECT_EQ(d.tests[0].overrides[0].second, "4.0 g");
+    EXPECT_EQ(d.tests[0].channels.mat.rows, 64);
+    ASSERT_EQ(d.tests[0].channels.bags.size(), 1u);
+    EXPECT_TRUE(d.tests[1].channels.mat.empty());
+    EXPECT_EQ(d.tests[1].channels.tilt.time.size(), 3u);
+    ASSERT_EQ(d.tests[1].overrides.size(), 2u);
+    // Each test's scenario: the protocol's settle time, then its own keys.
+    const io::PatientMeasuredScenario s = io::readPatientMeasuredScenario(d);
+    ASSERT_EQ(s.tests.size(), 2u);
+    EXPECT_NEAR(s.tests[0].scenario.options.layout.gasMass, 4.0e-3, 1e-12);
+    EXPECT_NEAR(s.tests[1].scenario.options.layout.gasMass, 5.0e-3, 1e-12);
+    EXPECT_NEAR(s.tests[1].scenario.settleTime, 0.3, 1e-12);
+    EXPECT_NEAR(s.scenario.options.layout.gasMass, 4.5e-3, 1e-12);  // the scenario's, untouched
+}
+
+TEST_F(PatientMeasuredDataTest, TestsWrittenReadBackTheSame) {
+    write("full.csv", makeFullMat({0.1, 0.2}, 2.5));
+    write("measured.yaml", kTestsManifest);
+    const diagnose::PatientMeasurement d = io::readPatientMeasuredData(m_dir.string());
+    const fs::path out = m_dir / "written";
+    fs::create_directories(out);
+    io::writePatientMeasuredData(out.string(), d, "kind: patient-on-array\n", "# synthetic\n");
+    EXPECT_TRUE(fs::exists(out / "gas-4.0g-mat.csv"));
+    EXPECT_TRUE(fs::exists(out / "gas-5.0g-tilt.csv"));
+    const diagnose::PatientMeasurement r = io::readPatientMeasuredData(out.string());
+    ASSERT_EQ(r.tests.size(), 2u);
+    EXPECT_EQ(r.tests[1].name, "gas-5.0g");
+    EXPECT_EQ(r.tests[1].overrides, d.tests[1].overrides);
+    EXPECT_NEAR(r.tests[0].channels.mat.pressure[1][5], 2.5 * 133.322387415, 1e-2 * 133.3);
+    EXPECT_NEAR(r.tests[1].channels.tilt.pelvis[2], d.tests[1].channels.tilt.pelvis[2], 1e-6);
+}
+
+TEST_F(PatientMeasuredDataTest, ChannelsAndTestsTogetherAreRefused) {
+    write("measured.yaml", kManifest + "tests: []\n");
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getKey(), "tests");
+    EXPECT_EQ(e.getLine(), 12);
+    EXPECT_NE(e.getMessage().find("both 'channels' and 'tests'; valid: 'channels' for one record, or "
+                                  "'tests'"),
+              std::string::npos)
+        << e.what();
+    write("measured.yaml", kManifest.substr(0, kManifest.find("channels:")));
+    const io::InputError n = readError();
+    EXPECT_NE(n.getMessage().find("neither 'channels' nor 'tests'"), std::string::npos) << n.what();
+    write("measured.yaml", kManifest.substr(0, kManifest.find("channels:")) + "tests: []\n");
+    const io::InputError z = readError();
+    EXPECT_EQ(z.getLine(), 6);
+    EXPECT_NE(z.getMessage().find("is an empty list"), std::string::npos) << z.what();
+}
+
+TEST_F(PatientMeasuredDataTest, ATestNeedsANameOnceAndChannels) {
+    write("full.csv", makeFullMat({0.1, 0.2}));
+    write("measured.yaml", replaceAll(kTestsManifest, "name: gas-5.0g", "name: gas-4.0g"));
+    const io::InputError twice = readError();
+    EXPECT_EQ(twice.getLine(), 12);
+    EXPECT_EQ(twice.getKey(), "tests[1].name");
+    EXPECT_NE(twice.getMessage().find("the test \"gas-4.0g\" is named twice (first on line 7)"),
+              std::string::npos)
+        << twice.what();
+    write("measured.yaml", replaceAll(kTestsManifest, "name: gas-5.0g", "name: gas 5/g"));
+    const io::InputError bad = readError();
+    EXPECT_EQ(bad.getLine(), 12);
+    EXPECT_NE(bad.getMessage().find("is not a test's name; valid: 1-64 letters"), std::string::npos)
+        << bad.what();
+    write("measured.yaml", replaceAll(kTestsManifest, "  - name: gas-5.0g\n", "  - nam: gas-5.0g\n"));
+    const io::InputError missing = readError();
+    EXPECT_NE(std::string(missing.what()).find("tests[1]"), std::string::npos) << missing.what();
+    write("measured.yaml", replaceAll(kTestsManifest, "      tilt: tilt.csv\n", "      tilt: none.csv\n"));
+    const io::InputError file = readError();
+    EXPECT_EQ(file.getLine(), 17);
+    EXPECT_EQ(file.getKey(), "tests[1].channels.tilt");
+    EXPECT_NE(file.getMessage().find("channel file \"none.csv\" is missing"), std::string::npos);
+}
+
+TEST_F(PatientMeasuredDataTest, ATestsOverridesAreCheckedAgainstTheScenario) {
+    write("full.csv", makeFullMat({0.1, 0.2}));
+    // A key the scenario does not have: at the test's key, with the scenario's own message.
+    write("measured.yaml", replaceAll(kTestsManifest, "array.gas_mass: 5.0 g", "array.gas_mas: 5.0 g"));
+    const io::InputError typo = scenarioError();
+    EXPECT_EQ(typo.getLine(), 14);
+    EXPECT_EQ(typo.getKey(), "tests[1].overrides.array.gas_mas");
+    EXPECT_NE(typo.getMessage().find("the test \"gas-5.0g\": "), std::string::npos) << typo.what();
+    EXPECT_NE(typo.getMessage().find("did you mean 'gas_mass'"), std::string::npos) << typo.what();
+    // A value out of its bounds.
+    write("measured.yaml", replaceAll(kTestsManifest, "{array.gas_mass: 4.0 g}", "{array.gas_mass: 4.0 m}"));
+    const io::InputError unit = scenarioError();
+    EXPECT_EQ(unit.getLine(), 8);
+    EXPECT_EQ(unit.getKey(), "tests[0].overrides.array.gas_mass");
+    // The protocol's keys are every test's.
+    write("measured.yaml", replaceAll(kTestsManifest, "array.gas_mass: 5.0 g", "run.settle_time: 1 s"));
+    const io::InputError proto = readError();
+    EXPECT_EQ(proto.getLine(), 14);
+    EXPECT_NE(proto.getMessage().find("a test cannot change 'run.settle_time'"), std::string::npos)
+        << proto.what();
+    // A test's channels against its scenario: at the test's key.
+    write("measured.yaml", replaceAll(kTestsManifest, "mat: full.csv", "mat: mat.csv"));
+    const io::InputError mat = scenarioError();
+    EXPECT_EQ(mat.getLine(), 10);
+    EXPECT_EQ(mat.getKey(), "tests[0].channels.mat");
+    EXPECT_NE(mat.getMessage().find("has 2 x 3 sensels, the scenario's mat 64 x 32"), std::string::npos);
+    write("measured.yaml", kTestsManifest);
+    write("tilt.csv", "time_s,pelvis_tilt_deg\n0,0\n0.5,1\n");
+    const io::InputError span = scenarioError();
+    EXPECT_EQ(span.getLine(), 17);
+    EXPECT_EQ(span.getKey(), "tests[1].channels.tilt");
+}

@@ -9,6 +9,7 @@
 #include <diagnose/MeasuredData.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace diagnose {
@@ -55,13 +56,24 @@ struct PatientChannels {
     std::string matFile, tiltFile;         ///< as named in messages ("" for a simulation)
 };
 
-/// A measured-data folder of a patient (manifest `protocol.kind: patient-on-array`).
+/// One test of a patient's data: a record under its own condition of the scenario (another gas
+/// mass, another setting), the manifest's `tests:` list.
+struct PatientTest {
+    std::string name;  ///< the lab's name ("gas-4.0g"): letters, digits, '.', '-', '_'
+    /// The scenario keys this test changes: (dotted key, value text with units), as `--set`.
+    std::vector<std::pair<std::string, std::string>> overrides;
+    PatientChannels channels;
+};
+
+/// A measured-data folder of a patient (manifest `protocol.kind: patient-on-array`): one record
+/// (`channels`) or several tests (`tests`, each with its channels; then `channels` is empty).
 struct PatientMeasurement {
     std::string folder;        ///< where it was read from
     std::string scenarioFile;  ///< the patient-on-array scenario it corresponds to
     std::string description;
     PatientProtocol protocol;
-    PatientChannels channels;
+    PatientChannels channels;        ///< the single record's (empty when `tests` is not)
+    std::vector<PatientTest> tests;  ///< the manifest's tests, in its order; empty: one record
 };
 
 }  // namespace diagnose

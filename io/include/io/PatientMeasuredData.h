@@ -50,21 +50,34 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
 /// listed twice).
 diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder);
 
+/// One test's scenario: the data's with the protocol and the test's overrides applied.
+struct PatientMeasuredTestScenario {
+    std::string name;                   ///< the test's
+    ScenarioFile file;                  ///< the protocol and the test's overrides as overrides
+    PatientOnArrayScenario scenario;    ///< read and checked
+};
+
 /// A patient's data's scenario, ready to run.
 struct PatientMeasuredScenario {
     ScenarioFile file;                  ///< the scenario's text and the protocol as overrides
     PatientOnArrayScenario scenario;    ///< read and checked
+    /// Per test of the manifest's `tests` (empty for one record): its own scenario.
+    std::vector<PatientMeasuredTestScenario> tests;
 };
 /// The scenario of a patient's data with the protocol applied (run.settle_time, run.duration
 /// replaced), ready to run, and checked against the data: a patient-on-array scenario; its
 /// mat of the data's rows x columns; each bag sensor's bag in the array; every channel's
-/// samples within the run (release to settle + duration).
-/// @throws InputError at the manifest's key (or the scenario's own error).
+/// samples within the run (release to settle + duration). With tests, each test's scenario
+/// (the protocol's, then its overrides) is read and checked against its channels.
+/// @throws InputError at the manifest's key (a test's: tests[i].overrides.KEY,
+/// tests[i].channels.KEY) or the scenario's own error.
 PatientMeasuredScenario readPatientMeasuredScenario(const diagnose::PatientMeasurement& data);
 
 /// Writes a patient's measured-data folder (which must exist): measured.yaml, scenario.yaml
 /// (the scenario text given), mat.csv (pressures in mmHg), tilt.csv (deg) and per bag sensor
-/// bag<N>-pressure.csv (kPa). `comment` goes at the top of the manifest. Returns the names.
+/// bag<N>-pressure.csv (kPa); with tests, the manifest's `tests` list and each test's files
+/// prefixed with its name (<name>-mat.csv, ...). `comment` goes at the top of the manifest.
+/// Returns the names.
 std::vector<std::string> writePatientMeasuredData(const std::string& folder,
                                                   const diagnose::PatientMeasurement& data,
                                                   const std::string& scenarioText,
