@@ -25,17 +25,21 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The time windows the folds leave out: `n` equal parts of the measured record.
-std::vector<double> makeWindowEdges(const diagnose::PatientChannels& c, int n) {
+// The time windows (of the where stage, and of the folds for one record): `n` equal parts of
+// the span of the measured records.
+std::vector<double> makeWindowEdges(const std::vector<diagnose::PatientTestCase>& tests, int n) {
     double lo = INFINITY, hi = -INFINITY;
     auto span = [&](const std::vector<double>& t) {
         if (t.empty()) return;
         lo = std::min(lo, t.front());
         hi = std::max(hi, t.back());
     };
-    span(c.mat.time);
-    span(c.tilt.time);
-    for (const auto& b : c.bags) span(b.pressure.time);
+    for (const diagnose::PatientTestCase& tc : tests) {
+        const diagnose::PatientChannels& c = tc.measured;
+        span(c.mat.time);
+        span(c.tilt.time);
+        for (const auto& b : c.bags) span(b.pressure.time);
+    }
     std::vector<double> e;
     for (int k = 0; k <= n; ++k) e.push_back(lo + (hi - lo) * double(k) / double(n));
     e.back() = hi + 1e-9;  // the last sample inside the last window
@@ -64,8 +68,7 @@ void printWhere(const diagnose::PatientComparison& c, const diagnose::WhereRepor
     out << "  signatures (bias, scale, lag):\n";
     for (const auto& s : w.signatures) {
         const diagnose::PatientChannelComparison* cc = c.find(s.channel);
-        const std::string part =
-            cc && s.test >= 0 && size_t(s.test) < cc->partNames.size() ? " " + cc->partNames[size_t(s.test)] : "";
+        const std::string part = s.part.empty() ? "" : " " + s.part;
         out << "    " << s.channel << part << ": bias " << fmt("%+.3g", s.bias / (cc ? cc->unitScale : 1.0))
             << (cc ? " " + cc->unit : "") << ", scale " << fmt("%+.3f", s.scale) << ", lag "
             << fmt("%.3f s", s.lag) << "\n";
@@ -98,17 +101,47 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
         ++simulations;
         return runCoSimulation(f, (runs / label).string());
     };
-    const diagnose::PatientChannels baseline = simulate(ms.file, "model");
-    const diagnose::PatientComparison base =
-        diagnose::comparePatient(data.channels, baseline, {}, regions);
+    // The tests (one record: one test without a name); each test's co-simulations in
+    // runs/<test>/ (one record: runs/).
+    struct TestRun {
+        std::string name, dir;  // dir: "" or "<test>/"
+        io::ScenarioFile file;
+        double gasMass = 0.0;
+    };
+    std::vector<TestRun> testRuns;
+    std::vector<diagnose::PatientTestCase> cases;
+    if (data.tests.empty()) {
+        testRuns.push_back({"", "", ms.file, ms.scenario.options.layout.gasMass});
+        cases.push_back({"", data.channels, {}, ms.scenario.options.layout.gasMass});
+    } else {
+        for (size_t t = 0; t < data.tests.size(); ++t) {
+            const io::PatientMeasuredTestScenario& ts = ms.tests[t];
+            testRuns.push_back({ts.name, ts.name + "/", ts.file, ts.scenario.options.layout.gasMass});
+            cases.push_back({ts.name, data.tests[t].channels, {}, ts.scenario.options.layout.gasMass});
+        }
+    }
+    std::vector<std::string> names;
+    for (const TestRun& t : testRuns) names.push_back(t.name);
+    std::vector<diagnose::PatientComparison> halfParts;
+    for (size_t t = 0; t < testRuns.size(); ++t) {
+        cases[t].baseline = simulate(testRuns[t].file, testRuns[t].dir + "model");
+        // The numerical uncertainty: the same scenario at half the macro step.
+        io::ScenarioFile halfFile = testRuns[t].file;
+        halfFile.applyOverride("coupling.macro_step", formatHalfMacroStep(ms.scenario));
+        const diagnose::PatientChannels half = simulate(halfFile, testRuns[t].dir + "half-macro-step");
+        const diagnose::PatientComparison basePart =
+            diagnose::comparePatient(cases[t].measured, cases[t].baseline, {}, regions);
+        halfParts.push_back(diagnose::comparePatient(cases[t].measured, half, {}, regions, &basePart));
+    }
+    const std::vector<diagnose::PatientComparison> baseParts = diagnose::comparePatientTests(cases, regions);
+    const diagnose::PatientComparison base = diagnose::joinPatientComparisons(baseParts, names);
     if (base.channels.empty())
         throw io::InputError(a.measured, 0, "", "no channel of the data has a simulated counterpart");
-    // The numerical uncertainty: the same scenario at half the macro step.
-    io::ScenarioFile halfFile = ms.file;
-    halfFile.applyOverride("coupling.macro_step", formatHalfMacroStep(ms.scenario));
-    const diagnose::PatientComparison half = diagnose::comparePatient(
-        data.channels, simulate(halfFile, "half-macro-step"), {}, regions, &base);
-    const std::vector<double> edges = makeWindowEdges(data.channels, std::max(2, a.windows));
+    const diagnose::PatientComparison half = diagnose::joinPatientComparisons(halfParts, names);
+    diagnose::PatientFolds folds;
+    folds.windowEdges = makeWindowEdges(cases, std::max(2, a.windows));
+    folds.tests = int(cases.size());
+    const std::vector<double>& edges = folds.windowEdges;
     const diagnose::WhereReport where =
         diagnose::calcPatientWhere(base, diagnose::calcPatientSimulatedDifference(base, half), edges, 2.0);
     if (!a.quiet) printWhere(base, where, std::cout);
@@ -118,13 +151,13 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     if (!a.whereOnly) {
         diagnose::PatientCalibrationOptions co;
         co.candidates = a.candidates;
-        const double gasMass = ms.scenario.options.layout.gasMass;
         which = std::make_unique<diagnose::WhichReport>(diagnose::calibratePatientCandidates(
-            data.channels, baseline, base, where, regions, edges, gasMass,
-            [&](const std::vector<std::pair<std::string, std::string>>& overrides, const std::string& label) {
-                io::ScenarioFile f = ms.file;
+            cases, where, regions, folds,
+            [&](int t, const std::vector<std::pair<std::string, std::string>>& overrides,
+                const std::string& label) {
+                io::ScenarioFile f = testRuns[size_t(t)].file;
                 for (const auto& [k, v] : overrides) f.applyOverride(k, v);
-                return simulate(f, label);
+                return simulate(f, testRuns[size_t(t)].dir + label);
             },
             co));
         if (!which->candidates.empty()) {
@@ -133,14 +166,19 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
             if (!e->changesTheBag) {
                 diagnose::PatientInstruments inst;
                 diagnose::applyPatientInstrumentEffect(*e, b.parameters, inst);
+                std::vector<diagnose::PatientComparison> parts;
+                for (size_t t = 0; t < cases.size(); ++t)
+                    parts.push_back(diagnose::comparePatient(cases[t].measured, cases[t].baseline, inst,
+                                                             regions, &baseParts[t]));
                 fitted = std::make_unique<diagnose::PatientComparison>(
-                    diagnose::comparePatient(data.channels, baseline, inst, regions, &base));
+                    diagnose::joinPatientComparisons(parts, names));
             }
         }
         if (!a.quiet) {
             std::cout << "which: candidates ranked by the shrink of the held-out gap beyond the "
-                         "validation uncertainty (leave one time window out of "
-                      << edges.size() - 1 << "), less " << fmt("%g", co.parameterPenalty)
+                         "validation uncertainty (leave one "
+                      << (folds.isByTest() ? "test" : "time window") << " out of " << folds.getCount()
+                      << "), less " << fmt("%g", co.parameterPenalty)
                       << " per parameter:\n";
             for (const auto& c : which->candidates) {
                 const diagnose::Effect* e = diagnose::findPatientEffect(c.effect);
@@ -174,11 +212,11 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     info.commandLine = a.commandLine;
     info.simulations = simulations;
     info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    writeOutputFile(out, "residuals.csv", io::formatPatientResidualsCsv(base, data.channels.mat.columns));
+    writeOutputFile(out, "residuals.csv", io::formatPatientResidualsCsv(base, ms.scenario.mat.columns));
     writeOutputFile(out, "report.html",
                     io::formatPatientDiagnosisReportHtml(info, base, where, which.get(), fitted.get()));
     writeOutputFile(out, "diagnosis.json",
-                    io::formatPatientDiagnosisJson(info, base, where, which.get(), edges));
+                    io::formatPatientDiagnosisJson(info, base, where, which.get(), folds));
     if (which)
         std::cout << "verdict: " << which->verdict << " (" << which->reason << ")\n";
     else

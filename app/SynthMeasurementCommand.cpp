@@ -14,6 +14,8 @@
 #include <io/Scenario.h>
 #include <io/Units.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -98,6 +100,10 @@ const char* kHelp =
     "  --noise mat=0.5mmHg, tilt=0.1deg, pressure=0.05kPa (the defaults), or none;\n"
     "  --sample-interval T (tilt and bag sensors, default 0.02 s), --mat-interval T (the\n"
     "  mat's frames, default 0.1 s).\n"
+    "  --test NAME:KEY=VALUE[,KEY=VALUE]...  (repeatable) data of several tests instead of one\n"
+    "  record: each test is the scenario with its keys set (e.g. --test gas-4.0g:array.gas_mass=4.0g),\n"
+    "  the effect in every test, a truth co-simulation each (LABEL.truth-run/NAME/), noise\n"
+    "  seed N + the test's index; the manifest lists the tests (docs/measured-data.md).\n"
     "\n"
     "exit status: 0 written, 1 the truth run failed, 2 bad input, 130/143 interrupted.\n";
 
@@ -107,6 +113,7 @@ constexpr std::uint64_t kTruthSeedOffset = 100;
 struct Args {
     std::string scenario, effect, out, labelOut;
     std::vector<std::string> params, noise;
+    std::vector<std::string> tests;  ///< --test NAME:KEY=VALUE[,KEY=VALUE] as given
     std::uint64_t seed = 1;
     std::string sampleInterval;  ///< "" the kind's default (0.5 s rig, 0.02 s patient)
     std::string matInterval = "0.1 s";
@@ -122,6 +129,7 @@ Args parseArgs(int argc, char** argv) {
         else if (arg == "--effect") a.effect = value();
         else if (arg == "--param") a.params.push_back(value());
         else if (arg == "--noise") a.noise.push_back(value());
+        else if (arg == "--test") a.tests.push_back(value());
         else if (arg == "--seed") {
             const std::string v = value();
             char* end = nullptr;
@@ -137,7 +145,7 @@ Args parseArgs(int argc, char** argv) {
         else if (arg == "--quiet" || arg == "-q") a.quiet = true;
         else
             throw UsageError("unknown option '" + arg +
-                             "'; valid: --scenario, --effect, --param, --noise, --seed, "
+                             "'; valid: --scenario, --effect, --param, --noise, --test, --seed, "
                              "--sample-interval, --mat-interval, --out, --label-out, --force, --quiet, --help");
     }
     if (a.scenario.empty()) throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
@@ -338,6 +346,46 @@ void writeLabel(const Args& a, const std::vector<const diagnose::Effect*>& effec
     fs::rename(tmp, a.labelOut);
 }
 
+// "NAME:KEY=VALUE[,KEY=VALUE]..." of --test: the test's name and its scenario keys. A piece
+// without '=' continues the previous value (a value with a comma: {thickness: 20 mm, ...}).
+diagnose::PatientTest parseTestOption(const std::string& g) {
+    const std::string valid = "valid: NAME:KEY=VALUE[,KEY=VALUE]..., e.g. --test gas-4.0g:array.gas_mass=4.0g";
+    const size_t colon = g.find(':');
+    if (colon == std::string::npos || colon == 0) throw UsageError("--test '" + g + "' has no name; " + valid);
+    diagnose::PatientTest t;
+    t.name = g.substr(0, colon);
+    const bool plain = std::all_of(t.name.begin(), t.name.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-' || ch == '_';
+    });
+    if (!plain || t.name[0] == '.' || t.name[0] == '-' || t.name.size() > 64)
+        throw UsageError("--test '" + g + "': '" + t.name + "' is not a test's name; valid: 1-64 letters, "
+                         "digits, '.', '-' and '_', not starting with '.' or '-'");
+    std::string rest = g.substr(colon + 1);
+    size_t start = 0;
+    while (start <= rest.size()) {
+        size_t comma = rest.find(',', start);
+        if (comma == std::string::npos) comma = rest.size();
+        const std::string piece = rest.substr(start, comma - start);
+        const size_t eq = piece.find('=');
+        if (eq != std::string::npos && eq > 0) {
+            std::string key = piece.substr(0, eq);
+            key.erase(0, key.find_first_not_of(' '));
+            t.overrides.emplace_back(key, piece.substr(eq + 1));
+        } else if (!t.overrides.empty() && !piece.empty()) {
+            t.overrides.back().second += "," + piece;
+        } else {
+            throw UsageError("--test '" + g + "': '" + piece + "' is not KEY=VALUE; " + valid);
+        }
+        start = comma + 1;
+    }
+    for (const auto& [k, v] : t.overrides)
+        if (k == "kind" || k == "run" || k == "run.settle_time" || k == "run.duration")
+            throw UsageError("--test '" + g + "': a test cannot change '" + k +
+                             "'; valid: any other scenario key (the settle time and duration are "
+                             "every test's)");
+    return t;
+}
+
 // A patient-on-array scenario: the truth co-simulation and the patient's channels.
 int runPatient(const Args& a, const io::ScenarioFile& file) {
     const std::vector<const diagnose::Effect*> effects =
@@ -353,38 +401,84 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
     so.matInterval = parseInterval("--mat-interval", a.matInterval);
 
     const io::PatientOnArrayScenario sc = io::readPatientOnArrayScenario(file);
+    std::vector<diagnose::PatientTest> tests;
+    for (const std::string& g : a.tests) {
+        tests.push_back(parseTestOption(g));
+        for (size_t k = 0; k + 1 < tests.size(); ++k)
+            if (tests[k].name == tests.back().name)
+                throw UsageError("--test '" + g + "': the test '" + tests.back().name +
+                                 "' is given twice; valid: one --test per name");
+    }
+    const bool several = !tests.empty();
+    if (!several) tests.push_back({"", {}, {}});
+    // Each test's truth: the test's scenario, the effect (a response effect at the test's stated
+    // gas mass), half the macro step.
     diagnose::PatientInstruments inst;
-    io::ScenarioFile truth = file;
-    for (size_t i = 0; i < effects.size(); ++i) {
+    std::vector<io::ScenarioFile> truths;
+    for (const diagnose::PatientTest& t : tests) {
+        io::ScenarioFile truth = file;
+        io::PatientOnArrayScenario tsc;
         try {
-            if (effects[i]->changesTheBag) {
-                for (const auto& [key, value] :
-                     diagnose::getPatientEffectOverrides(*effects[i], values[i], sc.options.layout.gasMass))
-                    truth.applyOverride(key, value);
-            } else {
-                diagnose::applyPatientInstrumentEffect(*effects[i], values[i], inst);
-            }
-        } catch (const std::invalid_argument& e) {
-            throw UsageError(std::string("--param: ") + e.what());
+            for (const auto& [k, v] : t.overrides) truth.applyOverride(k, v);
+            tsc = io::readPatientOnArrayScenario(truth);
+        } catch (const io::InputError& e) {
+            throw UsageError("--test '" + t.name + "': " + e.what());
         }
+        inst = {};
+        for (size_t i = 0; i < effects.size(); ++i) {
+            try {
+                if (effects[i]->changesTheBag) {
+                    for (const auto& [key, value] : diagnose::getPatientEffectOverrides(
+                             *effects[i], values[i], tsc.options.layout.gasMass))
+                        truth.applyOverride(key, value);
+                } else {
+                    diagnose::applyPatientInstrumentEffect(*effects[i], values[i], inst);
+                }
+            } catch (const std::invalid_argument& e) {
+                throw UsageError(std::string("--param: ") + e.what());
+            }
+        }
+        truth.applyOverride("coupling.macro_step", formatHalfMacroStep(tsc));
+        truths.push_back(truth);
     }
     const std::string half = formatHalfMacroStep(sc);
-    truth.applyOverride("coupling.macro_step", half);
     const std::string modelForm = "macro step " + half + " (the scenario's " +
                                   io::formatSignificant(sc.options.coupling.macroStep, "ms") + ")";
     const fs::path out(a.out);
     claimOutputFolder(out, a.force,
-                      {io::kMeasuredManifest, "scenario.yaml", "mat.csv", "tilt.csv", "bag*-pressure.csv"});
+                      {io::kMeasuredManifest, "scenario.yaml", "mat.csv", "tilt.csv", "bag*-pressure.csv",
+                       "*-mat.csv", "*-tilt.csv"});
     const std::string truthDir = a.labelOut + ".truth-run";
+    if (several) {
+        std::error_code ec;
+        fs::remove_all(truthDir, ec);
+    }
     if (!a.quiet)
         std::cerr << "bagsim synth-measurement: truth co-simulation of " << a.scenario << " ("
-                  << fmt("%g s", sc.getEndTime()) << ", " << modelForm << ") in " << truthDir << "\n";
+                  << fmt("%g s", sc.getEndTime()) << ", " << modelForm << ") in " << truthDir
+                  << (several ? "/<test>/ for " + std::to_string(tests.size()) + " tests" : std::string()) << "\n";
     const auto start = std::chrono::steady_clock::now();
-    const diagnose::PatientChannels run = runCoSimulation(truth, truthDir);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
     diagnose::PatientMeasurement data;
-    data.channels = diagnose::synthesizePatientChannels(run, inst, so);
+    std::string testLines;
+    for (size_t t = 0; t < tests.size(); ++t) {
+        if (several && !a.quiet) std::cerr << "  test " << tests[t].name << "\n";
+        const diagnose::PatientChannels run =
+            runCoSimulation(truths[t], several ? truthDir + "/" + tests[t].name : truthDir);
+        diagnose::PatientSynthesisOptions st = so;
+        st.seed = a.seed + t;  // each test its own noise
+        tests[t].channels = diagnose::synthesizePatientChannels(run, inst, st);
+        if (several) {
+            testLines += "  - {name: " + tests[t].name + ", noise_seed: " + std::to_string(st.seed) +
+                         ", overrides: {";
+            for (size_t k = 0; k < tests[t].overrides.size(); ++k)
+                testLines += (k ? ", " : "") + tests[t].overrides[k].first + ": \"" +
+                             tests[t].overrides[k].second + "\"";
+            testLines += "}}\n";
+        }
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (several) data.tests = tests;
+    else data.channels = tests.front().channels;
     data.protocol.settleTime = sc.settleTime;
     data.protocol.duration = sc.duration;
     data.description = "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
@@ -398,17 +492,24 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
                    fmt("%g", so.pressureNoise * 1e-3) + " kPa}\nseed: " + std::to_string(a.seed) +
                    "\nsample_interval: " + fmt("%g", so.sampleInterval) + " s\nmat_interval: " +
                    fmt("%g", so.matInterval) + " s\nmodel_form: \"" + modelForm +
-                   "\"\ntruth_run: " + truthDir + "\nscenario: " + a.scenario + "\n");
-    std::cout << "measured data in " << a.out << "/: " << data.channels.mat.time.size()
-              << " mat frames, " << data.channels.tilt.time.size() << " tilt samples, "
-              << data.channels.bags.size() << " bag sensors (truth co-simulation "
-              << fmt("%.1f", seconds) << " s); label in " << a.labelOut << "\n";
+                   "\"\ntruth_run: " + truthDir + "\nscenario: " + a.scenario + "\n" +
+                   (several ? "tests:\n" + testLines : std::string()));
+    size_t frames = 0, tilts = 0, bags = 0;
+    for (const diagnose::PatientTest& t : tests)
+        frames += t.channels.mat.time.size(), tilts += t.channels.tilt.time.size(), bags += t.channels.bags.size();
+    std::cout << "measured data in " << a.out << "/: "
+              << (several ? std::to_string(tests.size()) + " tests, " : std::string()) << frames
+              << " mat frames, " << tilts << " tilt samples, " << bags << " bag sensors (truth co-simulation"
+              << (several ? "s " : " ") << fmt("%.1f", seconds) << " s); label in " << a.labelOut << "\n";
     return 0;
 }
 
 int run(const Args& a) {
     const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
     if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) return runPatient(a, file);
+    if (!a.tests.empty())
+        throw UsageError("--test is for a patient-on-array scenario; the rig's scenario lists its gas "
+                         "masses (test.gas_masses)");
     // The effects and their parameters.
     const std::vector<const diagnose::Effect*> effects =
         parseEffects(a, diagnose::findEffect, diagnose::listEffectNames());

@@ -206,14 +206,51 @@ PatientChannels synthesizePatientChannels(const PatientChannels& run, const Pati
 // ------------------------------------------------------------------------- where
 
 std::vector<std::vector<size_t>> PatientChannelComparison::partSeries() const {
-    std::map<int, std::vector<size_t>> by;
+    std::map<std::pair<int, int>, std::vector<size_t>> by;  // (test, sensel or part)
     const bool mat = !sensel.empty();
-    for (size_t i = 0; i < time.size(); ++i) by[mat ? sensel[i] : (part.empty() ? 0 : part[i])].push_back(i);
+    for (size_t i = 0; i < time.size(); ++i)
+        by[{getTest(i), mat ? sensel[i] : (part.empty() ? 0 : part[i])}].push_back(i);
     std::vector<std::vector<size_t>> out;
     for (auto& [k, v] : by) {
         std::sort(v.begin(), v.end(), [&](size_t a, size_t b) { return time[a] < time[b]; });
         out.push_back(std::move(v));
     }
+    return out;
+}
+
+int PatientFolds::findFold(const PatientChannelComparison& c, size_t i) const {
+    return isByTest() ? c.getTest(i) : findWindow(windowEdges, c.time[i]);
+}
+
+PatientComparison joinPatientComparisons(const std::vector<PatientComparison>& parts,
+                                         const std::vector<std::string>& names) {
+    if (parts.size() == 1) return parts.front();
+    PatientComparison out;
+    out.tests = names;
+    for (size_t t = 0; t < parts.size(); ++t)
+        for (const PatientChannelComparison& ch : parts[t].channels) {
+            auto it = std::find_if(out.channels.begin(), out.channels.end(),
+                                   [&](const PatientChannelComparison& c) { return c.name == ch.name; });
+            if (it == out.channels.end()) {
+                PatientChannelComparison c;
+                c.name = ch.name, c.unit = ch.unit, c.unitScale = ch.unitScale;
+                out.channels.push_back(std::move(c));
+                it = out.channels.end() - 1;
+            }
+            PatientChannelComparison& j = *it;
+            for (size_t i = 0; i < ch.time.size(); ++i) {
+                j.time.push_back(ch.time[i]);
+                j.measured.push_back(ch.measured[i]);
+                j.simulated.push_back(ch.simulated[i]);
+                j.test.push_back(int(t));
+                if (!ch.frame.empty()) j.frame.push_back(ch.frame[i]), j.sensel.push_back(ch.sensel[i]);
+                if (ch.part.empty()) continue;
+                const std::string& pn = ch.partNames.at(size_t(ch.part[i]));
+                auto p = std::find(j.partNames.begin(), j.partNames.end(), pn);
+                if (p == j.partNames.end()) p = j.partNames.insert(j.partNames.end(), pn);
+                j.part.push_back(int(p - j.partNames.begin()));
+            }
+        }
     return out;
 }
 
@@ -309,6 +346,62 @@ std::vector<double> calcPatientSimulatedDifference(const PatientComparison& a,
     return out;
 }
 
+namespace {
+
+// The samples of one test of a joined channel.
+PatientChannelComparison selectTest(const PatientChannelComparison& ch, int test) {
+    PatientChannelComparison o;
+    o.name = ch.name, o.unit = ch.unit, o.unitScale = ch.unitScale, o.partNames = ch.partNames;
+    for (size_t i = 0; i < ch.time.size(); ++i) {
+        if (ch.getTest(i) != test) continue;
+        o.time.push_back(ch.time[i]);
+        o.measured.push_back(ch.measured[i]);
+        o.simulated.push_back(ch.simulated[i]);
+        if (!ch.part.empty()) o.part.push_back(ch.part[i]);
+        if (!ch.frame.empty()) o.frame.push_back(ch.frame[i]), o.sensel.push_back(ch.sensel[i]);
+    }
+    return o;
+}
+
+// One record's signatures of a channel: per bag, or of the channel (the mat: the lag of its
+// frame sums); `label` ("" or "test NAME") begins each signature's part.
+void addPatientSignatures(const PatientChannelComparison& ch, const std::string& label, double maxLag,
+                          std::vector<Signature>& out) {
+    if (ch.time.empty()) return;
+    auto partOf = [&](const std::string& p) {
+        return label.empty() ? p : p.empty() ? label : label + ", " + p;
+    };
+    if (ch.name == "bag-pressure") {
+        for (const auto& idx : ch.partSeries()) {
+            std::vector<double> t, m, s;
+            for (size_t i : idx) t.push_back(ch.time[i]), m.push_back(ch.measured[i]), s.push_back(ch.simulated[i]);
+            Signature sg = calcSeriesSignature(ch.name, t, m, s, maxLag);
+            sg.test = ch.part[idx.front()];
+            sg.part = partOf(ch.partNames.at(size_t(sg.test)));
+            out.push_back(sg);
+        }
+    } else if (ch.name == "mat") {
+        Signature sg = calcSeriesSignature(ch.name, ch.time, ch.measured, ch.simulated, maxLag);
+        std::map<int, std::array<double, 3>> frames;  // time, sum measured, sum simulated
+        for (size_t i = 0; i < ch.time.size(); ++i) {
+            auto& f = frames[ch.frame[i]];
+            f[0] = ch.time[i], f[1] += ch.measured[i], f[2] += ch.simulated[i];
+        }
+        std::vector<double> t, m, s;
+        for (const auto& [k, f] : frames) t.push_back(f[0]), m.push_back(f[1]), s.push_back(f[2]);
+        const auto [lag, corr] = calcLag(t, m, s, maxLag);
+        sg.lag = lag, sg.lagCorrelation = corr;
+        sg.part = partOf("");
+        out.push_back(sg);
+    } else {
+        Signature sg = calcSeriesSignature(ch.name, ch.time, ch.measured, ch.simulated, maxLag);
+        sg.part = partOf("");
+        out.push_back(sg);
+    }
+}
+
+}  // namespace
+
 WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<double>& numerical,
                              const std::vector<double>& edges, double maxLag) {
     WhereReport r;
@@ -340,6 +433,13 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
                 "time " + fmt("%.3g", edges.size() > 1 ? edges[w] : 0.0) + "-" +
                     fmt("%.3g s", edges.size() > 1 ? edges[w + 1] : 0.0),
                 byWindow[w], sumSq));
+        if (c.tests.size() > 1) {
+            std::vector<std::vector<double>> byTest(c.tests.size());
+            for (size_t i = 0; i < res.size(); ++i) byTest.at(size_t(ch.getTest(i))).push_back(res[i]);
+            for (size_t t = 0; t < byTest.size(); ++t)
+                if (!byTest[t].empty())
+                    r.regimes.push_back(calcRegimeStats(ch.name, "test " + c.tests[t], byTest[t], sumSq));
+        }
 
         // Noise: second differences of each part's (the mat: each sensel's) series.
         std::vector<double> dd;
@@ -360,29 +460,13 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
         nrmse2.push_back(cs.range > 0.0 ? std::pow(cs.rmse / cs.range, 2) : 0.0);
 
         // Signatures: per bag, and of the channel (the mat: its mean over the compared
-        // sensels per frame, for the lag).
-        if (ch.name == "bag-pressure") {
-            for (size_t p = 0; p < series.size(); ++p) {
-                std::vector<double> t, m, s;
-                for (size_t i : series[p]) t.push_back(ch.time[i]), m.push_back(ch.measured[i]), s.push_back(ch.simulated[i]);
-                Signature sg = calcSeriesSignature(ch.name, t, m, s, maxLag);
-                sg.test = ch.part[series[p].front()];
-                r.signatures.push_back(sg);
-            }
-        } else if (ch.name == "mat") {
-            Signature sg = calcSeriesSignature(ch.name, ch.time, ch.measured, ch.simulated, maxLag);
-            std::map<int, std::array<double, 3>> frames;  // time, sum measured, sum simulated
-            for (size_t i = 0; i < res.size(); ++i) {
-                auto& f = frames[ch.frame[i]];
-                f[0] = ch.time[i], f[1] += ch.measured[i], f[2] += ch.simulated[i];
-            }
-            std::vector<double> t, m, s;
-            for (const auto& [k, f] : frames) t.push_back(f[0]), m.push_back(f[1]), s.push_back(f[2]);
-            const auto [lag, corr] = calcLag(t, m, s, maxLag);
-            sg.lag = lag, sg.lagCorrelation = corr;
-            r.signatures.push_back(sg);
+        // sensels per frame, for the lag); per test when there are several (a series is one
+        // test's record).
+        if (c.tests.size() > 1) {
+            for (size_t t = 0; t < c.tests.size(); ++t)
+                addPatientSignatures(selectTest(ch, int(t)), "test " + c.tests[t], maxLag, r.signatures);
         } else {
-            r.signatures.push_back(calcSeriesSignature(ch.name, ch.time, ch.measured, ch.simulated, maxLag));
+            addPatientSignatures(ch, "", maxLag, r.signatures);
         }
     }
     double sum2 = 0.0;
@@ -398,6 +482,13 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
 double calcPatientGap(const PatientComparison& c, const WhereReport& where,
                       const std::vector<double>& edges, const std::vector<int>& windows,
                       bool beyond) {
+    PatientFolds folds;
+    folds.windowEdges = edges;
+    return calcPatientGap(c, where, folds, windows, beyond);
+}
+
+double calcPatientGap(const PatientComparison& c, const WhereReport& where, const PatientFolds& folds,
+                      const std::vector<int>& windows, bool beyond) {
     double sum = 0.0;
     int n = 0;
     for (const PatientChannelComparison& ch : c.channels) {
@@ -407,7 +498,7 @@ double calcPatientGap(const PatientComparison& c, const WhereReport& where,
         double ss = 0.0;
         long k = 0;
         for (size_t i = 0; i < ch.time.size(); ++i) {
-            const int w = findWindow(edges, ch.time[i]);
+            const int w = folds.findFold(ch, i);
             if (std::find(windows.begin(), windows.end(), w) == windows.end()) continue;
             ss += std::pow(ch.measured[i] - ch.simulated[i], 2), ++k;
         }
@@ -431,46 +522,53 @@ double calcPatientGap(const PatientComparison& c, const WhereReport& where,
 
 namespace {
 
-// A candidate's comparisons at trial values: instrument effects re-read the baseline run;
-// effects that change the response run the co-simulation (cached by value).
+// A candidate's comparisons at trial values, every test's joined: instrument effects re-read
+// each test's baseline run; effects that change the response run the co-simulation of every
+// test (cached by value).
 class PatientEvaluator {
   public:
-    PatientEvaluator(const Effect& e, const PatientChannels& measured, const PatientChannels& baseline,
-                     const PatientComparison& base, const MatRegions& regions, double gasMass,
-                     const PatientSimulator& simulate)
-        : m_effect(e), m_measured(measured), m_baseline(baseline), m_base(base), m_regions(regions),
-          m_gasMass(gasMass), m_simulate(simulate) {}
+    PatientEvaluator(const Effect& e, const std::vector<PatientTestCase>& tests,
+                     const std::vector<PatientComparison>& baseParts, const MatRegions& regions,
+                     const PatientTestSimulator& simulate)
+        : m_effect(e), m_tests(tests), m_baseParts(baseParts), m_regions(regions), m_simulate(simulate) {
+        for (const PatientTestCase& t : tests) m_names.push_back(t.name);
+    }
 
     PatientComparison evaluate(const std::vector<double>& v) {
-        if (!m_effect.changesTheBag) {
-            PatientInstruments inst;
-            applyPatientInstrumentEffect(m_effect, v, inst);
-            return comparePatient(m_measured, m_baseline, inst, m_regions, &m_base);
-        }
-        const auto overrides = getPatientEffectOverrides(m_effect, v, m_gasMass);
         std::string key;
-        for (const auto& [k, val] : overrides) key += k + "=" + val + ";";
+        for (double x : v) key += fmt("%.17g", x) + ";";
         auto it = m_cache.find(key);
-        if (it == m_cache.end()) {
+        if (it != m_cache.end()) return it->second;
+        std::vector<PatientComparison> parts;
+        PatientInstruments inst;
+        if (!m_effect.changesTheBag) applyPatientInstrumentEffect(m_effect, v, inst);
+        for (size_t t = 0; t < m_tests.size(); ++t) {
+            const PatientTestCase& tc = m_tests[t];
+            if (!m_effect.changesTheBag) {
+                parts.push_back(comparePatient(tc.measured, tc.baseline, inst, m_regions, &m_baseParts[t]));
+                continue;
+            }
+            const auto overrides = getPatientEffectOverrides(m_effect, v, tc.statedGasMass);
             std::string label = m_effect.name;
             for (size_t i = 0; i < v.size(); ++i)
                 label += "-" + m_effect.parameters[i].name + fmt("%.4g", v[i] / m_effect.parameters[i].siPerUnit);
-            const PatientChannels run = overrides.empty() ? m_baseline : m_simulate(overrides, label);
+            const PatientChannels run = overrides.empty() ? tc.baseline : m_simulate(int(t), overrides, label);
             if (!overrides.empty()) ++m_runs;
-            it = m_cache.emplace(key, comparePatient(m_measured, run, PatientInstruments(), m_regions, &m_base)).first;
+            parts.push_back(comparePatient(tc.measured, run, PatientInstruments(), m_regions, &m_baseParts[t]));
         }
-        return it->second;
+        PatientComparison joined = joinPatientComparisons(parts, m_names);
+        if (!m_effect.changesTheBag) return joined;  // cheap: not kept
+        return m_cache.emplace(key, std::move(joined)).first->second;
     }
     int getRuns() const { return m_runs; }
 
   private:
     const Effect& m_effect;
-    const PatientChannels& m_measured;
-    const PatientChannels& m_baseline;
-    const PatientComparison& m_base;
+    const std::vector<PatientTestCase>& m_tests;
+    const std::vector<PatientComparison>& m_baseParts;
     const MatRegions& m_regions;
-    double m_gasMass;
-    const PatientSimulator& m_simulate;
+    const PatientTestSimulator& m_simulate;
+    std::vector<std::string> m_names;
     std::map<std::string, PatientComparison> m_cache;
     int m_runs = 0;
 };
@@ -493,13 +591,13 @@ struct PatientFit {
 // training windows. Every point of the grid (the tensor product of the axes); instrument
 // effects are then refined coordinate by coordinate by golden section within a grid cell.
 PatientFit fitPatient(PatientEvaluator& e, const Effect& effect, const WhereReport& where,
-                      const std::vector<double>& edges, const std::vector<int>& train, int gridPoints) {
+                      const PatientFolds& folds, const std::vector<int>& train, int gridPoints) {
     const size_t np = effect.parameters.size();
     const int points = effect.changesTheBag ? gridPoints : 11;
     std::vector<std::vector<double>> axes;
     for (const EffectParameter& p : effect.parameters) axes.push_back(makeAxis(p, points));
     auto cost = [&](const std::vector<double>& v) {
-        return std::pow(calcPatientGap(e.evaluate(v), where, edges, train, false), 2);
+        return std::pow(calcPatientGap(e.evaluate(v), where, folds, train, false), 2);
     };
     PatientFit best;
     best.cost = INFINITY;
@@ -553,12 +651,37 @@ PatientFit fitPatient(PatientEvaluator& e, const Effect& effect, const WhereRepo
 
 }  // namespace
 
+std::vector<PatientComparison> comparePatientTests(const std::vector<PatientTestCase>& tests,
+                                                   const MatRegions& regions) {
+    std::vector<PatientComparison> out;
+    for (const PatientTestCase& t : tests) out.push_back(comparePatient(t.measured, t.baseline, {}, regions));
+    return out;
+}
+
 WhichReport calibratePatientCandidates(const PatientChannels& measured, const PatientChannels& baseline,
                                        const PatientComparison& base, const WhereReport& where,
                                        const MatRegions& regions, const std::vector<double>& edges,
                                        double statedGasMass, const PatientSimulator& simulate,
                                        const PatientCalibrationOptions& o) {
+    (void)base;  // the same comparison is made again from the baseline
+    PatientFolds folds;
+    folds.windowEdges = edges;
+    return calibratePatientCandidates({{"", measured, baseline, statedGasMass}}, where, regions, folds,
+                                      [&](int, const std::vector<std::pair<std::string, std::string>>& ov,
+                                          const std::string& label) { return simulate(ov, label); },
+                                      o);
+}
+
+WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests,
+                                       const WhereReport& where, const MatRegions& regions,
+                                       const PatientFolds& folds, const PatientTestSimulator& simulate,
+                                       const PatientCalibrationOptions& o) {
     WhichReport report;
+    if (tests.empty()) throw std::invalid_argument("no test to calibrate on");
+    const std::vector<PatientComparison> baseParts = comparePatientTests(tests, regions);
+    std::vector<std::string> names;
+    for (const PatientTestCase& t : tests) names.push_back(t.name);
+    const PatientComparison base = joinPatientComparisons(baseParts, names);
     std::vector<const Effect*> candidates;
     if (o.candidates.empty()) {
         if (base.find("bag-pressure")) candidates.push_back(findPatientEffect(kBagSensor));
@@ -571,43 +694,45 @@ WhichReport calibratePatientCandidates(const PatientChannels& measured, const Pa
             candidates.push_back(e);
         }
     }
-    const int nw = int(edges.size()) - 1;
-    if (nw < 2) throw std::invalid_argument("the folds need two time windows or more");
+    if (folds.isByTest() && folds.tests != int(tests.size()))
+        throw std::invalid_argument("the folds name " + std::to_string(folds.tests) + " tests, the data " +
+                                    std::to_string(tests.size()));
+    const int nw = folds.getCount();
+    if (nw < 2) throw std::invalid_argument("the folds need two time windows or tests or more");
     std::vector<int> all(static_cast<size_t>(nw), 0);
     for (int w = 0; w < nw; ++w) all[size_t(w)] = w;
 
     for (const Effect* effect : candidates) {
-        PatientEvaluator e(*effect, measured, baseline, base, regions, statedGasMass, simulate);
+        PatientEvaluator e(*effect, tests, baseParts, regions, simulate);
         CandidateResult c;
         c.effect = effect->name;
-        std::vector<double> hm, hs, bm, bs;  // held-out samples per channel, flattened below
         std::map<std::string, std::array<std::vector<double>, 3>> held;  // measured, before, after
         for (int h = 0; h < nw; ++h) {
             std::vector<int> train;
             for (int w = 0; w < nw; ++w)
                 if (w != h) train.push_back(w);
-            const PatientFit fit = fitPatient(e, *effect, where, edges, train, o.gridPoints);
+            const PatientFit fit = fitPatient(e, *effect, where, folds, train, o.gridPoints);
             const PatientComparison after = e.evaluate(fit.values);
             FoldResult f;
             f.heldOut = h;
             f.parameters = fit.values;
-            f.before = calcPatientGap(base, where, edges, {h}, false);
-            f.after = calcPatientGap(after, where, edges, {h}, false);
-            f.excessBefore = calcPatientGap(base, where, edges, {h}, true);
-            f.excessAfter = calcPatientGap(after, where, edges, {h}, true);
+            f.before = calcPatientGap(base, where, folds, {h}, false);
+            f.after = calcPatientGap(after, where, folds, {h}, false);
+            f.excessBefore = calcPatientGap(base, where, folds, {h}, true);
+            f.excessAfter = calcPatientGap(after, where, folds, {h}, true);
             c.folds.push_back(f);
             for (const PatientChannelComparison& ch : base.channels) {
                 const PatientChannelComparison* a = after.find(ch.name);
                 auto& hv = held[ch.name];
                 for (size_t i = 0; i < ch.time.size(); ++i)
-                    if (findWindow(edges, ch.time[i]) == h) {
+                    if (folds.findFold(ch, i) == h) {
                         hv[0].push_back(ch.measured[i]);
                         hv[1].push_back(ch.simulated[i]);
-                        hv[2].push_back(a ? a->simulated[i] : ch.simulated[i]);
+                        hv[2].push_back(a && i < a->simulated.size() ? a->simulated[i] : ch.simulated[i]);
                     }
             }
         }
-        const PatientFit whole = fitPatient(e, *effect, where, edges, all, o.gridPoints);
+        const PatientFit whole = fitPatient(e, *effect, where, folds, all, o.gridPoints);
         c.parameters = whole.values;
         c.parameterStdDev.assign(whole.values.size(), kNaN);
         for (const FoldResult& f : c.folds) {

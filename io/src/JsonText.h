@@ -63,12 +63,14 @@ inline std::string formatGaps(const diagnose::CandidateResult& c) {
 // fitted without it, the gaps before and after.
 inline std::string formatFolds(const diagnose::CandidateResult& c,
                                const std::function<std::string(const std::vector<double>&)>& parameters,
-                               const char* heldOutKey = "held_out_test") {
+                               const char* heldOutKey = "held_out_test",
+                               const std::vector<std::string>* heldOutNames = nullptr) {
     std::ostringstream os;
     os << "[";
     for (size_t k = 0; k < c.folds.size(); ++k) {
         const auto& f = c.folds[k];
-        os << (k ? ", " : "") << "{" << str(heldOutKey) << ": " << f.heldOut + 1
+        os << (k ? ", " : "") << "{" << str(heldOutKey) << ": "
+           << (heldOutNames ? str(heldOutNames->at(size_t(f.heldOut))) : std::to_string(f.heldOut + 1))
            << ", \"parameters\": " << parameters(f.parameters) << ", \"before\": " << num(f.before)
            << ", \"after\": " << num(f.after) << ", \"excess_before\": " << num(f.excessBefore)
            << ", \"excess_after\": " << num(f.excessAfter) << "}";

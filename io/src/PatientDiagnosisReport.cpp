@@ -24,12 +24,13 @@ std::pair<std::string, double> getUnit(const diagnose::PatientComparison& c, con
 std::string esc(const std::string& s) { return svg::escape(s); }
 
 // Per frame (mat: the sum over the compared sensels) or per sample, in the channel's unit:
-// x time [s], y measured and simulated, for the part `part` (-1: all).
-void makeTimeSeries(const diagnose::PatientChannelComparison& ch, int part, svg::Series& m,
+// x time [s], y measured and simulated, for the part `part` (-1: all) of the test `test`.
+void makeTimeSeries(const diagnose::PatientChannelComparison& ch, int part, int test, svg::Series& m,
                     svg::Series& s) {
     std::map<double, std::pair<double, double>> at;
     for (size_t i = 0; i < ch.time.size(); ++i) {
         if (part >= 0 && ch.part[i] != part) continue;
+        if (ch.getTest(i) != test) continue;
         auto& v = at[ch.time[i]];
         v.first += ch.measured[i] / ch.unitScale;
         v.second += ch.simulated[i] / ch.unitScale;
@@ -45,7 +46,8 @@ void makeTimeSeries(const diagnose::PatientChannelComparison& ch, int part, svg:
 std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose::PatientComparison& c,
                                        const diagnose::WhereReport& w,
                                        const diagnose::WhichReport* which,
-                                       const std::vector<double>& edges) {
+                                       const diagnose::PatientFolds& folds) {
+    const std::vector<double>& edges = folds.windowEdges;
     auto in = [&](const std::string& channel, double v) { return num(v / getUnit(c, channel).second); };
     std::ostringstream os;
     os << "{\n  \"format\": \"bagsim diagnosis 1\",\n  \"kind\": \"patient-on-array\",\n"
@@ -56,6 +58,8 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
        << "  \"simulations\": " << info.simulations << ",\n"
        << "  \"seconds\": " << num(info.seconds, "%.1f") << ",\n  \"time_windows_s\": [";
     for (size_t i = 0; i < edges.size(); ++i) os << (i ? ", " : "") << num(edges[i]);
+    os << "],\n  \"fold_kind\": " << str(folds.isByTest() ? "test" : "time-window") << ",\n  \"tests\": [";
+    for (size_t i = 0; i < c.tests.size(); ++i) os << (i ? ", " : "") << str(c.tests[i]);
     os << "],\n  \"where\": {\n    \"gap\": " << num(w.gap)
        << ",\n    \"gap_definition\": \"RMS over the channels of RMSE / measured range\",\n"
        << "    \"within_validation_uncertainty\": " << (w.withinValidation ? "true" : "false")
@@ -83,10 +87,7 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
     os << "    ],\n    \"signatures\": [\n";
     for (size_t i = 0; i < w.signatures.size(); ++i) {
         const auto& s = w.signatures[i];
-        const diagnose::PatientChannelComparison* cc = c.find(s.channel);
-        const std::string part = cc && s.test >= 0 && size_t(s.test) < cc->partNames.size()
-                                     ? cc->partNames[size_t(s.test)]
-                                     : "all";
+        const std::string part = s.part.empty() ? "all" : s.part;
         os << "      {\"channel\": " << str(s.channel) << ", \"part\": " << str(part)
            << ", \"bias\": " << in(s.channel, s.bias) << ", \"scale\": " << num(s.scale, "%.4f")
            << ", \"lag_s\": " << num(s.lag, "%.4f") << ", \"lag_correlation\": "
@@ -118,7 +119,8 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
             os << "},\n     \"folds\": "
                << json::formatFolds(
                       k, [&](const std::vector<double>& v) { return json::formatParameters(e, v, nullptr); },
-                      "held_out_window")
+                      folds.isByTest() ? "held_out_test" : "held_out_window",
+                      folds.isByTest() ? &c.tests : nullptr)
                << "}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
         }
         os << "  ],\n  \"confusable\": [";
@@ -137,9 +139,11 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
 
 std::string formatPatientResidualsCsv(const diagnose::PatientComparison& c, int matColumns) {
     std::ostringstream os;
-    os << "channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual\n";
+    const bool tests = c.tests.size() > 1;
+    os << (tests ? "test," : "") << "channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual\n";
     for (const diagnose::PatientChannelComparison& ch : c.channels)
         for (size_t i = 0; i < ch.time.size(); ++i) {
+            if (tests) os << c.tests.at(size_t(ch.getTest(i))) << ",";
             os << ch.name << "," << ch.unit << ","
                << (ch.part.empty() ? std::string() : ch.partNames.at(size_t(ch.part[i]))) << ","
                << svg::num(ch.time[i], "%.4f") << ",";
@@ -196,15 +200,18 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
     for (const auto& s : w.signatures) {
         const diagnose::PatientChannelComparison* cc = c.find(s.channel);
         const double scale = cc ? cc->unitScale : 1.0;
-        const std::string part =
-            cc && s.test >= 0 && size_t(s.test) < cc->partNames.size() ? ", " + cc->partNames[size_t(s.test)] : "";
+        const std::string part = s.part.empty() ? "" : ", " + s.part;
         os << "<tr><td>" << esc(s.channel + part) << "</td><td>" << svg::num(s.bias / scale, "%.4g")
            << " " << (cc ? cc->unit : "") << "</td><td>" << svg::num(s.scale, "%.4f") << "</td><td>"
            << svg::num(s.lag, "%.3f") << "</td><td>" << svg::num(s.drift / scale, "%.4g") << "</td></tr>\n";
     }
     os << "</table>\n";
     if (which) {
-        os << "<h2>Which</h2>\n<table><tr><th>effect</th><th>parameters (all windows)</th>"
+        os << "<h2>Which</h2>\n<p>Each candidate fitted on all "
+           << (c.tests.size() > 1 ? "tests" : "time windows") << " but one and judged on the one left out, in turn"
+           << (c.tests.size() > 1 ? " (leave one test out)" : "") << ".</p>\n"
+           << "<table><tr><th>effect</th><th>parameters (all "
+           << (c.tests.size() > 1 ? "tests" : "windows") << ")</th>"
               "<th>held-out gap before</th><th>after</th><th>shrink beyond u_val</th><th>score</th>"
               "<th>co-simulations</th></tr>\n";
         for (const auto& k : which->candidates) {
@@ -224,6 +231,8 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
     os << "<h2>Over time</h2>\n<p>Measured (dots), the model as it is (grey)"
        << (fitted ? " and with the best candidate at its fit on all windows (blue)" : "")
        << "; the mat as the sum of the compared sensels' pressures.</p>\n";
+    const int ntests = std::max<int>(1, int(c.tests.size()));
+    for (int t = 0; t < ntests; ++t)
     for (const diagnose::PatientChannelComparison& ch : c.channels) {
         const int parts = ch.name == "bag-pressure" ? int(std::min<size_t>(ch.partNames.size(), 6)) : 1;
         for (int p = 0; p < parts; ++p) {
@@ -231,17 +240,19 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
             svg::Series m, s, f;
             m.name = "measured", m.colour = "#000", m.points = true;
             s.name = "model as it is", s.colour = "#999";
-            makeTimeSeries(ch, part, m, s);
+            makeTimeSeries(ch, part, t, m, s);
+            if (m.x.empty()) continue;
             std::vector<svg::Series> series = {s, m};
             const diagnose::PatientChannelComparison* fc = fitted ? fitted->find(ch.name) : nullptr;
             if (fc) {
                 svg::Series fm, fs;
-                makeTimeSeries(*fc, part, fm, fs);
+                makeTimeSeries(*fc, part, t, fm, fs);
                 fs.name = "with the best candidate", fs.colour = "#0072b2";
                 series.push_back(fs);
             }
             svg::PlotOptions o;
-            o.title = ch.name + (part >= 0 ? ", " + ch.partNames[size_t(part)] : "");
+            o.title = (c.tests.size() > 1 ? "test " + c.tests[size_t(t)] + ": " : std::string()) + ch.name +
+                      (part >= 0 ? ", " + ch.partNames[size_t(part)] : "");
             o.xLabel = "time [s]";
             o.yLabel = (ch.name == "mat" ? "sum of sensels [" : "[") + ch.unit + "]";
             o.width = 460;

@@ -91,6 +91,9 @@ struct Signature {
     double loopAreaMeasured = 0.0;   ///< hysteresis loop area, channel x displacement [SI m]
     double loopAreaSimulated = 0.0;
     double drift = 0.0;       ///< slope of the residual over time [SI/s]
+    /// What the signature is of within its channel ("bag 17", "test gas-4.0g, bag 17"); "" all
+    /// (the rig's: `test` and `gasMass` say it).
+    std::string part;
 };
 
 struct ChannelSummary {

@@ -96,13 +96,36 @@ struct PatientChannelComparison {
     std::vector<std::string> partNames;  ///< "sacrum", "bag 17"; empty for the tilt
     /// The mat's samples: frame of the measured mat and sensel (to re-evaluate them alike).
     std::vector<int> frame, sensel;
-    /// Per part, its samples in time order (for the series' signatures and noise).
+    /// Per sample: its test (index into PatientComparison::tests); empty for one record.
+    std::vector<int> test;
+    /// Per part (the mat: per sensel) and test, its samples in time order (for the series'
+    /// signatures and noise).
     std::vector<std::vector<size_t>> partSeries() const;
+    int getTest(size_t sample) const { return test.empty() ? 0 : test[sample]; }
 };
 
 struct PatientComparison {
     std::vector<PatientChannelComparison> channels;
+    /// The tests' names when several tests are joined (joinPatientComparisons); empty for one
+    /// record.
+    std::vector<std::string> tests;
     const PatientChannelComparison* find(const std::string& name) const;
+};
+
+/// Several tests' comparisons as one: each channel's samples test after test, each tagged with
+/// its test; the parts (bags) merged by name. One comparison is returned as it is.
+PatientComparison joinPatientComparisons(const std::vector<PatientComparison>& parts,
+                                         const std::vector<std::string>& names);
+
+/// What the folds of the which stage leave out: the time windows of one record, or (several
+/// tests) whole tests, each in turn.
+struct PatientFolds {
+    std::vector<double> windowEdges;  ///< [s] the time windows' bounds (also the where stage's)
+    int tests = 1;                    ///< more than one: the folds are the tests
+    bool isByTest() const { return tests > 1; }
+    int getCount() const { return isByTest() ? tests : int(windowEdges.size()) - 1; }
+    /// The fold a sample of the channel belongs to.
+    int findFold(const PatientChannelComparison& c, size_t sample) const;
 };
 
 /// The simulated run (its true values; the instruments read it with `inst`) beside the measured
@@ -131,6 +154,9 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
 double calcPatientGap(const PatientComparison& c, const WhereReport& where,
                       const std::vector<double>& windowEdges, const std::vector<int>& windows,
                       bool beyondUncertainty);
+/// The same over the samples of the given folds (time windows, or tests).
+double calcPatientGap(const PatientComparison& c, const WhereReport& where, const PatientFolds& folds,
+                      const std::vector<int>& selected, bool beyondUncertainty);
 
 // ------------------------------------------------------------------------- which
 
@@ -148,6 +174,32 @@ struct PatientCalibrationOptions {
     int gridPoints = 5;
     double maxLag = 2.0;  ///< [s]
 };
+
+/// One test of a patient's data as the which stage uses it.
+struct PatientTestCase {
+    std::string name;           ///< "" for one record
+    PatientChannels measured;
+    PatientChannels baseline;   ///< the model's run of the test's scenario
+    double statedGasMass = 0.0; ///< [kg] the test's array.gas_mass
+};
+
+/// Simulates test `test`'s scenario with these overrides (applied after the test's own) and
+/// returns the run's channels; the app supplies it (a co-simulation).
+using PatientTestSimulator = std::function<PatientChannels(
+    int test, const std::vector<std::pair<std::string, std::string>>& overrides, const std::string& label)>;
+
+/// Each test's comparison of its baseline (the model as it is) with what was measured.
+std::vector<PatientComparison> comparePatientTests(const std::vector<PatientTestCase>& tests,
+                                                   const MatRegions& regions);
+
+/// Calibrates each candidate on all folds but one and judges it on the one left out, in turn:
+/// the folds are the tests when there are several (an effect that changes the response is
+/// simulated in every test at each trial value, with the test's stated gas mass), else the time
+/// windows of the one record. The fit, the score and the verdict as below.
+WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests,
+                                       const WhereReport& where, const MatRegions& regions,
+                                       const PatientFolds& folds, const PatientTestSimulator& simulate,
+                                       const PatientCalibrationOptions& options);
 
 /// Calibrates each candidate with leave-one-window-out folds (the windows bounded by
 /// windowEdges, at least two) and ranks them by the rig's score (the held-out shrink of the gap

@@ -15,13 +15,14 @@
 
 namespace io {
 
-/// diagnosis.json; `which` may be null (--where-only); windowEdges [s] bound the time windows.
+/// diagnosis.json; `which` may be null (--where-only); `folds` the time windows [s] and
+/// whether the folds were tests (`fold_kind`, `tests`, each fold's `held_out_test` by name).
 std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose::PatientComparison& c,
                                        const diagnose::WhereReport& where,
                                        const diagnose::WhichReport* which,
-                                       const std::vector<double>& windowEdges);
+                                       const diagnose::PatientFolds& folds);
 
-/// residuals.csv: channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual
+/// residuals.csv ([test,] first when several tests): channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual
 /// (the sensel's row and column from 1 for the mat, empty otherwise); `matColumns` the mat's.
 std::string formatPatientResidualsCsv(const diagnose::PatientComparison& c, int matColumns);
 
