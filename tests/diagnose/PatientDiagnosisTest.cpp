@@ -4,6 +4,8 @@
 // the where stage splits the residuals by region, bag and time window (shares adding up), the
 // which stage names the effect put in and brings its parameters back, and names none without
 // one; the effects that change the response say which scenario keys they set.
+// With several tests the comparisons are joined (each sample tagged with its test), the folds
+// are the tests, and an effect on the response is run in every test at its stated gas mass.
 #include <gtest/gtest.h>
 
 #include <diagnose/PatientDiagnosis.h>
@@ -186,4 +188,147 @@ TEST(PatientDiagnosis, EffectsOnTheResponseSetScenarioKeys) {
                  std::invalid_argument);
     EXPECT_EQ(listPatientEffectNames(),
               "bag-pressure-sensor, mat-gain, film-friction, gas-mass-bias, soft-tissue");
+}
+
+// ------------------------------------------------------------------ leave one test out
+
+namespace {
+
+// A stand-in test: the run with its bags' pressures raised by `lift` [Pa] (another condition).
+PatientChannels makeTestRun(double lift) {
+    PatientChannels r = makeRun();
+    for (BagPressureChannel& b : r.bags)
+        for (double& p : b.pressure.value) p += lift;
+    return r;
+}
+
+}  // namespace
+
+TEST(PatientDiagnosis, JoinedTestsKeepTheirSamplesApart) {
+    PatientSynthesisOptions so;
+    so.matInterval = 0.5;
+    std::vector<PatientComparison> parts;
+    for (double lift : {0.0, 3e3}) {
+        const PatientChannels run = makeTestRun(lift);
+        parts.push_back(comparePatient(synthesizePatientChannels(run, {}, so), run, {}, makeRegions()));
+    }
+    parts[1].channels.back().partNames = {"bag 8", "bag 3"};  // the same bags named in another order
+    for (int& p : parts[1].channels.back().part) p = 1 - p;
+    const PatientComparison j = joinPatientComparisons(parts, {"a", "b"});
+    ASSERT_EQ(j.tests.size(), 2u);
+    const PatientChannelComparison* bags = j.find("bag-pressure");
+    ASSERT_TRUE(bags);
+    EXPECT_EQ(bags->partNames, (std::vector<std::string>{"bag 3", "bag 8"}));
+    EXPECT_EQ(bags->time.size(), 2 * parts[0].find("bag-pressure")->time.size());
+    // A sample of test b keeps its bag's name and its test.
+    const size_t i = parts[0].find("bag-pressure")->time.size();
+    EXPECT_EQ(bags->getTest(i), 1);
+    EXPECT_EQ(bags->partNames[size_t(bags->part[i])], parts[1].channels.back().partNames[size_t(parts[1].channels.back().part[0])]);
+    // The series (noise, signatures) are per test and part: 2 tests x 2 bags.
+    EXPECT_EQ(bags->partSeries().size(), 4u);
+    PatientFolds folds;
+    folds.windowEdges = kEdges;
+    folds.tests = 2;
+    EXPECT_EQ(folds.getCount(), 2);
+    EXPECT_EQ(folds.findFold(*bags, i), 1);
+    EXPECT_EQ(folds.findFold(*bags, 0), 0);
+    // The where stage splits by test and gives each test its own signatures.
+    const WhereReport w = calcPatientWhere(j, {}, kEdges, 2.0);
+    int byTest = 0, signed_b = 0;
+    for (const RegimeStats& r : w.regimes) byTest += r.regime.rfind("test ", 0) == 0;
+    for (const Signature& s : w.signatures) signed_b += s.part.rfind("test b", 0) == 0;
+    EXPECT_EQ(byTest, 2 * int(j.channels.size()));
+    EXPECT_EQ(signed_b, int(j.channels.size()) + 1);  // mat, two tilts, two bags
+}
+
+TEST(PatientDiagnosis, LeavesOneTestOutForAnInstrumentEffect) {
+    PatientInstruments inst;
+    inst.bagSensorLag = 0.3;
+    inst.bagSensorOffset = 400.0;
+    std::vector<PatientTestCase> tests;
+    for (double lift : {0.0, 2e3, 4e3}) {
+        PatientTestCase t;
+        t.name = "lift-" + std::to_string(int(lift));
+        t.baseline = makeTestRun(lift);
+        PatientSynthesisOptions so;
+        so.matInterval = 0.05;
+        so.seed = uint64_t(lift) + 1;
+        t.measured = synthesizePatientChannels(t.baseline, inst, so);
+        t.statedGasMass = 4.5e-3;
+        tests.push_back(t);
+    }
+    const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
+    const PatientComparison base = joinPatientComparisons(parts, {tests[0].name, tests[1].name, tests[2].name});
+    const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
+    PatientFolds folds;
+    folds.windowEdges = kEdges;
+    folds.tests = 3;
+    const WhichReport which = calibratePatientCandidates(
+        tests, where, makeRegions(), folds,
+        [](int, const std::vector<std::pair<std::string, std::string>>&, const std::string&) -> PatientChannels {
+            throw std::logic_error("an instrument effect needs no co-simulation");
+        },
+        {});
+    EXPECT_EQ(which.verdict, "bag-pressure-sensor") << which.reason;
+    const CandidateResult& c = which.candidates.front();
+    ASSERT_EQ(c.folds.size(), 3u);  // one per test, not per time window
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(c.folds[size_t(k)].heldOut, k);
+        EXPECT_NEAR(c.folds[size_t(k)].parameters[0], 0.3, 0.03);
+        EXPECT_NEAR(c.folds[size_t(k)].parameters[1], 400.0, 20.0);
+        EXPECT_LT(c.folds[size_t(k)].excessAfter, 0.2 * c.folds[size_t(k)].excessBefore);
+    }
+}
+
+TEST(PatientDiagnosis, LeavesOneTestOutRunningAResponseEffectInEveryTest) {
+    // The gas mass's effect on the stand-in: every bag 20 kPa per gram above the stated mass.
+    // Two tests at 4.0 and 5.0 g; the bags hold 0.2 g more than stated in both.
+    const double perKg = 20e3 / 1e-3;
+    const std::vector<double> stated = {4.0e-3, 5.0e-3};
+    std::vector<PatientTestCase> tests;
+    for (size_t t = 0; t < stated.size(); ++t) {
+        PatientTestCase c;
+        c.name = t ? "gas-5.0g" : "gas-4.0g";
+        c.baseline = makeTestRun(0.0);
+        PatientSynthesisOptions so;
+        so.matInterval = 0.05;
+        so.seed = t + 1;
+        c.measured = synthesizePatientChannels(makeTestRun(perKg * 0.2e-3), {}, so);
+        c.statedGasMass = stated[t];
+        tests.push_back(c);
+    }
+    std::vector<std::pair<int, std::string>> calls;  // test, its array.gas_mass
+    const PatientTestSimulator simulate = [&](int t, const std::vector<std::pair<std::string, std::string>>& ov,
+                                              const std::string&) {
+        EXPECT_EQ(ov.size(), 1u);
+        EXPECT_EQ(ov.at(0).first, "array.gas_mass");
+        calls.push_back({t, ov.at(0).second});
+        const double mass = std::stod(ov.at(0).second) * 1e-3;  // "4.25 g"
+        return makeTestRun(perKg * (mass - stated[size_t(t)]));
+    };
+    const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
+    const PatientComparison base = joinPatientComparisons(parts, {tests[0].name, tests[1].name});
+    const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
+    PatientFolds folds;
+    folds.windowEdges = kEdges;
+    folds.tests = 2;
+    PatientCalibrationOptions o;
+    o.candidates = {"gas-mass-bias"};
+    const WhichReport which = calibratePatientCandidates(tests, where, makeRegions(), folds, simulate, o);
+    EXPECT_EQ(which.verdict, "gas-mass-bias") << which.reason;
+    const CandidateResult& c = which.candidates.front();
+    EXPECT_NEAR(c.parameters[0], 0.2e-3, 0.01e-3);
+    ASSERT_EQ(c.folds.size(), 2u);
+    // Each trial value ran in both tests, at the test's stated mass plus the offset.
+    EXPECT_EQ(c.simulations, int(calls.size()));
+    EXPECT_EQ(calls.size() % 2, 0u);
+    bool sawGrid = false;
+    for (size_t k = 0; k + 1 < calls.size(); k += 2) {
+        EXPECT_EQ(calls[k].first, 0);
+        EXPECT_EQ(calls[k + 1].first, 1);
+        const double a = std::stod(calls[k].second), b = std::stod(calls[k + 1].second);
+        EXPECT_NEAR(b - a, 1.0, 1e-9) << calls[k].second << " " << calls[k + 1].second;
+        sawGrid |= calls[k].second == "4.25 g" && calls[k + 1].second == "5.25 g";
+    }
+    EXPECT_TRUE(sawGrid);
 }
