@@ -316,8 +316,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         r.vec(resumedAirVolume), r.vec(resumedAirRate);
         verdict.loadState(r);
     };
-    auto saveCheckpoint = [&] {
-        bags::StateWriter w;
+    // A checkpoint's or rest state's header (readCheckpointHeader() reads it), and the file:
+    // magic, length and hash of the data, the data.
+    auto writeHeader = [&](bags::StateWriter& w) {
         w.tag("header");
         w.str(bagsim::kVersion);
         w.str(file.getFileName());
@@ -325,17 +326,23 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         w.pod(std::uint64_t(file.getOverrides().size()));
         for (const std::string& o : file.getOverrides()) w.str(o);
         w.pod(poa->getTime());
+    };
+    auto writeStateFile = [&](const char* name, const char* magic, const bags::StateWriter& w) {
+        bags::StateWriter head;
+        head.pod(std::uint64_t(w.getData().size()));
+        head.pod(calcCheckpointHash(w.getData()));
+        writeFileAtomically(outDir->getFile(name), std::string(magic) + head.getData() + w.getData());
+    };
+    auto saveCheckpoint = [&] {
+        bags::StateWriter w;
+        writeHeader(w);
         writer->saveState(w);
         saveRunState(w);
         poa->saveState(w);
         if (air) air->saveState(w);
         if (sc.controller) sc.controller->saveState(w);
         w.tag("end");
-        bags::StateWriter head;
-        head.pod(std::uint64_t(w.getData().size()));
-        head.pod(calcCheckpointHash(w.getData()));
-        writeFileAtomically(outDir->getFile(io::kCheckpointFile),
-                            std::string(kCheckpointMagic) + head.getData() + w.getData());
+        writeStateFile(io::kCheckpointFile, kCheckpointMagic, w);
         // The caches that shape later roundoff start afresh here, as in a run resumed here.
         poa->resetCaches();
     };
@@ -345,20 +352,10 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     bool restWritten = !(sc.settleTime > 0.0) || fromRest != nullptr;
     auto saveRestState = [&] {
         bags::StateWriter w;
-        w.tag("header");
-        w.str(bagsim::kVersion);
-        w.str(file.getFileName());
-        w.str(file.getText());
-        w.pod(std::uint64_t(file.getOverrides().size()));
-        for (const std::string& o : file.getOverrides()) w.str(o);
-        w.pod(poa->getTime());
+        writeHeader(w);
         poa->saveState(w);
         w.tag("end");
-        bags::StateWriter head;
-        head.pod(std::uint64_t(w.getData().size()));
-        head.pod(calcCheckpointHash(w.getData()));
-        writeFileAtomically(outDir->getFile(io::kRestStateFile),
-                            std::string(kRestStateMagic) + head.getData() + w.getData());
+        writeStateFile(io::kRestStateFile, kRestStateMagic, w);
         poa->resetCaches();
         restWritten = true;
     };

@@ -33,6 +33,14 @@ void PatientOnArrayOptions::validate() const {
                 "the reduced model");
     }
     contact.validate();
+    if (contact.friction > 0.0 &&
+        (coupling.scheme == Scheme::Tangent || coupling.scheme == Scheme::TangentImplicit))
+        throw std::invalid_argument(
+            "coupling.scheme: " + toString(coupling.scheme) +
+            " is not valid with body friction (bag.body_friction > 0): the linearised load "
+            "would carry the films' stick springs into the body's step, and the patient spins "
+            "(docs/cosim.md#friction-and-the-tangent-schemes); valid: implicit or explicit with "
+            "friction, or bag.body_friction 0");
     if (neighbourContact) {
         if (model != BagModel::FiniteElement)
             throw std::invalid_argument(

@@ -123,6 +123,29 @@ TEST(ArrayScenario, TheBodyOnTheFilmsIsFrictionlessByDefaultAndTakesACoulombCoef
     }
 }
 
+TEST(ArrayScenario, BodyFrictionIsRefusedWithTheTangentSchemes) {
+    // The tangent schemes put the films' stick springs into the body's step, undamped, and the
+    // patient spins (docs/cosim.md#friction-and-the-tangent-schemes): refused at coupling.scheme
+    // naming the friction; the implicit and explicit schemes take it.
+    std::string t = kBase;
+    t.replace(t.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm, body_friction: 0.4}");
+    for (const char* scheme : {"tangent", "tangent-implicit"}) {
+        const io::InputError e = readError(t + "coupling: {scheme: " + scheme + "}\n");
+        EXPECT_EQ(e.getKey(), "coupling.scheme");
+        EXPECT_NE(e.getMessage().find("is not valid with bag.body_friction 0.4"), std::string::npos)
+            << e.what();
+        EXPECT_NE(e.getMessage().find("valid: implicit or explicit, or bag.body_friction 0"),
+                  std::string::npos)
+            << e.what();
+    }
+    for (const char* scheme : {"implicit", "explicit"})
+        EXPECT_DOUBLE_EQ(read(t + "coupling: {scheme: " + scheme + "}\n").options.contact.friction,
+                         0.4);
+    cosim::PatientOnArrayOptions o = read(t).options;
+    o.coupling.scheme = cosim::Scheme::TangentImplicit;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+}
+
 TEST(ArrayScenario, TheBodysShapesTakeASoftTissueLayer) {
     EXPECT_FALSE(read(kBase).options.contact.hasTissue());
     auto with = [](const std::string& value) {
