@@ -526,8 +526,22 @@ struct Airbag::Impl {
     // B = d(grad E)/dq at fixed x; the bag re-equilibrates, dx/dq = -K^-1 B, hence
     // dW/dq = dW/dq|_x - (dW/dx) K^-1 B, and frictionless W = -dE_c/dq so dW/dx = -B^T. The
     // gas likewise: dx/dm_b = -K^-1 d(grad E)/dm_b, dW/dm_b = (dW/dx) dx/dm_b. One K for all.
+    // withoutFriction: the body shapes' contacts taken frictionless (the friction history
+    // kept), the rest of the bag as it is.
     Airbag::WrenchLinearisation linearise(const std::vector<int>& which, bool gas,
-                                          bool allowFilmHeld) const {
+                                          bool allowFilmHeld, bool withoutFriction = false) const {
+        // Without friction: the body shapes' contacts evaluated frictionless while the
+        // linearisation is built (their friction history kept), then restored.
+        struct Restore {
+            const std::vector<Shape>& sh;
+            bool on;
+            ~Restore() {
+                if (on)
+                    for (const Shape& s : sh) s.contact->setFrictionSuppressed(false);
+            }
+        } restore{shapes, withoutFriction};
+        if (withoutFriction)
+            for (const Shape& s : shapes) s.contact->setFrictionSuppressed(true);
         Airbag::WrenchLinearisation lin;
         lin.pose.assign(which.size(), Eigen::Matrix<double, 6, 6>::Zero());
         if (gas) lin.gas.assign(which.size(), Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, numBags));
@@ -547,6 +561,12 @@ struct Airbag::Impl {
         } catch (const NumericalError&) {
             if (!allowFilmHeld) throw;
             lin.filmHeld = true;  // pose: dW/dq at fixed nodes; gas: zero
+            // Without friction (the coupling's passes hold the friction force): zero, the
+            // whole load held over the step. The film-held tangent is the contact's penalty
+            // stiffness (about 1e6 N/m on a segment), too stiff a spring for the body's step
+            // (docs/cosim.md#friction-and-the-tangent-schemes).
+            if (withoutFriction)
+                for (auto& m : lin.pose) m.setZero();
             return lin;
         }
         for (size_t j = 0; j < pressing.size(); ++j) {
@@ -1376,14 +1396,16 @@ std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
 }
 
 std::vector<Eigen::Matrix<double, 6, 6>> Airbag::calcShapeWrenchTangents(
-    const std::vector<int>& shapes, bool* filmHeld) const {
-    Airbag::WrenchLinearisation lin = m_impl->linearise(shapes, false, filmHeld != nullptr);
+    const std::vector<int>& shapes, bool* filmHeld, bool withoutFriction) const {
+    Airbag::WrenchLinearisation lin =
+        m_impl->linearise(shapes, false, filmHeld != nullptr, withoutFriction);
     if (filmHeld) *filmHeld = lin.filmHeld;
     return std::move(lin.pose);
 }
 
-Airbag::WrenchLinearisation Airbag::calcShapeWrenchLinearisation(const std::vector<int>& shapes) const {
-    return m_impl->linearise(shapes, true, true);
+Airbag::WrenchLinearisation Airbag::calcShapeWrenchLinearisation(const std::vector<int>& shapes,
+                                                                 bool withoutFriction) const {
+    return m_impl->linearise(shapes, true, true, withoutFriction);
 }
 
 double Airbag::calcGasInflow(int bag, double dt) const {

@@ -163,6 +163,7 @@ struct RigidContact::Impl {
     std::vector<Vec3> anchor_S;    // friction anchor on the surface, shape frame
     std::vector<char> hasAnchor;
     double slipLength = RigidContact::kMinSlipLength;  // [m] r = v_s dt of the regularised law
+    bool frictionSuppressed = false;  // setFrictionSuppressed(): evaluate as frictionless
 
     NormalLaw law(int j) const {
         return NormalLaw{opt.pressurePenalty * area[j], opt.onsetGap, area[j], opt.tissueThickness,
@@ -193,7 +194,7 @@ struct RigidContact::Impl {
         out.grad = dphi * n;
         if (wantHess) out.hess = ddphi * n * n.transpose() + dphi * dn;
         if (full) out.full = out.hess;
-        if (!(opt.friction > 0.0 && hasAnchor[j])) return;
+        if (!(opt.friction > 0.0 && hasAnchor[j]) || frictionSuppressed) return;
         const Vec3 a_G = shape->getPose() * anchor_S[j];
         const Mat3 P = Mat3::Identity() - n * n.transpose();
         const Vec3 q = p - a_G;
@@ -295,7 +296,11 @@ void RigidContact::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) 
     }
 }
 
-bool RigidContact::isConservative() const { return m_impl->opt.friction == 0.0; }
+bool RigidContact::isConservative() const {
+    return m_impl->opt.friction == 0.0 || m_impl->frictionSuppressed;
+}
+
+void RigidContact::setFrictionSuppressed(bool on) const { m_impl->frictionSuppressed = on; }
 
 void RigidContact::beginStep(const Eigen::Matrix3Xd& x, double dt) {
     Impl& m = *m_impl;

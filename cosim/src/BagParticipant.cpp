@@ -49,14 +49,14 @@ std::vector<Mat6> BagParticipant::calcWrenchTangents(const std::vector<int>& sha
     // over-resists, never one that pulls the body in). The implicit schemes' passes correct
     // the load; the one-pass tangent scheme keeps it for that step.
     bool filmHeld = false;
-    std::vector<Mat6> T = m_bag->calcShapeWrenchTangents(shapes, &filmHeld);
+    std::vector<Mat6> T = m_bag->calcShapeWrenchTangents(shapes, &filmHeld, m_withoutFriction);
     if (filmHeld) ++m_filmHeldTangents;
     return T;
 }
 
 Participant::WrenchLinearisation BagParticipant::calcWrenchLinearisation(
     const std::vector<int>& shapes) const {
-    bags::Airbag::WrenchLinearisation b = m_bag->calcShapeWrenchLinearisation(shapes);
+    bags::Airbag::WrenchLinearisation b = m_bag->calcShapeWrenchLinearisation(shapes, m_withoutFriction);
     if (b.filmHeld) ++m_filmHeldTangents;
     return {std::move(b.pose), std::move(b.gas)};
 }

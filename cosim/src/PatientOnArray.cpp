@@ -33,14 +33,12 @@ void PatientOnArrayOptions::validate() const {
                 "the reduced model");
     }
     contact.validate();
-    if (contact.friction > 0.0 &&
-        (coupling.scheme == Scheme::Tangent || coupling.scheme == Scheme::TangentImplicit))
+    if (contact.friction > 0.0 && coupling.scheme == Scheme::Tangent)
         throw std::invalid_argument(
-            "coupling.scheme: " + toString(coupling.scheme) +
-            " is not valid with body friction (bag.body_friction > 0): the linearised load "
-            "would carry the films' stick springs into the body's step, and the patient spins "
-            "(docs/cosim.md#friction-and-the-tangent-schemes); valid: implicit or explicit with "
-            "friction, or bag.body_friction 0");
+            "coupling.scheme: tangent is not valid with body friction (bag.body_friction > 0): "
+            "its one pass would hold the friction force from the step's start "
+            "(docs/cosim.md#friction-and-the-tangent-schemes); valid: implicit, "
+            "tangent-implicit or explicit with friction, or bag.body_friction 0");
     if (neighbourContact) {
         if (model != BagModel::FiniteElement)
             throw std::invalid_argument(
@@ -187,7 +185,13 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         for (int b : m.bagIndices) mass = std::max(mass, cells[b].gasMass);
         m.fe = makeArrayParticipants(cells, m.bagIndices, options.bag, options.neighbourContact,
                                      options.neighbourMargin, mass);
-        for (auto& p : m.fe.participants) m.participants.push_back(p.get());
+        for (auto& p : m.fe.participants) {
+            // With friction the body's linearised load leaves the films' stick springs out;
+            // the tangent-implicit passes hold the friction force
+            // (docs/cosim.md#friction-and-the-tangent-schemes).
+            p->setLinearisationWithoutFriction(options.contact.friction > 0.0);
+            m.participants.push_back(p.get());
+        }
         m.bags = m.fe.bags;
         m.modules = m.fe.modules;
         participantOf = m.fe.participantOf;

@@ -862,17 +862,13 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     readBag(root.getSection("bag", false), sc, file.getFileName());
     readArray(root.getSection("array"), sc);
     readCoupling(root.getSection("coupling", false), sc.options);
-    if (sc.options.contact.friction > 0.0 &&
-        (sc.options.coupling.scheme == cosim::Scheme::Tangent ||
-         sc.options.coupling.scheme == cosim::Scheme::TangentImplicit))
+    if (sc.options.contact.friction > 0.0 && sc.options.coupling.scheme == cosim::Scheme::Tangent)
         root.getSection("coupling", false)
-            .fail("scheme", cosim::toString(sc.options.coupling.scheme) +
-                                " is not valid with bag.body_friction " +
+            .fail("scheme", "tangent is not valid with bag.body_friction " +
                                 fmtNumber(sc.options.contact.friction) +
-                                ": the linearised load would carry the films' stick springs "
-                                "into the body's step, and the patient spins "
-                                "(docs/cosim.md#friction-and-the-tangent-schemes); valid: "
-                                "implicit or explicit, or bag.body_friction 0");
+                                ": its one pass would hold the friction force from the step's "
+                                "start (docs/cosim.md#friction-and-the-tangent-schemes); valid: "
+                                "implicit, tangent-implicit or explicit, or bag.body_friction 0");
 
     const ScenarioNode run = root.getSection("run", false);
     run.checkKeys({}, {"settle_time", "duration", "drop_height", "contact_damping"});

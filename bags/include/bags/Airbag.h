@@ -265,9 +265,14 @@ public:
     /// state at or past a limit point, e.g. one held by the stabilisation springs) each
     /// pressing shape gets the film-held tangent dW/dq at fixed nodes (the contact's own
     /// stiffness: the bag's stiffest answer, no re-equilibration) and *filmHeld is set,
-    /// instead of a throw.
+    /// instead of a throw. withoutFriction: the tangents of the same state with the shapes'
+    /// contacts taken frictionless (their normal law, the film and the gas; no stick or slip
+    /// force, the friction history kept), for a coupling whose passes hold the friction force
+    /// (docs/cosim.md#friction-and-the-tangent-schemes). Without friction on the shapes it is
+    /// the tangent itself, except where the bag's tangent is not positive definite: zero
+    /// there instead of the film-held tangent (the load held over the coupling's step).
     std::vector<Eigen::Matrix<double, 6, 6>> calcShapeWrenchTangents(
-        const std::vector<int>& shapes, bool* filmHeld) const;
+        const std::vector<int>& shapes, bool* filmHeld, bool withoutFriction = false) const;
     /// The shapes' wrenches linearised at the current state in their poses and in the bags'
     /// gas: what calcShapeWrenchTangents(shapes, filmHeld) gives, and per shape the
     /// derivative of its wrench by each bag's gas mass, with one factorisation for all.
@@ -282,7 +287,9 @@ public:
         /// gas columns (at fixed nodes the wrench does not see the gas).
         bool filmHeld = false;
     };
-    WrenchLinearisation calcShapeWrenchLinearisation(const std::vector<int>& shapes) const;
+    /// withoutFriction as in calcShapeWrenchTangents().
+    WrenchLinearisation calcShapeWrenchLinearisation(const std::vector<int>& shapes,
+                                                     bool withoutFriction = false) const;
     /// Gas mass [kg] the flows set (setMassFlow(), setTargetMass()) let into bag b (negative:
     /// out) over an advance(dt) from the current state: the flow times dt, at most what is
     /// left to a target. Leakage, orifices and heat are not counted.

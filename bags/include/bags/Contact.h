@@ -112,6 +112,11 @@ public:
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     /// True when friction is on: the term is then not a potential (solver uses residual norms).
     bool isConservative() const;
+    /// While on, every evaluation is the frictionless contact's (the friction history kept):
+    /// for the frictionless linearisation of a state with friction
+    /// (Airbag::calcShapeWrenchLinearisation()). Not to be set while another thread
+    /// evaluates this contact.
+    void setFrictionSuppressed(bool on) const;
     /// Starts a step of dt [s] from x (the committed state, the shape at its pose at the
     /// step's start). Regularised law: each anchored node's anchor goes to its contact point
     /// at x, so the slip is measured over the step, and the slip length becomes v_s dt

@@ -37,6 +37,14 @@ class BagParticipant : public Bag {
     /// How many calcWrenchTangents() and calcWrenchLinearisation() calls gave film-held
     /// tangents (not saved in checkpoints).
     int getNumFilmHeldTangents() const;
+    /// With on, calcWrenchTangents() and calcWrenchLinearisation() give the linearisation of
+    /// the same state with the shapes' contacts taken frictionless (bags::Airbag's
+    /// withoutFriction): the body's linearised load carries no stick springs, and the
+    /// tangent-implicit passes hold the friction force as the implicit scheme holds the whole
+    /// load (docs/cosim.md#friction-and-the-tangent-schemes). Off by default (the exact
+    /// tangent).
+    void setLinearisationWithoutFriction(bool on) { m_withoutFriction = on; }
+    bool getLinearisationWithoutFriction() const { return m_withoutFriction; }
     Eigen::VectorXd calcContactPressure(int shape) const override;
     /// The airbag's gas is still (bags::Airbag::isGasStill()).
     bool isSteady() const override;
@@ -66,6 +74,7 @@ class BagParticipant : public Bag {
     bags::AdvanceSummary m_last;
     mutable Eigen::VectorXd m_areas;  // the mesh's nodal areas, made on first use
     mutable int m_filmHeldTangents = 0;
+    bool m_withoutFriction = false;
 };
 
 }  // namespace cosim
