@@ -56,3 +56,28 @@ TEST(PatientOnArray, CoSimulationsRunOneAfterAnotherInOneProcessAreIndependent) 
     EXPECT_EQ(first, oneThread);
     EXPECT_NE(first, half);
 }
+
+TEST(PatientOnArray, WithBodyFrictionTheBagsHandTheBodyTheirLinearisationWithoutFriction) {
+    // With body friction the bags' stick springs stay out of the body's linearised load (they
+    // spun the landing patient under tangent-implicit, docs/cosim.md#friction-and-the-tangent-
+    // schemes): every finite-element bag is set to its linearisation without friction, and
+    // none is without friction. Tangent-implicit is taken with friction, tangent is not.
+    for (const double mu : {0.0, 0.4}) {
+        PatientOnArrayOptions o = coarseOptions();
+        o.contact.friction = mu;
+        o.coupling.scheme = Scheme::TangentImplicit;
+        PatientOnArray poa(lightPatient(), o);
+        int n = 0;
+        for (size_t i = 0; i < poa.getBagIndices().size(); ++i) {
+            const auto* b = dynamic_cast<const BagParticipant*>(&poa.getBag(int(i)));
+            ASSERT_NE(b, nullptr);
+            EXPECT_EQ(b->getLinearisationWithoutFriction(), mu > 0.0) << "bag " << i;
+            ++n;
+        }
+        EXPECT_EQ(n, 28);
+    }
+    PatientOnArrayOptions o = coarseOptions();
+    o.contact.friction = 0.4;
+    o.coupling.scheme = Scheme::Tangent;
+    EXPECT_THROW(o.validate(), std::invalid_argument);
+}
