@@ -687,7 +687,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     }
     writeReportAfterRun(outPath, quiet);
     std::cout << table.str() << "support verdict:\n" << verdictText << "results in " << outPath.string() << "/:\n"
-              << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N\n"
+              << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg\n"
               << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm\n"
               << "  " << io::kTiltCsv << "      time_s,pelvis_tilt_deg,thorax_tilt_deg\n"
               << "  " << io::kBodyCsv << "      time_s,com_x_mm,com_y_mm,com_z_mm\n"

@@ -5,6 +5,10 @@
 //                                                section pressed by spheres; writes OUT
 //   bench_reduced_bag validate SCENARIO CAL      FE against reduced on cases not calibrated on
 //   bench_reduced_bag speed CAL                  cost of an advance and a tangent
+//   bench_reduced_bag trace SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G
+//                                                one case step by step
+//   bench_reduced_bag footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM
+//                                                where each model puts its contact pressure
 //
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
@@ -564,6 +568,70 @@ int trace(const std::string& scenario, const std::string& calPath, char** a) {
     return 0;
 }
 
+// One case at one travel: every FE node and reduced grid point that carries contact pressure
+// (position in the bag frame, pressure, area), to compare where each puts its pressure.
+int footprint(const std::string& scenario, const std::string& calPath, char** a) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const auto cal = io::readReducedBagCalibration(calPath);
+    Case c;
+    c.kind = a[0];
+    c.size = Vec3(std::stod(a[1]), std::stod(a[2]), std::stod(a[3]));
+    c.x = std::stod(a[4]), c.y = std::stod(a[5]), c.tilt = std::stod(a[6]) * kPi / 180;
+    c.mass = std::stod(a[7]) * 1e-3;
+    const double travel = std::stod(a[8]) * 1e-3;
+    c.maxDepth = travel;
+    std::vector<Row> rows = pressFE(c, spec, sc.options.contact);
+    if (rows.empty() || std::abs(rows.back().depth - travel) > 1e-6) {
+        std::fprintf(stderr, "the FE bag did not reach %.1f mm\n", travel * 1e3);
+        return 1;
+    }
+    // Again to the last step, keeping the bag (pressFE does not hand it out).
+    bags::Airbag bag(spec);
+    auto shape = makeShape(c);
+    shape->setPose(pose(c, 1.0));
+    const int s = bag.addShape(shape, sc.options.contact);
+    bag.inflate(c.mass);
+    for (const Row& r : rows) {
+        bag.setShapePose(s, pose(c, r.z));
+        if (!bag.advance(1.0).converged) return 1;
+        bag.commit();
+    }
+    const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
+    const Eigen::VectorXd areas = bag.getMesh().calcNodalAreas();
+    const Eigen::Matrix3Xd& x = bag.getPositions();
+    std::printf("# FE: x_mm y_mm z_mm p_kPa area_cm2 (gas %.3f kPa, force %.2f N)\n",
+                rows.back().pFE * 1e-3, rows.back().forceFE);
+    for (int n = 0; n < p.size(); ++n)
+        if (p[n] > 0.0)
+            std::printf("FE %7.1f %7.1f %7.1f %7.2f %6.2f\n", x(0, n) * 1e3, x(1, n) * 1e3,
+                        x(2, n) * 1e3, p[n] * 1e-3, areas[n] * 1e4);
+    replay(c, rows, cal);
+    cosim::ReducedBag red(cal, Eigen::Isometry3d::Identity());
+    auto rs = makeShape(c);
+    rs->setPose(pose(c, 1.0));
+    red.addShape(rs);
+    red.setGasMass(c.mass);
+    for (const Row& r : rows) {
+        cosim::ShapeState st;
+        st.X_GS = pose(c, r.z);
+        red.setShapeState(0, st);
+        red.advance(1.0);
+        red.commit();
+    }
+    const Eigen::VectorXd q = red.calcContactPressure(0);
+    const Eigen::VectorXd A = red.getPressureAreas();
+    const Eigen::Matrix3Xd& y = red.getPressurePoints();
+    std::printf("# reduced: x_mm y_mm z_mm q_kPa area_cm2 (gas %.3f kPa, force %.2f N)\n",
+                red.getGaugePressure() * 1e-3, red.calcWrench(0).force.z());
+    for (int i = 0; i < q.size(); ++i)
+        if (q[i] > 0.0)
+            std::printf("RED %7.1f %7.1f %7.1f %7.2f %6.2f\n", y(0, i) * 1e3, y(1, i) * 1e3,
+                        y(2, i) * 1e3, q[i] * 1e-3, A[i] * 1e4);
+    return 0;
+}
+
 int speed(const std::string& calPath) {
     const auto cal = io::readReducedBagCalibration(calPath);
     cosim::ReducedBag bag(cal, Eigen::Isometry3d::Identity());
@@ -612,6 +680,7 @@ int main(int argc, char** argv) {
         if (mode == "validate" && argc == 4) return validate(argv[2], argv[3]);
         if (mode == "speed" && argc == 3) return speed(argv[2]);
         if (mode == "trace" && argc == 12) return trace(argv[2], argv[3], argv + 4);
+        if (mode == "footprint" && argc == 13) return footprint(argv[2], argv[3], argv + 4);
         std::cerr << "usage: bench_reduced_bag calibrate SCENARIO OUT | validate SCENARIO CAL | "
                      "speed CAL\n";
         return 2;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <cmath>
+#include <stdexcept>
 
 #include "cosim/BodyShapes.h"
 
@@ -16,11 +17,38 @@ std::vector<std::string> getRegionLoadNames(const body::BodyModel& model) {
     return names;
 }
 
-std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaThreshold) {
+double calcPatchPeakPressure(const std::vector<Eigen::Vector2d>& points,
+                             const std::vector<double>& forces, double patchArea) {
+    if (!(patchArea > 0.0)) throw std::invalid_argument("calcPatchPeakPressure: patchArea <= 0");
+    const double r2 = patchArea / 3.14159265358979323846;
+    // Points sorted by x: a disc's neighbours lie within one radius in x.
+    std::vector<int> order(points.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+    std::sort(order.begin(), order.end(),
+              [&](int a, int b) { return points[a].x() < points[b].x(); });
+    const double r = std::sqrt(r2);
+    double best = 0.0;
+    size_t lo = 0;
+    for (size_t i = 0; i < order.size(); ++i) {
+        const Eigen::Vector2d& c = points[order[i]];
+        while (points[order[lo]].x() < c.x() - r) ++lo;
+        double sum = 0.0;
+        for (size_t j = lo; j < order.size() && points[order[j]].x() <= c.x() + r; ++j)
+            if ((points[order[j]] - c).squaredNorm() <= r2) sum += forces[order[j]];
+        best = std::max(best, sum);
+    }
+    return best / patchArea;
+}
+
+std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaThreshold,
+                                        double patchArea) {
     const body::BodyModel& model = poa.getModel();
     const std::vector<std::string> names = getRegionLoadNames(model);
     std::vector<RegionLoad> loads(names.size());
     std::vector<double> normalForce(names.size(), 0.0);
+    // Per region: its loaded nodes in the bed's plane and their normal forces (patch peak).
+    std::vector<std::vector<Eigen::Vector2d>> patchPoints(names.size());
+    std::vector<std::vector<double>> patchForces(names.size());
     for (size_t i = 0; i < names.size(); ++i) loads[i].name = names[i];
     const int numRegions = int(model.getRegions().size());
 
@@ -54,14 +82,19 @@ std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaTh
             // points out of the membrane, against the shape's outward normal.
             r.force += p[n] * area[n] * -normal.z();
             r.peakPressure = std::max(r.peakPressure, p[n]);
+            patchPoints[&r - loads.data()].emplace_back(x(0, n), x(1, n));
+            patchForces[&r - loads.data()].push_back(p[n] * area[n]);
             if (p[n] > areaThreshold) {
                 r.area += area[n];
                 normalForce[&r - loads.data()] += p[n] * area[n];
             }
         }
     }
-    for (size_t i = 0; i < loads.size(); ++i)
+    for (size_t i = 0; i < loads.size(); ++i) {
         loads[i].meanPressure = loads[i].area > 0.0 ? normalForce[i] / loads[i].area : 0.0;
+        loads[i].patchPeakPressure =
+            calcPatchPeakPressure(patchPoints[i], patchForces[i], patchArea);
+    }
     return loads;
 }
 

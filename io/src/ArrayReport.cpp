@@ -708,9 +708,13 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         const Curves ppi = collect(run.regions, "region", "ppi_mmHg");
         const Curves area = collect(run.regions, "region", "area_cm2");
         const Curves force = collect(run.regions, "region", "force_N");
+        // The patch peak (regions.csv of runs before it was written has no such column).
+        const bool hasPatch = run.regions.find("patch_peak_mmHg") >= 0;
+        const Curves patch =
+            hasPatch ? collect(run.regions, "region", "patch_peak_mmHg") : Curves{};
         struct R {
             std::string name;
-            double max, at, area, force;
+            double max, at, area, force, patch;
         };
         std::vector<R> rs;
         double top = kThresholdMmHg;
@@ -719,8 +723,11 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
             const size_t i = size_t(std::max_element(s.y.begin(), s.y.end()) - s.y.begin());
             const auto& a = area.byKey.at(k).y;
             const auto& f = force.byKey.at(k).y;
+            double pp = 0.0;
+            if (hasPatch)
+                for (double v : patch.byKey.at(k).y) pp = std::max(pp, v);
             rs.push_back({k, s.y[i], s.x[i], *std::max_element(a.begin(), a.end()),
-                          *std::max_element(f.begin(), f.end())});
+                          *std::max_element(f.begin(), f.end()), pp});
             top = std::max(top, s.y[i]);
         }
         std::sort(rs.begin(), rs.end(), [](const R& a, const R& b) { return a.max > b.max; });
@@ -729,13 +736,21 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         } else {
             os << "<p>The highest nodal contact pressure (PPI) in each region that touched the "
                   "bags, on one scale; dashed: 32 mmHg. A region with no row at a time had no "
-                  "contact then.</p><table><tr><th>region</th><th>highest PPI</th><th>at</th>"
-                  "<th>largest contact area</th><th>largest force</th></tr>";
-            for (const R& r : rs)
+                  "contact then."
+               << (hasPatch ? " The patch peak is the highest mean pressure over a disc of "
+                              "20 cm&#178; of the region: unlike the nodal PPI it does not "
+                              "depend on the bags' mesh."
+                            : "")
+               << "</p><table><tr><th>region</th><th>highest PPI</th><th>at</th>"
+               << (hasPatch ? "<th>highest patch peak</th>" : "")
+               << "<th>largest contact area</th><th>largest force</th></tr>";
+            for (const R& r : rs) {
                 os << "<tr><td>" << escape(r.name) << "</td><td class='n'>" << num(r.max, "%.1f")
-                   << " mmHg</td><td class='n'>" << formatTime(r.at) << "</td><td class='n'>"
-                   << num(r.area, "%.1f") << " cm&#178;</td><td class='n'>" << num(r.force, "%.1f")
-                   << " N</td></tr>";
+                   << " mmHg</td><td class='n'>" << formatTime(r.at) << "</td><td class='n'>";
+                if (hasPatch) os << num(r.patch, "%.1f") << " mmHg</td><td class='n'>";
+                os << num(r.area, "%.1f") << " cm&#178;</td><td class='n'>"
+                   << num(r.force, "%.1f") << " N</td></tr>";
+            }
             os << "</table><div class='plots'>";
             const double yMax = svg::calcRoundUp(top * 1.05);
             for (const R& r : rs) {

@@ -174,7 +174,7 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info
         f << header << "\n";
         if (!f) throw std::runtime_error("cannot write " + dir.getFile(name).string());
     };
-    open(d.regions, kRegionsCsv, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N");
+    open(d.regions, kRegionsCsv, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg");
     open(d.bags, kBagsCsv, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm");
     open(d.tilt, kTiltCsv, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
     open(d.body, kBodyCsv, "time_s,com_x_mm,com_y_mm,com_z_mm");
@@ -250,7 +250,8 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
         if (!(r.peakPressure > 0.0)) continue;
         d.regions << t << "," << r.name << "," << fmt("%.3f", r.peakPressure / kMmHg) << ","
                   << fmt("%.3f", r.meanPressure / kMmHg) << "," << fmt("%.4f", r.area * 1e4)
-                  << "," << fmt("%.5f", r.force) << "\n";
+                  << "," << fmt("%.5f", r.force) << "," << fmt("%.3f", r.patchPeakPressure / kMmHg)
+                  << "\n";
     }
     for (const cosim::BagReading& b : f.bags)
         d.bags << t << "," << b.bag << "," << fmt("%.6f", b.gasMass * 1e3) << ","

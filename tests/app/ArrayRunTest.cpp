@@ -21,7 +21,7 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     const Csv regions = readCsv(out / "regions.csv");
     const Csv bags = readCsv(out / "bags.csv");
     const Csv tilt = readCsv(out / "tilt.csv");
-    EXPECT_EQ(regions.header, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N");
+    EXPECT_EQ(regions.header, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg");
     EXPECT_EQ(bags.header, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm");
     EXPECT_EQ(tilt.header, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
     EXPECT_EQ(tilt.rows.size(), 11u);  // every 10 ms from 0 to 0.1 s

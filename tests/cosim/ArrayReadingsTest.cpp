@@ -86,3 +86,45 @@ TEST(ArrayReadings, MirroredColumnsFaceAwayFromEachOtherSymmetricAboutTheBedsAxi
         EXPECT_NEAR(right.linear().col(0).y(), -left.linear().col(0).y(), 1e-12);
     }
 }
+
+// The patch peak against closed forms. A paraboloid pressure p0 (1 - r^2/R^2) sampled on a
+// fine grid (point forces p a): the best disc of radius b sits at its centre and holds the
+// mean p0 (1 - b^2 / (2 R^2)). Tolerance 1 %: the count of 1 mm grid points in a disc of
+// 18-36 mm radius against its area.
+TEST(ArrayReadings, ThePatchPeakIsTheMeanPressureOverTheBestDisc) {
+    const double p0 = 8000.0, R = 0.06, pitch = 0.001, a = pitch * pitch;
+    std::vector<Eigen::Vector2d> pts;
+    std::vector<double> f;
+    for (double x = -R; x <= R + 1e-12; x += pitch)
+        for (double y = -R; y <= R + 1e-12; y += pitch) {
+            const double r2 = x * x + y * y;
+            if (r2 >= R * R) continue;
+            pts.emplace_back(x + 0.3, y - 0.1);  // anywhere in the plane
+            f.push_back(p0 * (1.0 - r2 / (R * R)) * a);
+        }
+    for (double area : {10e-4, 20e-4, 40e-4}) {
+        const double b2 = area / M_PI;
+        EXPECT_NEAR(calcPatchPeakPressure(pts, f, area), p0 * (1.0 - b2 / (2 * R * R)),
+                    0.01 * p0)
+            << area * 1e4 << " cm2";
+    }
+    // Uniform pressure on a region larger than the disc: the pressure itself.
+    std::vector<double> uniform(pts.size(), p0 * a);
+    EXPECT_NEAR(calcPatchPeakPressure(pts, uniform, 20e-4), p0, 0.01 * p0);
+}
+
+// A point load alone, loads farther apart than a disc's diameter, loads within its radius.
+TEST(ArrayReadings, ThePatchPeakAddsTheLoadsOneDiscHolds) {
+    const double area = 20e-4, r = std::sqrt(area / M_PI);  // 25.2 mm
+    EXPECT_EQ(calcPatchPeakPressure({}, {}, area), 0.0);
+    EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{0.1, 0.2}}, {3.0}, area), 3.0 / area);
+    EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{0, 0}, {2.2 * r, 0}}, {3.0, 5.0}, area), 5.0 / area);
+    EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{0, 0}, {0.7 * r, 0.7 * r}, {5 * r, 0}},
+                                           {3.0, 5.0, 6.0}, area),
+                     8.0 / area);
+    // Sorted by x inside: the order given does not matter.
+    EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{5 * r, 0}, {0.7 * r, 0.7 * r}, {0, 0}},
+                                           {6.0, 5.0, 3.0}, area),
+                     8.0 / area);
+    EXPECT_THROW(calcPatchPeakPressure({{0, 0}}, {1.0}, 0.0), std::invalid_argument);
+}

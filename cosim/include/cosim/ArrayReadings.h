@@ -15,6 +15,12 @@
 /// that area (the nodes' normal force over it), and the force: the vertical part of the
 /// nodes' contact forces (pressure times area along the shape's outward normal), so that the
 /// regions' forces add up to PatientOnArray::calcBagForce() (without friction).
+///
+/// The patch peak: the highest normal force of the region's nodes inside any disc of area
+/// `patchArea` (in the bed's plane, centred on one of its loaded nodes), divided by that area.
+/// Unlike the nodal peak it does not depend on the mesh once the disc holds several nodes:
+/// a node's pressure is its force over its lumped area, which at the contact's rim and along
+/// the seams changes with the mesh (docs/reduced-bag.md, "Which peak").
 
 #include <string>
 #include <vector>
@@ -28,6 +34,7 @@ namespace cosim {
 struct RegionLoad {
     std::string name;           ///< body::BodyRegion::name, or the segment's name
     double peakPressure = 0.0;  ///< [Pa] highest nodal contact pressure
+    double patchPeakPressure = 0.0;  ///< [Pa] highest mean pressure over a patch (file comment)
     double meanPressure = 0.0;  ///< [Pa] normal force over the area (0 with no area)
     double area = 0.0;          ///< [m^2] nodes' areas where the pressure exceeds the threshold
     double force = 0.0;         ///< [N] vertical (Ground +z) part of the contact force
@@ -38,9 +45,23 @@ struct RegionLoad {
 std::vector<std::string> getRegionLoadNames(const body::BodyModel& model);
 
 /// Loads per getRegionLoadNames() entry at the committed state (see the file comment).
+/// The patch area of the patch peak by default [m^2]: 20 cm^2, the smallest disc over which
+/// the finite-element bags' patch peak agrees between meshes of 20, 15 and 12 mm (within 2 %;
+/// docs/reduced-bag.md). Clinical peak pressure indices use about 9-10 cm^2, which needs a
+/// finer mesh than the shipped 20 mm.
+constexpr double kDefaultPatchArea = 20e-4;
+
+/// Loads per getRegionLoadNames() entry at the committed state (see the file comment).
 /// @param areaThreshold [Pa] pressure above which a node's area counts as contact area
+/// @param patchArea [m^2] the disc of the patch peak
 std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa,
-                                        double areaThreshold = 5.0 * 133.322387415);
+                                        double areaThreshold = 5.0 * 133.322387415,
+                                        double patchArea = kDefaultPatchArea);
+
+/// The highest load inside any disc of area `patchArea` centred on one of the points, over
+/// that area [Pa]: points (x, y) [m] in a plane with normal forces f [N]. 0 without points.
+double calcPatchPeakPressure(const std::vector<Eigen::Vector2d>& points,
+                             const std::vector<double>& forces, double patchArea);
 
 /// State of one coupled bag.
 struct BagReading {
