@@ -13,6 +13,7 @@
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
 #include <bags/Airbag.h>
+#include <cosim/ArrayReadings.h>
 #include <cosim/ReducedBag.h>
 #include <io/ArrayScenario.h>
 #include <io/InputError.h>
@@ -31,6 +32,23 @@
 #include <vector>
 
 namespace {
+
+// The patch peak (cosim::calcPatchPeakPressure, 20 cm^2) and the force-weighted mean pressure
+// sum p^2 A / sum p A of points x with pressures p and areas A.
+void pressureMeasures(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& p, const Eigen::VectorXd& A,
+                      double& patch, double& level) {
+    std::vector<Eigen::Vector2d> pts;
+    std::vector<double> f;
+    double s1 = 0.0, s2 = 0.0;
+    for (int n = 0; n < p.size(); ++n)
+        if (p[n] > 0.0) {
+            pts.emplace_back(x(0, n), x(1, n));
+            f.push_back(p[n] * A[n]);
+            s1 += p[n] * A[n], s2 += p[n] * p[n] * A[n];
+        }
+    patch = cosim::calcPatchPeakPressure(pts, f, cosim::kDefaultPatchArea);
+    level = s1 > 0.0 ? s2 / s1 : 0.0;
+}
 
 using Vec3 = Eigen::Vector3d;
 constexpr double kPi = 3.14159265358979323846;
@@ -79,6 +97,8 @@ struct Row {
     double pFE = 0.0, pRed = 0.0;                      // gauge [Pa]
     double vFE = 0.0;                                  // [m^3]
     double peakFE = 0.0, peakRed = 0.0;                // contact pressure [Pa]
+    double patchFE = 0.0, patchRed = 0.0;              // patch peak, 20 cm^2 [Pa]
+    double levelFE = 0.0, levelRed = 0.0;              // force-weighted mean pressure [Pa]
     double overlap = 0.0, area = 0.0, redDepth = 0.0;  // reduced geometry
     double matFE = 0.0, matRed = 0.0;                  // sum p A (normal force) [N]
     double z = 0.0;                                    // the shape's height [m]
@@ -130,6 +150,7 @@ std::vector<Row> pressFE(const Case& c, const bags::AirbagSpec& spec,
         const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
         r.peakFE = p.maxCoeff();
         r.matFE = p.dot(areas);
+        pressureMeasures(bag.getPositions(), p, areas, r.patchFE, r.levelFE);
         for (int n = 0; n < p.size(); ++n)
             if (p[n] > 0.0) r.areaFE += areas[n];
         rows.push_back(r);
@@ -157,6 +178,8 @@ void replay(const Case& c, std::vector<Row>& rows,
         const Eigen::VectorXd q = red.calcContactPressure(0);
         r.peakRed = q.maxCoeff();
         r.matRed = q.dot(red.getPressureAreas());
+        pressureMeasures(red.getPressurePoints(), q, red.getPressureAreas(), r.patchRed,
+                         r.levelRed);
         r.overlap = red.getOverlapVolume(0);
         r.area = red.getContactArea(0);
         r.redDepth = red.getDepth(0);
@@ -493,10 +516,12 @@ int validate(const std::string& scenario, const std::string& calPath) {
     std::printf(
         "per case, steps with an FE force of 5 to 250 N: force error rms / worst [%%], gas "
         "pressure error rms [kPa] and [%%], peak contact pressure reduced/FE at the "
-        "deepest step, sum p A / force (reduced)\n");
+        "deepest step, patch peak (20 cm2) reduced/FE: mean and rms of its error [%%], "
+        "sum p A / force (reduced)\n");
     struct Acc {
         double f2 = 0, fmax = 0, p2 = 0, pr2 = 0, peak = 0;
-        int n = 0, cases = 0;
+        double patch = 0, patch2 = 0;  // sums of patch peak ratio - 1 and its square
+        int n = 0, cases = 0, np = 0;
     };
     std::map<std::string, Acc> regimes;
     for (const Case& c : validationCases(spec.geometry)) {
@@ -515,6 +540,10 @@ int validate(const std::string& scenario, const std::string& calPath) {
             a.pr2 += ep * ep;
             ++a.n;
             lastPeak = r.peakFE > 0 ? r.peakRed / r.peakFE : 0.0;
+            if (r.patchFE > 0.0) {
+                const double ek = r.patchRed / r.patchFE - 1.0;
+                a.patch += ek, a.patch2 += ek * ek, ++a.np;
+            }
             if (r.forceRed > 1.0)
                 consistency = std::max(consistency, std::abs(r.matRed - 0.0) > 0
                                                         ? std::abs(r.matRed / r.forceRed - 1.0)
@@ -523,13 +552,16 @@ int validate(const std::string& scenario, const std::string& calPath) {
         const std::string regime = c.mass >= fill ? "taut" : "slack";
         std::printf(
             "  %-36s %.2f g %-5s %2d steps, to %5.1f N: force %5.1f / %5.1f %%, P %6.2f "
-            "kPa %5.1f %%, peak %.2f, sum pA/F-1 %.3f\n",
+            "kPa %5.1f %%, peak %.2f, patch %+5.1f / %5.1f %%, sum pA/F-1 %.3f\n",
             c.name.c_str(), c.mass * 1e3, regime.c_str(), a.n,
             rows.empty() ? 0.0 : rows.back().forceFE, a.n ? 100 * std::sqrt(a.f2 / a.n) : 0.0,
             100 * a.fmax, a.n ? 1e-3 * std::sqrt(a.p2 / a.n) : 0.0,
-            a.n ? 100 * std::sqrt(a.pr2 / a.n) : 0.0, lastPeak, consistency);
+            a.n ? 100 * std::sqrt(a.pr2 / a.n) : 0.0, lastPeak,
+            a.np ? 100 * a.patch / a.np : 0.0, a.np ? 100 * std::sqrt(a.patch2 / a.np) : 0.0,
+            consistency);
         Acc& g = regimes[regime];
         g.f2 += a.f2, g.p2 += a.p2, g.pr2 += a.pr2, g.n += a.n, g.fmax = std::max(g.fmax, a.fmax);
+        g.patch += a.patch, g.patch2 += a.patch2, g.np += a.np;
         g.peak += lastPeak;
         ++g.cases;
     }
@@ -537,10 +569,12 @@ int validate(const std::string& scenario, const std::string& calPath) {
     for (const auto& [name, g] : regimes)
         std::printf(
             "  %-5s %2d cases %3d steps: force rms %.1f %% worst %.1f %%; gas pressure "
-            "rms %.2f kPa (%.1f %%); peak contact pressure reduced/FE %.2f on average\n",
+            "rms %.2f kPa (%.1f %%); peak contact pressure reduced/FE %.2f on average; patch "
+            "peak error mean %+.1f %% rms %.1f %%\n",
             name.c_str(), g.cases, g.n, g.n ? 100 * std::sqrt(g.f2 / g.n) : 0.0, 100 * g.fmax,
             g.n ? 1e-3 * std::sqrt(g.p2 / g.n) : 0.0, g.n ? 100 * std::sqrt(g.pr2 / g.n) : 0.0,
-            g.cases ? g.peak / g.cases : 0.0);
+            g.cases ? g.peak / g.cases : 0.0, g.np ? 100 * g.patch / g.np : 0.0,
+            g.np ? 100 * std::sqrt(g.patch2 / g.np) : 0.0);
     return 0;
 }
 
@@ -558,13 +592,16 @@ int trace(const std::string& scenario, const std::string& calPath, char** a) {
     c.maxDepth = 0.08;
     std::printf(
         "travel_mm F_FE F_red P_FE_kPa P_red_kPa V_FE_L overlap_L area_cm2 depth_mm "
-        "peak_FE_kPa peak_red_kPa sumpA_FE sumpA_red\n");
+        "peak_FE_kPa peak_red_kPa sumpA_FE sumpA_red patch_FE_kPa patch_red_kPa level_FE_kPa "
+        "level_red_kPa\n");
     for (const Row& r : press(c, spec, sc.options.contact, cal))
         std::printf(
-            "%5.1f %7.2f %7.2f %7.3f %7.3f %7.4f %7.4f %7.1f %6.1f %7.2f %7.2f %7.2f %7.2f\n",
+            "%5.1f %7.2f %7.2f %7.3f %7.3f %7.4f %7.4f %7.1f %6.1f %7.2f %7.2f %7.2f %7.2f "
+            "%7.2f %7.2f %7.2f %7.2f\n",
             r.depth * 1e3, r.forceFE, r.forceRed, r.pFE * 1e-3, r.pRed * 1e-3, r.vFE * 1e3,
             r.overlap * 1e3, r.area * 1e4, r.redDepth * 1e3, r.peakFE * 1e-3, r.peakRed * 1e-3,
-            r.matFE, r.matRed);
+            r.matFE, r.matRed, r.patchFE * 1e-3, r.patchRed * 1e-3, r.levelFE * 1e-3,
+            r.levelRed * 1e-3);
     return 0;
 }
 
