@@ -33,6 +33,11 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
         EXPECT_NEAR(f, bagSum.at(t), 1e-3 * bagSum.at(t) + 1e-3) << "at " << t << " s";
         EXPECT_GT(f, 0.0);
     }
+    // Every region with contact has a patch peak (the mean over its best 20 cm2 disc), and
+    // the report's region table shows it.
+    const int ppi = regions.column("ppi_mmHg"), patch = regions.column("patch_peak_mmHg");
+    for (const auto& r : regions.rows)
+        if (std::stod(r.at(ppi)) > 0.0) EXPECT_GT(std::stod(r.at(patch)), 0.0) << r.at(1);
     // Every bag holds the scenario's 4.5 g (no gas command).
     const int mass = bags.column("mass_g");
     for (const auto& r : bags.rows) EXPECT_NEAR(std::stod(r.at(mass)), 4.5, 1e-6);
@@ -43,6 +48,7 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     page << std::ifstream(out / "report.html").rdbuf();
     EXPECT_NE(page.str().find("<h1>supine-on-array-coarse</h1>"), std::string::npos);
     EXPECT_EQ(page.str().find("INCOMPLETE RESULTS"), std::string::npos);
+    EXPECT_NE(page.str().find("<th>highest patch peak</th>"), std::string::npos);
     const std::string bagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\" report ";
     auto run = [&](const std::string& args) {
         const int rc = std::system((bagsim + args + " > \"" + out.string() + ".report.log\" 2>&1").c_str());
