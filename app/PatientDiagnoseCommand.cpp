@@ -1,7 +1,8 @@
 // bagsim diagnose on a patient's measured data (docs/diagnosis.md#a-patient-on-the-array):
 // the co-simulation of the data's scenario beside the mat, the tilt sensor and the bags'
 // pressure sensors; where the gap lies (by channel, body region, bag, time window) and which
-// effect of the patient's library explains it, judged on time windows held out in turn.
+// effect of the patient's library explains it, judged on time windows, tests or subjects held out
+// in turn.
 #include <bagsim/Version.h>
 #include <diagnose/PatientDiagnosis.h>
 #include <io/PatientDiagnosisReport.h>
@@ -112,16 +113,22 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     std::vector<diagnose::PatientTestCase> cases;
     if (data.tests.empty()) {
         testRuns.push_back({"", "", ms.file, ms.scenario.options.layout.gasMass});
-        cases.push_back({"", data.channels, {}, ms.scenario.options.layout.gasMass});
+        cases.push_back({"", data.channels, {}, ms.scenario.options.layout.gasMass, "", {}});
     } else {
         for (size_t t = 0; t < data.tests.size(); ++t) {
             const io::PatientMeasuredTestScenario& ts = ms.tests[t];
             testRuns.push_back({ts.name, ts.name + "/", ts.file, ts.scenario.options.layout.gasMass});
-            cases.push_back({ts.name, data.tests[t].channels, {}, ts.scenario.options.layout.gasMass});
+            // Each test's mat regions under its own patient (subjects differ in build).
+            cases.push_back({ts.name, data.tests[t].channels, {}, ts.scenario.options.layout.gasMass,
+                             data.tests[t].subject, makeMatRegions(ts.scenario)});
         }
     }
-    std::vector<std::string> names;
+    std::vector<std::string> names, subjects;
     for (const TestRun& t : testRuns) names.push_back(t.name);
+    for (const diagnose::PatientTestCase& c : cases) subjects.push_back(c.subject);
+    auto regionsOf = [&](size_t t) -> const diagnose::MatRegions& {
+        return cases[t].regions.names.empty() ? regions : cases[t].regions;
+    };
     std::vector<diagnose::PatientComparison> halfParts;
     for (size_t t = 0; t < testRuns.size(); ++t) {
         cases[t].baseline = simulate(testRuns[t].file, testRuns[t].dir + "model");
@@ -130,17 +137,19 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
         halfFile.applyOverride("coupling.macro_step", formatHalfMacroStep(ms.scenario));
         const diagnose::PatientChannels half = simulate(halfFile, testRuns[t].dir + "half-macro-step");
         const diagnose::PatientComparison basePart =
-            diagnose::comparePatient(cases[t].measured, cases[t].baseline, {}, regions);
-        halfParts.push_back(diagnose::comparePatient(cases[t].measured, half, {}, regions, &basePart));
+            diagnose::comparePatient(cases[t].measured, cases[t].baseline, {}, regionsOf(t));
+        halfParts.push_back(diagnose::comparePatient(cases[t].measured, half, {}, regionsOf(t), &basePart));
     }
     const std::vector<diagnose::PatientComparison> baseParts = diagnose::comparePatientTests(cases, regions);
-    const diagnose::PatientComparison base = diagnose::joinPatientComparisons(baseParts, names);
+    const diagnose::PatientComparison base = diagnose::joinPatientComparisons(baseParts, names, subjects);
     if (base.channels.empty())
         throw io::InputError(a.measured, 0, "", "no channel of the data has a simulated counterpart");
-    const diagnose::PatientComparison half = diagnose::joinPatientComparisons(halfParts, names);
+    const diagnose::PatientComparison half = diagnose::joinPatientComparisons(halfParts, names, subjects);
     diagnose::PatientFolds folds;
     folds.windowEdges = makeWindowEdges(cases, std::max(2, a.windows));
     folds.tests = int(cases.size());
+    folds.subjects = base.subjects;  // the reader asks for a subject in every test, and two or more
+    folds.testSubject = base.testSubject;
     const std::vector<double>& edges = folds.windowEdges;
     const diagnose::WhereReport where =
         diagnose::calcPatientWhere(base, diagnose::calcPatientSimulatedDifference(base, half), edges, 2.0);
@@ -169,15 +178,16 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
                 std::vector<diagnose::PatientComparison> parts;
                 for (size_t t = 0; t < cases.size(); ++t)
                     parts.push_back(diagnose::comparePatient(cases[t].measured, cases[t].baseline, inst,
-                                                             regions, &baseParts[t]));
+                                                             regionsOf(t), &baseParts[t]));
                 fitted = std::make_unique<diagnose::PatientComparison>(
-                    diagnose::joinPatientComparisons(parts, names));
+                    diagnose::joinPatientComparisons(parts, names, subjects));
             }
         }
         if (!a.quiet) {
             std::cout << "which: candidates ranked by the shrink of the held-out gap beyond the "
                          "validation uncertainty (leave one "
-                      << (folds.isByTest() ? "test" : "time window") << " out of " << folds.getCount()
+                      << (folds.isBySubject() ? "subject" : folds.isByTest() ? "test" : "time window")
+                      << " out of " << folds.getCount()
                       << "), less " << fmt("%g", co.parameterPenalty)
                       << " per parameter:\n";
             for (const auto& c : which->candidates) {

@@ -104,6 +104,9 @@ const char* kHelp =
     "  record: each test is the scenario with its keys set (e.g. --test gas-4.0g:array.gas_mass=4.0g),\n"
     "  the effect in every test, a truth co-simulation each (LABEL.truth-run/NAME/), noise\n"
     "  seed N + the test's index; the manifest lists the tests (docs/measured-data.md).\n"
+    "  --test NAME@SUBJECT:KEY=VALUE,...  the test of a subject (a patient; his build in the keys,\n"
+    "  e.g. --test woman@small-woman:patient.sex=female,patient.height=1.55m,patient.mass=50kg);\n"
+    "  every test names one, at least two subjects; the diagnosis leaves one subject out.\n"
     "\n"
     "exit status: 0 written, 1 the truth run failed, 2 bad input, 130/143 interrupted.\n";
 
@@ -346,20 +349,37 @@ void writeLabel(const Args& a, const std::vector<const diagnose::Effect*>& effec
     fs::rename(tmp, a.labelOut);
 }
 
-// "NAME:KEY=VALUE[,KEY=VALUE]..." of --test: the test's name and its scenario keys. A piece
-// without '=' continues the previous value (a value with a comma: {thickness: 20 mm, ...}).
-diagnose::PatientTest parseTestOption(const std::string& g) {
-    const std::string valid = "valid: NAME:KEY=VALUE[,KEY=VALUE]..., e.g. --test gas-4.0g:array.gas_mass=4.0g";
-    const size_t colon = g.find(':');
-    if (colon == std::string::npos || colon == 0) throw UsageError("--test '" + g + "' has no name; " + valid);
-    diagnose::PatientTest t;
-    t.name = g.substr(0, colon);
-    const bool plain = std::all_of(t.name.begin(), t.name.end(), [](char ch) {
+// A test's or subject's name: letters, digits, '.', '-', '_' (it names folders).
+bool isPlainName(const std::string& n) {
+    const bool plain = std::all_of(n.begin(), n.end(), [](char ch) {
         return std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-' || ch == '_';
     });
-    if (!plain || t.name[0] == '.' || t.name[0] == '-' || t.name.size() > 64)
+    return plain && !n.empty() && n[0] != '.' && n[0] != '-' && n.size() <= 64;
+}
+
+// "NAME[@SUBJECT]:KEY=VALUE[,KEY=VALUE]..." of --test: the test's name, its subject and its
+// scenario keys ("NAME@SUBJECT" alone: the scenario's own keys). A piece without '=' continues
+// the previous value (a value with a comma: {thickness: 20 mm, ...}).
+diagnose::PatientTest parseTestOption(const std::string& g) {
+    const std::string valid = "valid: NAME[@SUBJECT]:KEY=VALUE[,KEY=VALUE]..., e.g. --test "
+                              "gas-4.0g:array.gas_mass=4.0g or --test woman-4.5g@small-woman:"
+                              "patient.sex=female,patient.height=1.55m,patient.mass=50kg";
+    size_t colon = g.find(':');
+    const size_t at = g.substr(0, colon).find('@');
+    if (colon == std::string::npos && at != std::string::npos) colon = g.size();  // NAME@SUBJECT
+    if (colon == std::string::npos || colon == 0 || at == 0) throw UsageError("--test '" + g + "' has no name; " + valid);
+    diagnose::PatientTest t;
+    t.name = g.substr(0, std::min(colon, at));
+    if (!isPlainName(t.name))
         throw UsageError("--test '" + g + "': '" + t.name + "' is not a test's name; valid: 1-64 letters, "
                          "digits, '.', '-' and '_', not starting with '.' or '-'");
+    if (at != std::string::npos) {
+        t.subject = g.substr(at + 1, colon - at - 1);
+        if (!isPlainName(t.subject))
+            throw UsageError("--test '" + g + "': '" + t.subject + "' is not a subject's name; valid: "
+                             "1-64 letters, digits, '.', '-' and '_', not starting with '.' or '-'");
+    }
+    if (colon == g.size()) return t;
     std::string rest = g.substr(colon + 1);
     size_t start = 0;
     while (start <= rest.size()) {
@@ -386,6 +406,12 @@ diagnose::PatientTest parseTestOption(const std::string& g) {
     return t;
 }
 
+std::string joinNames(const std::vector<std::string>& names) {
+    std::string s;
+    for (size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + names[i];
+    return s;
+}
+
 // A patient-on-array scenario: the truth co-simulation and the patient's channels.
 int runPatient(const Args& a, const io::ScenarioFile& file) {
     const std::vector<const diagnose::Effect*> effects =
@@ -410,7 +436,19 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
                                  "' is given twice; valid: one --test per name");
     }
     const bool several = !tests.empty();
-    if (!several) tests.push_back({"", {}, {}});
+    if (!several) tests.push_back({"", "", {}, {}});
+    // Subjects: one per test or none, and at least two (the diagnosis holds one out at a time).
+    std::vector<std::string> subjects;
+    for (const diagnose::PatientTest& t : tests)
+        if (!t.subject.empty() && std::find(subjects.begin(), subjects.end(), t.subject) == subjects.end())
+            subjects.push_back(t.subject);
+    for (const diagnose::PatientTest& t : tests)
+        if (!subjects.empty() && t.subject.empty())
+            throw UsageError("--test '" + t.name + "' names no subject, another names '" + subjects.front() +
+                             "'; valid: NAME@SUBJECT:KEY=VALUE,... for every test, or no subject at all");
+    if (subjects.size() == 1)
+        throw UsageError("every --test names the subject '" + subjects.front() +
+                         "'; valid: at least two subjects (NAME@SUBJECT), or none");
     // Each test's truth: the test's scenario, the effect (a response effect at the test's stated
     // gas mass), half the macro step.
     diagnose::PatientInstruments inst;
@@ -468,8 +506,9 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
         st.seed = a.seed + t;  // each test its own noise
         tests[t].channels = diagnose::synthesizePatientChannels(run, inst, st);
         if (several) {
-            testLines += "  - {name: " + tests[t].name + ", noise_seed: " + std::to_string(st.seed) +
-                         ", overrides: {";
+            testLines += "  - {name: " + tests[t].name +
+                         (tests[t].subject.empty() ? std::string() : ", subject: " + tests[t].subject) +
+                         ", noise_seed: " + std::to_string(st.seed) + ", overrides: {";
             for (size_t k = 0; k < tests[t].overrides.size(); ++k)
                 testLines += (k ? ", " : "") + tests[t].overrides[k].first + ": \"" +
                              tests[t].overrides[k].second + "\"";
@@ -493,11 +532,13 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
                    "\nsample_interval: " + fmt("%g", so.sampleInterval) + " s\nmat_interval: " +
                    fmt("%g", so.matInterval) + " s\nmodel_form: \"" + modelForm +
                    "\"\ntruth_run: " + truthDir + "\nscenario: " + a.scenario + "\n" +
+                   (subjects.empty() ? std::string() : "subjects: [" + joinNames(subjects) + "]\n") +
                    (several ? "tests:\n" + testLines : std::string()));
     size_t frames = 0, tilts = 0, bags = 0;
     for (const diagnose::PatientTest& t : tests)
         frames += t.channels.mat.time.size(), tilts += t.channels.tilt.time.size(), bags += t.channels.bags.size();
     std::cout << "measured data in " << a.out << "/: "
+              << (subjects.empty() ? std::string() : std::to_string(subjects.size()) + " subjects, ")
               << (several ? std::to_string(tests.size()) + " tests, " : std::string()) << frames
               << " mat frames, " << tilts << " tilt samples, " << bags << " bag sensors (truth co-simulation"
               << (several ? "s " : " ") << fmt("%.1f", seconds) << " s); label in " << a.labelOut << "\n";

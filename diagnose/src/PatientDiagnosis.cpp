@@ -219,14 +219,34 @@ std::vector<std::vector<size_t>> PatientChannelComparison::partSeries() const {
 }
 
 int PatientFolds::findFold(const PatientChannelComparison& c, size_t i) const {
+    if (isBySubject()) return testSubject.at(size_t(c.getTest(i)));
     return isByTest() ? c.getTest(i) : findWindow(windowEdges, c.time[i]);
 }
 
+std::vector<int> PatientFolds::getFoldTests(int fold) const {
+    std::vector<int> out;
+    if (isBySubject()) {
+        for (size_t t = 0; t < testSubject.size(); ++t)
+            if (testSubject[t] == fold) out.push_back(int(t));
+    } else if (isByTest()) {
+        out.push_back(fold);
+    }
+    return out;
+}
+
 PatientComparison joinPatientComparisons(const std::vector<PatientComparison>& parts,
-                                         const std::vector<std::string>& names) {
+                                         const std::vector<std::string>& names,
+                                         const std::vector<std::string>& subjects) {
     if (parts.size() == 1) return parts.front();
     PatientComparison out;
     out.tests = names;
+    for (const std::string& s : subjects) {
+        if (s.empty()) continue;
+        auto it = std::find(out.subjects.begin(), out.subjects.end(), s);
+        if (it == out.subjects.end()) it = out.subjects.insert(out.subjects.end(), s);
+        out.testSubject.push_back(int(it - out.subjects.begin()));
+    }
+    if (out.testSubject.size() != parts.size()) out.subjects.clear(), out.testSubject.clear();
     for (size_t t = 0; t < parts.size(); ++t)
         for (const PatientChannelComparison& ch : parts[t].channels) {
             auto it = std::find_if(out.channels.begin(), out.channels.end(),
@@ -400,6 +420,13 @@ void addPatientSignatures(const PatientChannelComparison& ch, const std::string&
     }
 }
 
+// "test NAME", or with subjects "subject S, test NAME".
+std::string getTestLabel(const PatientComparison& c, size_t t) {
+    const std::string test = "test " + c.tests.at(t);
+    if (c.subjects.empty()) return test;
+    return "subject " + c.subjects.at(size_t(c.testSubject.at(t))) + ", " + test;
+}
+
 }  // namespace
 
 WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<double>& numerical,
@@ -433,12 +460,21 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
                 "time " + fmt("%.3g", edges.size() > 1 ? edges[w] : 0.0) + "-" +
                     fmt("%.3g s", edges.size() > 1 ? edges[w + 1] : 0.0),
                 byWindow[w], sumSq));
-        if (c.tests.size() > 1) {
+        // By subject (when the tests name them), and by test when a subject has several tests.
+        if (!c.subjects.empty()) {
+            std::vector<std::vector<double>> bySubject(c.subjects.size());
+            for (size_t i = 0; i < res.size(); ++i)
+                bySubject.at(size_t(c.testSubject.at(size_t(ch.getTest(i))))).push_back(res[i]);
+            for (size_t s = 0; s < bySubject.size(); ++s)
+                if (!bySubject[s].empty())
+                    r.regimes.push_back(calcRegimeStats(ch.name, "subject " + c.subjects[s], bySubject[s], sumSq));
+        }
+        if (c.tests.size() > 1 && c.tests.size() > c.subjects.size()) {
             std::vector<std::vector<double>> byTest(c.tests.size());
             for (size_t i = 0; i < res.size(); ++i) byTest.at(size_t(ch.getTest(i))).push_back(res[i]);
             for (size_t t = 0; t < byTest.size(); ++t)
                 if (!byTest[t].empty())
-                    r.regimes.push_back(calcRegimeStats(ch.name, "test " + c.tests[t], byTest[t], sumSq));
+                    r.regimes.push_back(calcRegimeStats(ch.name, getTestLabel(c, t), byTest[t], sumSq));
         }
 
         // Noise: second differences of each part's (the mat: each sensel's) series.
@@ -464,7 +500,7 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
         // test's record).
         if (c.tests.size() > 1) {
             for (size_t t = 0; t < c.tests.size(); ++t)
-                addPatientSignatures(selectTest(ch, int(t)), "test " + c.tests[t], maxLag, r.signatures);
+                addPatientSignatures(selectTest(ch, int(t)), getTestLabel(c, t), maxLag, r.signatures);
         } else {
             addPatientSignatures(ch, "", maxLag, r.signatures);
         }
@@ -531,7 +567,7 @@ class PatientEvaluator {
                      const std::vector<PatientComparison>& baseParts, const MatRegions& regions,
                      const PatientTestSimulator& simulate)
         : m_effect(e), m_tests(tests), m_baseParts(baseParts), m_regions(regions), m_simulate(simulate) {
-        for (const PatientTestCase& t : tests) m_names.push_back(t.name);
+        for (const PatientTestCase& t : tests) m_names.push_back(t.name), m_subjects.push_back(t.subject);
     }
 
     PatientComparison evaluate(const std::vector<double>& v) {
@@ -545,7 +581,7 @@ class PatientEvaluator {
         for (size_t t = 0; t < m_tests.size(); ++t) {
             const PatientTestCase& tc = m_tests[t];
             if (!m_effect.changesTheBag) {
-                parts.push_back(comparePatient(tc.measured, tc.baseline, inst, m_regions, &m_baseParts[t]));
+                parts.push_back(comparePatient(tc.measured, tc.baseline, inst, getRegions(tc), &m_baseParts[t]));
                 continue;
             }
             const auto overrides = getPatientEffectOverrides(m_effect, v, tc.statedGasMass);
@@ -554,21 +590,25 @@ class PatientEvaluator {
                 label += "-" + m_effect.parameters[i].name + fmt("%.4g", v[i] / m_effect.parameters[i].siPerUnit);
             const PatientChannels run = overrides.empty() ? tc.baseline : m_simulate(int(t), overrides, label);
             if (!overrides.empty()) ++m_runs;
-            parts.push_back(comparePatient(tc.measured, run, PatientInstruments(), m_regions, &m_baseParts[t]));
+            parts.push_back(comparePatient(tc.measured, run, PatientInstruments(), getRegions(tc), &m_baseParts[t]));
         }
-        PatientComparison joined = joinPatientComparisons(parts, m_names);
+        PatientComparison joined = joinPatientComparisons(parts, m_names, m_subjects);
         if (!m_effect.changesTheBag) return joined;  // cheap: not kept
         return m_cache.emplace(key, std::move(joined)).first->second;
     }
     int getRuns() const { return m_runs; }
 
   private:
+    const MatRegions& getRegions(const PatientTestCase& tc) const {
+        return tc.regions.names.empty() ? m_regions : tc.regions;
+    }
+
     const Effect& m_effect;
     const std::vector<PatientTestCase>& m_tests;
     const std::vector<PatientComparison>& m_baseParts;
     const MatRegions& m_regions;
     const PatientTestSimulator& m_simulate;
-    std::vector<std::string> m_names;
+    std::vector<std::string> m_names, m_subjects;
     std::map<std::string, PatientComparison> m_cache;
     int m_runs = 0;
 };
@@ -654,7 +694,8 @@ PatientFit fitPatient(PatientEvaluator& e, const Effect& effect, const WhereRepo
 std::vector<PatientComparison> comparePatientTests(const std::vector<PatientTestCase>& tests,
                                                    const MatRegions& regions) {
     std::vector<PatientComparison> out;
-    for (const PatientTestCase& t : tests) out.push_back(comparePatient(t.measured, t.baseline, {}, regions));
+    for (const PatientTestCase& t : tests)
+        out.push_back(comparePatient(t.measured, t.baseline, {}, t.regions.names.empty() ? regions : t.regions));
     return out;
 }
 
@@ -666,7 +707,7 @@ WhichReport calibratePatientCandidates(const PatientChannels& measured, const Pa
     (void)base;  // the same comparison is made again from the baseline
     PatientFolds folds;
     folds.windowEdges = edges;
-    return calibratePatientCandidates({{"", measured, baseline, statedGasMass}}, where, regions, folds,
+    return calibratePatientCandidates({{"", measured, baseline, statedGasMass, "", {}}}, where, regions, folds,
                                       [&](int, const std::vector<std::pair<std::string, std::string>>& ov,
                                           const std::string& label) { return simulate(ov, label); },
                                       o);
@@ -679,9 +720,9 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
     WhichReport report;
     if (tests.empty()) throw std::invalid_argument("no test to calibrate on");
     const std::vector<PatientComparison> baseParts = comparePatientTests(tests, regions);
-    std::vector<std::string> names;
-    for (const PatientTestCase& t : tests) names.push_back(t.name);
-    const PatientComparison base = joinPatientComparisons(baseParts, names);
+    std::vector<std::string> names, subjects;
+    for (const PatientTestCase& t : tests) names.push_back(t.name), subjects.push_back(t.subject);
+    const PatientComparison base = joinPatientComparisons(baseParts, names, subjects);
     std::vector<const Effect*> candidates;
     if (o.candidates.empty()) {
         if (base.find("bag-pressure")) candidates.push_back(findPatientEffect(kBagSensor));
@@ -694,11 +735,20 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
             candidates.push_back(e);
         }
     }
-    if (folds.isByTest() && folds.tests != int(tests.size()))
+    if ((folds.isByTest() || folds.isBySubject()) && folds.tests != int(tests.size()))
         throw std::invalid_argument("the folds name " + std::to_string(folds.tests) + " tests, the data " +
                                     std::to_string(tests.size()));
+    if (folds.isBySubject()) {
+        if (folds.testSubject.size() != tests.size())
+            throw std::invalid_argument("the folds give " + std::to_string(folds.testSubject.size()) +
+                                        " tests a subject, the data have " + std::to_string(tests.size()));
+        for (int s : folds.testSubject)
+            if (s < 0 || s >= int(folds.subjects.size()))
+                throw std::invalid_argument("a test's subject " + std::to_string(s) + " is not one of the " +
+                                            std::to_string(folds.subjects.size()) + " subjects");
+    }
     const int nw = folds.getCount();
-    if (nw < 2) throw std::invalid_argument("the folds need two time windows or tests or more");
+    if (nw < 2) throw std::invalid_argument("the folds need two time windows, tests or subjects or more");
     std::vector<int> all(static_cast<size_t>(nw), 0);
     for (int w = 0; w < nw; ++w) all[size_t(w)] = w;
 

@@ -59,18 +59,21 @@ inline std::string formatGaps(const diagnose::CandidateResult& c) {
            ", \"score\": " + num(c.score, "%.4f");
 }
 
-// Per fold: the test (or time window: heldOutKey) held out, counted from 1, the parameters
-// fitted without it, the gaps before and after.
+// Per fold: the test (or time window, or subject: heldOutKey) held out, counted from 1 or by
+// name, what `more` adds about it (", \"key\": value"; null: nothing), the parameters fitted
+// without it, the gaps before and after.
 inline std::string formatFolds(const diagnose::CandidateResult& c,
                                const std::function<std::string(const std::vector<double>&)>& parameters,
                                const char* heldOutKey = "held_out_test",
-                               const std::vector<std::string>* heldOutNames = nullptr) {
+                               const std::vector<std::string>* heldOutNames = nullptr,
+                               const std::function<std::string(int)>& more = nullptr) {
     std::ostringstream os;
     os << "[";
     for (size_t k = 0; k < c.folds.size(); ++k) {
         const auto& f = c.folds[k];
         os << (k ? ", " : "") << "{" << str(heldOutKey) << ": "
            << (heldOutNames ? str(heldOutNames->at(size_t(f.heldOut))) : std::to_string(f.heldOut + 1))
+           << (more ? more(f.heldOut) : std::string())
            << ", \"parameters\": " << parameters(f.parameters) << ", \"before\": " << num(f.before)
            << ", \"after\": " << num(f.after) << ", \"excess_before\": " << num(f.excessBefore)
            << ", \"excess_after\": " << num(f.excessAfter) << "}";

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -58,8 +59,13 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
        << "  \"simulations\": " << info.simulations << ",\n"
        << "  \"seconds\": " << num(info.seconds, "%.1f") << ",\n  \"time_windows_s\": [";
     for (size_t i = 0; i < edges.size(); ++i) os << (i ? ", " : "") << num(edges[i]);
-    os << "],\n  \"fold_kind\": " << str(folds.isByTest() ? "test" : "time-window") << ",\n  \"tests\": [";
+    os << "],\n  \"fold_kind\": " << str(folds.getKind()) << ",\n  \"tests\": [";
     for (size_t i = 0; i < c.tests.size(); ++i) os << (i ? ", " : "") << str(c.tests[i]);
+    os << "],\n  \"subjects\": [";
+    for (size_t i = 0; i < c.subjects.size(); ++i) os << (i ? ", " : "") << str(c.subjects[i]);
+    os << "],\n  \"test_subjects\": [";
+    for (size_t i = 0; i < c.testSubject.size(); ++i)
+        os << (i ? ", " : "") << str(c.subjects.at(size_t(c.testSubject[i])));
     os << "],\n  \"where\": {\n    \"gap\": " << num(w.gap)
        << ",\n    \"gap_definition\": \"RMS over the channels of RMSE / measured range\",\n"
        << "    \"within_validation_uncertainty\": " << (w.withinValidation ? "true" : "false")
@@ -95,6 +101,15 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
            << (i + 1 < w.signatures.size() ? "," : "") << "\n";
     }
     os << "    ]\n  }";
+    // A subject's fold: the tests it holds out.
+    std::function<std::string(int)> heldOutTests;
+    if (folds.isBySubject())
+        heldOutTests = [&](int fold) {
+            std::string s = ", \"held_out_tests\": [";
+            const std::vector<int> t = folds.getFoldTests(fold);
+            for (size_t k = 0; k < t.size(); ++k) s += (k ? ", " : "") + str(c.tests.at(size_t(t[k])));
+            return s + "]";
+        };
     if (which) {
         os << ",\n  \"candidates\": [\n";
         for (size_t i = 0; i < which->candidates.size(); ++i) {
@@ -119,8 +134,11 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
             os << "},\n     \"folds\": "
                << json::formatFolds(
                       k, [&](const std::vector<double>& v) { return json::formatParameters(e, v, nullptr); },
-                      folds.isByTest() ? "held_out_test" : "held_out_window",
-                      folds.isByTest() ? &c.tests : nullptr)
+                      folds.isBySubject() ? "held_out_subject"
+                      : folds.isByTest()  ? "held_out_test"
+                                          : "held_out_window",
+                      folds.isBySubject() ? &folds.subjects : folds.isByTest() ? &c.tests : nullptr,
+                      heldOutTests)
                << "}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
         }
         os << "  ],\n  \"confusable\": [";
@@ -139,10 +157,12 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
 
 std::string formatPatientResidualsCsv(const diagnose::PatientComparison& c, int matColumns) {
     std::ostringstream os;
-    const bool tests = c.tests.size() > 1;
-    os << (tests ? "test," : "") << "channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual\n";
+    const bool tests = c.tests.size() > 1, subjects = !c.subjects.empty();
+    os << (subjects ? "subject," : "") << (tests ? "test," : "")
+       << "channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual\n";
     for (const diagnose::PatientChannelComparison& ch : c.channels)
         for (size_t i = 0; i < ch.time.size(); ++i) {
+            if (subjects) os << c.subjects.at(size_t(c.testSubject.at(size_t(ch.getTest(i))))) << ",";
             if (tests) os << c.tests.at(size_t(ch.getTest(i))) << ",";
             os << ch.name << "," << ch.unit << ","
                << (ch.part.empty() ? std::string() : ch.partNames.at(size_t(ch.part[i]))) << ","
@@ -206,12 +226,17 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
            << svg::num(s.lag, "%.3f") << "</td><td>" << svg::num(s.drift / scale, "%.4g") << "</td></tr>\n";
     }
     os << "</table>\n";
+    const bool bySubject = !c.subjects.empty(), byTest = c.tests.size() > 1;
     if (which) {
         os << "<h2>Which</h2>\n<p>Each candidate fitted on all "
-           << (c.tests.size() > 1 ? "tests" : "time windows") << " but one and judged on the one left out, in turn"
-           << (c.tests.size() > 1 ? " (leave one test out)" : "") << ".</p>\n"
+           << (bySubject ? "subjects" : byTest ? "tests" : "time windows")
+           << " but one and judged on the one left out, in turn"
+           << (bySubject ? " (leave one subject out: all tests of the subject)"
+               : byTest  ? " (leave one test out)"
+                         : "")
+           << ".</p>\n"
            << "<table><tr><th>effect</th><th>parameters (all "
-           << (c.tests.size() > 1 ? "tests" : "windows") << ")</th>"
+           << (bySubject ? "subjects" : byTest ? "tests" : "windows") << ")</th>"
               "<th>held-out gap before</th><th>after</th><th>shrink beyond u_val</th><th>score</th>"
               "<th>co-simulations</th></tr>\n";
         for (const auto& k : which->candidates) {
@@ -231,32 +256,45 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
     os << "<h2>Over time</h2>\n<p>Measured (dots), the model as it is (grey)"
        << (fitted ? " and with the best candidate at its fit on all windows (blue)" : "")
        << "; the mat as the sum of the compared sensels' pressures.</p>\n";
+    // The plots test by test; with subjects, grouped under each subject's heading.
     const int ntests = std::max<int>(1, int(c.tests.size()));
-    for (int t = 0; t < ntests; ++t)
-    for (const diagnose::PatientChannelComparison& ch : c.channels) {
-        const int parts = ch.name == "bag-pressure" ? int(std::min<size_t>(ch.partNames.size(), 6)) : 1;
-        for (int p = 0; p < parts; ++p) {
-            const int part = ch.name == "bag-pressure" ? p : -1;
-            svg::Series m, s, f;
-            m.name = "measured", m.colour = "#000", m.points = true;
-            s.name = "model as it is", s.colour = "#999";
-            makeTimeSeries(ch, part, t, m, s);
-            if (m.x.empty()) continue;
-            std::vector<svg::Series> series = {s, m};
-            const diagnose::PatientChannelComparison* fc = fitted ? fitted->find(ch.name) : nullptr;
-            if (fc) {
-                svg::Series fm, fs;
-                makeTimeSeries(*fc, part, t, fm, fs);
-                fs.name = "with the best candidate", fs.colour = "#0072b2";
-                series.push_back(fs);
+    std::vector<int> order;
+    for (size_t s = 0; s < std::max<size_t>(1, c.subjects.size()); ++s)
+        for (int t = 0; t < ntests; ++t)
+            if (!bySubject || c.testSubject.at(size_t(t)) == int(s)) order.push_back(t);
+    int shownSubject = -1;
+    for (int t : order) {
+        if (bySubject && c.testSubject.at(size_t(t)) != shownSubject) {
+            shownSubject = c.testSubject.at(size_t(t));
+            os << "<h3>subject " << esc(c.subjects.at(size_t(shownSubject))) << "</h3>\n";
+        }
+        for (const diagnose::PatientChannelComparison& ch : c.channels) {
+            const int parts = ch.name == "bag-pressure" ? int(std::min<size_t>(ch.partNames.size(), 6)) : 1;
+            for (int p = 0; p < parts; ++p) {
+                const int part = ch.name == "bag-pressure" ? p : -1;
+                svg::Series m, s, f;
+                m.name = "measured", m.colour = "#000", m.points = true;
+                s.name = "model as it is", s.colour = "#999";
+                makeTimeSeries(ch, part, t, m, s);
+                if (m.x.empty()) continue;
+                std::vector<svg::Series> series = {s, m};
+                const diagnose::PatientChannelComparison* fc = fitted ? fitted->find(ch.name) : nullptr;
+                if (fc) {
+                    svg::Series fm, fs;
+                    makeTimeSeries(*fc, part, t, fm, fs);
+                    fs.name = "with the best candidate", fs.colour = "#0072b2";
+                    series.push_back(fs);
+                }
+                svg::PlotOptions o;
+                const std::string subject =
+                    bySubject ? "subject " + c.subjects.at(size_t(c.testSubject.at(size_t(t)))) + ", " : "";
+                o.title = subject + (byTest ? "test " + c.tests[size_t(t)] + ": " : std::string()) + ch.name +
+                          (part >= 0 ? ", " + ch.partNames[size_t(part)] : "");
+                o.xLabel = "time [s]";
+                o.yLabel = (ch.name == "mat" ? "sum of sensels [" : "[") + ch.unit + "]";
+                o.width = 460;
+                os << svg::plot(o, series) << "\n";
             }
-            svg::PlotOptions o;
-            o.title = (c.tests.size() > 1 ? "test " + c.tests[size_t(t)] + ": " : std::string()) + ch.name +
-                      (part >= 0 ? ", " + ch.partNames[size_t(part)] : "");
-            o.xLabel = "time [s]";
-            o.yLabel = (ch.name == "mat" ? "sum of sensels [" : "[") + ch.unit + "]";
-            o.width = 460;
-            os << svg::plot(o, series) << "\n";
         }
     }
     os << "</body></html>\n";

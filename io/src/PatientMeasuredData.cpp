@@ -277,18 +277,51 @@ bool isProtocolKey(const std::string& k) {
     return k == "kind" || k == "run" || k == "run.settle_time" || k == "run.duration";
 }
 
+// Subjects: none, or one per test and at least two (the folds hold out one subject's tests).
+void checkSubjects(const ScenarioNode& list, const std::vector<diagnose::PatientTest>& tests) {
+    const std::vector<ScenarioNode> nodes = list.getElements();
+    size_t named = 0, first = 0;
+    for (size_t i = 0; i < tests.size(); ++i)
+        if (!tests[i].subject.empty()) {
+            if (!named) first = i;
+            ++named;
+        }
+    if (!named) return;
+    for (size_t i = 0; i < tests.size(); ++i)
+        if (tests[i].subject.empty())
+            nodes[i].fail("subject",
+                          "the test \"" + tests[i].name + "\" names no subject, the test \"" +
+                              tests[first].name + "\" (line " +
+                              std::to_string(nodes[first].getLine("subject")) + ") names \"" +
+                              tests[first].subject + "\"; valid: a subject for every test (the "
+                              "patient measured, e.g. subject: " + tests[first].subject +
+                              "), or for none (docs/measured-data.md#several-subjects)");
+    for (size_t i = 1; i < tests.size(); ++i)
+        if (tests[i].subject != tests[0].subject) return;
+    nodes[0].fail("subject", "every test names the subject \"" + tests[0].subject +
+                                 "\"; valid: at least two subjects (the diagnosis holds out one "
+                                 "subject's tests at a time), or no 'subject' key at all");
+}
+
 std::vector<diagnose::PatientTest> readTestsSection(const ScenarioNode& root, const fs::path& dir) {
     const ScenarioNode list = root.get("tests");
     std::vector<diagnose::PatientTest> tests;
     std::map<std::string, int> names;  // name, line
     for (const ScenarioNode& t : list.getElements()) {
-        t.checkKeys({"name", "channels"}, {"overrides"});
+        t.checkKeys({"name", "channels"}, {"overrides", "subject"});
         diagnose::PatientTest test;
         test.name = t.getString("name");
         if (!isTestName(test.name))
             t.fail("name", "\"" + test.name + "\" is not a test's name; valid: 1-64 letters, digits, "
                            "'.', '-' and '_', not starting with '.' or '-' (it names the test's "
                            "co-simulations' folders), e.g. gas-4.0g");
+        if (t.has("subject")) {
+            test.subject = t.getString("subject");
+            if (!isTestName(test.subject))
+                t.fail("subject", "\"" + test.subject + "\" is not a subject's name; valid: 1-64 "
+                                  "letters, digits, '.', '-' and '_', not starting with '.' or '-' "
+                                  "(as a test's name), e.g. subject-2");
+        }
         const auto [it, added] = names.emplace(test.name, t.getLine("name"));
         if (!added)
             t.fail("name", "the test \"" + test.name + "\" is named twice (first on line " +
@@ -320,6 +353,7 @@ std::vector<diagnose::PatientTest> readTestsSection(const ScenarioNode& root, co
     if (tests.empty())
         root.fail("tests", "is an empty list; valid: one entry per test, each with a name, its "
                            "overrides and its channels (docs/measured-data.md#several-tests)");
+    checkSubjects(list, tests);
     return tests;
 }
 
@@ -511,6 +545,7 @@ std::vector<std::string> writePatientMeasuredData(const std::string& folder,
         m << "tests:\n";
         for (const diagnose::PatientTest& t : data.tests) {
             m << "  - name: " << t.name << "\n";
+            if (!t.subject.empty()) m << "    subject: " << t.subject << "\n";
             if (!t.overrides.empty()) {
                 m << "    overrides:\n";
                 for (const auto& [k, v] : t.overrides) m << "      " << k << ": " << v << "\n";

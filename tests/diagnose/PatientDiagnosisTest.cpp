@@ -6,6 +6,8 @@
 // one; the effects that change the response say which scenario keys they set.
 // With several tests the comparisons are joined (each sample tagged with its test), the folds
 // are the tests, and an effect on the response is run in every test at its stated gas mass.
+// With subjects (tests that name the patient measured) the folds hold out all tests of one
+// subject; the where stage splits by subject; each test's mat regions are its own patient's.
 #include <gtest/gtest.h>
 
 #include <diagnose/PatientDiagnosis.h>
@@ -331,4 +333,186 @@ TEST(PatientDiagnosis, LeavesOneTestOutRunningAResponseEffectInEveryTest) {
         sawGrid |= calls[k].second == "4.25 g" && calls[k + 1].second == "5.25 g";
     }
     EXPECT_TRUE(sawGrid);
+}
+
+// ------------------------------------------------------------------ leave one subject out
+
+namespace {
+
+// Four tests of three subjects: a (two tests), b, c; each subject's bags lifted by its own
+// amount (another build), a's second test a little more (another condition).
+struct SubjectCase {
+    std::string test, subject;
+    double lift;
+};
+const std::vector<SubjectCase> kSubjectCases = {
+    {"a-1", "a", 0.0}, {"b-1", "b", 2e3}, {"a-2", "a", 1e3}, {"c-1", "c", 4e3}};
+
+// The regions of a taller patient: his sacrum over the mat's first half.
+MatRegions makeTallRegions() {
+    MatRegions m;
+    m.names = {"heels", "sacrum"};
+    m.sensel = {1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0};
+    return m;
+}
+
+std::vector<PatientTestCase> makeSubjectTests(const PatientInstruments& inst) {
+    std::vector<PatientTestCase> tests;
+    for (size_t k = 0; k < kSubjectCases.size(); ++k) {
+        PatientTestCase t;
+        t.name = kSubjectCases[k].test;
+        t.subject = kSubjectCases[k].subject;
+        t.baseline = makeTestRun(kSubjectCases[k].lift);
+        PatientSynthesisOptions so;
+        so.matInterval = 0.05;
+        so.seed = k + 1;
+        t.measured = synthesizePatientChannels(t.baseline, inst, so);
+        t.statedGasMass = 4.5e-3;
+        if (t.subject == "b") t.regions = makeTallRegions();
+        tests.push_back(t);
+    }
+    return tests;
+}
+
+std::vector<std::string> getNames(const std::vector<PatientTestCase>& tests, bool subjects) {
+    std::vector<std::string> out;
+    for (const PatientTestCase& t : tests) out.push_back(subjects ? t.subject : t.name);
+    return out;
+}
+
+PatientFolds makeSubjectFolds(const PatientComparison& base) {
+    PatientFolds folds;
+    folds.windowEdges = kEdges;
+    folds.tests = int(base.tests.size());
+    folds.subjects = base.subjects;
+    folds.testSubject = base.testSubject;
+    return folds;
+}
+
+}  // namespace
+
+TEST(PatientDiagnosis, JoinedTestsKnowTheirSubjects) {
+    const std::vector<PatientTestCase> tests = makeSubjectTests({});
+    const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
+    const PatientComparison j = joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
+    EXPECT_EQ(j.subjects, (std::vector<std::string>{"a", "b", "c"}));  // in the order they first appear
+    EXPECT_EQ(j.testSubject, (std::vector<int>{0, 1, 0, 2}));
+    // Without subjects the joined tests have none.
+    const PatientComparison n = joinPatientComparisons(parts, getNames(tests, false));
+    EXPECT_TRUE(n.subjects.empty());
+    EXPECT_TRUE(n.testSubject.empty());
+    // The folds: one per subject; a's fold holds out both of its tests.
+    const PatientFolds folds = makeSubjectFolds(j);
+    EXPECT_TRUE(folds.isBySubject());
+    EXPECT_FALSE(folds.isByTest());
+    EXPECT_STREQ(folds.getKind(), "subject");
+    EXPECT_EQ(folds.getCount(), 3);
+    EXPECT_EQ(folds.getFoldTests(0), (std::vector<int>{0, 2}));
+    EXPECT_EQ(folds.getFoldTests(2), (std::vector<int>{3}));
+    const PatientChannelComparison* bags = j.find("bag-pressure");
+    ASSERT_TRUE(bags);
+    for (size_t i = 0; i < bags->time.size(); ++i)
+        EXPECT_EQ(folds.findFold(*bags, i), j.testSubject[size_t(bags->getTest(i))]);
+    // Each test's mat on its own patient's regions: b's first sensel under his sacrum.
+    const PatientChannelComparison* mat = parts[1].find("mat");
+    ASSERT_TRUE(mat);
+    EXPECT_EQ(mat->partNames[size_t(mat->part[0])], mat->sensel[0] < 6 ? "sacrum" : "heels");
+    const PatientChannelComparison* matA = parts[0].find("mat");
+    EXPECT_EQ(matA->partNames[size_t(matA->part[0])], matA->sensel[0] < 6 ? "heels" : "sacrum");
+    // The where stage: a regime per subject, and per test (a has two tests); signatures per test
+    // named with the subject.
+    const WhereReport w = calcPatientWhere(j, {}, kEdges, 2.0);
+    int bySubject = 0, byTest = 0, named = 0;
+    for (const RegimeStats& r : w.regimes) {
+        const bool subject = r.regime.rfind("subject ", 0) == 0;
+        const bool test = r.regime.find(", test ") != std::string::npos;  // "subject a, test a-1"
+        bySubject += subject && !test;
+        byTest += subject && test;
+    }
+    for (const Signature& sg : w.signatures) named += sg.part.rfind("subject a, test a-2", 0) == 0;
+    EXPECT_EQ(bySubject, 3 * int(j.channels.size()));
+    EXPECT_EQ(byTest, 4 * int(j.channels.size()));
+    EXPECT_EQ(named, int(j.channels.size()) + 1);  // mat, two tilts, two bags
+}
+
+TEST(PatientDiagnosis, LeavesOneSubjectOutForAnInstrumentEffect) {
+    PatientInstruments inst;
+    inst.bagSensorLag = 0.3;
+    inst.bagSensorOffset = 400.0;
+    const std::vector<PatientTestCase> tests = makeSubjectTests(inst);
+    const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
+    const PatientComparison base = joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
+    const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
+    const PatientFolds folds = makeSubjectFolds(base);
+    const PatientTestSimulator none = [](int, const std::vector<std::pair<std::string, std::string>>&,
+                                         const std::string&) -> PatientChannels {
+        throw std::logic_error("an instrument effect needs no co-simulation");
+    };
+    const WhichReport which = calibratePatientCandidates(tests, where, makeRegions(), folds, none, {});
+    EXPECT_EQ(which.verdict, "bag-pressure-sensor") << which.reason;
+    const CandidateResult& c = which.candidates.front();
+    ASSERT_EQ(c.folds.size(), 3u);  // one per subject, not per test (4) or time window
+    for (int k = 0; k < 3; ++k) {
+        const FoldResult& f = c.folds[size_t(k)];
+        EXPECT_EQ(f.heldOut, k);
+        EXPECT_NEAR(f.parameters[0], 0.3, 0.03);
+        EXPECT_NEAR(f.parameters[1], 400.0, 20.0);
+        EXPECT_LT(f.excessAfter, 0.2 * f.excessBefore);
+        // The fold's gap is over its subject's tests.
+        EXPECT_NEAR(f.before, calcPatientGap(base, where, folds, {k}, false), 1e-12);
+    }
+    // The held-out samples are every sample once (each subject held out once).
+    size_t samples = 0;
+    for (const PatientChannelComparison& ch : base.channels) samples += ch.time.size();
+    size_t held = 0;
+    for (const GapMetrics& m : c.heldoutMetricsBefore) held += size_t(m.samples);
+    EXPECT_EQ(held, samples);
+    // Folds that do not match the tests are refused.
+    PatientFolds bad = folds;
+    bad.testSubject.pop_back();
+    EXPECT_THROW(calibratePatientCandidates(tests, where, makeRegions(), bad, none, {}), std::invalid_argument);
+}
+
+TEST(PatientDiagnosis, LeavesOneSubjectOutRunningAResponseEffectInEveryTest) {
+    // The gas mass on the stand-in (20 kPa per gram): every test's bags hold 0.2 g more than its
+    // stated mass (a at 4.0 and 5.0 g, b at 4.5 g, c at 4.0 g).
+    const double perKg = 20e3 / 1e-3;
+    const std::vector<double> stated = {4.0e-3, 4.5e-3, 5.0e-3, 4.0e-3};
+    std::vector<PatientTestCase> tests;
+    for (size_t k = 0; k < kSubjectCases.size(); ++k) {
+        PatientTestCase c;
+        c.name = kSubjectCases[k].test;
+        c.subject = kSubjectCases[k].subject;
+        c.baseline = makeTestRun(kSubjectCases[k].lift);
+        PatientSynthesisOptions so;
+        so.matInterval = 0.05;
+        so.seed = k + 1;
+        c.measured = synthesizePatientChannels(makeTestRun(kSubjectCases[k].lift + perKg * 0.2e-3), {}, so);
+        c.statedGasMass = stated[k];
+        tests.push_back(c);
+    }
+    std::vector<int> calls(tests.size(), 0);
+    const PatientTestSimulator simulate = [&](int t, const std::vector<std::pair<std::string, std::string>>& ov,
+                                              const std::string&) {
+        EXPECT_EQ(ov.at(0).first, "array.gas_mass");
+        ++calls.at(size_t(t));
+        const double mass = std::stod(ov.at(0).second) * 1e-3;
+        return makeTestRun(kSubjectCases[size_t(t)].lift + perKg * (mass - stated[size_t(t)]));
+    };
+    const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
+    const PatientComparison base = joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
+    const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
+    PatientCalibrationOptions o;
+    o.candidates = {"gas-mass-bias"};
+    const WhichReport which = calibratePatientCandidates(tests, where, makeRegions(), makeSubjectFolds(base),
+                                                         simulate, o);
+    EXPECT_EQ(which.verdict, "gas-mass-bias") << which.reason;
+    const CandidateResult& c = which.candidates.front();
+    ASSERT_EQ(c.folds.size(), 3u);
+    for (const FoldResult& f : c.folds) EXPECT_NEAR(f.parameters[0], 0.2e-3, 0.01e-3) << f.heldOut;
+    EXPECT_NEAR(c.parameters[0], 0.2e-3, 0.01e-3);
+    // Every trial value ran in every test (the co-simulations are shared by the folds).
+    for (size_t t = 1; t < calls.size(); ++t) EXPECT_EQ(calls[t], calls[0]) << t;
+    EXPECT_GT(calls[0], 0);
+    EXPECT_EQ(c.simulations, calls[0] * int(calls.size()));
 }

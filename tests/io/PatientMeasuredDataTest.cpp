@@ -448,3 +448,93 @@ TEST_F(PatientMeasuredDataTest, ATestsOverridesAreCheckedAgainstTheScenario) {
     EXPECT_EQ(span.getLine(), 17);
     EXPECT_EQ(span.getKey(), "tests[1].channels.tilt");
 }
+
+namespace {
+
+// Three tests of two subjects (docs/measured-data.md#several-subjects).
+const std::string kSubjectsManifest =
+    "format: bagsim-measured-data 1\n"                                                 // 1
+    "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/supine-on-array-coarse.yaml\n"    // 2
+    "protocol: {kind: patient-on-array, settle_time: 0.3 s}\n"                         // 3
+    "tests:\n"                                                                         // 4
+    "  - name: woman-4.5g\n"                                                           // 5
+    "    subject: small-woman\n"                                                       // 6
+    "    overrides: {patient.sex: female, patient.height: 1.55 m, patient.mass: 50 kg}\n"  // 7
+    "    channels: {tilt: tilt.csv}\n"                                                 // 8
+    "  - name: man-4.5g\n"                                                             // 9
+    "    subject: tall-man\n"                                                          // 10
+    "    overrides: {patient.height: 1.90 m, patient.mass: 110 kg}\n"                  // 11
+    "    channels: {tilt: tilt.csv}\n"                                                 // 12
+    "  - name: woman-5.0g\n"                                                           // 13
+    "    subject: small-woman\n"                                                       // 14
+    "    overrides: {patient.sex: female, patient.height: 1.55 m, patient.mass: 50 kg, array.gas_mass: 5.0 g}\n"  // 15
+    "    channels: {tilt: tilt.csv}\n";                                                // 16
+
+}  // namespace
+
+TEST_F(PatientMeasuredDataTest, SubjectsReadInTheManifestsOrder) {
+    write("measured.yaml", kSubjectsManifest);
+    const diagnose::PatientMeasurement d = io::readPatientMeasuredData(m_dir.string());
+    ASSERT_EQ(d.tests.size(), 3u);
+    EXPECT_EQ(d.tests[0].subject, "small-woman");
+    EXPECT_EQ(d.tests[1].subject, "tall-man");
+    EXPECT_EQ(d.tests[2].subject, "small-woman");
+    EXPECT_EQ(d.getSubjects(), (std::vector<std::string>{"small-woman", "tall-man"}));
+    // Each test's scenario holds its subject's build.
+    const io::PatientMeasuredScenario s = io::readPatientMeasuredScenario(d);
+    ASSERT_EQ(s.tests.size(), 3u);
+    EXPECT_NEAR(s.tests[0].scenario.patient.height, 1.55, 1e-12);
+    EXPECT_NEAR(s.tests[1].scenario.patient.mass, 110.0, 1e-12);
+    EXPECT_NEAR(s.tests[2].scenario.options.layout.gasMass, 5.0e-3, 1e-12);
+    // Without subjects the tests have none.
+    write("full.csv", makeFullMat({0.1, 0.2}));
+    write("measured.yaml", kTestsManifest);
+    const diagnose::PatientMeasurement n = io::readPatientMeasuredData(m_dir.string());
+    EXPECT_TRUE(n.getSubjects().empty());
+    EXPECT_TRUE(n.tests[0].subject.empty());
+}
+
+TEST_F(PatientMeasuredDataTest, SubjectsWrittenReadBackTheSame) {
+    write("measured.yaml", kSubjectsManifest);
+    const diagnose::PatientMeasurement d = io::readPatientMeasuredData(m_dir.string());
+    const fs::path out = m_dir / "written";
+    fs::create_directories(out);
+    io::writePatientMeasuredData(out.string(), d, "kind: patient-on-array\n", "# synthetic\n");
+    const diagnose::PatientMeasurement r = io::readPatientMeasuredData(out.string());
+    ASSERT_EQ(r.tests.size(), 3u);
+    for (size_t i = 0; i < 3; ++i) EXPECT_EQ(r.tests[i].subject, d.tests[i].subject) << i;
+}
+
+TEST_F(PatientMeasuredDataTest, ATestWithoutASubjectWhereAnotherNamesOneIsLocated) {
+    write("measured.yaml", replaceAll(kSubjectsManifest, "    subject: tall-man\n", ""));
+    const io::InputError e = readError();
+    EXPECT_NE(e.getWhere().find("measured.yaml"), std::string::npos) << e.what();
+    EXPECT_EQ(e.getLine(), 9);  // the test's entry: its key is absent
+    EXPECT_EQ(e.getKey(), "tests[1].subject");
+    EXPECT_NE(e.getMessage().find("the test \"man-4.5g\" names no subject, the test \"woman-4.5g\" "
+                                  "(line 6) names \"small-woman\"; valid: a subject for every test"),
+              std::string::npos)
+        << e.what();
+}
+
+TEST_F(PatientMeasuredDataTest, SubjectsNeedTwoAndPlainNames) {
+    write("measured.yaml", replaceAll(kSubjectsManifest, "subject: tall-man", "subject: small-woman"));
+    const io::InputError one = readError();
+    EXPECT_EQ(one.getLine(), 6);
+    EXPECT_EQ(one.getKey(), "tests[0].subject");
+    EXPECT_NE(one.getMessage().find("every test names the subject \"small-woman\"; valid: at least two "
+                                    "subjects"),
+              std::string::npos)
+        << one.what();
+    write("measured.yaml", replaceAll(kSubjectsManifest, "subject: tall-man", "subject: tall man/2"));
+    const io::InputError bad = readError();
+    EXPECT_EQ(bad.getLine(), 10);
+    EXPECT_EQ(bad.getKey(), "tests[1].subject");
+    EXPECT_NE(bad.getMessage().find("\"tall man/2\" is not a subject's name; valid: 1-64 letters"),
+              std::string::npos)
+        << bad.what();
+    // A subject's key where the manifest has no tests list is an unknown key of the manifest.
+    write("measured.yaml", kManifest + "subject: a\n");
+    const io::InputError top = readError();
+    EXPECT_EQ(top.getLine(), 12);
+}

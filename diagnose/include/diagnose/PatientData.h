@@ -8,6 +8,7 @@
 
 #include <diagnose/MeasuredData.h>
 
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -60,6 +61,9 @@ struct PatientChannels {
 /// mass, another setting), the manifest's `tests:` list.
 struct PatientTest {
     std::string name;  ///< the lab's name ("gas-4.0g"): letters, digits, '.', '-', '_'
+    /// The patient measured (the manifest's optional `subject`, a name as the test's): "" when
+    /// the data name no subject, else every test names one and there are at least two.
+    std::string subject;
     /// The scenario keys this test changes: (dotted key, value text with units), as `--set`.
     std::vector<std::pair<std::string, std::string>> overrides;
     PatientChannels channels;
@@ -74,6 +78,14 @@ struct PatientMeasurement {
     PatientProtocol protocol;
     PatientChannels channels;        ///< the single record's (empty when `tests` is not)
     std::vector<PatientTest> tests;  ///< the manifest's tests, in its order; empty: one record
+    /// The subjects the tests name, in the order they first appear; empty when none.
+    std::vector<std::string> getSubjects() const {
+        std::vector<std::string> out;
+        for (const PatientTest& t : tests)
+            if (!t.subject.empty() && std::find(out.begin(), out.end(), t.subject) == out.end())
+                out.push_back(t.subject);
+        return out;
+    }
 };
 
 }  // namespace diagnose

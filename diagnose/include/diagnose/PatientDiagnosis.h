@@ -109,23 +109,40 @@ struct PatientComparison {
     /// The tests' names when several tests are joined (joinPatientComparisons); empty for one
     /// record.
     std::vector<std::string> tests;
+    /// The subjects' names (in the order they first appear) when the joined tests name them;
+    /// empty otherwise.
+    std::vector<std::string> subjects;
+    /// Per test: its subject (index into subjects); empty without subjects.
+    std::vector<int> testSubject;
     const PatientChannelComparison* find(const std::string& name) const;
 };
 
 /// Several tests' comparisons as one: each channel's samples test after test, each tagged with
-/// its test; the parts (bags) merged by name. One comparison is returned as it is.
+/// its test; the parts (bags, the mat's regions) merged by name. One comparison is returned as
+/// it is. `subjects` (per test its subject's name; empty: none) fills subjects and testSubject.
 PatientComparison joinPatientComparisons(const std::vector<PatientComparison>& parts,
-                                         const std::vector<std::string>& names);
+                                         const std::vector<std::string>& names,
+                                         const std::vector<std::string>& subjects = {});
 
 /// What the folds of the which stage leave out: the time windows of one record, or (several
-/// tests) whole tests, each in turn.
+/// tests) whole tests, or (tests that name their subjects) all tests of one subject, each in
+/// turn.
 struct PatientFolds {
     std::vector<double> windowEdges;  ///< [s] the time windows' bounds (also the where stage's)
-    int tests = 1;                    ///< more than one: the folds are the tests
-    bool isByTest() const { return tests > 1; }
-    int getCount() const { return isByTest() ? tests : int(windowEdges.size()) - 1; }
+    int tests = 1;                    ///< more than one: the folds are the tests (or subjects)
+    std::vector<std::string> subjects;  ///< not empty: the folds are these subjects
+    std::vector<int> testSubject;       ///< per test: its subject (index into subjects)
+    bool isBySubject() const { return !subjects.empty(); }
+    bool isByTest() const { return tests > 1 && !isBySubject(); }
+    int getCount() const {
+        return isBySubject() ? int(subjects.size()) : isByTest() ? tests : int(windowEdges.size()) - 1;
+    }
+    /// "subject", "test" or "time-window" (diagnosis.json's fold_kind).
+    const char* getKind() const { return isBySubject() ? "subject" : isByTest() ? "test" : "time-window"; }
     /// The fold a sample of the channel belongs to.
     int findFold(const PatientChannelComparison& c, size_t sample) const;
+    /// The tests (indices) of a fold: its subject's, or the one test; empty for a time window.
+    std::vector<int> getFoldTests(int fold) const;
 };
 
 /// The simulated run (its true values; the instruments read it with `inst`) beside the measured
@@ -181,6 +198,10 @@ struct PatientTestCase {
     PatientChannels measured;
     PatientChannels baseline;   ///< the model's run of the test's scenario
     double statedGasMass = 0.0; ///< [kg] the test's array.gas_mass
+    std::string subject;        ///< the patient measured ("" when the data name none)
+    /// The mat's regions under this test's patient (a subject's own build); empty: the regions
+    /// the caller gives for every test.
+    MatRegions regions;
 };
 
 /// Simulates test `test`'s scenario with these overrides (applied after the test's own) and
@@ -188,14 +209,16 @@ struct PatientTestCase {
 using PatientTestSimulator = std::function<PatientChannels(
     int test, const std::vector<std::pair<std::string, std::string>>& overrides, const std::string& label)>;
 
-/// Each test's comparison of its baseline (the model as it is) with what was measured.
+/// Each test's comparison of its baseline (the model as it is) with what was measured, on the
+/// test's own regions when it has them, else on `regions`.
 std::vector<PatientComparison> comparePatientTests(const std::vector<PatientTestCase>& tests,
                                                    const MatRegions& regions);
 
 /// Calibrates each candidate on all folds but one and judges it on the one left out, in turn:
-/// the folds are the tests when there are several (an effect that changes the response is
-/// simulated in every test at each trial value, with the test's stated gas mass), else the time
-/// windows of the one record. The fit, the score and the verdict as below.
+/// the folds are the subjects when the tests name them (all tests of one subject left out), the
+/// tests when there are several (an effect that changes the response is simulated in every test
+/// at each trial value, with the test's stated gas mass), else the time windows of the one
+/// record. The fit, the score and the verdict as below.
 WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests,
                                        const WhereReport& where, const MatRegions& regions,
                                        const PatientFolds& folds, const PatientTestSimulator& simulate,

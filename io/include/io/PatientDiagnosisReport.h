@@ -16,13 +16,14 @@
 namespace io {
 
 /// diagnosis.json; `which` may be null (--where-only); `folds` the time windows [s] and
-/// whether the folds were tests (`fold_kind`, `tests`, each fold's `held_out_test` by name).
+/// whether the folds were tests or subjects (`fold_kind`, `tests`, `subjects`, `test_subjects`,
+/// each fold's `held_out_test`, or `held_out_subject` and its `held_out_tests`, by name).
 std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose::PatientComparison& c,
                                        const diagnose::WhereReport& where,
                                        const diagnose::WhichReport* which,
                                        const diagnose::PatientFolds& folds);
 
-/// residuals.csv ([test,] first when several tests): channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual
+/// residuals.csv ([subject,][test,] first when the tests name subjects, when several tests): channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual
 /// (the sensel's row and column from 1 for the mat, empty otherwise); `matColumns` the mat's.
 std::string formatPatientResidualsCsv(const diagnose::PatientComparison& c, int matColumns);
 

@@ -47,7 +47,7 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
 /// Reads a patient's measured-data folder (the manifest's keys, the channel files: at least a
 /// mat or a tilt sensor; each tilt file with a pelvis_tilt or thorax_tilt column or both).
 /// @throws InputError (missing manifest, key or file; bad units; NaN; unsorted time; a bag
-/// listed twice).
+/// listed twice; a test without a subject where another names one; a single subject).
 diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder);
 
 /// One test's scenario: the data's with the protocol and the test's overrides applied.
@@ -75,7 +75,8 @@ PatientMeasuredScenario readPatientMeasuredScenario(const diagnose::PatientMeasu
 
 /// Writes a patient's measured-data folder (which must exist): measured.yaml, scenario.yaml
 /// (the scenario text given), mat.csv (pressures in mmHg), tilt.csv (deg) and per bag sensor
-/// bag<N>-pressure.csv (kPa); with tests, the manifest's `tests` list and each test's files
+/// bag<N>-pressure.csv (kPa); with tests, the manifest's `tests` list (with each test's
+/// subject when it has one) and each test's files
 /// prefixed with its name (<name>-mat.csv, ...). `comment` goes at the top of the manifest.
 /// Returns the names.
 std::vector<std::string> writePatientMeasuredData(const std::string& folder,
