@@ -60,7 +60,7 @@ void printWhere(const diagnose::PatientComparison& c, const diagnose::WhereRepor
             << fmt("%.3g", ch.numerical / u) << un << ", share of gap "
             << fmt("%.0f %%", 100 * ch.shareOfGap) << "\n";
     }
-    out << "  largest shares of a channel's squared error (by region, bag, time window):\n";
+    out << "  largest shares of a channel's squared error (by region, bag, time window, test, subject):\n";
     for (const auto& r : w.regimes)
         if (r.regime != "all" && r.share >= 0.25)
             out << "    " << r.channel << ", " << r.regime << ": " << fmt("%.0f %%", 100 * r.share)
