@@ -191,7 +191,8 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     s.checkKeys({"rows", "columns", "gas_mass"},
                 {"row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
-                 "groups", "board_contact", "neighbour_contact", "neighbour_margin"});
+                 "groups", "board_contact", "board_slip_velocity", "neighbour_contact",
+                 "neighbour_margin"});
     cosim::ArrayLayout& a = sc.options.layout;
     a.rows = s.get("rows").asInteger();
     a.columns = s.get("columns").asInteger();
@@ -230,6 +231,14 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     // The bed board under the bags, as the body feels it where it reaches it (between bags,
     // through a slack or bottomed bag, beside the array): PatientOnArrayOptions::boardContact.
     sc.options.boardContact = s.getBool("board_contact", true);
+    // Its friction's regularisation velocity (body::PlaneSupportOptions::slipVelocity): a
+    // body resting on the board creeps at v_s f_t / (mu f_n). Small values make the friction
+    // stiff in the body's velocity, and they set the body's integrator steps where hands and
+    // forearms rest on the board (docs/performance.md#the-reduced-bag).
+    sc.options.board.slipVelocity =
+        s.getQuantity("board_slip_velocity", D::Velocity, sc.options.board.slipVelocity);
+    checkBetween(s, "board_slip_velocity", sc.options.board.slipVelocity, 1e-5, 1.0, "mm/s",
+                 "a creep speed: 2 mm/s by default, 20 mm/s halves a reduced-bag run's time");
     // Neighbouring bags touch: the bags that may meet once inflated are solved as one module
     // (PatientOnArrayOptions::neighbourContact, docs/cosim.md#contact-between-neighbouring-bags).
     sc.options.neighbourContact = s.getBool("neighbour_contact", false);

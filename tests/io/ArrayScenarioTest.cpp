@@ -105,6 +105,19 @@ TEST(ArrayScenario, TheBedBoardCarriesTheBodyByDefaultAndCanBeLeftOut) {
     EXPECT_EQ(e.getKey(), "array.board_contact");
 }
 
+TEST(ArrayScenario, TheBedBoardsSlipVelocityIs2MmPerSecondByDefaultAndCanBeSet) {
+    EXPECT_DOUBLE_EQ(read(kBase).options.board.slipVelocity, 2e-3);
+    std::string set = kBase;
+    set.insert(set.find("  groups:"), "  board_slip_velocity: 20 mm/s\n");
+    EXPECT_DOUBLE_EQ(read(set).options.board.slipVelocity, 0.02);
+    std::string bad = kBase;
+    bad.insert(bad.find("  groups:"), "  board_slip_velocity: 0 mm/s\n");
+    const io::InputError e = readError(bad);
+    EXPECT_EQ(e.getLine(), 12);
+    EXPECT_EQ(e.getKey(), "array.board_slip_velocity");
+    EXPECT_NE(std::string(e.what()).find("mm/s"), std::string::npos) << e.what();
+}
+
 TEST(ArrayScenario, TheBodyOnTheFilmsIsFrictionlessByDefaultAndTakesACoulombCoefficient) {
     EXPECT_EQ(read(kBase).options.contact.friction, 0.0);
     auto with = [](const std::string& value) {
