@@ -97,6 +97,8 @@ void ArrayVerdict::addFrame(const io::ArrayFrame& f, const std::vector<double>& 
             g.peakTime = f.time;
         }
         if (r.peakPressure > kCapillary) g.above += dt;
+        g.patchPeak = std::max(g.patchPeak, r.patchPeakPressure);
+        if (r.patchPeakPressure > kCapillary) g.patchAbove += dt;
     }
 }
 
@@ -185,7 +187,9 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
         rows.push_back({"peak pressure " + name, g.peak > kCapillary ? "warning" : "ok",
                         g.peak / kMmHg, "mmHg",
                         fmt("at %.2f s; ", g.peakTime) + fmt("above 32 mmHg for %.2f s", g.above) +
-                            fmt(" of %.2f s ", span) + window});
+                            fmt(" of %.2f s ", span) + window +
+                            fmt("; patch peak (20 cm2) %.1f mmHg", g.patchPeak / kMmHg) +
+                            fmt(", above 32 mmHg for %.2f s", g.patchAbove)});
     }
     return rows;
 }
@@ -209,7 +213,7 @@ void loadMap(bags::StateReader& r, std::map<int, double>& m) {
 }  // namespace
 
 void ArrayVerdict::saveState(bags::StateWriter& w) const {
-    w.tag("verdict");
+    w.tag("verdict-2");  // 2: with the regions' patch peaks
     w.pod(m_reached), w.pod(m_turnedTilt), w.pod(m_back), w.pod(m_turnKnown);
     w.pod(m_haveRef), w.pod(m_lastTime), w.pod(m_firstTime);
     w.mat(m_refCom);
@@ -222,13 +226,14 @@ void ArrayVerdict::saveState(bags::StateWriter& w) const {
     for (const auto& [name, reg] : m_regions) {
         w.str(name);
         w.pod(reg.peak), w.pod(reg.peakTime), w.pod(reg.above);
+        w.pod(reg.patchPeak), w.pod(reg.patchAbove);
     }
     w.pod(std::uint64_t(m_regionOrder.size()));
     for (const std::string& name : m_regionOrder) w.str(name);
 }
 
 void ArrayVerdict::loadState(bags::StateReader& r) {
-    r.tag("verdict");
+    r.tag("verdict-2");
     r.pod(m_reached), r.pod(m_turnedTilt), r.pod(m_back), r.pod(m_turnKnown);
     r.pod(m_haveRef), r.pod(m_lastTime), r.pod(m_firstTime);
     Eigen::Vector3d com;
@@ -245,6 +250,7 @@ void ArrayVerdict::loadState(bags::StateReader& r) {
         const std::string name = r.str();
         Region& reg = m_regions[name];
         r.pod(reg.peak), r.pod(reg.peakTime), r.pod(reg.above);
+        r.pod(reg.patchPeak), r.pod(reg.patchAbove);
     }
     m_regionOrder.resize(r.pod<std::uint64_t>());
     for (std::string& name : m_regionOrder) name = r.str();

@@ -50,6 +50,7 @@ class ArrayVerdict {
     int m_minHeightBag = -1;
     struct Region {
         double peak = 0.0, peakTime = 0.0, above = 0.0;
+        double patchPeak = 0.0, patchAbove = 0.0;  // the patch peak (20 cm^2), its time above
     };
     std::map<std::string, Region> m_regions;
     std::vector<std::string> m_regionOrder;

@@ -33,6 +33,7 @@ io::ArrayFrame frame(double t, double y, double z, double ppi, double edgeForce)
     cosim::RegionLoad r;
     r.name = "sacrum";
     r.peakPressure = ppi * kMmHg;
+    r.patchPeakPressure = 0.75 * ppi * kMmHg;  // a patch peak below the nodal one
     f.regions = {r};
     for (int b : {0, 3, 6}) {  // row 0: columns 0 (his left edge), 3, 6 (his right edge)
         cosim::BagReading g;
@@ -85,6 +86,10 @@ TEST(ArrayVerdict, EachCheckFollowsItsCriterion) {
     EXPECT_NEAR(sacrum.value, 40.0, 1e-9);
     EXPECT_NE(sacrum.detail.find("above 32 mmHg for 0.50 s of 1.50 s"), std::string::npos)
         << sacrum.detail;  // the 1.0 s frame opens the window; 1.5 s adds its interval
+    // The patch peak beside it (0.75 of the nodal one: 30 mmHg, never above 32 mmHg).
+    EXPECT_NE(sacrum.detail.find("patch peak (20 cm2) 30.0 mmHg, above 32 mmHg for 0.00 s"),
+              std::string::npos)
+        << sacrum.detail;
 
     // A warning for travel beyond one column pitch that ends over the middle; a pressed node
     // 20 mm up fails; his centre of mass under the board fails; a turn that gave up fails.
