@@ -9,12 +9,24 @@
 //                                                one case step by step
 //   bench_reduced_bag footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM
 //                                                where each model puts its contact pressure
+//   bench_reduced_bag replay SCENARIO CAL RUN_DIR
+//                                                a run's body motion onto reduced bags, per
+//                                                bag beside the run's forces
+//   bench_reduced_bag fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1
+//                                                one bag of a run alone, FE and reduced
 //
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
 #include <bags/Airbag.h>
 #include <cosim/ArrayReadings.h>
 #include <cosim/ReducedBag.h>
+#include <cosim/ArrayShapes.h>
+#include <cosim/ArrayLayout.h>
+#include <cosim/BodyShapes.h>
+#include <cosim/PatientOnArray.h>
+#include <fstream>
+#include <hdf5.h>
+#include <stdexcept>
 #include <io/ArrayScenario.h>
 #include <io/InputError.h>
 #include <io/ReducedBagFile.h>
@@ -722,6 +734,263 @@ int speed(const std::string& calPath) {
     return 0;
 }
 
+
+// --- A patient-on-array run read back: its bags.csv and the body's surface nodes at the shape
+// frames of its results.h5 (/shapes/body, docs/output-layout.md), for replay and fe-bag.
+
+struct RunBags {  // time [ms] -> array bag index -> (mass [kg], gauge pressure [Pa], force [N])
+    std::map<long, std::map<int, std::array<double, 3>>> at;
+};
+
+RunBags readRunBags(const std::string& dir) {
+    RunBags r;
+    std::ifstream in(dir + "/bags.csv");
+    if (!in) throw std::runtime_error("cannot read " + dir + "/bags.csv");
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+        std::stringstream ss(line);
+        std::string f[7];
+        for (auto& x : f) std::getline(ss, x, ',');
+        r.at[std::lround(std::stod(f[0]) * 1e3)][std::stoi(f[1])] = {
+            std::stod(f[2]) * 1e-3, std::stod(f[3]) * 1e3, std::stod(f[5])};
+    }
+    return r;
+}
+
+// time [ms] -> the body surface's node positions [m], Ground (cosim::makeBodySurface order).
+std::map<long, Eigen::Matrix3Xd> readBodyFrames(const std::string& dir) {
+    const std::string path = dir + "/results.h5";
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0) throw std::runtime_error("cannot open " + path);
+    auto read = [&](const std::string& name, hid_t type, std::vector<hsize_t>& dims) {
+        const hid_t d = H5Dopen2(f, name.c_str(), H5P_DEFAULT);
+        if (d < 0) throw std::runtime_error(path + ": no " + name);
+        const hid_t sp = H5Dget_space(d);
+        dims.assign(size_t(H5Sget_simple_extent_ndims(sp)), 0);
+        H5Sget_simple_extent_dims(sp, dims.data(), nullptr);
+        size_t n = 1;
+        for (hsize_t k : dims) n *= k;
+        std::vector<double> buf(n);
+        H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data());
+        H5Sclose(sp);
+        H5Dclose(d);
+        return buf;
+    };
+    std::vector<hsize_t> dims;
+    const std::vector<double> time = read("/shapes/time", H5T_NATIVE_DOUBLE, dims);
+    std::map<long, Eigen::Matrix3Xd> out;
+    for (size_t k = 0; k < time.size(); ++k) {
+        const std::vector<double> x =
+            read("/shapes/body/positions/" + std::to_string(k), H5T_NATIVE_DOUBLE, dims);
+        Eigen::Matrix3Xd m(3, dims.at(0));
+        for (Eigen::Index n = 0; n < m.cols(); ++n)
+            m.col(n) = Vec3(x[3 * size_t(n)], x[3 * size_t(n) + 1], x[3 * size_t(n) + 2]);
+        out[std::lround(time[k] * 1e3)] = m;
+    }
+    H5Fclose(f);
+    return out;
+}
+
+// Segment seg's pose X_GB: the rigid fit (Kabsch) of its surface nodes in its frame to x.
+Eigen::Isometry3d fitSegmentPose(const cosim::BodySurface& surf, const Eigen::Matrix3Xd& x,
+                                 int seg) {
+    std::vector<int> idx;
+    for (int n = 0; n < int(surf.nodeSegment.size()); ++n)
+        if (surf.nodeSegment[size_t(n)] == seg) idx.push_back(n);
+    Vec3 cb = Vec3::Zero(), cg = Vec3::Zero();
+    for (int n : idx) cb += surf.p_B.col(n), cg += x.col(n);
+    cb /= double(idx.size()), cg /= double(idx.size());
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (int n : idx) H += (surf.p_B.col(n) - cb) * (x.col(n) - cg).transpose();
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = svd.matrixV() * D * svd.matrixU().transpose();
+    X.translation() = cg - X.linear() * cb;
+    return X;
+}
+
+// The bag shape's pose of segment seg (X_GB X_BS, as PatientOnArray sets it).
+Eigen::Isometry3d shapePoseOf(const body::BodyModel& model, const cosim::BodySurface& surf,
+                              const Eigen::Matrix3Xd& x, int seg) {
+    const SimTK::Transform T =
+        cosim::makeBagShape(model.getContactShape(static_cast<body::Segment>(seg))).X_BS;
+    Eigen::Isometry3d X_BS = Eigen::Isometry3d::Identity();
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) X_BS.linear()(r, c) = T.R()[r][c];
+        X_BS.translation()[r] = T.p()[r];
+    }
+    return fitSegmentPose(surf, x, seg) * X_BS;
+}
+
+io::PatientOnArrayScenario readReducedScenario(const std::string& scenario,
+                                               const std::string& calPath) {
+    io::PatientOnArrayScenario sc = readScenario(scenario);
+    sc.options.model = cosim::PatientOnArrayOptions::BagModel::Reduced;
+    sc.options.reduced = io::readReducedBagCalibration(calPath);
+    return sc;
+}
+
+// Replays a run's body motion onto reduced bags: at each shape frame of RUN (every segment's
+// pose fitted to the body's surface nodes, each bag's gas mass from its bags.csv), every bag's
+// vertical force and gas pressure beside the run's, and per shape the reduced depth, force,
+// overlap volume and contact area. Of a finite-element run: the bags see the FE run's poses,
+// so what differs is the bag model alone, not where the body went. Of a reduced run: its own
+// forces again (a check of the replay).
+int replay(const std::string& scenario, const std::string& calPath, const std::string& run) {
+    const io::PatientOnArrayScenario sc = readReducedScenario(scenario, calPath);
+    cosim::PatientOnArray poa(sc.patient, sc.options);
+    const body::BodyModel& model = poa.getModel();
+    const cosim::BodySurface surf = cosim::makeBodySurface(model);
+    const RunBags fe = readRunBags(run);
+    const std::map<long, Eigen::Matrix3Xd> frames = readBodyFrames(run);
+    std::vector<cosim::ReducedBag*> bags;
+    for (size_t i = 0; i < poa.getBagIndices().size(); ++i)
+        bags.push_back(dynamic_cast<cosim::ReducedBag*>(&poa.updBag(int(i))));
+    std::printf(
+        "time_s bag row col mass_g F_run F_red P_run_kPa P_red_kPa  "
+        "shapes: segment:depth_mm:Fz_N:overlap_ml:area_cm2\n");
+    const int columns = sc.options.layout.columns;
+    for (const auto& [tk, x] : frames) {
+        if (!fe.at.count(tk)) continue;
+        const auto& ran = fe.at.at(tk);
+        for (size_t i = 0; i < bags.size(); ++i)
+            bags[i]->setGasMass(ran.at(poa.getBagIndices()[i])[0]);
+        for (size_t k = 0; k < poa.getPairs().size(); ++k) {
+            const cosim::Link& L = poa.getLinks()[k];
+            cosim::ShapeState st;
+            st.X_GS = shapePoseOf(model, surf, x, poa.getPairs()[k].shape);
+            bags[size_t(L.participant)]->setShapeState(L.shape, st);
+        }
+        for (cosim::ReducedBag* b : bags) {
+            b->advance(0.0);
+            b->commit();
+        }
+        for (size_t i = 0; i < bags.size(); ++i) {
+            const int bag = poa.getBagIndices()[i];
+            const auto& f = ran.at(bag);
+            double Fz = 0.0;
+            std::string shapes;
+            for (size_t k = 0; k < poa.getPairs().size(); ++k) {
+                const cosim::Link& L = poa.getLinks()[k];
+                if (L.participant != int(i)) continue;
+                const double fz = bags[i]->calcWrench(L.shape).force.z();
+                Fz += fz;
+                if (bags[i]->getDepth(L.shape) > 0.0) {
+                    char buf[80];
+                    std::snprintf(buf, sizeof buf, " %d:%.1f:%.1f:%.0f:%.0f",
+                                  poa.getPairs()[k].shape, bags[i]->getDepth(L.shape) * 1e3, fz,
+                                  bags[i]->getOverlapVolume(L.shape) * 1e6,
+                                  bags[i]->getContactArea(L.shape) * 1e4);
+                    shapes += buf;
+                }
+            }
+            if (f[2] < 0.5 && Fz < 0.5) continue;
+            std::printf("%.2f %2d %d %d %.3f %7.2f %7.2f %7.3f %7.3f %s\n", tk * 1e-3, bag,
+                        bag / columns, bag % columns, f[0] * 1e3, f[2], Fz, f[1] * 1e-3,
+                        bags[i]->getGaugePressure() * 1e-3, shapes.c_str());
+        }
+    }
+    return 0;
+}
+
+// One bag of a finite-element run alone, FE and reduced, along the run's poses (as replay)
+// and gas masses from T0 to T1 [s]: its shapes, or only the segments listed (body::Segment
+// indices, comma separated; "all": every one). The FE bag is inflated at T0's mass with the
+// shapes lifted 0.3 m, lowered onto T0's poses in 30 steps, then taken frame by frame (its
+// gas changed, then the shapes moved).
+int feBag(const std::string& scenario, const std::string& calPath, const std::string& run,
+          int bagIndex, const std::string& segList, double t0, double t1) {
+    const io::PatientOnArrayScenario sc = readReducedScenario(scenario, calPath);
+    cosim::PatientOnArray poa(sc.patient, sc.options);
+    const body::BodyModel& model = poa.getModel();
+    const cosim::BodySurface surf = cosim::makeBodySurface(model);
+    const RunBags fe = readRunBags(run);
+    const std::map<long, Eigen::Matrix3Xd> frames = readBodyFrames(run);
+    std::vector<int> segs;
+    for (const cosim::ShapeBagPair& p : poa.getPairs())
+        if (p.bag == bagIndex &&
+            (segList == "all" || ("," + segList + ",").find("," + std::to_string(p.shape) + ",") !=
+                                     std::string::npos))
+            segs.push_back(p.shape);
+    const std::vector<cosim::ArrayBag> cells =
+        cosim::makeArrayBags(sc.options.layout, sc.options.bag.geometry);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    spec.X_GB = cells.at(size_t(bagIndex)).X_GB;
+    bags::Airbag bag(spec);
+    cosim::ReducedBag red(sc.options.reduced, spec.X_GB);
+    auto lift = [](Eigen::Isometry3d X, double dz) {
+        X.translation().z() += dz;
+        return X;
+    };
+    const long k0 = std::lround(t0 * 1e3), k1 = std::lround(t1 * 1e3);
+    std::vector<Eigen::Isometry3d> start;
+    for (int seg : segs) {
+        start.push_back(shapePoseOf(model, surf, frames.at(k0), seg));
+        for (int k = 0; k < 2; ++k) {
+            auto s = cosim::makeBagShape(model.getContactShape(static_cast<body::Segment>(seg))).shape;
+            s->setPose(lift(start.back(), 0.3));
+            if (k == 0)
+                bag.addShape(s, sc.options.contact);
+            else
+                red.addShape(s);
+        }
+    }
+    bag.inflate(fe.at.at(k0).at(bagIndex)[0]);
+    red.setGasMass(fe.at.at(k0).at(bagIndex)[0]);
+    for (int j = 1; j <= 30; ++j) {
+        for (size_t i = 0; i < segs.size(); ++i)
+            bag.setShapePose(int(i), lift(start[i], 0.3 * (1.0 - j / 30.0)));
+        if (!bag.advance(0.01).converged) std::fprintf(stderr, "lowering: no convergence\n");
+        bag.commit();
+    }
+    std::printf("bag %d, segments", bagIndex);
+    for (int s : segs) std::printf(" %d", s);
+    std::printf(
+        "\ntime_s mass_g P_run_kPa F_run P_FE_kPa V_FE_L F_FE P_red_kPa F_red  "
+        "per shape: segment:Fz_FE/Fz_red\n");
+    for (const auto& [tk, x] : frames) {
+        if (tk < k0 || tk > k1 || !fe.at.count(tk)) continue;
+        const auto& ran = fe.at.at(tk).at(bagIndex);
+        std::vector<Eigen::Isometry3d> X;
+        for (int seg : segs) X.push_back(shapePoseOf(model, surf, x, seg));
+        if (tk > k0) {
+            bag.changeGasMass(ran[0]);
+            for (size_t i = 0; i < segs.size(); ++i) bag.setShapePose(int(i), X[i]);
+            if (!bag.advance(0.1).converged)
+                std::fprintf(stderr, "%.2f s: no convergence\n", tk * 1e-3);
+            bag.commit();
+        }
+        red.setGasMass(ran[0]);
+        for (size_t i = 0; i < segs.size(); ++i) {
+            cosim::ShapeState st;
+            st.X_GS = X[i];
+            red.setShapeState(int(i), st);
+        }
+        red.advance(0.0);
+        red.commit();
+        double fFE = 0.0, fRed = 0.0, V = 0.0;
+        std::string per;
+        for (size_t i = 0; i < segs.size(); ++i) {
+            const double a = bag.calcShapeWrench(int(i)).force.z();
+            const double b = red.calcWrench(int(i)).force.z();
+            fFE += a, fRed += b;
+            char buf[64];
+            std::snprintf(buf, sizeof buf, " %d:%.1f/%.1f", segs[i], a, b);
+            per += buf;
+        }
+        for (int c = 0; c < bag.getNumChambers(); ++c) V += bag.getChamberState(c).volume;
+        std::printf("%.2f %.3f %6.3f %6.1f %6.3f %.4f %6.1f %6.3f %6.1f %s\n", tk * 1e-3,
+                    ran[0] * 1e3, ran[1] * 1e-3, ran[2], bag.getChamberState(0).gaugePressure * 1e-3,
+                    V * 1e3, fFE, red.getGaugePressure() * 1e-3, fRed, per.c_str());
+        std::fflush(stdout);
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -732,9 +1001,14 @@ int main(int argc, char** argv) {
         if (mode == "speed" && argc == 3) return speed(argv[2]);
         if (mode == "trace" && argc == 12) return trace(argv[2], argv[3], argv + 4);
         if (mode == "footprint" && argc == 13) return footprint(argv[2], argv[3], argv + 4);
+        if (mode == "replay" && argc == 5) return replay(argv[2], argv[3], argv[4]);
+        if (mode == "fe-bag" && argc == 9)
+            return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
+                         std::stod(argv[7]), std::stod(argv[8]));
         std::cerr << "usage: bench_reduced_bag calibrate SCENARIO OUT | validate SCENARIO CAL | "
                      "speed CAL | trace SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G | "
-                     "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM\n";
+                     "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM | "
+                     "replay SCENARIO CAL RUN_DIR | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1\n";
         return 2;
     } catch (const io::InputError& e) {
         std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";
