@@ -129,22 +129,32 @@ void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
     out << "where: gap " << fmt("%.4f", w.gap)
         << " (RMS over force and pressure of RMSE / measured range)"
         << (w.withinValidation ? ", within the validation uncertainty" : "") << "\n";
-    out << "  channel   RMSE        range       noise       numerical   input       share of gap\n";
+    out << "  channel   RMSE        range       noise       numerical   input       gas mass    "
+           "room temp.  validation  share of gap\n";
     for (const auto& c : w.channels) {
         const auto kind = diagnose::getChannelKind(c.channel);
         const double u = diagnose::getChannelUnitScale(kind);
         const std::string un = " " + diagnose::getChannelUnit(kind);
-        char line[200];
-        std::snprintf(line, sizeof line, "  %-8s  %-10s  %-10s  %-10s  %-10s  %-10s  %s\n",
+        char line[300];
+        std::snprintf(line, sizeof line,
+                      "  %-8s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %s\n",
                       c.channel.c_str(), (fmt("%.4g", c.rmse / u) + un).c_str(),
                       (fmt("%.4g", c.range / u) + un).c_str(),
                       (fmt("%.3g", c.noise / u) + un).c_str(),
                       (fmt("%.3g", c.numerical / u) + un).c_str(),
                       (fmt("%.3g", c.input / u) + un).c_str(),
+                      (fmt("%.3g", c.inputGasMass / u) + un).c_str(),
+                      (fmt("%.3g", c.inputTemperature / u) + un).c_str(),
+                      (fmt("%.3g", c.validation / u) + un).c_str(),
                       c.channel == "mass" ? "(consistency only)"
                                           : (fmt("%.0f", 100 * c.shareOfGap) + " %").c_str());
         out << line;
     }
+    out << "  (input: a stated imperfection's spread; gas mass, room temp.: the protocol's stated "
+           "standard uncertainties by their sensitivities; validation: the root sum square)\n";
+    for (const auto& s : w.statedInputs)
+        out << "  stated " << (s.input == diagnose::ProtocolInput::GasMass ? "gas mass" : "room temperature")
+            << " uncertainty: " << io::formatStatedInput(s) << "\n";
     out << "  largest shares of squared error (per channel and split):\n";
     for (const auto& r : w.regimes)
         if (r.regime != "all" && r.channel != "mass" && r.share >= 0.5)
@@ -254,23 +264,31 @@ int run(const Args& a) {
                   << simulations << " simulation, " << fmt("%.1f", info.seconds) << " s)\n";
         return 0;
     }
-    const bags::LoadTestResult base = simulate(sc.options);
-    // The numerical uncertainty: the same protocol at half the displacement step.
-    bags::LoadTestOptions half = sc.options;
-    half.displacementStep *= 0.5;
-    const bags::LoadTestResult fine = simulate(half);
-    simulations += 2;
-    // The input uncertainty of a stated imperfection: other bags of its population (the next
-    // kPopulation imperfection seeds), as the ensemble of a run would make them.
+    // The protocol as stated, then the runs its uncertainties need, all at once (--threads):
+    // the numerical uncertainty (the same protocol at half the displacement step); the input
+    // uncertainty of a stated imperfection (other bags of its population: the next kPopulation
+    // imperfection seeds, as the ensemble of a run would make them); the protocol's stated
+    // gas mass and room temperature, each at + and - its standard uncertainty (sensitivity
+    // coefficients by central difference).
     constexpr int kPopulation = 3;
-    std::vector<bags::LoadTestResult> population;
+    std::vector<bags::LoadTestOptions> runs = {sc.options, sc.options};
+    runs[1].displacementStep *= 0.5;
     if (sc.options.imperfection.amplitude > 0.0)
         for (int k = 1; k <= kPopulation; ++k) {
-            bags::LoadTestOptions other = sc.options;
-            other.imperfection.seed += static_cast<std::uint64_t>(k);
-            population.push_back(simulate(other));
-            ++simulations;
+            runs.push_back(sc.options);
+            runs.back().imperfection.seed += static_cast<std::uint64_t>(k);
         }
+    const size_t firstInputRun = runs.size();
+    const std::vector<diagnose::InputRun> inputRuns = diagnose::makeInputRuns(data, sc.options);
+    for (const diagnose::InputRun& r : inputRuns) runs.push_back(r.options);
+    std::vector<bags::LoadTestResult> results = diagnose::runLoadTests(runs, simulate, a.threads);
+    simulations += static_cast<int>(runs.size());
+    const bags::LoadTestResult base = std::move(results[0]);
+    const bags::LoadTestResult& fine = results[1];
+    const std::vector<bags::LoadTestResult> population(results.begin() + 2,
+                                                       results.begin() + firstInputRun);
+    const std::vector<bags::LoadTestResult> inputResults(results.begin() + firstInputRun,
+                                                         results.end());
 
     std::vector<diagnose::TestComparison> tests;
     for (size_t i = 0; i < data.tests.size(); ++i) {
@@ -290,10 +308,13 @@ int run(const Args& a) {
             t.inputUncertainty[c] = population.empty() ? 0.0 : std::sqrt(sum2[c] / double(population.size()));
         tests.push_back(std::move(t));
     }
+    diagnose::addInputUncertainties(data, inputRuns, inputResults, sc.rig, sc.options.loadingRate,
+                                    tests);
     diagnose::WhereOptions wo;
     wo.loadFrom = sc.options.stiffnessFrom;
     wo.loadTo = sc.options.stiffnessTo;
-    const diagnose::WhereReport where = diagnose::calcWhere(tests, wo);
+    diagnose::WhereReport where = diagnose::calcWhere(tests, wo);
+    where.statedInputs = diagnose::describeInputs(data);
     if (!a.quiet) printWhere(where, std::cout);
 
     std::unique_ptr<diagnose::WhichReport> which;

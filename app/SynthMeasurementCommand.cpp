@@ -43,6 +43,7 @@ namespace fs = std::filesystem;
 const char* kHelp =
     "usage: bagsim synth-measurement --scenario S.yaml --effect E [--param NAME=VALUE]...\n"
     "           [--noise CHANNEL=VALUE]... [--seed N] [--sample-interval T]\n"
+    "           [--gas-mass-uncertainty U] [--room-temperature-uncertainty U]\n"
     "           --out DIR --label-out FILE [--force] [--quiet]\n"
     "\n"
     "Makes measured data (docs/measured-data.md) of the seed's rig from a truth simulation of\n"
@@ -51,6 +52,14 @@ const char* kHelp =
     "displacement step and, if the scenario has an imperfection, another imperfection seed\n"
     "(the scenario's + 100).\n"
     "The folder names neither the effect nor its parameters; they go to the label file only.\n"
+    "\n"
+    "  --gas-mass-uncertainty U          the manifest states U as the standard uncertainty of\n"
+    "                                    the flowmeter's gas mass (e.g. 0.05g; at most 10 % of\n"
+    "                                    the smallest gas mass)\n"
+    "  --room-temperature-uncertainty U  the manifest states U as the standard uncertainty of\n"
+    "                                    the room temperature (e.g. 0.5K; at most 10 K)\n"
+    "  (statements only: the data are made as without them; bagsim diagnose adds their\n"
+    "  sensitivities to the validation uncertainty)\n"
     "\n"
     "effects (--effect E, or several: --effect E1,E2) and their parameters (--param NAME=VALUE\n"
     "with units, or EFFECT.NAME=VALUE where two effects share a name; default in brackets):\n"
@@ -120,6 +129,7 @@ struct Args {
     std::uint64_t seed = 1;
     std::string sampleInterval;  ///< "" the kind's default (0.5 s rig, 0.02 s patient)
     std::string matInterval = "0.1 s";
+    std::string gasMassUncertainty, roomTemperatureUncertainty;  ///< "" not stated
     bool force = false, quiet = false;
 };
 
@@ -142,6 +152,8 @@ Args parseArgs(int argc, char** argv) {
             a.seed = s;
         } else if (arg == "--sample-interval") a.sampleInterval = value();
         else if (arg == "--mat-interval") a.matInterval = value();
+        else if (arg == "--gas-mass-uncertainty") a.gasMassUncertainty = value();
+        else if (arg == "--room-temperature-uncertainty") a.roomTemperatureUncertainty = value();
         else if (arg == "--out") a.out = value();
         else if (arg == "--label-out") a.labelOut = value();
         else if (arg == "--force") a.force = true;
@@ -149,7 +161,9 @@ Args parseArgs(int argc, char** argv) {
         else
             throw UsageError("unknown option '" + arg +
                              "'; valid: --scenario, --effect, --param, --noise, --test, --seed, "
-                             "--sample-interval, --mat-interval, --out, --label-out, --force, --quiet, --help");
+                             "--sample-interval, --mat-interval, --gas-mass-uncertainty, "
+                             "--room-temperature-uncertainty, --out, --label-out, --force, --quiet, "
+                             "--help");
     }
     if (a.scenario.empty()) throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
     if (a.effect.empty())
@@ -545,9 +559,64 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
     return 0;
 }
 
+// The standard uncertainties the manifest is to state (--gas-mass-uncertainty,
+// --room-temperature-uncertainty), in the ranges the reader accepts.
+struct StatedUncertainties {
+    bool mass = false, temperature = false;
+    double massValue = 0.0, temperatureValue = 0.0;  ///< [kg], [K]
+    void applyTo(diagnose::MeasuredData& data) const {
+        for (diagnose::MeasuredTest& t : data.tests)
+            t.gasMassUncertainty = massValue, t.gasMassUncertaintyStated = mass;
+        data.protocol.roomTemperatureUncertainty = temperatureValue;
+        data.protocol.roomTemperatureUncertaintyStated = temperature;
+    }
+};
+
+StatedUncertainties parseStatedUncertainties(const Args& a, const std::vector<double>& masses) {
+    StatedUncertainties s;
+    if (!a.gasMassUncertainty.empty()) {
+        const double least = *std::min_element(masses.begin(), masses.end());
+        const double most = io::kMaxGasMassUncertaintyShare * least;
+        const std::string valid = "valid: 0 g to " + fmt("%g", 100 * io::kMaxGasMassUncertaintyShare) +
+                                  " % of the smallest gas mass (" + fmt("%.4g", most * 1e3) + " g)";
+        try {
+            s.massValue = io::parseQuantity(a.gasMassUncertainty, io::Dimension::Mass);
+        } catch (const io::UnitError& ex) {
+            throw UsageError("--gas-mass-uncertainty '" + a.gasMassUncertainty + "': " + ex.what() +
+                             "; " + valid);
+        }
+        if (!(s.massValue >= 0.0) || s.massValue > most)
+            throw UsageError("--gas-mass-uncertainty '" + a.gasMassUncertainty +
+                             "' is out of range; " + valid);
+        s.mass = true;
+    }
+    if (!a.roomTemperatureUncertainty.empty()) {
+        const std::string& t = a.roomTemperatureUncertainty;
+        const std::string valid = "valid: 0 K to " + fmt("%g", io::kMaxRoomTemperatureUncertainty) +
+                                  " K, a temperature difference in K (e.g. 0.5K)";
+        const size_t k = t.find('K');
+        if (k == std::string::npos || k + 1 != t.size())
+            throw UsageError("--room-temperature-uncertainty '" + t + "': " + valid);
+        try {
+            s.temperatureValue = io::parseQuantity(t.substr(0, k), io::Dimension::Dimensionless);
+        } catch (const io::UnitError& ex) {
+            throw UsageError("--room-temperature-uncertainty '" + t + "': " + ex.what() + "; " + valid);
+        }
+        if (!(s.temperatureValue >= 0.0) || s.temperatureValue > io::kMaxRoomTemperatureUncertainty)
+            throw UsageError("--room-temperature-uncertainty '" + t + "' is out of range; " + valid);
+        s.temperature = true;
+    }
+    return s;
+}
+
 int run(const Args& a) {
     const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
-    if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) return runPatient(a, file);
+    if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) {
+        if (!a.gasMassUncertainty.empty() || !a.roomTemperatureUncertainty.empty())
+            throw UsageError("--gas-mass-uncertainty and --room-temperature-uncertainty are for the "
+                             "rig's data (a patient-on-array scenario's manifest does not state them)");
+        return runPatient(a, file);
+    }
     if (!a.tests.empty())
         throw UsageError("--test is for a patient-on-array scenario; the rig's scenario lists its gas "
                          "masses (test.gas_masses)");
@@ -573,6 +642,7 @@ int run(const Args& a) {
                              "the scenario switches rig effects on; give synth-measurement a "
                              "scenario without a rig section (the effect is chosen by --effect)");
     const std::vector<double> readings = sc.options.gasMasses;  // what the flowmeter reads
+    const StatedUncertainties statedUncertainties = parseStatedUncertainties(a, readings);
     const double roomTemperature = sc.options.gas.temperature;   // what the lab's thermometer reads
     bags::LoadTestOptions truth = sc.options;
     diagnose::RigEffects rig;
@@ -624,6 +694,7 @@ int run(const Args& a) {
     protocol.roomTemperature = roomTemperature;
     diagnose::MeasuredData data =
         diagnose::synthesizeMeasurement(result.curves, readings, rig, protocol, so);
+    statedUncertainties.applyTo(data);
     data.description = "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
     io::writeMeasuredData(out.string(), data, file.getText(),
                           "# Measured data of the seed's rig (docs/measured-data.md), synthesised by\n"

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <map>
 #include <numeric>
 
@@ -117,7 +118,112 @@ TestComparison compareTest(const MeasuredTest& test, int index, const bags::Load
     tc.channels = {std::move(f), std::move(p), std::move(m)};
     tc.numericalUncertainty.assign(3, 0.0);
     tc.inputUncertainty.assign(3, 0.0);
+    tc.inputUncertaintyGasMass.assign(3, 0.0);
+    tc.inputUncertaintyTemperature.assign(3, 0.0);
     return tc;
+}
+
+std::string getProtocolInputName(ProtocolInput input) {
+    return input == ProtocolInput::GasMass ? "gas_mass" : "room_temperature";
+}
+
+std::vector<InputRun> makeInputRuns(const MeasuredData& data, const bags::LoadTestOptions& base) {
+    std::vector<InputRun> runs;
+    bool mass = false;
+    for (const MeasuredTest& t : data.tests) mass = mass || t.gasMassUncertainty > 0.0;
+    if (mass && base.gasMasses.size() != data.tests.size())
+        throw std::invalid_argument("the simulation's gas masses are not one per test");
+    for (int sign : {1, -1}) {
+        if (mass) {
+            InputRun r;
+            r.input = ProtocolInput::GasMass;
+            r.sign = sign;
+            r.options = base;
+            for (size_t i = 0; i < data.tests.size(); ++i)
+                r.options.gasMasses[i] += sign * data.tests[i].gasMassUncertainty;
+            runs.push_back(std::move(r));
+        }
+    }
+    if (data.protocol.roomTemperatureUncertainty > 0.0)
+        for (int sign : {1, -1}) {
+            InputRun r;
+            r.input = ProtocolInput::RoomTemperature;
+            r.sign = sign;
+            r.options = base;
+            // The gas is at the room's temperature, and relaxes to it with heat exchange.
+            r.options.gas.temperature += sign * data.protocol.roomTemperatureUncertainty;
+            runs.push_back(std::move(r));
+        }
+    return runs;
+}
+
+std::vector<double> calcSensitivityUncertainty(const TestComparison& plus,
+                                               const TestComparison& minus) {
+    // Half the central difference is |dS/dx| u at each sample: the RMS difference halved.
+    std::vector<double> d = calcSimulatedRmsDifference(plus, minus);
+    for (double& v : d) v *= 0.5;
+    return d;
+}
+
+std::vector<double> combineInputUncertainties(const std::vector<std::vector<double>>& terms) {
+    std::vector<double> out;
+    for (const std::vector<double>& t : terms) {
+        if (out.size() < t.size()) out.resize(t.size(), 0.0);
+        for (size_t c = 0; c < t.size(); ++c) out[c] += t[c] * t[c];
+    }
+    for (double& v : out) v = std::sqrt(v);
+    return out;
+}
+
+std::vector<bags::LoadTestResult> runLoadTests(
+    const std::vector<bags::LoadTestOptions>& runs,
+    const std::function<bags::LoadTestResult(const bags::LoadTestOptions&)>& simulate,
+    int threads) {
+    std::vector<bags::LoadTestResult> out(runs.size());
+    std::vector<std::exception_ptr> errors(runs.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(std::max(1, threads))
+    for (int i = 0; i < static_cast<int>(runs.size()); ++i) {
+        try {
+            out[i] = simulate(runs[i]);
+        } catch (...) {
+            errors[i] = std::current_exception();
+        }
+    }
+    for (const std::exception_ptr& e : errors)
+        if (e) std::rethrow_exception(e);  // the first failure by index (e.g. an interrupt)
+    return out;
+}
+
+void addInputUncertainties(const MeasuredData& data, const std::vector<InputRun>& runs,
+                           const std::vector<bags::LoadTestResult>& results, const RigEffects& rig,
+                           double rate, std::vector<TestComparison>& tests) {
+    for (ProtocolInput input : {ProtocolInput::GasMass, ProtocolInput::RoomTemperature}) {
+        int plus = -1, minus = -1;
+        for (size_t r = 0; r < runs.size(); ++r)
+            if (runs[r].input == input) (runs[r].sign > 0 ? plus : minus) = static_cast<int>(r);
+        if (plus < 0 || minus < 0) continue;
+        for (TestComparison& t : tests) {
+            const MeasuredTest& m = data.tests[t.test];
+            const std::vector<double> u = calcSensitivityUncertainty(
+                compareTest(m, t.test, results[plus].curves[t.test], rig, rate),
+                compareTest(m, t.test, results[minus].curves[t.test], rig, rate));
+            (input == ProtocolInput::GasMass ? t.inputUncertaintyGasMass
+                                             : t.inputUncertaintyTemperature) = u;
+        }
+    }
+}
+
+std::vector<WhereReport::StatedInput> describeInputs(const MeasuredData& data) {
+    WhereReport::StatedInput mass, temperature;
+    mass.input = ProtocolInput::GasMass;
+    for (const MeasuredTest& t : data.tests) {
+        mass.stated = mass.stated || t.gasMassUncertaintyStated;
+        mass.values.push_back(t.gasMassUncertainty);
+    }
+    temperature.input = ProtocolInput::RoomTemperature;
+    temperature.stated = data.protocol.roomTemperatureUncertaintyStated;
+    temperature.values = {data.protocol.roomTemperatureUncertainty};
+    return {mass, temperature};
 }
 
 WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptions& o) {
@@ -140,6 +246,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             it->second.push_back(res);
         };
         double lo = INFINITY, hi = -INFINITY, numSum = 0.0, inSum = 0.0, sumSq = 0.0;
+        double massSum = 0.0, tempSum = 0.0;  // the stated inputs' terms, weighted by samples
         long numN = 0, inN = 0, total = 0;
         std::vector<double> secondDifferences;
         for (const TestComparison& t : tests) {
@@ -176,6 +283,12 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
                 inSum += t.inputUncertainty[c] * t.inputUncertainty[c];
                 ++inN;
             }
+            // Each test's term is an RMS over its samples: the channel's is the RMS over all.
+            const double n = static_cast<double>(ch.measured.size());
+            if (c < t.inputUncertaintyGasMass.size())
+                massSum += n * t.inputUncertaintyGasMass[c] * t.inputUncertaintyGasMass[c];
+            if (c < t.inputUncertaintyTemperature.size())
+                tempSum += n * t.inputUncertaintyTemperature[c] * t.inputUncertaintyTemperature[c];
 
             // Signatures of this test.
             Signature s = calcSeriesSignature(name, ch.time, ch.measured, ch.simulated, o.maxLag);
@@ -195,8 +308,11 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         cs.noise = calcNoise(secondDifferences);
         cs.numerical = numN ? std::sqrt(numSum / double(numN)) : 0.0;
         cs.input = inN ? std::sqrt(inSum / double(inN)) : 0.0;
+        cs.inputGasMass = total ? std::sqrt(massSum / double(total)) : 0.0;
+        cs.inputTemperature = total ? std::sqrt(tempSum / double(total)) : 0.0;
         cs.validation = std::sqrt(cs.noise * cs.noise + cs.numerical * cs.numerical +
-                                  cs.input * cs.input);
+                                  cs.input * cs.input + cs.inputGasMass * cs.inputGasMass +
+                                  cs.inputTemperature * cs.inputTemperature);
         r.channels.push_back(cs);
         if (kind != ChannelKind::Mass && cs.range > 0.0)
             nrmse2.push_back(std::pow(cs.rmse / cs.range, 2));

@@ -97,7 +97,43 @@ std::string formatStiffness(const diagnose::StiffnessComparison& k) {
     return os.str() + "]}";
 }
 
+// The protocol's stated input uncertainties (the where report's statedInputs).
+std::string formatStatedInputs(const diagnose::WhereReport& w) {
+    std::ostringstream os;
+    os << "[";
+    for (size_t i = 0; i < w.statedInputs.size(); ++i) {
+        const auto& s = w.statedInputs[i];
+        const bool mass = s.input == diagnose::ProtocolInput::GasMass;
+        os << (i ? ",\n      " : "\n      ") << "{\"input\": "
+           << str(diagnose::getProtocolInputName(s.input)) << ", \"stated\": "
+           << (s.stated ? "true" : "false") << ", \"unit\": " << str(mass ? "g" : "K")
+           << ", \"standard_uncertainty\": [";
+        for (size_t k = 0; k < s.values.size(); ++k)
+            os << (k ? ", " : "") << num(s.values[k] * (mass ? 1e3 : 1.0));
+        os << "], \"per\": " << str(mass ? "test" : "protocol")
+           << ", \"text\": " << str(formatStatedInput(s)) << "}";
+    }
+    return os.str() + "\n    ]";
+}
+
 }  // namespace
+
+std::string formatStatedInput(const diagnose::WhereReport::StatedInput& s) {
+    if (!s.stated || s.values.empty()) return "not stated";
+    const bool mass = s.input == diagnose::ProtocolInput::GasMass;
+    auto one = [&](double v) {
+        char b[64];
+        std::snprintf(b, sizeof b, "%.4g %s", mass ? v * 1e3 : v, mass ? "g" : "K");
+        return std::string(b);
+    };
+    if (!mass) return one(s.values[0]);
+    bool same = true;
+    for (double v : s.values) same = same && v == s.values[0];
+    if (same) return one(s.values[0]) + (s.values.size() > 1 ? " (every test)" : "");
+    std::string t;
+    for (double v : s.values) t += (t.empty() ? "" : ", ") + one(v);
+    return t + " (per test)";
+}
 
 std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::WhereReport& w,
                                 const diagnose::WhichReport* which,
@@ -128,11 +164,15 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
            << ", \"noise\": " << num(inUnit(c.channel, c.noise))
            << ", \"numerical_uncertainty\": " << num(inUnit(c.channel, c.numerical))
            << ", \"input_uncertainty\": " << num(inUnit(c.channel, c.input))
+           << ", \"input_uncertainty_gas_mass\": " << num(inUnit(c.channel, c.inputGasMass))
+           << ", \"input_uncertainty_temperature\": "
+           << num(inUnit(c.channel, c.inputTemperature))
            << ", \"validation_uncertainty\": " << num(inUnit(c.channel, c.validation))
            << ", \"share_of_gap\": " << num(c.shareOfGap, "%.4f") << "}"
            << (i + 1 < w.channels.size() ? "," : "") << "\n";
     }
-    os << "    ],\n    \"regimes\": [\n";
+    os << "    ],\n    \"stated_input_uncertainties\": " << formatStatedInputs(w)
+       << ",\n    \"regimes\": [\n";
     for (size_t i = 0; i < w.regimes.size(); ++i) {
         const auto& r = w.regimes[i];
         os << "      {\"channel\": " << str(r.channel) << ", \"regime\": " << str(r.regime)

@@ -67,7 +67,8 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
     os << "<h2>Where</h2><p>Gap " << num(w.gap) << " (RMS over force and pressure of RMSE / "
        << "measured range)" << (w.withinValidation ? ", within the validation uncertainty" : "")
        << ".</p><table><tr><th>channel</th><th>RMSE</th><th>range</th><th>noise</th>"
-       << "<th>numerical</th><th>input</th><th>validation</th><th>share of gap</th></tr>";
+       << "<th>numerical</th><th>input</th><th>gas mass</th><th>room temperature</th>"
+       << "<th>validation</th><th>share of gap</th></tr>";
     for (const auto& c : w.channels) {
         const auto kind = diagnose::getChannelKind(c.channel);
         const double u = diagnose::getChannelUnitScale(kind);
@@ -75,12 +76,22 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
         os << "<tr><td>" << c.channel << "</td><td>" << num(c.rmse / u) << un << "</td><td>"
            << num(c.range / u) << un << "</td><td>" << num(c.noise / u) << un << "</td><td>"
            << num(c.numerical / u) << un << "</td><td>" << num(c.input / u) << un << "</td><td>"
-           << num(c.validation / u) << un << "</td><td>"
+           << num(c.inputGasMass / u) << un << "</td><td>" << num(c.inputTemperature / u) << un
+           << "</td><td>" << num(c.validation / u) << un << "</td><td>"
            << (c.channel == "mass" ? std::string("(consistency)")
                                    : num(100 * c.shareOfGap, "%.0f") + " %")
            << "</td></tr>";
     }
-    os << "</table><table><tr><th>channel, regime</th><th>samples</th><th>RMSE</th><th>bias</th>"
+    os << "</table><p>Validation uncertainty (ASME V&amp;V 20): the root sum square of the noise, "
+       << "the numerical uncertainty, the input uncertainty of a stated imperfection (input) and "
+       << "of the protocol's stated gas mass and room temperature (by their sensitivities). "
+       << "Stated standard uncertainties: ";
+    for (size_t i = 0; i < w.statedInputs.size(); ++i)
+        os << (i ? "; " : "")
+           << (w.statedInputs[i].input == diagnose::ProtocolInput::GasMass ? "gas mass "
+                                                                          : "room temperature ")
+           << esc(formatStatedInput(w.statedInputs[i]));
+    os << ".</p><table><tr><th>channel, regime</th><th>samples</th><th>RMSE</th><th>bias</th>"
        << "<th>share of the channel's squared error</th></tr>";
     for (const auto& r : w.regimes) {
         if (r.regime == "all") continue;

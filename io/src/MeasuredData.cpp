@@ -188,7 +188,8 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
     data.scenarioFile = manifest::readManifestScenario(root, folder, "the scenario file");
 
     const ScenarioNode p = root.getSection("protocol");
-    p.checkKeys({"block", "rate", "peak_force", "room_temperature"}, {});
+    p.checkKeys({"block", "rate", "peak_force", "room_temperature"},
+                {"gas_mass_uncertainty", "room_temperature_uncertainty"});
     diagnose::Protocol& pr = data.protocol;
     pr.blockSize = p.getQuantity("block", Dimension::Length);
     pr.rate = p.getQuantity("rate", Dimension::Velocity);
@@ -199,6 +200,24 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
                                  {"peak_force", pr.peakForce},
                                  {"room_temperature", pr.roomTemperature}})
         if (!(v > 0.0)) p.fail(key, "must be greater than zero");
+    if (p.has("room_temperature_uncertainty")) {
+        // A temperature difference: K only (degC would be read as a temperature, 273.15 K on).
+        const std::string key = "room_temperature_uncertainty";
+        const std::string text = trim(p.getString(key));
+        const std::string valid = "valid: 0 K to " + fmt("%g", kMaxRoomTemperatureUncertainty) +
+                                  " K, a standard uncertainty in K (e.g. 0.5 K)";
+        if (text.empty() || text.back() != 'K' || text.find("degC") != std::string::npos)
+            p.fail(key, "\"" + text + "\" is not a temperature difference in K; " + valid);
+        pr.roomTemperatureUncertainty = p.getQuantity(key, Dimension::Temperature);
+        if (!(pr.roomTemperatureUncertainty >= 0.0) ||
+            pr.roomTemperatureUncertainty > kMaxRoomTemperatureUncertainty)
+            p.fail(key, "\"" + text + "\" is out of range; " + valid);
+        pr.roomTemperatureUncertaintyStated = true;
+    }
+    // The flowmeter's stated standard uncertainty for every test (a test may state its own).
+    const bool massUncertaintyForAll = p.has("gas_mass_uncertainty");
+    const double massUncertaintyAll =
+        massUncertaintyForAll ? p.getQuantity("gas_mass_uncertainty", Dimension::Mass) : 0.0;
 
     if (root.has("stiffness")) readStiffnessChannel(root, dir, data);
     if (!root.has("tests")) return data;
@@ -206,10 +225,28 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
     const std::vector<ScenarioNode> entries = tests.getElements();
     if (entries.empty()) tests.fail("lists no test; valid: one entry per gas mass");
     for (const ScenarioNode& e : entries) {
-        e.checkKeys({"gas_mass", "machine", "pressure", "flowmeter"}, {});
+        e.checkKeys({"gas_mass", "machine", "pressure", "flowmeter"}, {"gas_mass_uncertainty"});
         diagnose::MeasuredTest t;
         t.gasMass = e.getQuantity("gas_mass", Dimension::Mass);
         if (!(t.gasMass > 0.0)) e.fail("gas_mass", "must be greater than zero");
+        {
+            // The test's own statement, else the protocol's; at most a share of its gas mass.
+            const bool own = e.has("gas_mass_uncertainty");
+            if (own || massUncertaintyForAll) {
+                const ScenarioNode& at = own ? e : p;
+                t.gasMassUncertainty =
+                    own ? e.getQuantity("gas_mass_uncertainty", Dimension::Mass) : massUncertaintyAll;
+                t.gasMassUncertaintyStated = true;
+                const double most = kMaxGasMassUncertaintyShare * t.gasMass;
+                if (!(t.gasMassUncertainty >= 0.0) || t.gasMassUncertainty > most)
+                    at.fail("gas_mass_uncertainty",
+                            formatMass(t.gasMassUncertainty) + " is out of range" +
+                                (own ? std::string() : " for the test of " + formatMass(t.gasMass)) +
+                                "; valid: 0 g to " + fmt("%g", 100 * kMaxGasMassUncertaintyShare) +
+                                " % of the test's gas mass (" + formatMass(most) +
+                                "), a standard uncertainty of the flowmeter's reading");
+            }
+        }
         auto channelPath = [&](const char* key) {
             const std::string name = e.getString(key);
             const fs::path f = fs::path(name).is_absolute() ? fs::path(name) : dir / name;
@@ -379,12 +416,26 @@ std::vector<std::string> writeMeasuredData(const std::string& folder,
       << "  block: " << fmt("%.6g", p.blockSize * 1e3) << " mm\n"
       << "  rate: " << fmt("%.6g", p.rate * 6e4) << " mm/min\n"
       << "  peak_force: " << fmt("%.6g", p.peakForce) << " N\n"
-      << "  room_temperature: " << fmt("%.6g", p.roomTemperature - 273.15) << " degC\n"
-      << "tests:\n";
+      << "  room_temperature: " << fmt("%.6g", p.roomTemperature - 273.15) << " degC\n";
+    if (p.roomTemperatureUncertaintyStated)
+        m << "  room_temperature_uncertainty: " << fmt("%.6g", p.roomTemperatureUncertainty)
+          << " K  # standard uncertainty\n";
+    // One gas-mass uncertainty for all tests when they state the same, else each its own.
+    bool sameMassUncertainty = !data.tests.empty();
+    for (const diagnose::MeasuredTest& t : data.tests)
+        sameMassUncertainty = sameMassUncertainty && t.gasMassUncertaintyStated &&
+                              t.gasMassUncertainty == data.tests[0].gasMassUncertainty;
+    if (sameMassUncertainty)
+        m << "  gas_mass_uncertainty: " << fmt("%.6g", data.tests[0].gasMassUncertainty * 1e3)
+          << " g  # standard uncertainty of the flowmeter's reading\n";
+    m << "tests:\n";
     for (size_t i = 0; i < data.tests.size(); ++i) {
         const diagnose::MeasuredTest& t = data.tests[i];
         const std::string stem = "test" + std::to_string(i + 1);
         m << "  - gas_mass: " << fmt("%.4f", t.gasMass * 1e3) << " g  # flowmeter reading\n"
+          << (t.gasMassUncertaintyStated && !sameMassUncertainty
+                  ? "    gas_mass_uncertainty: " + fmt("%.6g", t.gasMassUncertainty * 1e3) + " g\n"
+                  : std::string())
           << "    machine: " << stem << "-machine.csv\n"
           << "    pressure: " << stem << "-pressure.csv\n"
           << "    flowmeter: " << stem << "-flowmeter.csv\n";

@@ -56,7 +56,53 @@ struct TestComparison {
     /// RMS over other bags of the population (imperfection seeds) of (simulated - theirs) per
     /// channel [SI]: the input uncertainty of a stated imperfection (0 if not estimated).
     std::vector<double> inputUncertainty;
+    /// The input uncertainty of the protocol's stated gas mass and room temperature per channel
+    /// [SI]: RMS over the channel's samples of |dS/dx| u_x, the sensitivity by central
+    /// difference (calcSensitivityUncertainty); 0 where not stated.
+    std::vector<double> inputUncertaintyGasMass, inputUncertaintyTemperature;
 };
+
+/// The protocol's own inputs whose stated standard uncertainty enters the validation
+/// uncertainty by its sensitivity coefficient (ASME V&V 20): the flowmeter's gas mass of each
+/// test and the room (gas) temperature.
+enum class ProtocolInput { GasMass, RoomTemperature };
+std::string getProtocolInputName(ProtocolInput input);  ///< "gas_mass", "room_temperature"
+
+/// One extra simulation of the protocol for the sensitivity to a stated input: every test's
+/// gas mass shifted by its own stated uncertainty (sign +1 or -1) at once, or the room
+/// temperature by its.
+struct InputRun {
+    ProtocolInput input = ProtocolInput::GasMass;
+    int sign = 1;
+    bags::LoadTestOptions options;
+};
+
+/// The runs the stated inputs of `data` need (none for an input not stated, or stated as 0):
+/// for each stated input, `base` at + and - its standard uncertainty.
+std::vector<InputRun> makeInputRuns(const MeasuredData& data, const bags::LoadTestOptions& base);
+
+/// |dS/dx| u_x per sample by central difference, (S(x + u) - S(x - u)) / 2, from the
+/// comparisons of the runs at + and - (the same test, the same rig), RMS over each channel's
+/// samples [SI].
+std::vector<double> calcSensitivityUncertainty(const TestComparison& plus,
+                                               const TestComparison& minus);
+
+/// Root sum square of independent inputs' terms, channel by channel [SI]:
+/// sqrt(sum_i term_i^2). (The RMS over samples of sqrt(sum_i (dS/dx_i u_i)^2) is this of the
+/// inputs' RMS terms.)
+std::vector<double> combineInputUncertainties(const std::vector<std::vector<double>>& terms);
+
+/// Runs the load tests at once, `threads` at a time; rethrows the first failure (by index).
+std::vector<bags::LoadTestResult> runLoadTests(const std::vector<bags::LoadTestOptions>& runs,
+                                               const std::function<bags::LoadTestResult(
+                                                   const bags::LoadTestOptions&)>& simulate,
+                                               int threads);
+
+/// Sets each test's inputUncertaintyGasMass and inputUncertaintyTemperature from the runs of
+/// makeInputRuns (`results` in the same order), the instruments reading them with `rig`.
+void addInputUncertainties(const MeasuredData& data, const std::vector<InputRun>& runs,
+                           const std::vector<bags::LoadTestResult>& results, const RigEffects& rig,
+                           double rate, std::vector<TestComparison>& tests);
 
 /// RMS per channel of the difference between two comparisons' simulated values at the same
 /// measured samples [SI].
@@ -103,7 +149,11 @@ struct ChannelSummary {
     double noise = 0.0;        ///< sensor noise from the data (median second difference) [SI]
     double numerical = 0.0;    ///< numerical uncertainty [SI] (0 if not estimated)
     double input = 0.0;        ///< input uncertainty (the imperfection's spread) [SI]
-    /// ASME V&V 20 validation uncertainty sqrt(noise^2 + numerical^2 + input^2) [SI]
+    /// Input uncertainty of the protocol's stated gas mass and room temperature [SI]: over the
+    /// channel's samples of all tests, the RMS of |dS/dx| u_x (0 where not stated).
+    double inputGasMass = 0.0, inputTemperature = 0.0;
+    /// ASME V&V 20 validation uncertainty [SI]: the root sum square of noise, numerical,
+    /// input, inputGasMass and inputTemperature.
     double validation = 0.0;
     double shareOfGap = 0.0;   ///< of the normalised squared error over force and pressure
 };
@@ -116,7 +166,19 @@ struct WhereReport {
     double gap = 0.0;
     /// True when every channel's RMSE is within twice its validation uncertainty.
     bool withinValidation = false;
+    /// What the protocol states of its inputs' standard uncertainties (for the report: an
+    /// input not stated adds nothing and is said so); set by the caller (describeInputs).
+    struct StatedInput {
+        ProtocolInput input = ProtocolInput::GasMass;
+        bool stated = false;           ///< by every test (the gas mass) or the protocol
+        std::vector<double> values;    ///< [SI] per test (the gas mass) or one (temperature)
+    };
+    std::vector<StatedInput> statedInputs;
 };
+
+/// The protocol's stated input uncertainties of `data` (gas mass: stated when any test states
+/// it, the values per test, 0 where a test states none; room temperature: one value).
+std::vector<WhereReport::StatedInput> describeInputs(const MeasuredData& data);
 
 struct WhereOptions {
     double loadFrom = 10.0;  ///< [N] load range split (the scenario's stiffness range)

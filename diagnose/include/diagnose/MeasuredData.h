@@ -20,6 +20,10 @@ struct Channel {
 /// One loading-unloading test at one gas mass.
 struct MeasuredTest {
     double gasMass = 0.0;   ///< [kg] as the flowmeter read it (the protocol's value)
+    /// The stated standard uncertainty of that reading [kg] (the manifest's
+    /// `gas_mass_uncertainty`, the test's or the protocol's); 0 when not stated.
+    double gasMassUncertainty = 0.0;
+    bool gasMassUncertaintyStated = false;
     /// Testing machine: displacement [m] (crosshead travel from first contact) and force [N]
     /// on one time base.
     std::vector<double> time, displacement, force;
@@ -33,6 +37,10 @@ struct Protocol {
     double rate = 0.0;             ///< crosshead speed [m/s]
     double peakForce = 0.0;        ///< loading stops at this force [N]
     double roomTemperature = 0.0;  ///< [K] (the gas temperature of the test)
+    /// The stated standard uncertainty of the room temperature [K] (the manifest's
+    /// `room_temperature_uncertainty`); 0 when not stated.
+    double roomTemperatureUncertainty = 0.0;
+    bool roomTemperatureUncertaintyStated = false;
 };
 
 /// A measured stiffness curve k(m): the stiffness over the scenario's load range

@@ -28,6 +28,10 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
                                 const diagnose::WhichReport* which,
                                 const diagnose::StiffnessComparison* stiffness = nullptr);
 
+/// A stated input uncertainty as the outputs say it: "0.05 g (every test)", "0.05 g, 0.04 g,
+/// not stated (per test)", "0.5 K", or "not stated".
+std::string formatStatedInput(const diagnose::WhereReport::StatedInput& stated);
+
 /// One row per compared sample: test,gas_mass_g,channel,unit,time_s,displacement_mm,branch,
 /// measured,simulated,residual (channel values in the channel's unit).
 std::string formatResidualsCsv(const std::vector<diagnose::TestComparison>& tests);

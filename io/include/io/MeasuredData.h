@@ -31,6 +31,14 @@ inline constexpr double kFlowmeterAbsTolerance = 0.05e-3;  ///< [kg]
 inline constexpr double kFlowmeterRelTolerance = 0.02;
 /// How far a test's largest force may be from the protocol's peak force (fraction).
 inline constexpr double kPeakForceTolerance = 0.10;
+/// Largest stated standard uncertainty of a test's gas mass, as a share of the mass: the
+/// diagnosis simulates the test at the mass plus and minus it and takes the response as linear
+/// in between (a flowmeter's stated accuracy is about 1 %; ten times that is no longer a
+/// reading the test was run at).
+inline constexpr double kMaxGasMassUncertaintyShare = 0.10;
+/// Largest stated standard uncertainty of the room temperature [K]: 10 K is 3.4 % of the gas's
+/// m T at 23 degC, the share above for the gas mass (the gas-temperature candidate reaches 15 K).
+inline constexpr double kMaxRoomTemperatureUncertainty = 10.0;
 
 /// One column a channel file must have: its name and its kind of unit.
 struct ChannelColumn {
