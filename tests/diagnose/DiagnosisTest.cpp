@@ -76,7 +76,14 @@ struct Diagnosed {
 // Several effects at once: each name with its values.
 using EffectValues = std::vector<std::pair<std::string, std::vector<double>>>;
 
-Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true) {
+// What the manifest states of the protocol's inputs (0: not stated).
+struct Stated {
+    double gasMass = 0.0;      ///< [kg] standard uncertainty of every test's gas mass
+    double temperature = 0.0;  ///< [K] of the room temperature
+};
+
+Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true,
+                          const Stated& stated = {}) {
     const Rig rig;
     bags::LoadTestOptions truth = rig.options;
     truth.displacementStep *= 0.5;
@@ -89,16 +96,27 @@ Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true) {
     diagnose::MeasuredData data = diagnose::synthesizeMeasurement(
         simulateStandIn(truth).curves, rig.options.gasMasses, rigTruth, rig.protocol, so);
 
+    for (diagnose::MeasuredTest& t : data.tests)
+        t.gasMassUncertainty = stated.gasMass, t.gasMassUncertaintyStated = stated.gasMass > 0.0;
+    data.protocol.roomTemperatureUncertainty = stated.temperature;
+    data.protocol.roomTemperatureUncertaintyStated = stated.temperature > 0.0;
+
     Diagnosed d;
     const bags::LoadTestResult base = simulateStandIn(rig.options);
     const diagnose::RigEffects none;
     for (size_t i = 0; i < data.tests.size(); ++i)
         d.tests.push_back(diagnose::compareTest(data.tests[i], int(i), base.curves[i], none,
                                                 rig.options.loadingRate));
+    const std::vector<diagnose::InputRun> runs = diagnose::makeInputRuns(data, rig.options);
+    std::vector<bags::LoadTestOptions> options;
+    for (const diagnose::InputRun& r : runs) options.push_back(r.options);
+    diagnose::addInputUncertainties(data, runs, diagnose::runLoadTests(options, simulateStandIn, 2),
+                                    none, rig.options.loadingRate, d.tests);
     diagnose::WhereOptions wo;
     wo.loadFrom = 5.0;
     wo.loadTo = 15.0;
     d.where = diagnose::calcWhere(d.tests, wo);
+    d.where.statedInputs = diagnose::describeInputs(data);
     diagnose::CalibrationOptions co;
     co.pairGate = pairGate;
     d.which = diagnose::calibrateCandidates(data, rig.options, none, base, d.tests, d.where,
@@ -315,4 +333,154 @@ TEST(Diagnosis, AnEffectOutsideTheLibraryIsNotExplainedByAPair) {
     EXPECT_FALSE(d.which.pairs.empty());
     EXPECT_EQ(d.which.pairChosen, -1) << d.which.reason;
     EXPECT_TRUE(d.which.verdictEffects.empty());
+}
+
+// ------------------------------------------------------------- the protocol's input uncertainty
+
+TEST(InputUncertainty, SensitivityTermsAreHalfTheCentralDifferenceCombinedByRootSumSquare) {
+    // By hand: S(x + u) = 1, 2, 3 and S(x - u) = 0, 1, 1 at three samples: |dS/dx| u = 0.5, 0.5,
+    // 1, RMS sqrt(1.5 / 3) = sqrt(0.5). With a second input of 0.3: sqrt(0.5 + 0.09).
+    diagnose::TestComparison plus, minus;
+    for (diagnose::TestComparison* t : {&plus, &minus}) t->channels.resize(1);
+    plus.channels[0].simulated = {1.0, 2.0, 3.0};
+    minus.channels[0].simulated = {0.0, 1.0, 1.0};
+    const std::vector<double> u = diagnose::calcSensitivityUncertainty(plus, minus);
+    ASSERT_EQ(u.size(), 1u);
+    EXPECT_NEAR(u[0], std::sqrt(0.5), 1e-15);
+    EXPECT_NEAR(u[0], diagnose::calcSensitivityUncertainty(minus, plus)[0], 1e-15);
+    const std::vector<double> c = diagnose::combineInputUncertainties({u, {0.3}});
+    EXPECT_NEAR(c[0], std::sqrt(0.59), 1e-15);
+}
+
+TEST(InputUncertainty, TheChannelsTermIsTheRmsOverAllItsSamplesAndEntersTheValidationByRss) {
+    // Two tests of a channel with 3 and 1 samples, terms 0.2 and 0.6: over the channel's
+    // samples sqrt((3 x 0.04 + 1 x 0.36) / 4) = sqrt(0.12); beside a numerical uncertainty of
+    // 0.1 and a room temperature term of 0.05 the validation uncertainty is their root sum
+    // square with the noise (0: the measured values lie on a line).
+    std::vector<diagnose::TestComparison> tests(2);
+    for (int i = 0; i < 2; ++i) {
+        diagnose::TestComparison& t = tests[i];
+        t.test = i;
+        t.gasMass = 4e-3;
+        diagnose::ChannelComparison ch;
+        ch.kind = diagnose::ChannelKind::Pressure;
+        const int n = i == 0 ? 3 : 1;
+        for (int k = 0; k < n; ++k) {
+            ch.time.push_back(k);
+            ch.displacement.push_back(1e-3 * k);
+            ch.force.push_back(k);
+            ch.loading.push_back(1);
+            ch.measured.push_back(100.0 * k);
+            ch.simulated.push_back(100.0 * k);
+        }
+        t.channels = {ch};
+        t.numericalUncertainty = {0.1};
+        t.inputUncertainty = {0.0};
+        t.inputUncertaintyGasMass = {i == 0 ? 0.2 : 0.6};
+        t.inputUncertaintyTemperature = {0.05};
+    }
+    const diagnose::WhereReport w = diagnose::calcWhere(tests, diagnose::WhereOptions());
+    ASSERT_EQ(w.channels.size(), 1u);
+    const diagnose::ChannelSummary& c = w.channels[0];
+    EXPECT_NEAR(c.inputGasMass, std::sqrt(0.12), 1e-12);
+    EXPECT_NEAR(c.inputTemperature, 0.05, 1e-12);
+    EXPECT_NEAR(c.validation,
+                std::sqrt(c.noise * c.noise + 0.01 + 0.12 + 0.0025), 1e-12);
+}
+
+namespace {
+
+// The stand-in's closed form of |dS/dm| u at each sample of a test's channel: at a fixed
+// displacement d, F = k(m) d and p = p0(m) + F / 0.01 m^2, so dF/dm = 2e6 d and
+// dp/dm = 1e7 + 2e8 d (both linear in m: the central difference is exact); the force is 0
+// where the measured displacement is not positive. RMS over the channel's samples of all tests.
+double calcStandInMassTerm(const std::vector<diagnose::TestComparison>& tests,
+                           diagnose::ChannelKind kind, const std::vector<double>& u) {
+    double s = 0.0;
+    long n = 0;
+    for (const diagnose::TestComparison& t : tests)
+        for (const diagnose::ChannelComparison& ch : t.channels) {
+            if (ch.kind != kind) continue;
+            for (double d : ch.displacement) {
+                const double dSdm = kind == diagnose::ChannelKind::Force
+                                        ? (d > 0.0 ? 2e6 * d : 0.0)
+                                        : 1e7 + 2e8 * d;
+                s += std::pow(dSdm * u[t.test], 2);
+                ++n;
+            }
+        }
+    return std::sqrt(s / double(n));
+}
+
+}  // namespace
+
+TEST(InputUncertainty, AStatedGasMassUncertaintyGivesTheStandInsClosedForm) {
+    const double u = 0.02e-3;
+    const Diagnosed d = diagnoseStandIn({}, true, {u, 0.0});
+    const Diagnosed plain = diagnoseStandIn({}, true, {});
+    for (int c : {0, 1}) {
+        const auto kind = c == 0 ? diagnose::ChannelKind::Force : diagnose::ChannelKind::Pressure;
+        const diagnose::ChannelSummary& s = d.where.channels[c];
+        const double expected = calcStandInMassTerm(d.tests, kind, {u, u, u});
+        // 1e-6: the force's samples at the first contact, where the noise puts the measured
+        // displacement about 0 (the simulated force is clipped at 0 on one side only).
+        EXPECT_NEAR(s.inputGasMass, expected, 1e-6 * expected) << s.channel;
+        EXPECT_EQ(s.inputTemperature, 0.0);
+        // The validation uncertainty grows by root sum square; the RMSE does not change.
+        const diagnose::ChannelSummary& p = plain.where.channels[c];
+        EXPECT_EQ(p.inputGasMass, 0.0);
+        EXPECT_NEAR(s.validation * s.validation, p.validation * p.validation + expected * expected,
+                    1e-9 * s.validation * s.validation);
+        EXPECT_EQ(s.rmse, p.rmse);
+    }
+    EXPECT_NEAR(d.where.channels[2].inputGasMass, u, 1e-15);  // the flowmeter reads the mass
+    ASSERT_EQ(d.where.statedInputs.size(), 2u);
+    EXPECT_TRUE(d.where.statedInputs[0].stated);
+    EXPECT_FALSE(d.where.statedInputs[1].stated);
+    EXPECT_FALSE(plain.where.statedInputs[0].stated);
+}
+
+TEST(InputUncertainty, AStatedRoomTemperatureUncertaintyActsAsTheGasMassTimesItsShare) {
+    // The stand-in's gas acts through m T: u_T acts as a mass uncertainty of m u_T / T.
+    const double uT = 0.5;
+    const Diagnosed d = diagnoseStandIn({}, true, {0.0, uT});
+    const std::vector<double> masses = {4.5e-3, 4.25e-3, 4.0e-3};
+    std::vector<double> um;
+    for (double m : masses) um.push_back(m * uT / 296.15);
+    for (int c : {0, 1}) {
+        const auto kind = c == 0 ? diagnose::ChannelKind::Force : diagnose::ChannelKind::Pressure;
+        const double expected = calcStandInMassTerm(d.tests, kind, um);
+        EXPECT_NEAR(d.where.channels[c].inputTemperature, expected, 1e-6 * expected);
+        EXPECT_EQ(d.where.channels[c].inputGasMass, 0.0);
+    }
+    EXPECT_TRUE(d.where.statedInputs[1].stated);
+}
+
+TEST(InputUncertainty, AFlowmeterBiasWithinTheStatedUncertaintyIsNone) {
+    // A bias of 0.03 g: found without a statement; with a stated standard uncertainty of
+    // 0.05 g the data are within twice the validation uncertainty, and called none.
+    const Diagnosed found = diagnoseStandIn({{"flowmeter-bias", {0.03e-3}}});
+    EXPECT_FALSE(found.where.withinValidation);
+    EXPECT_EQ(found.which.verdict, "flowmeter-bias") << found.which.reason;
+    const Diagnosed within = diagnoseStandIn({{"flowmeter-bias", {0.03e-3}}}, true, {0.05e-3, 0.0});
+    EXPECT_TRUE(within.where.withinValidation);
+    EXPECT_EQ(within.which.verdict, "none") << within.which.reason;
+}
+
+TEST(InputUncertainty, NothingStatedRunsNothing) {
+    diagnose::MeasuredData data;
+    data.tests.resize(2);
+    bags::LoadTestOptions o;
+    o.gasMasses = {4e-3, 3e-3};
+    EXPECT_TRUE(diagnose::makeInputRuns(data, o).empty());
+    data.tests[1].gasMassUncertainty = 0.01e-3;  // one test states it: the other is not moved
+    data.protocol.roomTemperatureUncertainty = 1.0;
+    const std::vector<diagnose::InputRun> runs = diagnose::makeInputRuns(data, o);
+    ASSERT_EQ(runs.size(), 4u);
+    EXPECT_EQ(runs[0].input, diagnose::ProtocolInput::GasMass);
+    EXPECT_EQ(runs[0].options.gasMasses, (std::vector<double>{4e-3, 3.01e-3}));
+    EXPECT_EQ(runs[1].options.gasMasses, (std::vector<double>{4e-3, 2.99e-3}));
+    EXPECT_EQ(runs[2].input, diagnose::ProtocolInput::RoomTemperature);
+    EXPECT_DOUBLE_EQ(runs[2].options.gas.temperature, o.gas.temperature + 1.0);
+    EXPECT_DOUBLE_EQ(runs[3].options.gas.temperature, o.gas.temperature - 1.0);
 }

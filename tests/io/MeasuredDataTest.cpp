@@ -257,6 +257,84 @@ TEST_F(MeasuredDataTest, WrittenFolderReadsBack) {
     EXPECT_NEAR(r.protocol.roomTemperature, d.protocol.roomTemperature, 1e-9);
 }
 
+TEST_F(MeasuredDataTest, StatedInputUncertaintiesReadInSiAndAreOptional) {
+    const diagnose::MeasuredData none = io::readMeasuredData(m_dir.string());
+    EXPECT_FALSE(none.tests[0].gasMassUncertaintyStated);
+    EXPECT_EQ(none.tests[0].gasMassUncertainty, 0.0);
+    EXPECT_FALSE(none.protocol.roomTemperatureUncertaintyStated);
+    // For all tests in the protocol, and the room temperature's in K.
+    write("measured.yaml",
+          replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                     "  room_temperature: 23 degC\n  gas_mass_uncertainty: 20 mg\n"
+                     "  room_temperature_uncertainty: 0.5 K\n"));
+    diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
+    EXPECT_TRUE(d.tests[0].gasMassUncertaintyStated);
+    EXPECT_DOUBLE_EQ(d.tests[0].gasMassUncertainty, 0.02e-3);
+    EXPECT_TRUE(d.protocol.roomTemperatureUncertaintyStated);
+    EXPECT_DOUBLE_EQ(d.protocol.roomTemperatureUncertainty, 0.5);
+    // A test's own statement wins over the protocol's; a stated 0 is stated.
+    write("measured.yaml",
+          replaceAll(kManifest, "    machine: m.csv\n", "    gas_mass_uncertainty: 0 g\n    machine: m.csv\n"));
+    d = io::readMeasuredData(m_dir.string());
+    EXPECT_TRUE(d.tests[0].gasMassUncertaintyStated);
+    EXPECT_EQ(d.tests[0].gasMassUncertainty, 0.0);
+    // Written and read back.
+    d.tests[0].gasMassUncertainty = 0.03e-3;
+    d.protocol.roomTemperatureUncertainty = 0.25, d.protocol.roomTemperatureUncertaintyStated = true;
+    const fs::path out = m_dir / "copy";
+    fs::create_directories(out);
+    io::writeMeasuredData(out.string(), d, "kind: seed-load-test\n", "# copy\n");
+    std::ifstream in(out / "measured.yaml");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text = replaceAll(text, "scenario: scenario.yaml",
+                      "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/tiny-load-test.yaml");
+    std::ofstream(out / "measured.yaml") << text;
+    const diagnose::MeasuredData r = io::readMeasuredData(out.string());
+    EXPECT_NEAR(r.tests[0].gasMassUncertainty, 0.03e-3, 1e-12);
+    EXPECT_NEAR(r.protocol.roomTemperatureUncertainty, 0.25, 1e-12);
+}
+
+TEST_F(MeasuredDataTest, StatedInputUncertaintiesOutOfRangeNameFileLineKeyAndTheRange) {
+    // A test's: beyond 10 % of its gas mass (3.5 g: 0.35 g).
+    write("measured.yaml",
+          replaceAll(kManifest, "    machine: m.csv\n", "    gas_mass_uncertainty: 0.4 g\n    machine: m.csv\n"));
+    io::InputError e = readError();
+    EXPECT_EQ(e.getWhere(), file("measured.yaml"));
+    EXPECT_EQ(e.getLine(), 10);
+    EXPECT_EQ(e.getKey(), "tests[0].gas_mass_uncertainty");
+    EXPECT_NE(e.getMessage().find("0.4 g is out of range; valid: 0 g to 10 % of the test's gas "
+                                  "mass (0.35 g)"),
+              std::string::npos)
+        << e.what();
+    // The protocol's, negative: named at the protocol's key, with the test it fails for.
+    write("measured.yaml", replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                                      "  room_temperature: 23 degC\n  gas_mass_uncertainty: -1 mg\n"));
+    e = readError();
+    EXPECT_EQ(e.getLine(), 8);
+    EXPECT_EQ(e.getKey(), "protocol.gas_mass_uncertainty");
+    EXPECT_NE(e.getMessage().find("-0.001 g is out of range for the test of 3.5 g; valid: 0 g to"),
+              std::string::npos)
+        << e.what();
+    // Not a mass.
+    write("measured.yaml", replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                                      "  room_temperature: 23 degC\n  gas_mass_uncertainty: 2 %\n"));
+    e = readError();
+    EXPECT_EQ(e.getLine(), 8);
+    EXPECT_EQ(e.getKey(), "protocol.gas_mass_uncertainty");
+    // The room temperature's: beyond 10 K, and in degC (a temperature, not a difference).
+    for (const std::string& v : {"12 K", "0.5 degC", "0.5"}) {
+        write("measured.yaml",
+              replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                         "  room_temperature: 23 degC\n  room_temperature_uncertainty: " + v + "\n"));
+        e = readError();
+        EXPECT_EQ(e.getLine(), 8) << v;
+        EXPECT_EQ(e.getKey(), "protocol.room_temperature_uncertainty") << v;
+        EXPECT_NE(e.getMessage().find("valid: 0 K to 10 K, a standard uncertainty in K (e.g. 0.5 K)"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
 // The scenario's rig section (docs/scenario-reference.md#rig): the effects the diagnosis can
 // blame, as keys a scenario can switch on.
 TEST(RigSection, KeysReadInSiAndTheFlowmeterOffsetShiftsTheBagsMasses) {
