@@ -53,6 +53,7 @@ double calcBagVolume(const cosim::Bag& a) {
 
 struct Totals {
     int steps = 0, passes = 0, cuts = 0;
+    long bodySteps = 0;  // the body integrator's internal steps in the committed passes
 };
 
 // Writes `data` to dir/checkpoint.bin through a temporary file, flushed to the disk and
@@ -296,7 +297,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     // loop's own state, the verdict so far, then the model: body, bags, coupling, pneumatics,
     // controller. A resumed run reads it in that order.
     auto saveRunState = [&](bags::StateWriter& w) {
-        w.tag("run");
+        w.tag("run-2");
         w.pod(nextOutput), w.pod(settled), w.pod(nextCheckpoint);
         w.pod(std::uint64_t(events.size()));
         for (const cosim::ControlEvent& e : events) w.pod(e.time), w.str(e.text);
@@ -307,7 +308,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     };
     std::vector<double> resumedAirVolume, resumedAirRate;  // until the network is built
     auto loadRunState = [&](bags::StateReader& r) {
-        r.tag("run");
+        r.tag("run-2");
         r.pod(nextOutput), r.pod(settled), r.pod(nextCheckpoint);
         events.resize(r.pod<std::uint64_t>());
         for (cosim::ControlEvent& e : events) r.pod(e.time), e.text = r.str();
@@ -524,6 +525,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             ++totals.steps;
             totals.passes += s.iterations;
             totals.cuts += s.cuts;
+            totals.bodySteps += poa->getBody().getLastIntegratorSteps();
             if (air) {
                 // The committed step: each bag's volume now and its rate over the step; the
                 // bag's and the network's masses (one owner: they must agree to roundoff).
@@ -655,7 +657,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     }
     table << totals.steps << " macro steps (" << totals.cuts << " cuts), "
           << fmt("%.2f", totals.steps ? double(totals.passes) / totals.steps : 0.0)
-          << " coupling passes a step; " << fmt("%.1f s", wall()) << " wall-clock\n";
+          << " coupling passes a step, " << totals.bodySteps
+          << " steps of the body's integrator; " << fmt("%.1f s", wall()) << " wall-clock\n";
     std::string verdictText;
     try {
         events.push_back({poa->getTime(), "run ended"});

@@ -17,10 +17,14 @@ void PlaneSupportOptions::validate() const {
     check(friction >= 0 && std::isfinite(friction), "friction must be >= 0");
     check(slipVelocity > 0 && std::isfinite(slipVelocity), "slipVelocity must be > 0 [m/s]");
     check(sampleSpacing > 0.001 && sampleSpacing < 0.1, "sampleSpacing must be in (1, 100) mm");
+    check(stickDistance > 0 && std::isfinite(stickDistance), "stickDistance must be > 0 [m]");
+    check(frictionLaw != SupportFrictionLaw::StickSlip || friction == 0 || damping > 0,
+          "the stick-slip law needs damping > 0 (its tangential time constant is "
+          "damping / stiffness)");
 }
 
 PlaneSupport::PlaneSupport(const BodyModel& model, const PlaneSupportOptions& options)
-    : m_model(model), m_options(options) {
+    : m_model(model), m_options(options), m_forces(model.getForces()) {
     options.validate();
     // The patches are made mirror-symmetric about the sagittal plane (body Z = 0 for midline
     // segments, left = mirrored right), so that a symmetric posture stays symmetric.
@@ -51,8 +55,10 @@ PlaneSupport::PlaneSupport(const BodyModel& model, const PlaneSupportOptions& op
             if (side == Side::Left)
                 for (SurfaceSample& s : samples) s = mirror(s);
         }
+        m_firstPatch[i] = m_patchCount;
         for (const SurfaceSample& s : samples)
             m_patches[i].push_back({s.p_B, s.n_B, s.area, model.findRegion(seg, s.p_B)});
+        m_patchCount += static_cast<int>(m_patches[i].size());
         SimTK::Vec3 lo(0), hi(0);
         if (!m_patches[i].empty()) lo = hi = m_patches[i].front().p_B;
         for (const Patch& p : m_patches[i])
@@ -74,23 +80,71 @@ bool PlaneSupport::isClearOfSupport(int i, const SimTK::Transform& X_GB) const {
     return (X_GB * m_boxCentre[i])[2] - reach > m_options.height;
 }
 
-int PlaneSupport::getPatchCount() const {
-    int n = 0;
-    for (const auto& v : m_patches) n += static_cast<int>(v.size());
+int PlaneSupport::getPatchCount() const { return m_patchCount; }
+
+void PlaneSupport::realizeTopology(SimTK::State& state) const {
+    if (m_options.frictionLaw != SupportFrictionLaw::StickSlip) return;
+    // The anchors invalidate the forces (Dynamics); their update follows the positions and
+    // velocities (Velocity). The integrator swaps the update in after every accepted step.
+    Anchors none;
+    none.a.assign(m_patchCount, SimTK::Vec2(SimTK::NaN));
+    m_anchorsIndex = m_forces.allocateAutoUpdateDiscreteVariable(
+        state, SimTK::Stage::Dynamics, new SimTK::Value<Anchors>(none), SimTK::Stage::Velocity);
+}
+
+std::vector<double> PlaneSupport::getAnchors(const SimTK::State& state) const {
+    std::vector<double> out;
+    if (!m_anchorsIndex.isValid()) return out;
+    const Anchors& an =
+        SimTK::Value<Anchors>::downcast(m_forces.getDiscreteVariable(state, m_anchorsIndex));
+    out.reserve(2 * an.a.size());
+    for (const SimTK::Vec2& a : an.a) out.insert(out.end(), {a[0], a[1]});
+    return out;
+}
+
+void PlaneSupport::setAnchors(SimTK::State& state, const std::vector<double>& anchors) const {
+    const std::size_t n = m_anchorsIndex.isValid() ? 2 * std::size_t(m_patchCount) : 0;
+    if (anchors.size() != n)
+        throw std::invalid_argument("PlaneSupport::setAnchors: " +
+                                    std::to_string(anchors.size()) + " values; valid: " +
+                                    std::to_string(n) + " (x, y per patch)");
+    if (n == 0) return;
+    Anchors& an =
+        SimTK::Value<Anchors>::updDowncast(m_forces.updDiscreteVariable(state, m_anchorsIndex));
+    for (int k = 0; k < m_patchCount; ++k) an.a[k] = SimTK::Vec2(anchors[2 * k], anchors[2 * k + 1]);
+}
+
+std::array<int, 2> PlaneSupport::countSlidingPatches(const SimTK::State& state) const {
+    std::array<int, 2> n{0, 0};  // sliding, in contact
+    if (!m_anchorsIndex.isValid()) return n;
+    const PlaneSupportOptions& o = m_options;
+    forEachContact(state, [&](int, int, const Patch&, const SimTK::Vec3&, const SimTK::Vec3& F,
+                              double, double, const SimTK::Vec2&) {
+        ++n[1];
+        if (std::hypot(F[0], F[1]) >= o.friction * F[2] * (1 - 1e-12) && F[2] > 0) ++n[0];
+    });
     return n;
 }
 
-// Calls visit(segment, patch, p_G, F_G, pressure, projectedArea, delta) for every patch in contact.
 template <class Visit>
 void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) const {
     const PlaneSupportOptions& o = m_options;
+    const bool stick = m_anchorsIndex.isValid();
+    const std::vector<SimTK::Vec2>* anchors =
+        stick ? &SimTK::Value<Anchors>::downcast(m_forces.getDiscreteVariable(state, m_anchorsIndex))
+                     .get()
+                     .a
+              : nullptr;
+    const double tau = o.damping / o.stiffness;
+    const SimTK::Vec2 none(SimTK::NaN);
     for (int i = 0; i < kSegmentCount; ++i) {
         const Segment seg = static_cast<Segment>(i);
         const SimTK::MobilizedBody& mb = m_model.getMobilizedBody(seg);
         const SimTK::Transform& X_GB = mb.getBodyTransform(state);
         if (isClearOfSupport(i, X_GB)) continue;  // broad phase
         const SimTK::SpatialVec& V_GB = mb.getBodyVelocity(state);
-        for (const Patch& p : m_patches[i]) {
+        for (int j = 0; j < int(m_patches[i].size()); ++j) {
+            const Patch& p = m_patches[i][j];
             const SimTK::Vec3 r_G = X_GB.R() * p.p_B;
             const SimTK::Vec3 p_G = X_GB.p() + r_G;
             const double delta = o.height - p_G[2];
@@ -102,10 +156,28 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
             const double pressure = o.stiffness * delta - o.damping * v[2];
             if (pressure <= 0) continue;
             const double fn = pressure * aProj;
-            const double vt =
-                std::sqrt(v[0] * v[0] + v[1] * v[1] + o.slipVelocity * o.slipVelocity);
-            const SimTK::Vec3 F(-o.friction * fn * v[0] / vt, -o.friction * fn * v[1] / vt, fn);
-            visit(i, p, p_G, r_G, F, pressure, aProj, delta);
+            const int k = m_firstPatch[i] + j;
+            if (!stick) {
+                const double vt =
+                    std::sqrt(v[0] * v[0] + v[1] * v[1] + o.slipVelocity * o.slipVelocity);
+                const SimTK::Vec3 F(-o.friction * fn * v[0] / vt, -o.friction * fn * v[1] / vt,
+                                    fn);
+                visit(i, k, p, r_G, F, pressure, aProj, none);
+                continue;
+            }
+            // The stick spring: s = u + tau v_t, f_t = -mu f_n s / max(|s|, d_s); the anchor
+            // after the step keeps the same force (|s| = d_s when sliding).
+            const SimTK::Vec2 x(p_G[0], p_G[1]), vt(v[0], v[1]);
+            const SimTK::Vec2& a = (*anchors)[k];
+            const SimTK::Vec2 u = std::isnan(a[0]) ? SimTK::Vec2(0) : x - a;
+            const SimTK::Vec2 sv = u + tau * vt;
+            const double ns = sv.norm();
+            const double scale = o.friction * fn / std::max(ns, o.stickDistance);
+            const SimTK::Vec3 F(-scale * sv[0], -scale * sv[1], fn);
+            const SimTK::Vec2 next =
+                ns > o.stickDistance ? SimTK::Vec2(x - (o.stickDistance / ns) * sv + tau * vt)
+                                     : std::isnan(a[0]) ? x : a;
+            visit(i, k, p, r_G, F, pressure, aProj, next);
         }
     }
 }
@@ -113,13 +185,23 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
 void PlaneSupport::calcForce(const SimTK::State& state,
                              SimTK::Vector_<SimTK::SpatialVec>& bodyForces,
                              SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector&) const {
-    forEachContact(state, [&](int i, const Patch&, const SimTK::Vec3&, const SimTK::Vec3& r_G,
-                              const SimTK::Vec3& F, double, double, double) {
+    std::vector<SimTK::Vec2>* next = nullptr;
+    if (m_anchorsIndex.isValid()) {
+        next = &SimTK::Value<Anchors>::updDowncast(
+                    m_forces.updDiscreteVarUpdateValue(state, m_anchorsIndex))
+                    .upd()
+                    .a;
+        next->assign(m_patchCount, SimTK::Vec2(SimTK::NaN));
+    }
+    forEachContact(state, [&](int i, int k, const Patch&, const SimTK::Vec3& r_G,
+                              const SimTK::Vec3& F, double, double, const SimTK::Vec2& a) {
         const SimTK::MobilizedBodyIndex mbx =
             m_model.getMobilizedBodyIndex(static_cast<Segment>(i));
         bodyForces[mbx][0] += r_G % F;
         bodyForces[mbx][1] += F;
+        if (next) (*next)[k] = a;
     });
+    if (next) m_forces.markDiscreteVarUpdateValueRealized(state, m_anchorsIndex);
 }
 
 SimTK::Real PlaneSupport::calcPotentialEnergy(const SimTK::State& state) const {
@@ -143,8 +225,9 @@ SupportLoad PlaneSupport::calcSupportLoad(const SimTK::State& state) const {
     const int nRegions = static_cast<int>(m_model.getRegions().size());
     load.regionForce.assign(nRegions, 0.0);
     load.regionPeakPressure.assign(nRegions, 0.0);
-    forEachContact(state, [&](int i, const Patch& p, const SimTK::Vec3&, const SimTK::Vec3&,
-                              const SimTK::Vec3& F, double pressure, double aProj, double) {
+    forEachContact(state, [&](int i, int, const Patch& p, const SimTK::Vec3&,
+                              const SimTK::Vec3& F, double pressure, double aProj,
+                              const SimTK::Vec2&) {
         load.force += F;
         load.contactArea += aProj;
         load.peakPressure = std::max(load.peakPressure, pressure);

@@ -125,6 +125,7 @@ struct BodyParticipant::Impl {
     BodyIntegratorOptions options;
     std::shared_ptr<std::vector<Shape>> shapes = std::make_shared<std::vector<Shape>>();
     bool initialized = false;
+    std::vector<DiscreteState> discrete;
     SimTK::State checkpoint, current;
     int lastSteps = 0;
     Impl(SimTK::MultibodySystem& sys, const BodyIntegratorOptions& o) : system(sys), options(o) {}
@@ -159,6 +160,12 @@ int BodyParticipant::addShape(SimTK::MobilizedBodyIndex body, const SimTK::Trans
     return int(m_impl->shapes->size()) - 1;
 }
 
+void BodyParticipant::addDiscreteState(DiscreteState d) {
+    if (m_impl->initialized)
+        throw std::logic_error("BodyParticipant::addDiscreteState: called after initialize()");
+    m_impl->discrete.push_back(std::move(d));
+}
+
 int BodyParticipant::getNumShapes() const { return int(m_impl->shapes->size()); }
 
 void BodyParticipant::initialize(const SimTK::State& state) {
@@ -186,7 +193,10 @@ void BodyParticipant::advanceTo(double time) {
     if (!m_impl->initialized) throw std::logic_error("BodyParticipant::advanceTo: not initialized");
     SimTK::State s = m_impl->checkpoint;
     // The loads changed outside the state: nothing cached at Dynamics or above may stand.
-    s.invalidateAll(SimTK::Stage::Dynamics);
+    // Velocity too: a discrete state's update (the board's anchors after a step) is then
+    // computed afresh from the checkpoint, as after loadState(), so that a resumed run takes
+    // the same steps as one that went on.
+    s.invalidateAll(SimTK::Stage::Velocity);
     if (time < s.getTime()) {
         std::ostringstream m;
         m << "BodyParticipant::advanceTo: time " << time << " s lies before the checkpoint's "
@@ -259,26 +269,44 @@ void loadVector(bags::StateReader& r, SimTK::Vector& v, const char* what) {
     for (int i = 0; i < v.size(); ++i) v[i] = r.pod<double>();
 }
 
-void saveBodyState(bags::StateWriter& w, const SimTK::State& s) {
+using DiscreteStates = std::vector<BodyParticipant::DiscreteState>;
+
+void saveBodyState(bags::StateWriter& w, const SimTK::State& s, const DiscreteStates& d) {
     w.pod(s.getTime());
     saveVector(w, s.getQ());
     saveVector(w, s.getU());
     saveVector(w, s.getZ());
+    w.pod(std::uint64_t(d.size()));
+    for (const BodyParticipant::DiscreteState& x : d) {
+        const std::vector<double> v = x.get(s);
+        w.pod(std::uint64_t(v.size()));
+        for (double e : v) w.pod(e);
+    }
 }
 
-void loadBodyState(bags::StateReader& r, SimTK::State& s) {
+void loadBodyState(bags::StateReader& r, SimTK::State& s, const DiscreteStates& d) {
     s.setTime(r.pod<double>());
     loadVector(r, s.updQ(), "the body's generalized coordinates q");
     loadVector(r, s.updU(), "the body's generalized speeds u");
     loadVector(r, s.updZ(), "the body's auxiliary states z");
+    const auto n = r.pod<std::uint64_t>();
+    if (n != d.size()) bags::StateReader::mismatch("the body's discrete states", n, d.size());
+    for (const BodyParticipant::DiscreteState& x : d) {
+        const auto m = r.pod<std::uint64_t>();
+        const std::size_t want = x.get(s).size();
+        if (m != want) bags::StateReader::mismatch(x.name.c_str(), m, want);
+        std::vector<double> v(m);
+        for (double& e : v) e = r.pod<double>();
+        x.set(s, v);
+    }
 }
 
 }  // namespace
 
 void BodyParticipant::saveState(bags::StateWriter& w) const {
-    w.tag("body");
-    saveBodyState(w, m_impl->checkpoint);
-    saveBodyState(w, m_impl->current);
+    w.tag("body-2");
+    saveBodyState(w, m_impl->checkpoint, m_impl->discrete);
+    saveBodyState(w, m_impl->current, m_impl->discrete);
     w.pod(std::uint64_t(m_impl->shapes->size()));
     for (const Shape& s : *m_impl->shapes) {
         w.mat(s.W0.torque), w.mat(s.W0.force);
@@ -291,9 +319,9 @@ void BodyParticipant::saveState(bags::StateWriter& w) const {
 
 void BodyParticipant::loadState(bags::StateReader& r) {
     if (!m_impl->initialized) throw std::logic_error("BodyParticipant::loadState: not initialized");
-    r.tag("body");
-    loadBodyState(r, m_impl->checkpoint);
-    loadBodyState(r, m_impl->current);
+    r.tag("body-2");
+    loadBodyState(r, m_impl->checkpoint, m_impl->discrete);
+    loadBodyState(r, m_impl->current, m_impl->discrete);
     const auto n = r.pod<std::uint64_t>();
     if (n != m_impl->shapes->size())
         bags::StateReader::mismatch("the body's contact shapes", n, m_impl->shapes->size());

@@ -137,7 +137,18 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
     m.body = std::make_unique<BodyParticipant>(model.updSystem(), model.updForces(),
                                                options.integrator);
 
-    if (options.boardContact) m.board = &body::addPlaneSupport(model, options.board);
+    if (options.boardContact) {
+        m.board = &body::addPlaneSupport(model, options.board);
+        if (options.board.frictionLaw == body::SupportFrictionLaw::StickSlip) {
+            const body::PlaneSupport* board = m.board;
+            m.body->addDiscreteState(
+                {"the bed board's friction anchors",
+                 [board](const SimTK::State& s) { return board->getAnchors(s); },
+                 [board](SimTK::State& s, const std::vector<double>& v) {
+                     board->setAnchors(s, v);
+                 }});
+        }
+    }
 
     // Where the shapes lie in the posture (lowest point on the bed board) picks the pairs.
     model.updSystem().realizeTopology();

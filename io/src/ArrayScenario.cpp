@@ -17,6 +17,9 @@ namespace io {
 
 namespace {
 
+// The bed board's friction law unless a scenario names one (array.board_friction_law).
+constexpr const char* kDefaultBoardFrictionLaw = "stick-slip";
+
 using D = Dimension;
 
 std::string fmtUnit(double si, const std::string& unit) {
@@ -191,7 +194,8 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     s.checkKeys({"rows", "columns", "gas_mass"},
                 {"row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
-                 "groups", "board_contact", "board_slip_velocity", "neighbour_contact",
+                 "groups", "board_contact", "board_friction_law", "board_stick_distance",
+                 "board_slip_velocity", "neighbour_contact",
                  "neighbour_margin"});
     cosim::ArrayLayout& a = sc.options.layout;
     a.rows = s.get("rows").asInteger();
@@ -231,14 +235,34 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     // The bed board under the bags, as the body feels it where it reaches it (between bags,
     // through a slack or bottomed bag, beside the array): PatientOnArrayOptions::boardContact.
     sc.options.boardContact = s.getBool("board_contact", true);
-    // Its friction's regularisation velocity (body::PlaneSupportOptions::slipVelocity): a
-    // body resting on the board creeps at v_s f_t / (mu f_n). Small values make the friction
-    // stiff in the body's velocity, and they set the body's integrator steps where hands and
-    // forearms rest on the board (docs/performance.md#the-reduced-bag).
+    // Its friction (body::PlaneSupportOptions::frictionLaw, docs/scenario-reference.md):
+    // stick-slip, an elastic stick spring per patch capped at mu f_n (no creep; a spring of
+    // mu f_n / d_s), or Coulomb regularised at a slip velocity (a body resting on the board
+    // creeps at v_s f_t / (mu f_n), and small v_s make the friction stiff in the body's
+    // velocity: it then sets the body's steps where hands and forearms rest on the board,
+    // docs/performance.md#the-reduced-bag).
+    const std::string boardLaw = s.getChoice("board_friction_law", {"stick-slip", "regularised"},
+                                             kDefaultBoardFrictionLaw);
+    sc.options.board.frictionLaw = boardLaw == "regularised"
+                                       ? body::SupportFrictionLaw::Regularised
+                                       : body::SupportFrictionLaw::StickSlip;
+    if (s.has("board_slip_velocity") && boardLaw != "regularised")
+        s.fail("board_slip_velocity",
+               "is the regularised law's; valid only with board_friction_law: regularised "
+               "(this file's law: " + boardLaw + ")");
+    if (s.has("board_stick_distance") && boardLaw != "stick-slip")
+        s.fail("board_stick_distance",
+               "is the stick-slip law's; valid only with board_friction_law: stick-slip "
+               "(this file's law: " + boardLaw + ")");
     sc.options.board.slipVelocity =
         s.getQuantity("board_slip_velocity", D::Velocity, sc.options.board.slipVelocity);
     checkBetween(s, "board_slip_velocity", sc.options.board.slipVelocity, 1e-5, 1.0, "mm/s",
                  "a creep speed: 2 mm/s by default, 20 mm/s halves a reduced-bag run's time");
+    sc.options.board.stickDistance =
+        s.getQuantity("board_stick_distance", D::Length, sc.options.board.stickDistance);
+    checkBetween(s, "board_stick_distance", sc.options.board.stickDistance, 1e-5, 0.02, "mm",
+                 "the elastic slip of skin or cloth on the board before it slides: 1 mm by "
+                 "default");
     // Neighbouring bags touch: the bags that may meet once inflated are solved as one module
     // (PatientOnArrayOptions::neighbourContact, docs/cosim.md#contact-between-neighbouring-bags).
     sc.options.neighbourContact = s.getBool("neighbour_contact", false);

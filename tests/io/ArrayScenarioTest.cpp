@@ -105,17 +105,40 @@ TEST(ArrayScenario, TheBedBoardCarriesTheBodyByDefaultAndCanBeLeftOut) {
     EXPECT_EQ(e.getKey(), "array.board_contact");
 }
 
-TEST(ArrayScenario, TheBedBoardsSlipVelocityIs2MmPerSecondByDefaultAndCanBeSet) {
-    EXPECT_DOUBLE_EQ(read(kBase).options.board.slipVelocity, 2e-3);
-    std::string set = kBase;
-    set.insert(set.find("  groups:"), "  board_slip_velocity: 20 mm/s\n");
-    EXPECT_DOUBLE_EQ(read(set).options.board.slipVelocity, 0.02);
-    std::string bad = kBase;
-    bad.insert(bad.find("  groups:"), "  board_slip_velocity: 0 mm/s\n");
-    const io::InputError e = readError(bad);
-    EXPECT_EQ(e.getLine(), 12);
-    EXPECT_EQ(e.getKey(), "array.board_slip_velocity");
-    EXPECT_NE(std::string(e.what()).find("mm/s"), std::string::npos) << e.what();
+TEST(ArrayScenario, TheBedBoardsFrictionIsStickSlipByDefaultAndCanBeRegularised) {
+    const io::PatientOnArrayScenario plain = read(kBase);
+    EXPECT_EQ(plain.options.board.frictionLaw, body::SupportFrictionLaw::StickSlip);
+    EXPECT_DOUBLE_EQ(plain.options.board.stickDistance, 1e-3);
+    auto with = [](const std::string& lines) {
+        std::string t = kBase;
+        t.insert(t.find("  groups:"), lines);
+        return t;
+    };
+    EXPECT_DOUBLE_EQ(read(with("  board_stick_distance: 0.5 mm\n")).options.board.stickDistance,
+                     5e-4);
+    const io::PatientOnArrayScenario reg =
+        read(with("  board_friction_law: regularised\n  board_slip_velocity: 20 mm/s\n"));
+    EXPECT_EQ(reg.options.board.frictionLaw, body::SupportFrictionLaw::Regularised);
+    EXPECT_DOUBLE_EQ(reg.options.board.slipVelocity, 0.02);
+    EXPECT_DOUBLE_EQ(read(with("  board_friction_law: regularised\n")).options.board.slipVelocity,
+                     2e-3);
+    struct Bad {
+        std::string lines, key, says;
+    };
+    for (const Bad& b : std::vector<Bad>{
+             {"  board_friction_law: regularised\n  board_slip_velocity: 0 mm/s\n",
+              "array.board_slip_velocity", "mm/s"},
+             {"  board_slip_velocity: 20 mm/s\n", "array.board_slip_velocity",
+              "valid only with board_friction_law: regularised"},
+             {"  board_stick_distance: 0 mm\n", "array.board_stick_distance", "mm"},
+             {"  board_friction_law: regularised\n  board_stick_distance: 1 mm\n",
+              "array.board_stick_distance", "valid only with board_friction_law: stick-slip"},
+             {"  board_friction_law: sticky\n", "array.board_friction_law", "stick-slip"}}) {
+        const io::InputError e = readError(with(b.lines));
+        EXPECT_GE(e.getLine(), 12) << b.lines;
+        EXPECT_EQ(e.getKey(), b.key) << b.lines;
+        EXPECT_NE(std::string(e.what()).find(b.says), std::string::npos) << e.what();
+    }
 }
 
 TEST(ArrayScenario, TheBodyOnTheFilmsIsFrictionlessByDefaultAndTakesACoulombCoefficient) {

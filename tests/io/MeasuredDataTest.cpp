@@ -322,7 +322,7 @@ TEST_F(MeasuredDataTest, StatedInputUncertaintiesOutOfRangeNameFileLineKeyAndThe
     EXPECT_EQ(e.getLine(), 8);
     EXPECT_EQ(e.getKey(), "protocol.gas_mass_uncertainty");
     // The room temperature's: beyond 10 K, and in degC (a temperature, not a difference).
-    for (const std::string& v : {"12 K", "0.5 degC", "0.5"}) {
+    for (const std::string v : {"12 K", "0.5 degC", "0.5"}) {
         write("measured.yaml",
               replaceAll(kManifest, "  room_temperature: 23 degC\n",
                          "  room_temperature: 23 degC\n  room_temperature_uncertainty: " + v + "\n"));

@@ -26,7 +26,9 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "cosim/Participant.h"
@@ -67,6 +69,16 @@ class BodyParticipant {
     int addShape(SimTK::MobilizedBodyIndex body, const SimTK::Transform& X_BS);
     int getNumShapes() const;
 
+    /// A part of the body's state outside time, q, u and z that checkpoints carry (a force
+    /// element's discrete variables, e.g. the bed board's stick-slip anchors): how to read
+    /// its values from a state and write them back. @pre before initialize().
+    struct DiscreteState {
+        std::string name;  ///< for messages ("the bed board's friction anchors")
+        std::function<std::vector<double>(const SimTK::State&)> get;
+        std::function<void(SimTK::State&, const std::vector<double>&)> set;
+    };
+    void addDiscreteState(DiscreteState d);
+
     /// The initial state (topology realized); it becomes the checkpoint.
     void initialize(const SimTK::State& state);
 
@@ -91,7 +103,8 @@ class BodyParticipant {
     int getLastIntegratorSteps() const;         ///< internal steps of the last advanceTo()
 
     // --- checkpoints (bags/StateStream.h), between steps
-    /// Writes the checkpoint's and the current state (time, q, u, z) and every shape's load.
+    /// Writes the checkpoint's and the current state (time, q, u, z, the discrete states
+    /// added) and every shape's load.
     void saveState(bags::StateWriter& w) const;
     /// Reads what saveState() wrote into a participant on the same system, initialized.
     /// @throws bags::StateError if the system's sizes or the shapes differ.

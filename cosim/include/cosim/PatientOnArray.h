@@ -47,8 +47,9 @@ struct PatientOnArrayOptions {
     /// slack or bottomed bag, or the body beside the array): body::PlaneSupport at z = 0,
     /// stiffer than the default support (1e7 Pa/m: 2 mm under 20 kPa) so that a body on the
     /// board is on a hard surface. The bags rest on the board on their own (their base
-    /// nodes); this is only the body's side. boardContact false: no board for the body (it
-    /// may then sink through slack bags and below the board).
+    /// nodes); this is only the body's side. Its friction is the stick-slip law (an elastic
+    /// stick spring per patch, 1 mm to Coulomb's limit). boardContact false: no board for the
+    /// body (it may then sink through slack bags and below the board).
     bool boardContact = true;
     body::PlaneSupportOptions board = makeBoardOptions();
     static body::PlaneSupportOptions makeBoardOptions() {
@@ -56,6 +57,9 @@ struct PatientOnArrayOptions {
         o.height = 0.0;
         o.stiffness = 1.0e7;
         o.damping = 2.0e5;
+        // No creep of a hand resting on the board, and the body's steps stay long there
+        // (docs/performance.md#the-reduced-bag).
+        o.frictionLaw = body::SupportFrictionLaw::StickSlip;
         return o;
     }
     /// Neighbouring bags touch (docs/cosim.md#contact-between-neighbouring-bags): the bags
