@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace body {
 
@@ -86,10 +87,8 @@ void PlaneSupport::realizeTopology(SimTK::State& state) const {
     if (m_options.frictionLaw != SupportFrictionLaw::StickSlip) return;
     // The anchors invalidate the forces (Dynamics); their update follows the positions and
     // velocities (Velocity). The integrator swaps the update in after every accepted step.
-    Anchors none;
-    none.a.assign(m_patchCount, SimTK::Vec2(SimTK::NaN));
     m_anchorsIndex = m_forces.allocateAutoUpdateDiscreteVariable(
-        state, SimTK::Stage::Dynamics, new SimTK::Value<Anchors>(none), SimTK::Stage::Velocity);
+        state, SimTK::Stage::Dynamics, new SimTK::Value<Anchors>(), SimTK::Stage::Velocity);
 }
 
 std::vector<double> PlaneSupport::getAnchors(const SimTK::State& state) const {
@@ -97,21 +96,35 @@ std::vector<double> PlaneSupport::getAnchors(const SimTK::State& state) const {
     if (!m_anchorsIndex.isValid()) return out;
     const Anchors& an =
         SimTK::Value<Anchors>::downcast(m_forces.getDiscreteVariable(state, m_anchorsIndex));
-    out.reserve(2 * an.a.size());
-    for (const SimTK::Vec2& a : an.a) out.insert(out.end(), {a[0], a[1]});
+    out.reserve(3 * an.a.size());
+    for (std::size_t i = 0; i < an.a.size(); ++i)
+        out.insert(out.end(), {double(an.patch[i]), an.a[i][0], an.a[i][1]});
     return out;
 }
 
 void PlaneSupport::setAnchors(SimTK::State& state, const std::vector<double>& anchors) const {
-    const std::size_t n = m_anchorsIndex.isValid() ? 2 * std::size_t(m_patchCount) : 0;
-    if (anchors.size() != n)
-        throw std::invalid_argument("PlaneSupport::setAnchors: " +
-                                    std::to_string(anchors.size()) + " values; valid: " +
-                                    std::to_string(n) + " (x, y per patch)");
-    if (n == 0) return;
-    Anchors& an =
-        SimTK::Value<Anchors>::updDowncast(m_forces.updDiscreteVariable(state, m_anchorsIndex));
-    for (int k = 0; k < m_patchCount; ++k) an.a[k] = SimTK::Vec2(anchors[2 * k], anchors[2 * k + 1]);
+    auto fail = [&](const std::string& why) {
+        throw std::invalid_argument("PlaneSupport::setAnchors: " + why +
+                                    "; valid: (patch index, x, y) triples, patches ascending "
+                                    "in [0, " + std::to_string(m_patchCount) + ")");
+    };
+    if (!m_anchorsIndex.isValid()) {
+        if (!anchors.empty()) fail("anchors given to a support without the stick-slip law");
+        return;
+    }
+    if (anchors.size() % 3 != 0) fail(std::to_string(anchors.size()) + " values");
+    Anchors an;
+    for (std::size_t i = 0; i < anchors.size(); i += 3) {
+        const double k = anchors[i];
+        if (!(k >= 0 && k < m_patchCount && k == std::floor(k)) ||
+            (!an.patch.empty() && int(k) <= an.patch.back()) || !std::isfinite(anchors[i + 1]) ||
+            !std::isfinite(anchors[i + 2]))
+            fail("triple " + std::to_string(i / 3) + " does not fit");
+        an.patch.push_back(int(k));
+        an.a.emplace_back(anchors[i + 1], anchors[i + 2]);
+    }
+    SimTK::Value<Anchors>::updDowncast(m_forces.updDiscreteVariable(state, m_anchorsIndex))
+        .upd() = std::move(an);
 }
 
 std::array<int, 2> PlaneSupport::countSlidingPatches(const SimTK::State& state) const {
@@ -130,11 +143,11 @@ template <class Visit>
 void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) const {
     const PlaneSupportOptions& o = m_options;
     const bool stick = m_anchorsIndex.isValid();
-    const std::vector<SimTK::Vec2>* anchors =
+    const Anchors* anchors =
         stick ? &SimTK::Value<Anchors>::downcast(m_forces.getDiscreteVariable(state, m_anchorsIndex))
                      .get()
-                     .a
               : nullptr;
+    std::size_t cursor = 0;  // into anchors: the patches come in ascending index
     const double tau = o.damping / o.stiffness;
     const SimTK::Vec2 none(SimTK::NaN);
     for (int i = 0; i < kSegmentCount; ++i) {
@@ -168,7 +181,10 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
             // The stick spring: s = u + tau v_t, f_t = -mu f_n s / max(|s|, d_s); the anchor
             // after the step keeps the same force (|s| = d_s when sliding).
             const SimTK::Vec2 x(p_G[0], p_G[1]), vt(v[0], v[1]);
-            const SimTK::Vec2& a = (*anchors)[k];
+            const std::vector<int>& anchored = anchors->patch;
+            while (cursor < anchored.size() && anchored[cursor] < k) ++cursor;
+            const SimTK::Vec2& a =
+                cursor < anchored.size() && anchored[cursor] == k ? anchors->a[cursor] : none;
             const SimTK::Vec2 u = std::isnan(a[0]) ? SimTK::Vec2(0) : x - a;
             const SimTK::Vec2 sv = u + tau * vt;
             const double ns = sv.norm();
@@ -185,13 +201,13 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
 void PlaneSupport::calcForce(const SimTK::State& state,
                              SimTK::Vector_<SimTK::SpatialVec>& bodyForces,
                              SimTK::Vector_<SimTK::Vec3>&, SimTK::Vector&) const {
-    std::vector<SimTK::Vec2>* next = nullptr;
+    Anchors* next = nullptr;
     if (m_anchorsIndex.isValid()) {
         next = &SimTK::Value<Anchors>::updDowncast(
                     m_forces.updDiscreteVarUpdateValue(state, m_anchorsIndex))
-                    .upd()
-                    .a;
-        next->assign(m_patchCount, SimTK::Vec2(SimTK::NaN));
+                    .upd();
+        next->patch.clear();
+        next->a.clear();
     }
     forEachContact(state, [&](int i, int k, const Patch&, const SimTK::Vec3& r_G,
                               const SimTK::Vec3& F, double, double, const SimTK::Vec2& a) {
@@ -199,7 +215,10 @@ void PlaneSupport::calcForce(const SimTK::State& state,
             m_model.getMobilizedBodyIndex(static_cast<Segment>(i));
         bodyForces[mbx][0] += r_G % F;
         bodyForces[mbx][1] += F;
-        if (next) (*next)[k] = a;
+        if (next) {
+            next->patch.push_back(k);
+            next->a.push_back(a);
+        }
     });
     if (next) m_forces.markDiscreteVarUpdateValueRealized(state, m_anchorsIndex);
 }

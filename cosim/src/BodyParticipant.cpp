@@ -292,12 +292,13 @@ void loadBodyState(bags::StateReader& r, SimTK::State& s, const DiscreteStates& 
     const auto n = r.pod<std::uint64_t>();
     if (n != d.size()) bags::StateReader::mismatch("the body's discrete states", n, d.size());
     for (const BodyParticipant::DiscreteState& x : d) {
-        const auto m = r.pod<std::uint64_t>();
-        const std::size_t want = x.get(s).size();
-        if (m != want) bags::StateReader::mismatch(x.name.c_str(), m, want);
-        std::vector<double> v(m);
+        std::vector<double> v(r.pod<std::uint64_t>());
         for (double& e : v) e = r.pod<double>();
-        x.set(s, v);
+        try {
+            x.set(s, v);
+        } catch (const std::invalid_argument& e) {
+            throw bags::StateError(x.name + " do not fit this body: " + e.what());
+        }
     }
 }
 

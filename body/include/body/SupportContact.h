@@ -76,9 +76,10 @@ class PlaneSupport : public SimTK::Force::Custom::Implementation {
     /// Stick-slip law: allocates the patches' anchors in the state (an auto-update discrete
     /// variable of the force subsystem).
     void realizeTopology(SimTK::State& state) const override;
-    /// The stick-slip anchors (x, y per patch [m], NaN where a patch has none) as stored in
-    /// the state; empty under the regularised law. For checkpoints: setAnchors() restores
-    /// them. @throws std::invalid_argument if the size does not fit.
+    /// The stick-slip anchors as stored in the state: (patch index, x [m], y [m]) per anchored
+    /// patch, patches ascending; empty under the regularised law. For checkpoints:
+    /// setAnchors() restores them. @throws std::invalid_argument if the values are not such
+    /// triples of this support's patches.
     std::vector<double> getAnchors(const SimTK::State& state) const;
     void setAnchors(SimTK::State& state, const std::vector<double>& anchors) const;
     /// Patches of the stick-slip law sliding (|s| > d_s) and in contact, at a realized state
@@ -91,11 +92,13 @@ class PlaneSupport : public SimTK::Force::Custom::Implementation {
         double area;
         int region;
     };
-    struct Anchors {  // the stick-slip law's anchors, x and y per patch (NaN: none)
+    struct Anchors {  // the stick-slip law's anchors: the anchored patches (ascending), x, y
+        std::vector<int> patch;
         std::vector<SimTK::Vec2> a;
     };
     // Calls visit(segment, patch index, patch, r_G, F_G, pressure, projected area, new
-    // anchor) for every patch in contact (the new anchor: NaN under the regularised law).
+    // anchor) for every patch in contact, in ascending patch index (the new anchor: NaN under
+    // the regularised law).
     template <class Visit>
     void forEachContact(const SimTK::State& state, Visit&& visit) const;
     // True when no patch of segment i can reach the support at body pose X_GB (the patches'
