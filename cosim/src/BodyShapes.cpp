@@ -1,5 +1,6 @@
 #include "cosim/BodyShapes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -27,9 +28,17 @@ class RoundCone : public bags::LocalRigidShape {
         m_e = (pB - pA) / h;
         m_sin = (rA - rB) / h;
         m_cos = std::sqrt(1.0 - m_sin * m_sin);
+        m_bound = std::max(m_pA.norm() + m_rA, m_pB.norm() + m_rB);
     }
-    double getBoundingRadius() const override {
-        return std::max(m_pA.norm() + m_rA, m_pB.norm() + m_rB);
+    double getBoundingRadius() const override { return m_bound; }
+    /// The round cone lies inside the capsule of radius max(rA, rB) about the segment AB, so
+    /// its signed distance is at least the capsule's, |p - closest point of AB| - max(rA, rB)
+    /// (outside: the capsule is nearer; inside: the cone's surface is nearer than the
+    /// capsule's). Tighter than the bounding sphere for a long limb.
+    double calcDistanceLowerBound(const Vec3& p_G) const override {
+        const Vec3 p = m_X_GS.linear().transpose() * (p_G - m_X_GS.translation());
+        const double y = std::clamp((p - m_pA).dot(m_e), 0.0, m_h);
+        return (p - m_pA - y * m_e).norm() - std::max(m_rA, m_rB);
     }
     std::string getName() const override { return "round-cone"; }
 
@@ -73,7 +82,7 @@ class RoundCone : public bags::LocalRigidShape {
 
   private:
     Vec3 m_pA, m_pB, m_e;
-    double m_rA, m_rB, m_h = 0.0, m_sin = 0.0, m_cos = 1.0;
+    double m_rA, m_rB, m_h = 0.0, m_sin = 0.0, m_cos = 1.0, m_bound = 0.0;
 };
 
 Vec3 toEigen(const SimTK::Vec3& v) { return Vec3(v[0], v[1], v[2]); }

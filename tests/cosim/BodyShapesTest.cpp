@@ -51,6 +51,9 @@ TEST(BodyShapes, RoundConeAgreesWithTheBodysOwnShapeAnywhere) {
         EXPECT_LT((c - X_GB * toEigen(q.closestPoint)).norm(), 1e-12);
         EXPECT_LT((n - X_GB.linear() * toEigen(q.normal)).norm(), 1e-12);
         EXPECT_LE(b.shape->calcDistanceLowerBound(X_GB * p_B), d + 1e-12);  // a lower bound
+        // and a tight one: the cone holds the capsule of the smaller radius, so the capsule
+        // bound of the larger is within rA - rB of the distance (a bounding sphere is not).
+        EXPECT_GE(b.shape->calcDistanceLowerBound(X_GB * p_B), d - (0.06 - 0.035) - 1e-12);
     }
 }
 
