@@ -298,16 +298,16 @@ void ReducedBag::evaluate() {
         shape.setPose(m_poses[s]);
         ShapeResult& r = m_results[s];
         r = ShapeResult{};
-        const double reach = c.skirt * c.depthMax;  // the widest skirt looked for
-        std::vector<Sample> found;
-        for (int i = 0; i < n; ++i) {
-            if (shape.calcDistanceLowerBound(top.col(i)) > reach) continue;
+        // Two passes over the grid: first the points the shape may overlap (its distance
+        // bound below 0), which give the depth d_s; then the skirt's, within skirt x d_s of
+        // it. The samples are kept in the grid's order, as one pass would give them.
+        std::vector<Sample> found, rim;
+        auto sample = [&](int i, std::vector<Sample>& out) {
             Sample smp;
             double phi = 0.0;
             smp.point = i;
             smp.t = top.col(i);
             shape.calcContactGeometry(smp.t, &phi, &smp.c, &smp.n, &smp.dndp);
-            if (!(phi < reach)) continue;
             smp.delta = -phi;
             // Where the shape's closest surface faces sideways or up (it lies below the
             // unloaded top), the film meets its underside: down the column to where it
@@ -331,11 +331,16 @@ void ReducedBag::evaluate() {
                 shape.calcContactGeometry(col.t, &phi, &col.c, &col.n, &col.dndp);
                 col.delta = -phi;
                 col.blend = b * calcAxisFade(col.dndp);
-                if (col.blend > 0.0) found.push_back(col);
+                if (col.blend > 0.0) out.push_back(col);
                 smp.blend = 1.0 - b;
             }
             smp.blend *= calcAxisFade(smp.dndp);
-            if (smp.blend > 0.0) found.push_back(smp);
+            if (smp.blend > 0.0) out.push_back(smp);
+        };
+        std::vector<double> bound(n);
+        for (int i = 0; i < n; ++i) {
+            bound[i] = shape.calcDistanceLowerBound(top.col(i));
+            if (bound[i] <= 0.0) sample(i, found);
         }
         // The depth: the mean of delta weighted by a delta over the overlap (smooth in the
         // pose), and the overlap volume.
@@ -350,9 +355,18 @@ void ReducedBag::evaluate() {
         r.depth = s1 > 0.0 ? s2 / s1 : 0.0;
         // The skirt: points outside the shape, within skirt x depth of it, touch it too.
         const double skirt = c.skirt * r.depth;
-        if (r.depth > 0.0)
-            for (const Sample& smp : found)
+        if (r.depth > 0.0) {
+            for (int i = 0; i < n; ++i)
+                if (bound[i] > 0.0 && bound[i] < skirt) sample(i, rim);
+            // Merge the two passes in grid order (each is ascending in the point).
+            size_t ia = 0, ib = 0;
+            while (ia < found.size() || ib < rim.size()) {
+                const bool takeA = ib == rim.size() ||
+                                   (ia < found.size() && found[ia].point < rim[ib].point);
+                const Sample& smp = takeA ? found[ia++] : rim[ib++];
                 if (smp.delta > -skirt) r.samples.push_back(smp);
+            }
+        }
         for (size_t k = 0; k < r.samples.size(); ++k) {
             const Sample& smp = r.samples[k];
             if (r.deepest < 0 || smp.delta > r.samples[r.deepest].delta) r.deepest = int(k);
