@@ -112,6 +112,25 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
               cosim::PatientOnArrayOptions::BagModel::FiniteElement);
     const io::PatientOnArrayScenario r = readWith("30 mm", "reduced", shipped);
     EXPECT_EQ(r.options.model, cosim::PatientOnArrayOptions::BagModel::Reduced);
+    // The coupling's defaults follow the model: the tangent scheme and the body at 1e-4 for
+    // reduced bags, the implicit scheme and 1e-6 for finite-element ones; a scenario's own
+    // coupling keys stand.
+    EXPECT_EQ(r.options.coupling.scheme, cosim::Scheme::Tangent);
+    EXPECT_DOUBLE_EQ(r.options.integrator.accuracy, 1e-4);
+    const io::PatientOnArrayScenario fe = readWith("30 mm", "finite-element", "");
+    EXPECT_EQ(fe.options.coupling.scheme, cosim::Scheme::Implicit);
+    EXPECT_DOUBLE_EQ(fe.options.integrator.accuracy, 1e-6);
+    {
+        std::string t = kScenario;
+        t.replace(t.find("MESH"), 4, "30 mm");
+        t.replace(t.find("MODEL"), 5, "reduced");
+        t.replace(t.find("CAL"), 3, ", calibration: " + shipped);
+        t += "coupling: {scheme: implicit, body_accuracy: 1e-6}\n";
+        const io::PatientOnArrayScenario own = io::readPatientOnArrayScenario(io::ScenarioFile::parse(
+            t, std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/r.yaml"));
+        EXPECT_EQ(own.options.coupling.scheme, cosim::Scheme::Implicit);
+        EXPECT_DOUBLE_EQ(own.options.integrator.accuracy, 1e-6);
+    }
     ASSERT_TRUE(r.options.reduced);
     EXPECT_DOUBLE_EQ(r.options.reduced->geometry.meshSize, 0.03);
     const io::InputError e1 = expectInputError([] { readWith("30 mm", "reduced", ""); });
