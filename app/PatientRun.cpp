@@ -129,7 +129,11 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
         s << "patient " << patient << "\n"
           << "support: flat, rigid, stiffness " << fmt("%g", o.support.stiffness)
           << " Pa/m, damping " << fmt("%g", o.support.damping) << " Pa s/m, friction "
-          << fmt("%g", o.support.friction) << "; settle time " << fmt("%g", o.settleTime) << " s, "
+          << fmt("%g", o.support.friction)
+          << (o.support.frictionLaw == body::SupportFrictionLaw::StickSlip
+                  ? fmt(" (stick-slip, %g mm)", 1e3 * o.support.stickDistance)
+                  : fmt(" (regularised, %g mm/s)", 1e3 * o.support.slipVelocity))
+          << "; settle time " << fmt("%g", o.settleTime) << " s, "
           << r.steps << " integrator steps, " << fmt("%.2f", r.wallSeconds) << " s wall-clock\n"
           << table.str();
         c.close();

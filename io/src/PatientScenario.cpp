@@ -50,6 +50,7 @@ std::vector<std::string> getPostureChoices() {
         {"damping", "support", "damping"},
         {"friction", "support", "friction"},
         {"slipVelocity", "support", "slip_velocity"},
+        {"stickDistance", "support", "stick_distance"},
         {"sampleSpacing", "support", "sample_spacing"},
         {"height", "support", "height"},
         {"settleTime", "", "settle_time"},
@@ -162,14 +163,28 @@ PatientOnSupportScenario readPatientOnSupportScenario(const ScenarioFile& file) 
     const ScenarioNode sup = root.getSection("support", false);
     if (!sup.isNull()) {
         sup.checkKeys(
-            {}, {"height", "stiffness", "damping", "friction", "slip_velocity", "sample_spacing"});
+            {}, {"height", "stiffness", "damping", "friction", "friction_law", "slip_velocity",
+                 "stick_distance", "sample_spacing"});
         body::PlaneSupportOptions& so = o.support;
         so.height = sup.getQuantity("height", D::Length, so.height);
         so.stiffness = sup.getQuantity("stiffness", D::StiffnessPerArea, so.stiffness);
         // Pa s/m has no unit of its own in io::Units: a plain number in Pa s/m.
         so.damping = sup.getNumber("damping", so.damping);
         so.friction = sup.getNumber("friction", so.friction);
+        // The friction law (body/SupportContact.h): regularised (the default here) or
+        // stick-slip (as the bed board under the bags); each law's own parameter only.
+        const std::string law =
+            sup.getChoice("friction_law", {"regularised", "stick-slip"}, "regularised");
+        so.frictionLaw = law == "stick-slip" ? body::SupportFrictionLaw::StickSlip
+                                             : body::SupportFrictionLaw::Regularised;
+        if (sup.has("slip_velocity") && law != "regularised")
+            sup.fail("slip_velocity", "is the regularised law's; valid only with friction_law: "
+                                      "regularised (this file's law: " + law + ")");
+        if (sup.has("stick_distance") && law != "stick-slip")
+            sup.fail("stick_distance", "is the stick-slip law's; valid only with friction_law: "
+                                       "stick-slip (this file's law: " + law + ")");
         so.slipVelocity = sup.getQuantity("slip_velocity", D::Velocity, so.slipVelocity);
+        so.stickDistance = sup.getQuantity("stick_distance", D::Length, so.stickDistance);
         so.sampleSpacing = sup.getQuantity("sample_spacing", D::Length, so.sampleSpacing);
     }
     o.settleTime = root.getQuantity("settle_time", D::Time, o.settleTime);

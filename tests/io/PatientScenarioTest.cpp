@@ -161,3 +161,33 @@ TEST(PatientScenario, ReportsInvalidSupportOptionAtItsKey) {
         EXPECT_EQ(e.getKey(), "support.friction");
     }
 }
+
+TEST(PatientScenario, TheSupportsFrictionLawIsRegularisedByDefaultAndCanBeStickSlip) {
+    auto read = [](const std::string& lines) {
+        std::string text = kGood;
+        text.insert(text.find("patient:"), lines);
+        return io::readPatientOnSupportScenario(io::ScenarioFile::parse(text, "sup.yaml"));
+    };
+    EXPECT_EQ(read("").settle.support.frictionLaw, body::SupportFrictionLaw::Regularised);
+    const io::PatientOnSupportScenario s =
+        read("  friction_law: stick-slip\n  stick_distance: 0.5 mm\n");
+    EXPECT_EQ(s.settle.support.frictionLaw, body::SupportFrictionLaw::StickSlip);
+    EXPECT_DOUBLE_EQ(s.settle.support.stickDistance, 5e-4);
+    struct Bad {
+        std::string lines, key;
+        int line;
+    };
+    for (const Bad& b : std::vector<Bad>{
+             {"  friction_law: sticky\n", "support.friction_law", 6},
+             {"  slip_velocity: 5 mm/s\n  friction_law: stick-slip\n", "support.slip_velocity", 6},
+             {"  stick_distance: 1 mm\n", "support.stick_distance", 6},
+             {"  friction_law: stick-slip\n  stick_distance: 0 mm\n", "support.stick_distance", 7}}) {
+        try {
+            read(b.lines);
+            ADD_FAILURE() << "accepted:\n" << b.lines;
+        } catch (const io::InputError& e) {
+            EXPECT_EQ(e.getKey(), b.key) << b.lines;
+            EXPECT_EQ(e.getLine(), b.line) << b.lines;
+        }
+    }
+}
