@@ -40,6 +40,11 @@ const std::string kMachine =
 const std::string kPressure = "time [s],pressure [kPa]\n0,0.5\n9,0.9\n18,0.6\n";
 const std::string kFlow = "time (s),mass (g)\n0,3.501\n18,3.499\n";
 
+std::string replaceAll(std::string s, const std::string& a, const std::string& b) {
+    s.replace(s.find(a), a.size(), b);
+    return s;
+}
+
 class MeasuredDataTest : public ::testing::Test {
   protected:
     void SetUp() override {
@@ -59,13 +64,22 @@ class MeasuredDataTest : public ::testing::Test {
     io::InputError readError() {
         return expectInputError([&] { io::readMeasuredData(m_dir.string()); });
     }
+    // Writes d into the folder copy/ and reads it back (the copy's manifest pointed at the real
+    // scenario, as the writer writes the scenario's text given).
+    diagnose::MeasuredData writeAndReadBack(const diagnose::MeasuredData& d) {
+        const fs::path out = m_dir / "copy";
+        fs::create_directories(out);
+        io::writeMeasuredData(out.string(), d, "kind: seed-load-test\n", "# copy\n");
+        std::ifstream in(out / "measured.yaml");
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        text = replaceAll(text, "scenario: scenario.yaml",
+                          "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/tiny-load-test.yaml");
+        std::ofstream(out / "measured.yaml") << text;
+        return io::readMeasuredData(out.string());
+    }
     fs::path m_dir;
 };
 
-std::string replaceAll(std::string s, const std::string& a, const std::string& b) {
-    s.replace(s.find(a), a.size(), b);
-    return s;
-}
 
 }  // namespace
 
@@ -241,16 +255,7 @@ TEST_F(MeasuredDataTest, NoTestsAndNoStiffnessIsRefused) {
 
 TEST_F(MeasuredDataTest, WrittenFolderReadsBack) {
     const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
-    const fs::path out = m_dir / "copy";
-    fs::create_directories(out);
-    io::writeMeasuredData(out.string(), d, "kind: seed-load-test\n", "# copy\n");
-    // The scenario written is the text given; point the copy at the real one to read it.
-    std::ifstream in(out / "measured.yaml");
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    text = replaceAll(text, "scenario: scenario.yaml",
-                      "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/tiny-load-test.yaml");
-    std::ofstream(out / "measured.yaml") << text;
-    const diagnose::MeasuredData r = io::readMeasuredData(out.string());
+    const diagnose::MeasuredData r = writeAndReadBack(d);
     ASSERT_EQ(r.tests.size(), 1u);
     EXPECT_NEAR(r.tests[0].force[2], 4.0, 1e-9);
     EXPECT_NEAR(r.tests[0].pressure.value[1], 900.0, 1e-6);
@@ -281,15 +286,7 @@ TEST_F(MeasuredDataTest, StatedInputUncertaintiesReadInSiAndAreOptional) {
     // Written and read back.
     d.tests[0].gasMassUncertainty = 0.03e-3;
     d.protocol.roomTemperatureUncertainty = 0.25, d.protocol.roomTemperatureUncertaintyStated = true;
-    const fs::path out = m_dir / "copy";
-    fs::create_directories(out);
-    io::writeMeasuredData(out.string(), d, "kind: seed-load-test\n", "# copy\n");
-    std::ifstream in(out / "measured.yaml");
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    text = replaceAll(text, "scenario: scenario.yaml",
-                      "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/tiny-load-test.yaml");
-    std::ofstream(out / "measured.yaml") << text;
-    const diagnose::MeasuredData r = io::readMeasuredData(out.string());
+    const diagnose::MeasuredData r = writeAndReadBack(d);
     EXPECT_NEAR(r.tests[0].gasMassUncertainty, 0.03e-3, 1e-12);
     EXPECT_NEAR(r.protocol.roomTemperatureUncertainty, 0.25, 1e-12);
 }
