@@ -833,6 +833,24 @@ io::PatientOnArrayScenario readReducedScenario(const std::string& scenario,
     return sc;
 }
 
+// What replay() and feBag() start from: the scenario with reduced bags, its patient on the
+// array, the body's surface, and a run's bag readings and body frames.
+struct RunReplay {
+    io::PatientOnArrayScenario sc;
+    cosim::PatientOnArray poa;
+    const body::BodyModel& model;
+    cosim::BodySurface surf;
+    RunBags fe;
+    std::map<long, Eigen::Matrix3Xd> frames;
+    RunReplay(const std::string& scenario, const std::string& calPath, const std::string& run)
+        : sc(readReducedScenario(scenario, calPath)),
+          poa(sc.patient, sc.options),
+          model(poa.getModel()),
+          surf(cosim::makeBodySurface(model)),
+          fe(readRunBags(run)),
+          frames(readBodyFrames(run)) {}
+};
+
 // Replays a run's body motion onto reduced bags: at each shape frame of RUN (every segment's
 // pose fitted to the body's surface nodes, each bag's gas mass from its bags.csv), every bag's
 // vertical force and gas pressure beside the run's, and per shape the reduced depth, force,
@@ -840,12 +858,8 @@ io::PatientOnArrayScenario readReducedScenario(const std::string& scenario,
 // so what differs is the bag model alone, not where the body went. Of a reduced run: its own
 // forces again (a check of the replay).
 int replay(const std::string& scenario, const std::string& calPath, const std::string& run) {
-    const io::PatientOnArrayScenario sc = readReducedScenario(scenario, calPath);
-    cosim::PatientOnArray poa(sc.patient, sc.options);
-    const body::BodyModel& model = poa.getModel();
-    const cosim::BodySurface surf = cosim::makeBodySurface(model);
-    const RunBags fe = readRunBags(run);
-    const std::map<long, Eigen::Matrix3Xd> frames = readBodyFrames(run);
+    RunReplay rr(scenario, calPath, run);
+    auto& [sc, poa, model, surf, fe, frames] = rr;
     std::vector<cosim::ReducedBag*> bags;
     for (size_t i = 0; i < poa.getBagIndices().size(); ++i)
         bags.push_back(dynamic_cast<cosim::ReducedBag*>(&poa.updBag(int(i))));
@@ -903,12 +917,8 @@ int replay(const std::string& scenario, const std::string& calPath, const std::s
 // gas changed, then the shapes moved).
 int feBag(const std::string& scenario, const std::string& calPath, const std::string& run,
           int bagIndex, const std::string& segList, double t0, double t1) {
-    const io::PatientOnArrayScenario sc = readReducedScenario(scenario, calPath);
-    cosim::PatientOnArray poa(sc.patient, sc.options);
-    const body::BodyModel& model = poa.getModel();
-    const cosim::BodySurface surf = cosim::makeBodySurface(model);
-    const RunBags fe = readRunBags(run);
-    const std::map<long, Eigen::Matrix3Xd> frames = readBodyFrames(run);
+    RunReplay rr(scenario, calPath, run);
+    auto& [sc, poa, model, surf, fe, frames] = rr;
     std::vector<int> segs;
     for (const cosim::ShapeBagPair& p : poa.getPairs())
         if (p.bag == bagIndex &&
