@@ -214,6 +214,34 @@ io::PatientOnArrayScenario readScenario(const std::string& path) {
     return io::readPatientOnArrayScenario(io::ScenarioFile::load(path));
 }
 
+// The highest point of a mesh's surface (nodes x in the bag frame) over each column of the
+// calibration's grid (ray against triangles); NaN where no triangle covers the column.
+Eigen::MatrixXd columnTops(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xi& tris,
+                           const cosim::ReducedBagCalibration& c) {
+    Eigen::MatrixXd top = Eigen::MatrixXd::Constant(c.nx, c.ny, std::nan(""));
+    for (int t = 0; t < tris.cols(); ++t) {
+        const Vec3 a = x.col(tris(0, t)), b = x.col(tris(1, t)), d = x.col(tris(2, t));
+        const double det = (b.x() - a.x()) * (d.y() - a.y()) - (d.x() - a.x()) * (b.y() - a.y());
+        if (std::abs(det) < 1e-14) continue;
+        const double xmin = std::min({a.x(), b.x(), d.x()}), xmax = std::max({a.x(), b.x(), d.x()});
+        const double ymin = std::min({a.y(), b.y(), d.y()}), ymax = std::max({a.y(), b.y(), d.y()});
+        for (int ix = std::max(0, int(std::ceil((xmin - c.x0) / c.pitch)));
+             ix < c.nx && c.x0 + ix * c.pitch <= xmax; ++ix)
+            for (int iy = std::max(0, int(std::ceil((ymin - c.y0) / c.pitch)));
+                 iy < c.ny && c.y0 + iy * c.pitch <= ymax; ++iy) {
+                const double px = c.x0 + ix * c.pitch, py = c.y0 + iy * c.pitch;
+                const double u =
+                    ((px - a.x()) * (d.y() - a.y()) - (d.x() - a.x()) * (py - a.y())) / det;
+                const double w =
+                    ((b.x() - a.x()) * (py - a.y()) - (px - a.x()) * (b.y() - a.y())) / det;
+                if (u < -1e-12 || w < -1e-12 || u + w > 1 + 1e-12) continue;
+                const double z = a.z() + u * (b.z() - a.z()) + w * (d.z() - a.z());
+                if (!(top(ix, iy) >= z)) top(ix, iy) = z;
+            }
+    }
+    return top;
+}
+
 // The unloaded bag at a mass: gauge pressure, volume, its top heights on the grid.
 void unloaded(const bags::AirbagSpec& spec, double mass, cosim::ReducedBagCalibration& c,
               bool setGrid) {
@@ -237,29 +265,7 @@ void unloaded(const bags::AirbagSpec& spec, double mass, cosim::ReducedBagCalibr
     }
     c.gaugePressures.push_back(pv / v);
     c.volumes.push_back(v);
-    // The highest point of the bag's surface over each grid column (ray against triangles).
-    const Eigen::Matrix3Xi& tris = bag.getMesh().tris;
-    Eigen::MatrixXd top = Eigen::MatrixXd::Constant(c.nx, c.ny, std::nan(""));
-    for (int t = 0; t < tris.cols(); ++t) {
-        const Vec3 a = x.col(tris(0, t)), b = x.col(tris(1, t)), d = x.col(tris(2, t));
-        const double det = (b.x() - a.x()) * (d.y() - a.y()) - (d.x() - a.x()) * (b.y() - a.y());
-        if (std::abs(det) < 1e-14) continue;
-        const double xmin = std::min({a.x(), b.x(), d.x()}), xmax = std::max({a.x(), b.x(), d.x()});
-        const double ymin = std::min({a.y(), b.y(), d.y()}), ymax = std::max({a.y(), b.y(), d.y()});
-        for (int ix = std::max(0, int(std::ceil((xmin - c.x0) / c.pitch)));
-             ix < c.nx && c.x0 + ix * c.pitch <= xmax; ++ix)
-            for (int iy = std::max(0, int(std::ceil((ymin - c.y0) / c.pitch)));
-                 iy < c.ny && c.y0 + iy * c.pitch <= ymax; ++iy) {
-                const double px = c.x0 + ix * c.pitch, py = c.y0 + iy * c.pitch;
-                const double u =
-                    ((px - a.x()) * (d.y() - a.y()) - (d.x() - a.x()) * (py - a.y())) / det;
-                const double w =
-                    ((b.x() - a.x()) * (py - a.y()) - (px - a.x()) * (b.y() - a.y())) / det;
-                if (u < -1e-12 || w < -1e-12 || u + w > 1 + 1e-12) continue;
-                const double z = a.z() + u * (b.z() - a.z()) + w * (d.z() - a.z());
-                if (!(top(ix, iy) >= z)) top(ix, iy) = z;
-            }
-    }
+    Eigen::MatrixXd top = columnTops(x, bag.getMesh().tris, c);
     // Columns whose top is the flat bottom panel are not bag top.
     for (int i = 0; i < top.size(); ++i)
         if (top(i) < 2e-3) top(i) = std::nan("");
@@ -938,17 +944,64 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
     };
     const long k0 = std::lround(t0 * 1e3), k1 = std::lround(t1 * 1e3);
     std::vector<Eigen::Isometry3d> start;
+    std::vector<std::shared_ptr<bags::RigidShape>> feShapes;
     for (int seg : segs) {
         start.push_back(shapePoseOf(model, surf, frames.at(k0), seg));
         for (int k = 0; k < 2; ++k) {
             auto s = cosim::makeBagShape(model.getContactShape(static_cast<body::Segment>(seg))).shape;
             s->setPose(lift(start.back(), 0.3));
-            if (k == 0)
+            if (k == 0) {
                 bag.addShape(s, sc.options.contact);
-            else
+                feShapes.push_back(s);
+            } else {
                 red.addShape(s);
+            }
         }
     }
+    // Where the FE bag's gas is, against the taut bag's enclosure (docs/reduced-bag.md, "Why
+    // the coarse turn under-turns at the end"): over the calibration's grid columns, the FE
+    // film's top h_FE, the taut top h_t (the calibration's top at its smallest taut mass) and
+    // the enclosure h_env: h_t, or the lowest point of a shape on the column where a shape
+    // comes below h_t (the film straight down under the shapes).
+    const cosim::ReducedBagCalibration& cal = *sc.options.reduced;
+    int tautIndex = -1;
+    for (size_t k = 0; k < cal.masses.size() && tautIndex < 0; ++k)
+        if (cal.gaugePressures[k] > 200.0) tautIndex = int(k);
+    auto gasVolumes = [&](std::string& out) {
+        Eigen::Matrix3Xd xB = spec.X_GB.inverse() * bag.getPositions();
+        const Eigen::MatrixXd hFE = columnTops(xB, bag.getMesh().tris, cal);
+        const double a = cal.pitch * cal.pitch;
+        double vT = 0, vEnv = 0, vFE = 0, above = 0, below = 0, shapes = 0;
+        for (int ix = 0; ix < cal.nx; ++ix)
+            for (int iy = 0; iy < cal.ny; ++iy) {
+                bool ok = true;
+                for (const Eigen::MatrixXd& t : cal.top) ok = ok && std::isfinite(t(ix, iy));
+                if (!ok) continue;
+                const double ht = cal.top[size_t(tautIndex)](ix, iy);
+                double env = ht;
+                const Vec3 pB(cal.x0 + cal.pitch * ix, cal.y0 + cal.pitch * iy, 0.0);
+                double taken = 0.0;
+                for (double z = 0.0005; z < ht; z += 0.001) {
+                    const Vec3 pG = spec.X_GB * Vec3(pB.x(), pB.y(), z);
+                    bool in = false;
+                    for (const auto& sh : feShapes)
+                        in = in || sh->calcSignedDistance(pG, nullptr, nullptr) < 0.0;
+                    if (in) {
+                        env = std::min(env, z - 0.0005);
+                        taken += 0.001;
+                    }
+                }
+                const double h = std::isfinite(hFE(ix, iy)) ? std::max(0.0, hFE(ix, iy)) : 0.0;
+                vT += a * ht, vEnv += a * env, vFE += a * h, shapes += a * taken;
+                above += a * std::max(0.0, h - env), below += a * std::max(0.0, env - h);
+            }
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "  columns [mL]: taut %.0f, shapes in it %.0f, enclosure %.0f, FE %.0f; "
+                      "FE above the enclosure %.0f, below %.0f",
+                      vT * 1e6, shapes * 1e6, vEnv * 1e6, vFE * 1e6, above * 1e6, below * 1e6);
+        out = buf;
+    };
     bag.inflate(fe.at.at(k0).at(bagIndex)[0]);
     red.setGasMass(fe.at.at(k0).at(bagIndex)[0]);
     for (int j = 1; j <= 30; ++j) {
@@ -993,9 +1046,14 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
             per += buf;
         }
         for (int c = 0; c < bag.getNumChambers(); ++c) V += bag.getChamberState(c).volume;
-        std::printf("%.2f %.3f %6.3f %6.1f %6.3f %.4f %6.1f %6.3f %6.1f %s\n", tk * 1e-3,
-                    ran[0] * 1e3, ran[1] * 1e-3, ran[2], bag.getChamberState(0).gaugePressure * 1e-3,
-                    V * 1e3, fFE, red.getGaugePressure() * 1e-3, fRed, per.c_str());
+        double vs = 0.0;
+        for (size_t i = 0; i < segs.size(); ++i) vs += red.getOverlapVolume(int(i));
+        std::string cols;
+        if (tautIndex >= 0) gasVolumes(cols);
+        std::printf("%.2f %.3f %6.3f %6.1f %6.3f %.4f %6.1f %6.3f %6.1f %s  V_s %.0f mL%s\n",
+                    tk * 1e-3, ran[0] * 1e3, ran[1] * 1e-3, ran[2],
+                    bag.getChamberState(0).gaugePressure * 1e-3, V * 1e3, fFE,
+                    red.getGaugePressure() * 1e-3, fRed, per.c_str(), vs * 1e6, cols.c_str());
         std::fflush(stdout);
     }
     return 0;

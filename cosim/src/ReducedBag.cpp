@@ -15,6 +15,9 @@ namespace {
 constexpr double kMinSlope = 0.3;      // least -n_z a contact's area is divided by
 constexpr double kColumnOnset = 0.01;  // [m] depth over which the column is blended in
 constexpr double kSlackWidth = 100.0;  // [Pa] width of the smooth turn from slack to taut
+// A chord's end on a surface within this of vertical (|n . e|) moves too fast along its
+// column to carry a derivative; its share of the volume's tangent is left out.
+constexpr double kGrazing = 1e-3;
 
 // A point nearing a shape's medial axis (deep inside a limb) has a closest surface point that
 // jumps from side to side; its share fades out within kAxisFade of the axis, 1 / |dn/dp|.
@@ -100,6 +103,8 @@ ReducedBag::ReducedBag(std::shared_ptr<const ReducedBagCalibration> calibration,
     if (m_pVfree.size() < 2)
         throw std::invalid_argument(
             "reduced bag calibration: needs at least 2 taut unloaded states (above 200 Pa)");
+    for (size_t i = 0; i < c.masses.size() && m_tautMass == 0.0; ++i)
+        if (c.gaugePressures[i] > 200.0) m_tautMass = c.masses[i];
     m_points.resize(3, int(m_gridIndex.size()));
     m_areas = Eigen::VectorXd::Constant(int(m_gridIndex.size()), c.pitch * c.pitch);
     setGasMass(c.masses.front());
@@ -186,11 +191,86 @@ double ReducedBag::interpolateTop(int point, double mass) const {
     const ReducedBagCalibration& c = *m_cal;
     const int g = m_gridIndex[point], ix = g % c.nx, iy = g / c.nx;
     const std::vector<double>& m = c.masses;
+    mass = std::max(mass, m_tautMass);  // a slack bag: the taut bag's top
     if (mass <= m.front()) return c.top.front()(ix, iy);
     if (mass >= m.back()) return c.top.back()(ix, iy);
     const size_t k = size_t(std::upper_bound(m.begin(), m.end(), mass) - m.begin()) - 1;
     const double u = (mass - m[k]) / (m[k + 1] - m[k]);
     return (1.0 - u) * c.top[k](ix, iy) + u * c.top[k + 1](ix, iy);
+}
+
+bool ReducedBag::findChord(const bags::RigidShape& shape, const Vec3& t, Chord& ch) const {
+    const Vec3 e = m_X_GB.linear().col(2);  // the bag's up
+    const double boardZ = e.dot(m_X_GB.translation());
+    auto height = [&](const Vec3& p) { return e.dot(p) - boardZ; };
+    auto phiAt = [&](const Vec3& p) { return shape.calcSignedDistance(p, nullptr, nullptr); };
+    // Where the line down from p0 (phi f0 there, not 0) crosses the surface: sphere steps
+    // (never past the surface) to within 1e-6 m, a bracket by doubling steps, then the
+    // Illinois method to 1e-13 m. False if the board comes first or, from outside, the line
+    // passes the shape.
+    auto cross = [&](const Vec3& p0, double f0, Vec3& at, Vec3& n) {
+        const bool outside = f0 > 0.0;
+        const double h0 = height(p0);
+        double s = 0.0, f = f0;
+        for (int it = 0; it < 400 && std::abs(f) > 1e-6; ++it) {
+            const double next = s + std::abs(f);
+            if (next > h0) return false;
+            const double fn = phiAt(p0 - next * e);
+            if (outside && fn > f - 1e-12) return false;  // passing by
+            s = next, f = fn;
+        }
+        double sa = s, fa = f, ds = 2.0 * std::abs(f) + 1e-9, sb = s, fb = f;
+        for (int it = 0;; ++it) {
+            sb = sa + ds;
+            if (sb > h0 || it > 60) return false;
+            fb = phiAt(p0 - sb * e);
+            if ((fb > 0.0) != (fa > 0.0)) break;
+            if (outside && fb > fa) return false;  // grazing past
+            sa = sb, fa = fb, ds *= 2.0;
+        }
+        int side = 0;
+        for (int it = 0; it < 200 && sb - sa > 1e-13; ++it) {
+            const double sc = (sa * fb - sb * fa) / (fb - fa);
+            const double fc = phiAt(p0 - sc * e);
+            if (fc == 0.0) {
+                sa = sb = sc;
+                break;
+            }
+            if ((fc > 0.0) == (fb > 0.0)) {
+                sb = sc, fb = fc;
+                if (side == -1) fa *= 0.5;
+                side = -1;
+            } else {
+                sa = sc, fa = fc;
+                if (side == 1) fb *= 0.5;
+                side = 1;
+            }
+        }
+        at = p0 - 0.5 * (sa + sb) * e;
+        shape.calcSignedDistance(at, nullptr, &n);
+        return true;
+    };
+    ch = Chord{};
+    const double phi = phiAt(t);
+    ch.topInside = phi < 0.0;
+    Vec3 p = t;
+    double inside = phi;
+    if (!ch.topInside) {
+        if (!cross(t, phi, ch.hi, ch.nhi)) return false;
+        // The lower end from just inside the upper one.
+        p = ch.hi - 1e-9 * e;
+        inside = phiAt(p);
+        if (!(inside < 0.0)) return false;
+    } else {
+        ch.hi = t;
+    }
+    ch.onBoard = !cross(p, inside, ch.lo, ch.nlo);
+    if (ch.onBoard) {
+        ch.lo = p - height(p) * e;
+        ch.nlo = -e;
+    }
+    ch.length = height(ch.hi) - height(ch.lo);
+    return ch.length > 0.0;
 }
 
 double ReducedBag::calcFreeVolume(double P, double* dVdP) const {
@@ -343,14 +423,27 @@ void ReducedBag::evaluate() {
             if (bound[i] <= 0.0) sample(i, found);
         }
         // The depth: the mean of delta weighted by a delta over the overlap (smooth in the
-        // pose), and the overlap volume.
+        // pose).
         double s1 = 0.0, s2 = 0.0;
         for (const Sample& smp : found)
             if (smp.delta > 0.0) {
                 s1 += a * smp.blend * smp.delta;
                 s2 += a * smp.blend * smp.delta * smp.delta;
-                r.volume += a * smp.blend * smp.delta / std::max(-smp.n.z(), kMinSlope);
             }
+        // The overlap volume: the shape's volume inside the columns below the top and above
+        // the board, column by column.
+        for (int i = 0; i < n; ++i) {
+            // (a column whose midpoint is further from the shape than half its height misses)
+            const double hcol = (m_X_GB.inverse() * Vec3(top.col(i))).z();
+            const Vec3 mid = top.col(i) - 0.5 * hcol * m_X_GB.linear().col(2);
+            if (shape.calcDistanceLowerBound(mid) > 0.5 * hcol + 1e-6) continue;
+            Chord ch;
+            if (findChord(shape, top.col(i), ch)) {
+                ch.point = i;
+                r.volume += a * ch.length;
+                r.chords.push_back(ch);
+            }
+        }
         r.depthSum1 = s1, r.depthSum2 = s2;
         r.depth = s1 > 0.0 ? s2 / s1 : 0.0;
         // The skirt: points outside the shape, within skirt x depth of it, touch it too.
@@ -437,19 +530,21 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, &dKappa);
     const double beta = lookup(c.volumeFactor, m_cur.mass, r.depth, &dBeta);
     Row6 dDepth = Row6::Zero(), dVolume = Row6::Zero();
-    // V_s = sum a b delta / g and the depth s2 / s1 over delta > 0 (the blend b held).
+    // The depth s2 / s1 over delta > 0 (the blend b held).
     const double s1 = r.depthSum1, s2 = r.depthSum2;
     for (const Sample& smp : r.samples) {
         if (!(smp.delta > 0.0)) continue;
-        const Mat36 J = jacobian(smp.t);
-        const Row6 dDelta = smp.n.transpose() * J;
-        const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
-        const double g = -smp.n.z(), ab = a * smp.blend;
-        if (g < kMinSlope)
-            dVolume += ab / kMinSlope * dDelta;
-        else
-            dVolume += ab * (dDelta / g + smp.delta / (g * g) * dn.row(2));
-        dDepth += ab * (2.0 * smp.delta * s1 - s2) / (s1 * s1) * dDelta;
+        const Row6 dDelta = smp.n.transpose() * jacobian(smp.t);
+        dDepth += a * smp.blend * (2.0 * smp.delta * s1 - s2) / (s1 * s1) * dDelta;
+    }
+    // V_s = sum a (z_hi - z_lo) over the chords: a surface end moves along the fixed column by
+    // dz = n.v / n.e (e up); the top point and the board stay.
+    const Vec3 e = m_X_GB.linear().col(2);
+    for (const Chord& ch : r.chords) {
+        if (!ch.topInside && std::abs(ch.nhi.dot(e)) > kGrazing)
+            dVolume += a / ch.nhi.dot(e) * ch.nhi.transpose() * jacobian(ch.hi);
+        if (!ch.onBoard && std::abs(ch.nlo.dot(e)) > kGrazing)
+            dVolume -= a / ch.nlo.dot(e) * ch.nlo.transpose() * jacobian(ch.lo);
     }
     const Row6 dP = m_dPdV * (beta * dVolume + r.volume * dBeta * dDepth);
     const Row6 dK = dKappa * dDepth;
@@ -628,7 +723,7 @@ void loadFixed(bags::StateReader& r, V& v) {
 }  // namespace
 
 void ReducedBag::saveState(bags::StateWriter& w) const {
-    w.tag("reduced bag");
+    w.tag("reduced bag 2");
     for (const State* s : {&m_cur, &m_committed}) {
         w.pod(s->mass), w.pod(s->pressure), w.pod(s->time);
         w.pod(s->flow), w.pod(s->target), w.pod(s->rate);
@@ -642,6 +737,11 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
             w.pod(smp.point), w.pod(smp.delta), w.pod(smp.blend);
             saveFixed(w, smp.t), saveFixed(w, smp.c), saveFixed(w, smp.n), saveFixed(w, smp.dndp);
         }
+        w.pod(std::uint64_t(res.chords.size()));
+        for (const Chord& ch : res.chords) {
+            w.pod(ch.point), w.pod(ch.topInside), w.pod(ch.onBoard), w.pod(ch.length);
+            saveFixed(w, ch.hi), saveFixed(w, ch.nhi), saveFixed(w, ch.lo), saveFixed(w, ch.nlo);
+        }
         w.pod(res.volume), w.pod(res.depth), w.pod(res.area);
         w.pod(res.depthSum1), w.pod(res.depthSum2), w.pod(res.deepest);
         saveFixed(w, res.wrench.torque), saveFixed(w, res.wrench.force);
@@ -653,7 +753,7 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
 }
 
 void ReducedBag::loadState(bags::StateReader& r) {
-    r.tag("reduced bag");
+    r.tag("reduced bag 2");
     for (State* s : {&m_cur, &m_committed}) {
         r.pod(s->mass), r.pod(s->pressure), r.pod(s->time);
         r.pod(s->flow), r.pod(s->target), r.pod(s->rate);
@@ -667,6 +767,11 @@ void ReducedBag::loadState(bags::StateReader& r) {
         for (Sample& smp : res.samples) {
             r.pod(smp.point), r.pod(smp.delta), r.pod(smp.blend);
             loadFixed(r, smp.t), loadFixed(r, smp.c), loadFixed(r, smp.n), loadFixed(r, smp.dndp);
+        }
+        res.chords.resize(r.pod<std::uint64_t>());
+        for (Chord& ch : res.chords) {
+            r.pod(ch.point), r.pod(ch.topInside), r.pod(ch.onBoard), r.pod(ch.length);
+            loadFixed(r, ch.hi), loadFixed(r, ch.nhi), loadFixed(r, ch.lo), loadFixed(r, ch.nlo);
         }
         r.pod(res.volume), r.pod(res.depth), r.pod(res.area);
         r.pod(res.depthSum1), r.pod(res.depthSum2), r.pod(res.deepest);

@@ -68,9 +68,15 @@ std::shared_ptr<const cosim::ReducedBagCalibration> readReducedBagCalibration(
         if (!magic) {
             if (rec != kMagic)
                 r.fail("", "not a reduced bag calibration (its first record must be '" +
-                               std::string(kMagic) + " 1')");
+                               std::string(kMagic) + " 2')");
             const std::vector<double> v = numbers(r, rec, in, 1);
-            if (v[0] != 1.0) r.fail(rec, "format version " + std::to_string(v[0]) + "; valid: 1");
+            if (v[0] == 1.0)
+                r.fail(rec,
+                       "format version 1: its volume factors were measured with the overlap "
+                       "volume of the reduced bag before version 2 (normal depths against the "
+                       "sagged top of a slack bag); valid: 2, made by bench_reduced_bag "
+                       "calibrate (docs/reduced-bag.md#calibration)");
+            if (v[0] != 2.0) r.fail(rec, "format version " + std::to_string(v[0]) + "; valid: 2");
             magic = true;
         } else if (rec == "source") {
             std::string rest;
@@ -205,7 +211,7 @@ void writeReducedBagCalibration(const std::string& path, const cosim::ReducedBag
     std::ofstream f(path);
     if (!f) throw std::runtime_error("cannot write " + path);
     f << std::setprecision(10);
-    f << kMagic << " 1\n"
+    f << kMagic << " 2\n"
       << "# The reduced bag's calibration (docs/reduced-bag.md). SI units: m, kg, Pa, m^3, rad.\n";
     std::istringstream src(c.source);
     for (std::string s; std::getline(src, s);) f << "source " << s << "\n";

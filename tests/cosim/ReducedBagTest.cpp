@@ -67,6 +67,7 @@ TEST(ReducedBag, ASpherePressedIntoAFlatTopCarriesGasPressureTimesItsContactArea
     ReducedBag bag(cal, Eigen::Isometry3d::Identity());
     const double R = 0.05, delta = 0.01;
     bag.addShape(bags::makeEllipsoid(Eigen::Vector3d::Constant(R)));
+    bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, 1.0)));  // clear of the bag
     bag.setGasMass(4.5e-3);
     const double p0 = bag.getGaugePressure();
     bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, 0.1 + R - delta)));

@@ -137,8 +137,20 @@ class ReducedBag : public Bag {
         Eigen::Matrix3d dndp;
         double blend = 1.0;  // share of the point (closest surface or down the column)
     };
+    // One grid column through one shape: the part of the vertical line through the top point
+    // that lies inside the shape, below the top and above the bed board (its length is the
+    // column's share of the overlap volume). Its upper end is the top point (topInside) or
+    // the shape's upper surface `hi`, its lower end the shape's lower surface `lo` or the
+    // board (onBoard); nhi, nlo the outward normals there.
+    struct Chord {
+        int point = -1;
+        bool topInside = false, onBoard = false;
+        double length = 0.0;
+        Vec3 hi, nhi, lo, nlo;
+    };
     struct ShapeResult {
         std::vector<Sample> samples;
+        std::vector<Chord> chords;
         double volume = 0.0, depth = 0.0, area = 0.0;
         double depthSum1 = 0.0, depthSum2 = 0.0;  // sum a b delta, sum a b delta^2
         int deepest = -1;  // sample index
@@ -148,7 +160,11 @@ class ReducedBag : public Bag {
         double mass = 0.0, pressure = 0.0, time = 0.0;
         double flow = 0.0, target = -1.0, rate = 0.0;  // target < 0: flow
     };
+    /// The top at a grid point: the unloaded top at the mass, or at the first taut mass of the
+    /// calibration below it (the slack film wraps the shapes within the taut bag's top).
     double interpolateTop(int point, double mass) const;
+    /// The chord of the column through top point t (Ground) in a shape; false if it misses.
+    bool findChord(const bags::RigidShape& shape, const Vec3& t, Chord& chord) const;
     /// The contact weight of a sample at depth delta of a shape whose deepest depth is
     /// `depth`, and its derivatives.
     double calcWeight(double delta, double depth, double* dDelta, double* dDepth) const;
@@ -169,6 +185,7 @@ class ReducedBag : public Bag {
     Eigen::Matrix3Xd m_points;  // per point: contact point or the top
     Eigen::VectorXd m_areas;
     std::vector<double> m_pVfree, m_Vfree;  // taut unloaded states, ascending pressure
+    double m_tautMass = 0.0;                // the calibration's first taut mass [kg]
     EnvelopeCounts m_envelope;
 };
 
