@@ -219,6 +219,11 @@ bool ReducedBag::findChord(const bags::RigidShape& shape, const Vec3& t, Chord& 
             if (outside && fn > f - 1e-12) return false;  // passing by
             s = next, f = fn;
         }
+        if (f == 0.0 || (f > 0.0) != outside) {  // a sphere step landed on the surface
+            at = p0 - s * e;
+            shape.calcSignedDistance(at, nullptr, &n);
+            return true;
+        }
         double sa = s, fa = f, ds = 2.0 * std::abs(f) + 1e-9, sb = s, fb = f;
         for (int it = 0;; ++it) {
             sb = sa + ds;

@@ -233,3 +233,46 @@ TEST(ReducedBag, GasFlowsReachTheirTargetRollBackAndTheEnvelopeCountsExits) {
     bag.setGasMass(3.0e-3);
     EXPECT_LT(bag.getGaugePressure(), 1.0);
 }
+
+TEST(ReducedBag, ASlackBagPressedByALongShapeStaysAtAmbientUntilItsShapeFillsTheTautBagsDeficit) {
+    // Reference (kappa = beta = 1): below its fill mass the film hangs slack under the taut
+    // bag's top (here 20 mm lower at 3 g than the flat top at 100 mm of the taut 4 and 5 g).
+    // A capsule of radius R lying along the bag, its axis R - delta above the taut top, takes
+    // the circular segment A(delta) = R^2 acos(1 - delta / R) - (R - delta) sqrt(2 R delta -
+    // delta^2) out of each column's length L of the taut bag. The gas stays at ambient
+    // pressure while L A < V_free(0) - m R T / p_amb (90 mL here: delta 10.6 mm), and then
+    // follows (P + p_amb)(V_free(P) - L A) = m R T. Tolerances: the gauge pressure below 1 Pa
+    // at delta 6 mm (the slack turn is 100 Pa wide, its argument here below -15); the overlap
+    // volume within 1 % of L A at 25 mm (a 1 mm grid); the gas law to 1e-9 relative.
+    auto cal = makeCalibration(1e-3, [](double, double, double m) {
+        return m < 3.5e-3 ? 0.08 : 0.1;  // the 3 g top sags
+    });
+    cal->rimWidth = 1e-4;
+    ReducedBag bag(cal, Eigen::Isometry3d::Identity());
+    const double R = 0.05, L = cal->nx * cal->pitch, m = 3e-3;
+    const Eigen::Matrix3d along = rotation(Eigen::Vector3d(0.0, kPi / 2, 0.0));  // axis on x
+    bag.addShape(bags::makeCapsule(R, 0.15));
+    bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, 1.0), along));
+    bag.setGasMass(m);
+    const ReducedBagCalibration& c = *cal;
+    const double slope =
+        (c.volumes[2] - c.volumes[1]) / (c.gaugePressures[2] - c.gaugePressures[1]);
+    auto vfree = [&](double P) { return c.volumes[1] + slope * (P - c.gaugePressures[1]); };
+    const double mrt = m * c.gasConstant * c.temperature;
+    ASSERT_NEAR(vfree(0.0) - mrt / c.ambientPressure, 90e-6, 1e-6);
+    auto segment = [R](double d) {
+        return R * R * std::acos(1.0 - d / R) - (R - d) * std::sqrt(2 * R * d - d * d);
+    };
+    // 6 mm: the shape takes 39 mL of the 90 mL the taut bag has to spare.
+    bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, 0.1 + R - 0.006), along));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    EXPECT_NEAR(bag.getOverlapVolume(0), L * segment(0.006), 0.02 * L * segment(0.006));
+    EXPECT_LT(bag.getGaugePressure(), 1.0);
+    // 25 mm: 236 mL, the gas is compressed.
+    bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, 0.1 + R - 0.025), along));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    const double V = bag.getOverlapVolume(0), P = bag.getGaugePressure();
+    EXPECT_NEAR(V, L * segment(0.025), 0.01 * L * segment(0.025));
+    EXPECT_GT(P, 3e3);
+    EXPECT_NEAR((P + c.ambientPressure) * (vfree(P) - V), mrt, 1e-9 * mrt);
+}
