@@ -466,6 +466,22 @@ int calibrate(const std::string& scenario, const std::string& out) {
             c.pressureFactor.row(i) = c.pressureFactor.row(best);
             c.volumeFactor.row(i) = c.volumeFactor.row(best);
         }
+    // Below the first taut mass the film is slack: the reduced bag measures the shapes
+    // against the taut bag's top there, and the gas fills that enclosure less the shapes'
+    // volume in it (docs/reduced-bag.md, "A slack bag"). Its displaced volume is that volume:
+    // beta 1. The spheres' own beta at those masses (their taut steps) is printed as a check.
+    double tautMass = 0.0;
+    for (int i = 0; i < nm && tautMass == 0.0; ++i)
+        if (c.gaugePressures[i] > 200.0) tautMass = kMasses[i];
+    std::printf("beta of the slack masses from the spheres (not used: beta 1 there):\n");
+    for (int i = 0; i < nm; ++i) {
+        if (kMasses[i] >= tautMass) continue;
+        std::printf("  %.2f g", kMasses[i] * 1e3);
+        for (int j = 0; j < nd; ++j)
+            std::printf(count(i, j) ? " %6.3f" : "      -", c.volumeFactor(i, j));
+        std::printf("\n");
+        c.volumeFactor.row(i).setOnes();
+    }
     std::printf("skirt %.2f; kappa (rows mass, columns depth [mm]; runs averaged):\n       ",
                 c.skirt);
     for (double d : c.depths) std::printf(" %6.0f", d * 1e3);
@@ -500,7 +516,8 @@ int calibrate(const std::string& scenario, const std::string& out) {
         << " N, bending " << spec.bendingStiffness << " N m\n"
         << "calibration shapes: spheres 40, 100 and 220 mm at the apex ridge and the gentle "
            "slope's middle, pressed vertically in 2 mm steps to 80 mm or 400 N; masses 2.5 to "
-           "6.5 g; skirt chosen from 0 to 3 by the contact area (mean |ln(A/A_FE)| "
+           "6.5 g; beta 1 below the first taut mass (the slack film); skirt chosen from 0 to 3 by "
+           "the contact area (mean |ln(A/A_FE)| "
         << bestMiss << ", spread of kappa " << bestSpread << ")";
     c.source = src.str();
     io::writeReducedBagCalibration(out, c);

@@ -445,7 +445,6 @@ void ReducedBag::evaluate() {
             Chord ch;
             if (findChord(shape, top.col(i), ch)) {
                 ch.point = i;
-                r.volume += a * ch.length;
                 r.chords.push_back(ch);
             }
         }
@@ -470,7 +469,59 @@ void ReducedBag::evaluate() {
             if (r.deepest < 0 || smp.delta > r.samples[r.deepest].delta) r.deepest = int(k);
             r.area += a * smp.blend * calcWeight(smp.delta, r.depth, nullptr, nullptr);
         }
-        m_displaced += lookup(c.volumeFactor, m_cur.mass, r.depth, nullptr) * r.volume;
+    }
+    // The columns' overlap: per column the union of the shapes' chords, shared among them in
+    // proportion to their lengths (V_s = sum a length U / S), so that where shapes overlap
+    // each other their common volume is displaced once.
+    {
+        std::vector<std::vector<std::pair<int, int>>> at(n);  // point -> (shape, chord)
+        for (size_t s = 0; s < m_shapes.size(); ++s)
+            for (size_t k = 0; k < m_results[s].chords.size(); ++k)
+                at[m_results[s].chords[k].point].emplace_back(int(s), int(k));
+        std::vector<double> beta(m_shapes.size());
+        for (size_t s = 0; s < m_shapes.size(); ++s)
+            beta[s] = lookup(c.volumeFactor, m_cur.mass, m_results[s].depth, nullptr);
+        const Vec3 e = m_X_GB.linear().col(2);
+        for (int i = 0; i < n; ++i) {
+            if (at[i].size() < 2) continue;
+            std::vector<Chord*> ch;
+            for (const auto& [s, k] : at[i]) ch.push_back(&m_results[size_t(s)].chords[size_t(k)]);
+            std::vector<int> order(ch.size());
+            for (size_t k = 0; k < ch.size(); ++k) order[k] = int(k);
+            std::sort(order.begin(), order.end(),
+                      [&](int u, int v) { return e.dot(ch[u]->lo) < e.dot(ch[v]->lo); });
+            double U = 0.0, S = 0.0, B = 0.0;
+            for (size_t k = 0; k < ch.size(); ++k) {
+                S += ch[k]->length;
+                B += beta[size_t(at[i][k].first)] * ch[k]->length;
+                ch[k]->hiBounds = ch[k]->loBounds = false;
+            }
+            // merged runs of intervals, sorted by their lower ends
+            for (size_t k = 0; k < order.size();) {
+                Chord* bottom = ch[order[k]];
+                Chord* topc = bottom;
+                double hiz = e.dot(bottom->hi);
+                size_t j = k + 1;
+                for (; j < order.size() && e.dot(ch[order[j]]->lo) <= hiz; ++j)
+                    if (e.dot(ch[order[j]]->hi) > hiz) {
+                        topc = ch[order[j]];
+                        hiz = e.dot(topc->hi);
+                    }
+                bottom->loBounds = true;
+                topc->hiBounds = true;
+                U += hiz - e.dot(bottom->lo);
+                k = j;
+            }
+            for (Chord* c2 : ch) c2->share = U / S, c2->sum = S, c2->betaSum = B;
+        }
+        for (size_t s = 0; s < m_shapes.size(); ++s) {
+            ShapeResult& r = m_results[s];
+            for (Chord& ch : r.chords) {
+                if (ch.sum == 0.0) ch.sum = ch.length, ch.betaSum = beta[s] * ch.length;
+                r.volume += a * ch.length * ch.share;
+            }
+            m_displaced += beta[s] * r.volume;
+        }
     }
     m_cur.pressure = solvePressure(m_displaced, &m_dPdV);
     const double P = m_cur.pressure;
@@ -534,7 +585,7 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
     double dKappa = 0.0, dBeta = 0.0;
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, &dKappa);
     const double beta = lookup(c.volumeFactor, m_cur.mass, r.depth, &dBeta);
-    Row6 dDepth = Row6::Zero(), dVolume = Row6::Zero();
+    Row6 dDepth = Row6::Zero();
     // The depth s2 / s1 over delta > 0 (the blend b held).
     const double s1 = r.depthSum1, s2 = r.depthSum2;
     for (const Sample& smp : r.samples) {
@@ -545,13 +596,22 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
     // V_s = sum a (z_hi - z_lo) over the chords: a surface end moves along the fixed column by
     // dz = n.v / n.e (e up); the top point and the board stay.
     const Vec3 e = m_X_GB.linear().col(2);
+    // Where other shapes share a column, this shape's pose changes every sharer's part
+    // beta_r length_r U / S: d(sum_r beta_r a length_r U / S) = a (beta w dl + B / S (dU - w
+    // dl)), w = U / S, B = sum_r beta_r length_r, dU from this chord's ends that bound the
+    // union. That is the displaced volume's change, dVd; alone in a column it is beta a dl.
+    Row6 dVd = Row6::Zero();
     for (const Chord& ch : r.chords) {
+        Row6 dHi = Row6::Zero(), dLo = Row6::Zero();
         if (!ch.topInside && std::abs(ch.nhi.dot(e)) > kGrazing)
-            dVolume += a / ch.nhi.dot(e) * ch.nhi.transpose() * jacobian(ch.hi);
+            dHi = 1.0 / ch.nhi.dot(e) * ch.nhi.transpose() * jacobian(ch.hi);
         if (!ch.onBoard && std::abs(ch.nlo.dot(e)) > kGrazing)
-            dVolume -= a / ch.nlo.dot(e) * ch.nlo.transpose() * jacobian(ch.lo);
+            dLo = 1.0 / ch.nlo.dot(e) * ch.nlo.transpose() * jacobian(ch.lo);
+        const Row6 dl = dHi - dLo;
+        const Row6 dU = (ch.hiBounds ? dHi : Row6::Zero()) - (ch.loBounds ? dLo : Row6::Zero());
+        dVd += a * (beta * ch.share * dl + ch.betaSum / ch.sum * (dU - ch.share * dl));
     }
-    const Row6 dP = m_dPdV * (beta * dVolume + r.volume * dBeta * dDepth);
+    const Row6 dP = m_dPdV * (dVd + r.volume * dBeta * dDepth);
     const Row6 dK = dKappa * dDepth;
 
     Mat6 T = Mat6::Zero();
@@ -745,6 +805,7 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
         w.pod(std::uint64_t(res.chords.size()));
         for (const Chord& ch : res.chords) {
             w.pod(ch.point), w.pod(ch.topInside), w.pod(ch.onBoard), w.pod(ch.length);
+            w.pod(ch.share), w.pod(ch.sum), w.pod(ch.betaSum), w.pod(ch.hiBounds), w.pod(ch.loBounds);
             saveFixed(w, ch.hi), saveFixed(w, ch.nhi), saveFixed(w, ch.lo), saveFixed(w, ch.nlo);
         }
         w.pod(res.volume), w.pod(res.depth), w.pod(res.area);
@@ -776,6 +837,7 @@ void ReducedBag::loadState(bags::StateReader& r) {
         res.chords.resize(r.pod<std::uint64_t>());
         for (Chord& ch : res.chords) {
             r.pod(ch.point), r.pod(ch.topInside), r.pod(ch.onBoard), r.pod(ch.length);
+            r.pod(ch.share), r.pod(ch.sum), r.pod(ch.betaSum), r.pod(ch.hiBounds), r.pod(ch.loBounds);
             loadFixed(r, ch.hi), loadFixed(r, ch.nhi), loadFixed(r, ch.lo), loadFixed(r, ch.nlo);
         }
         r.pod(res.volume), r.pod(res.depth), r.pod(res.area);

@@ -147,6 +147,12 @@ class ReducedBag : public Bag {
         bool topInside = false, onBoard = false;
         double length = 0.0;
         Vec3 hi, nhi, lo, nlo;
+        // Shapes sharing the column (body segments overlap at joints and where a limb lies
+        // on the trunk): the union of their chords U is the column's overlap, shared by their
+        // lengths: this one's share is length U / S (S the lengths' sum). B = sum of beta x
+        // length over them; hiBounds, loBounds: whether this chord's ends bound the union.
+        double share = 1.0, sum = 0.0, betaSum = 0.0;
+        bool hiBounds = true, loBounds = true;
     };
     struct ShapeResult {
         std::vector<Sample> samples;
