@@ -95,8 +95,10 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
     // following. Tolerance 1e-4 of the largest entry. A curved top that sinks with mass,
     // factors that vary with depth and mass, a skirt, a tilted ellipsoid off centre 12 mm
     // deep; a second case, a lower top, presses it 45 mm, through the bed board (the film's
-    // penalty).
-    for (double depth : {0.012, 0.045}) {
+    // penalty); a third as the first with the other shape pressed into the same columns
+    // (their common volume is displaced once: the union of their chords).
+    for (double depth : {0.012, 0.045, 0.0121}) {
+        const bool share = depth == 0.0121;
         const double h = depth < 0.02 ? 0.06 : 0.03;
         auto cal = makeCalibration(2e-3, [h](double x, double y, double m) {
             return h + 4.0 * (m - 3e-3) - 0.8 * x * x - 2.0 * y * y + 0.05 * x;
@@ -118,7 +120,8 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
                                                          : Eigen::Vector3d(0.1, -0.05, 0.4));
         // Its height for that depth (bisection).
         Eigen::Vector3d p(0.02, -0.01, 0.0);
-        bag.setShapeState(1, at(Eigen::Vector3d(-0.06, 0.02, h + 0.025)));
+        bag.setShapeState(1, share ? at(Eigen::Vector3d(0.04, 0.0, h + 0.026))
+                                   : at(Eigen::Vector3d(-0.06, 0.02, h + 0.025)));
         double lo = h, hi = h + 0.3;  // the centre at the top: deep in
         for (int it = 0; it < 50; ++it) {
             p.z() = 0.5 * (lo + hi);
@@ -127,6 +130,15 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
             (bag.getDepth(0) > depth ? lo : hi) = p.z();
         }
         ASSERT_NEAR(bag.getDepth(0), depth, 1e-6);
+        if (share) {  // the shapes do share columns: apart, the ellipsoid's own part grows
+            const double shared = bag.getOverlapVolume(0);
+            bag.setShapeState(1, at(Eigen::Vector3d(0.04, 0.0, 1.0)));
+            bag.advance(0.0);
+            EXPECT_GT(bag.getOverlapVolume(0), 1.05 * shared);
+            bag.setShapeState(1, at(Eigen::Vector3d(0.04, 0.0, h + 0.026)));
+            bag.advance(0.0);
+            ASSERT_NEAR(bag.getOverlapVolume(0), shared, 1e-15);
+        }
         if (depth > 0.02) {  // its underside is below the board: the penalty acts
             ASSERT_LT(bag.getPressurePoints().row(2).minCoeff(), -1e-3);
         }

@@ -100,6 +100,12 @@ TEST(ReducedBagFile, BadRecordsAndNumbersAreLocated) {
     EXPECT_NE(std::string(e2.what()).find("\"0.5x\" is not a number"), std::string::npos);
     const io::InputError e3 = withLine("depths 0 0.01 0.03", "depths 0 0.03 0.01");
     EXPECT_NE(std::string(e3.what()).find("ascending"), std::string::npos);
+    // A calibration of format 1 (its volume factors belong to the overlap volume before
+    // version 2) is refused on its first line, naming the version and how to remake it.
+    const io::InputError e5 = withLine("bagsim-reduced-bag 2", "bagsim-reduced-bag 1");
+    EXPECT_EQ(e5.getLine(), 1);
+    EXPECT_NE(std::string(e5.what()).find("format version 1"), std::string::npos);
+    EXPECT_NE(std::string(e5.what()).find("bench_reduced_bag calibrate"), std::string::npos);
     const io::InputError e4 =
         expectInputError([] { io::readReducedBagCalibration("/nonexistent/c.txt"); });
     EXPECT_NE(std::string(e4.what()).find("cannot open"), std::string::npos);
