@@ -409,10 +409,19 @@ void ReducedBag::evaluate() {
                     p.z() += d;
                     d = shape.calcSignedDistance(p, nullptr, nullptr);
                 }
-                Vec3 nrm;
-                shape.calcSignedDistance(p, nullptr, &nrm);
+                Vec3 nrm, cp;
+                Eigen::Matrix3d curv;
+                double on = 0.0;
+                shape.calcContactGeometry(p, &on, &cp, &nrm, &curv);
+                // At most half the surface's least curvature radius there (1 / |dn/dp|): a
+                // long column through a sunk limb would otherwise put the point past its
+                // axis, where its closest surface is the upper side and the film's pressure
+                // would push the limb down.
                 const double column = smp.t.z() - p.z();
-                col.t = p - column * std::max(-nrm.z(), kMinSlope) * nrm;
+                const double k = curv.norm();
+                const double inward = std::min(column * std::max(-nrm.z(), kMinSlope),
+                                               k > 1e-12 ? 0.5 / k : 1e300);
+                col.t = p - inward * nrm;
                 shape.calcContactGeometry(col.t, &phi, &col.c, &col.n, &col.dndp);
                 col.delta = -phi;
                 col.blend = b * calcAxisFade(col.dndp);
@@ -420,6 +429,10 @@ void ReducedBag::evaluate() {
                 smp.blend = 1.0 - b;
             }
             smp.blend *= calcAxisFade(smp.dndp);
+            // A point outside the shape above it (its closest surface faces up: a shape sunk
+            // below the top) is not film wrapping the shape; it fades out over n_z from -0.15
+            // to +0.15, else the skirt would press a sunk limb down.
+            if (phi > 0.0) smp.blend *= smoothstep((0.15 - smp.n.z()) / 0.3, nullptr);
             if (smp.blend > 0.0) out.push_back(smp);
         };
         std::vector<double> bound(n);
