@@ -5,14 +5,17 @@
 ///
 /// The model: the bag's gas (mass m, isothermal, one gas body: the chambers share their air
 /// through the open connection) and its unloaded top surface h(x, y; m) as a grid of points in
-/// the bag frame. A shape pressing the bag overlaps the unloaded top; at grid point i (area a,
-/// projected) its depth is delta_i = -(signed distance of the top point to the shape), its
-/// column depth delta_i / (-n_z) (n the shape's outward normal there). Per shape s: the
-/// overlap volume V_s = sum a delta_i / (-n_z), its depth d_s = sum a delta_i^2 / sum a
+/// the bag frame (below the calibration's first taut mass, that mass's top: a slack film wraps
+/// the shapes within the taut bag's enclosure). A shape pressing the bag overlaps the top; at
+/// grid point i (area a, projected) its depth is delta_i = -(signed distance of the top point
+/// to the shape). Per shape s: the overlap volume V_s = sum a l_i, l_i the length of grid
+/// column i inside the shape below the top and above the board (where shapes share a column,
+/// the union of their chords, shared by length), its depth d_s = sum a delta_i^2 / sum a
 /// delta_i (over delta_i > 0: the overlap's mean depth weighted by depth). The gas:
 ///   (P + p_amb) (V_free(P) - V_d) = m R T,   V_d = sum_s beta(m, d_s) V_s,   P >= 0,
 /// with V_free(P) the unloaded bag's volume at gauge pressure P (from the calibration's
-/// unloaded states) and beta the calibrated share of displaced volume. The contact pressure at
+/// unloaded states) and beta the calibrated share of displaced volume (1 below the first taut
+/// mass). The contact pressure at
 /// a point in contact: q_i = kappa(m, d_s) P w(delta_i) + k_b max(0, -z_i) (w a smoothstep
 /// from -skirt d_s to the rim width: the film wraps the shape a little beyond where it cut
 /// the unloaded top; the second term the film pressed on the bed board, z_i the contact
