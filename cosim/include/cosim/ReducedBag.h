@@ -149,7 +149,7 @@ class ReducedBag : public Bag {
         int point = -1;
         bool topInside = false, onBoard = false;
         double length = 0.0;
-        Vec3 hi, nhi, lo, nlo;
+        Vec3 hi = Vec3::Zero(), nhi = Vec3::Zero(), lo = Vec3::Zero(), nlo = Vec3::Zero();
         // Shapes sharing the column (body segments overlap at joints and where a limb lies
         // on the trunk): the union of their chords U is the column's overlap, shared by their
         // lengths: this one's share is length U / S (S the lengths' sum). B = sum of beta x
