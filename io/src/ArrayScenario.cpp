@@ -241,25 +241,9 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     // creeps at v_s f_t / (mu f_n), and small v_s make the friction stiff in the body's
     // velocity: it then sets the body's steps where hands and forearms rest on the board,
     // docs/performance.md#the-reduced-bag).
-    const std::string boardLaw = s.getChoice("board_friction_law", {"stick-slip", "regularised"},
-                                             kDefaultBoardFrictionLaw);
-    sc.options.board.frictionLaw = boardLaw == "regularised"
-                                       ? body::SupportFrictionLaw::Regularised
-                                       : body::SupportFrictionLaw::StickSlip;
-    if (s.has("board_slip_velocity") && boardLaw != "regularised")
-        s.fail("board_slip_velocity",
-               "is the regularised law's; valid only with board_friction_law: regularised "
-               "(this file's law: " + boardLaw + ")");
-    if (s.has("board_stick_distance") && boardLaw != "stick-slip")
-        s.fail("board_stick_distance",
-               "is the stick-slip law's; valid only with board_friction_law: stick-slip "
-               "(this file's law: " + boardLaw + ")");
-    sc.options.board.slipVelocity =
-        s.getQuantity("board_slip_velocity", D::Velocity, sc.options.board.slipVelocity);
+    readSupportFriction(s, "board_", kDefaultBoardFrictionLaw, sc.options.board);
     checkBetween(s, "board_slip_velocity", sc.options.board.slipVelocity, 1e-5, 1.0, "mm/s",
                  "a creep speed: 2 mm/s by default, 20 mm/s halves a reduced-bag run's time");
-    sc.options.board.stickDistance =
-        s.getQuantity("board_stick_distance", D::Length, sc.options.board.stickDistance);
     checkBetween(s, "board_stick_distance", sc.options.board.stickDistance, 1e-5, 0.02, "mm",
                  "the elastic slip of skin or cloth on the board before it slides: 1 mm by "
                  "default");

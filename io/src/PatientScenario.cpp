@@ -148,6 +148,23 @@ body::PatientSpec readScenarioPatient(const ScenarioFile& file) {
     return readPatientSection(root.getSection("patient"));
 }
 
+void readSupportFriction(const ScenarioNode& s, const std::string& prefix,
+                         const std::string& defaultLaw, body::PlaneSupportOptions& o) {
+    const std::string lawKey = prefix + "friction_law", slipKey = prefix + "slip_velocity",
+                      stickKey = prefix + "stick_distance";
+    const std::string law = s.getChoice(lawKey, {"stick-slip", "regularised"}, defaultLaw);
+    o.frictionLaw = law == "regularised" ? body::SupportFrictionLaw::Regularised
+                                         : body::SupportFrictionLaw::StickSlip;
+    if (s.has(slipKey) && law != "regularised")
+        s.fail(slipKey, "is the regularised law's; valid only with " + lawKey +
+                            ": regularised (this file's law: " + law + ")");
+    if (s.has(stickKey) && law != "stick-slip")
+        s.fail(stickKey, "is the stick-slip law's; valid only with " + lawKey +
+                             ": stick-slip (this file's law: " + law + ")");
+    o.slipVelocity = s.getQuantity(slipKey, D::Velocity, o.slipVelocity);
+    o.stickDistance = s.getQuantity(stickKey, D::Length, o.stickDistance);
+}
+
 PatientOnSupportScenario readPatientOnSupportScenario(const ScenarioFile& file) {
     const ScenarioNode root = file.getRoot();
     root.checkKeys({"kind", "patient"}, {"name", "description", "support", "settle_time"});
@@ -172,19 +189,8 @@ PatientOnSupportScenario readPatientOnSupportScenario(const ScenarioFile& file) 
         so.damping = sup.getNumber("damping", so.damping);
         so.friction = sup.getNumber("friction", so.friction);
         // The friction law (body/SupportContact.h): regularised (the default here) or
-        // stick-slip (as the bed board under the bags); each law's own parameter only.
-        const std::string law =
-            sup.getChoice("friction_law", {"regularised", "stick-slip"}, "regularised");
-        so.frictionLaw = law == "stick-slip" ? body::SupportFrictionLaw::StickSlip
-                                             : body::SupportFrictionLaw::Regularised;
-        if (sup.has("slip_velocity") && law != "regularised")
-            sup.fail("slip_velocity", "is the regularised law's; valid only with friction_law: "
-                                      "regularised (this file's law: " + law + ")");
-        if (sup.has("stick_distance") && law != "stick-slip")
-            sup.fail("stick_distance", "is the stick-slip law's; valid only with friction_law: "
-                                       "stick-slip (this file's law: " + law + ")");
-        so.slipVelocity = sup.getQuantity("slip_velocity", D::Velocity, so.slipVelocity);
-        so.stickDistance = sup.getQuantity("stick_distance", D::Length, so.stickDistance);
+        // stick-slip (as the bed board under the bags).
+        readSupportFriction(sup, "", "regularised", so);
         so.sampleSpacing = sup.getQuantity("sample_spacing", D::Length, so.sampleSpacing);
     }
     o.settleTime = root.getQuantity("settle_time", D::Time, o.settleTime);

@@ -33,6 +33,13 @@ body::PatientSpec readPatientSection(const ScenarioNode& section);
 /// @throws InputError at the root's 'name' key.
 void checkScenarioName(const ScenarioNode& root, const std::string& name);
 
+/// Reads a flat support's friction law from section `s`: keys prefix + "friction_law"
+/// (`regularised` or `stick-slip`, `defaultLaw` when absent), prefix + "slip_velocity" (the
+/// regularised law's only) and prefix + "stick_distance" (the stick-slip law's only) into `o`;
+/// the other law's key is refused at its line. Ranges are the caller's to check.
+void readSupportFriction(const ScenarioNode& s, const std::string& prefix,
+                         const std::string& defaultLaw, body::PlaneSupportOptions& o);
+
 /// Reads the `patient:` section at the top of any scenario. @throws InputError, also if the
 /// scenario has no patient section.
 body::PatientSpec readScenarioPatient(const ScenarioFile& file);
