@@ -65,7 +65,7 @@ const char* kHelp =
     "  --candidates LIST   effects to calibrate (default: the library, pressure-sensor,\n"
     "                      flowmeter-bias, gas-temperature, machine-compliance,\n"
     "                      block-friction, leakage, heat-exchange, bed-compliance,\n"
-    "                      viscoelasticity, fabric-anisotropy, soft-tissue;\n"
+    "                      viscoelasticity, fabric-anisotropy, soft-tissue, bag-volume;\n"
     "                      load-cell-gain is kept out of it on purpose)\n"
     "  --threads N         simulations run at once (default 1)\n"
     "  --windows N         a patient's data: the time windows the folds leave out (default 3)\n"

@@ -59,12 +59,7 @@ int runCommandMain(const std::string& command, const char* help, int argc, char*
     }
 }
 
-void prepareGeometry(io::LoadTestScenario& sc) {
-    if (!(sc.fillMass > 0.0)) return;
-    const bags::FillScaleResult fs = bags::findFillScale(sc.options, sc.fillMass, sc.fillScaling);
-    sc.options.geometry = fs.geometry;
-    sc.fillMass = 0.0;
-}
+void prepareGeometry(io::LoadTestScenario& sc) { io::applyBagSizing(sc); }
 
 void claimOutputFolder(const fs::path& dir, bool force, const std::vector<std::string>& owned) {
     std::error_code ec;

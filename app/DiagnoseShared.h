@@ -35,8 +35,8 @@ bool printHelpIfAsked(int argc, char** argv, const char* help);
 int runCommandMain(const std::string& command, const char* help, int argc, char** argv,
                    const std::function<int(int, char**)>& run);
 
-/// With airbag.fill_mass, sizes the bag (a few inflations) so its geometry is fixed before
-/// the simulations; prints nothing.
+/// Fixes the bag's geometry before the simulations (io::applyBagSizing: airbag.fill_mass's
+/// sizing, a few inflations, then airbag.volume_change); prints nothing.
 void prepareGeometry(io::LoadTestScenario& sc);
 
 /// Claims an output folder for a command that writes the files `owned` (names; one '*' in a

@@ -658,23 +658,32 @@ int runRunCommand(int argc, char** argv) {
         return getInterruptExitCode(signal);
     };
     try {
-        if (sc.fillMass > 0.0) {
+        if (sc.fillMass > 0.0 || sc.volumeChange != 0.0) {
             // airbag.fill_mass: the sizes as written are scaled until that mass just fills the
-            // inflated bag (a few inflations; docs/geometry.md). The sizes used are printed.
-            if (!args.quiet)
+            // inflated bag (a few inflations; docs/geometry.md); airbag.volume_change then
+            // scales the bag's volume (a similar bag). The sizes used are printed.
+            const double fillMass = sc.fillMass, volumeChange = sc.volumeChange;
+            if (!args.quiet && fillMass > 0.0)
                 std::cerr << "  sizing the airbag (" << bags::getFillScalingName(sc.fillScaling)
-                          << " scale) to a fill mass of " << io::formatQuantity(sc.fillMass, "g", 3)
+                          << " scale) to a fill mass of " << io::formatQuantity(fillMass, "g", 3)
                           << "\n";
-            const bags::FillScaleResult fs = bags::findFillScale(o, sc.fillMass, sc.fillScaling);
-            o.geometry = fs.geometry;
-            std::cout << "airbag sized to a fill mass of " << io::formatQuantity(sc.fillMass, "g", 3)
-                      << " (" << bags::getFillScalingName(sc.fillScaling) << " scale "
-                      << fmt("%.4f", fs.scale) << ", measured "
-                      << io::formatQuantity(fs.measurement.fillMass, "g", 3) << "): long side "
-                      << fmt("%.1f mm", o.geometry.longSide * 1e3) << ", short side "
-                      << fmt("%.1f mm", o.geometry.shortSide * 1e3) << ", width "
-                      << fmt("%.1f mm", o.geometry.width * 1e3) << ", height "
-                      << fmt("%.1f mm", o.geometry.height * 1e3) << "\n";
+            const bags::FillScaleResult fs = io::applyBagSizing(sc);  // o is sc.options
+            if (fillMass > 0.0)
+                std::cout << "airbag sized to a fill mass of " << io::formatQuantity(fillMass, "g", 3)
+                          << " (" << bags::getFillScalingName(sc.fillScaling) << " scale "
+                          << fmt("%.4f", fs.scale) << ", measured "
+                          << io::formatQuantity(fs.measurement.fillMass, "g", 3) << ")";
+            else
+                std::cout << "airbag as written";
+            if (volumeChange != 0.0)
+                std::cout << ", volume changed by " << fmt("%+.4g", volumeChange * 100.0)
+                          << " % (every size and the mesh size times "
+                          << fmt("%.4f", std::cbrt(1.0 + volumeChange)) << ")";
+            std::cout << ": long side " << fmt("%.1f mm", o.geometry.longSide * 1e3)
+                      << ", short side " << fmt("%.1f mm", o.geometry.shortSide * 1e3)
+                      << ", width " << fmt("%.1f mm", o.geometry.width * 1e3) << ", height "
+                      << fmt("%.1f mm", o.geometry.height * 1e3) << ", mesh size "
+                      << fmt("%.2f mm", o.geometry.meshSize * 1e3) << "\n";
         }
         result = bags::runLoadTest(o, observer);
         progress.finish();

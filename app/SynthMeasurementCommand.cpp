@@ -81,6 +81,8 @@ const char* kHelp =
     "  soft-tissue          thickness [10 mm], modulus [200 kPa] (a compliant layer on the\n"
     "                       block, soft tissue or a pad: its compression adds to the\n"
     "                       block's travel; softer layers need a finer mesh than 25 mm)\n"
+    "  bag-volume           volume [0.05] (the bag's volume and fill mass times 1 + volume:\n"
+    "                       a similar bag, every size times the cube root; -0.25 to 0.25)\n"
     "  load-cell-gain       gain [0.05] (reads the force times 1 + gain; not among the\n"
     "                       diagnosis's candidates: an effect outside its library)\n"
     "\n"
@@ -644,6 +646,11 @@ int run(const Args& a) {
     const std::vector<double> readings = sc.options.gasMasses;  // what the flowmeter reads
     const StatedUncertainties statedUncertainties = parseStatedUncertainties(a, readings);
     const double roomTemperature = sc.options.gas.temperature;   // what the lab's thermometer reads
+    // The bag as the scenario sizes it (a fill mass's sizing, its volume change), as the
+    // diagnosis will; the effects act on that bag (bag-volume scales it; a warmer gas does not
+    // resize it).
+    sc.options.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
+    prepareGeometry(sc);
     bags::LoadTestOptions truth = sc.options;
     diagnose::RigEffects rig;
     for (size_t i = 0; i < effects.size(); ++i) {
@@ -668,18 +675,15 @@ int run(const Args& a) {
                      " (the scenario's " +
                      std::to_string(truth.imperfection.seed - kTruthSeedOffset) + ")";
     }
+
     const fs::path out(a.out);
     claimOutputFolder(out, a.force,
                       {io::kMeasuredManifest, "scenario.yaml", "test*-machine.csv",
                        "test*-pressure.csv", "test*-flowmeter.csv"});
-
     if (!a.quiet)
         std::cerr << "bagsim synth-measurement: truth run of " << a.scenario << " ("
                   << truth.gasMasses.size() << " gas masses, " << modelForm << ")\n";
-    truth.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
-    sc.options = truth;
-    prepareGeometry(sc);
-    const bags::LoadTestResult result = bags::runLoadTest(sc.options);
+    const bags::LoadTestResult result = bags::runLoadTest(truth);
     for (const bags::LoadCurve& c : result.curves)
         if (c.failed)
             throw std::runtime_error("the truth run's curve at " + io::formatQuantity(c.gasMass, "g", 3) +

@@ -1,6 +1,7 @@
 #include <diagnose/Effects.h>
 
 #include <bags/Material.h>
+#include <bags/SeedReading.h>
 
 #include <memory>
 #include <sstream>
@@ -75,6 +76,12 @@ const std::vector<Effect>& getEffects() {
            "contact.block.tissue.thickness"},
           {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 200e3,
            "contact.block.tissue.modulus"}},
+         true},
+        {"bag-volume",
+         "the bag's volume (its fill mass) differs from the scenario's reading of it: a "
+         "geometrically similar bag, every size times the cube root of 1 + volume",
+         {{"volume", "", 1.0, -bags::kMaxVolumeChange, bags::kMaxVolumeChange, 0.05,
+           "airbag.volume_change"}},
          true},
         {"load-cell-gain",
          "the load cell reads the force times 1 + gain (a calibration error)",
@@ -156,6 +163,10 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
         const bool layer = values[0] > 0.0;  // 0: no layer, the model as it is
         options.blockContact.tissueThickness = layer ? values[0] : 0.0;
         options.blockContact.tissueModulus = layer ? values[1] : 0.0;
+    } else if (effect.name == "bag-volume") {
+        // On the bag as the scenario sizes it (its sizes, or its fill mass's scale, and its
+        // own airbag.volume_change): the base options' geometry is already fixed.
+        options.geometry = bags::scaleBagVolume(options.geometry, values[0]);
     } else if (effect.name == "block-friction") {
         options.blockContact.friction = values[0];
     } else {

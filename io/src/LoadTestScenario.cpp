@@ -165,7 +165,8 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
     s.checkKeys(
         {"long_side", "short_side", "width", "height"},
         {"mesh_size", "mesh_pattern", "diaphragm", "bond_base", "connection", "orifice_diameter",
-         "discharge_coefficient", "fill_mass", "fill_scaling", "imperfection", "neighbours"});
+         "discharge_coefficient", "fill_mass", "fill_scaling", "volume_change", "imperfection",
+         "neighbours"});
     g.longSide = s.getQuantity("long_side", D::Length);
     g.shortSide = s.getQuantity("short_side", D::Length);
     g.width = s.getQuantity("width", D::Length);
@@ -277,6 +278,24 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
 // as written so that this gas mass just fills the inflated bag; the scale itself is found
 // before the run (bags::findFillScale), here only the keys and a first guess are checked.
 void readFillMass(const ScenarioNode& s, LoadTestScenario& sc) {
+    // airbag.volume_change: the bag's volume (and fill mass) relative to the sizes as written
+    // or as the fill mass scales them; a similar bag, every size and the mesh size times
+    // cbrt(1 + change) (bags::scaleBagVolume), applied after the fill mass's sizing.
+    if (s.has("volume_change")) {
+        sc.volumeChange = s.getNumber("volume_change");
+        checkRange(s, "volume_change", sc.volumeChange, -bags::kMaxVolumeChange, true,
+                   bags::kMaxVolumeChange, true, "",
+                   "the bag's volume and fill mass relative to its sizes' reading: +0.05 a bag "
+                   "5 % larger, every size times the cube root of 1 + change");
+        const double s1 = std::cbrt(1.0 + sc.volumeChange);
+        const bags::DoubleWedgeParams& g = sc.options.geometry;
+        if (g.meshSize * s1 > 0.05)
+            s.fail("volume_change", shown(s, "volume_change") + " would scale the mesh size (" +
+                                        fmt(toUnit(g.meshSize, "mm")) +
+                                        " mm) beyond 50 mm; valid: a mesh_size of at most " +
+                                        fmt(std::floor(toUnit(0.05 / s1, "mm") * 10) / 10) +
+                                        " mm with this change");
+    }
     const std::string scaling =
         s.getChoice("fill_scaling", {"profile", "uniform", "height"}, "profile");
     if (!s.has("fill_mass")) {
@@ -846,6 +865,21 @@ std::string readScenarioKind(const ScenarioFile& file) {
         root.fail("missing required key 'kind' at the top of the scenario; valid kinds: " +
                   std::string(kKind) + ", patient-on-support, patient-on-array");
     return root.getChoice("kind", getScenarioKinds());
+}
+
+bags::FillScaleResult applyBagSizing(LoadTestScenario& sc) {
+    bags::FillScaleResult fs;
+    fs.geometry = sc.options.geometry;
+    if (sc.fillMass > 0.0) {
+        fs = bags::findFillScale(sc.options, sc.fillMass, sc.fillScaling);
+        sc.options.geometry = fs.geometry;
+        sc.fillMass = 0.0;
+    }
+    if (sc.volumeChange != 0.0) {
+        sc.options.geometry = bags::scaleBagVolume(sc.options.geometry, sc.volumeChange);
+        sc.volumeChange = 0.0;
+    }
+    return fs;
 }
 
 LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {

@@ -74,8 +74,8 @@ inline constexpr double kMaxTissueModulus = 200e3;    ///< [Pa]
 
 /// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
 /// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance,
-/// viscoelasticity, fabric-anisotropy, soft-tissue (the library), load-cell-gain (kept out of
-/// it).
+/// viscoelasticity, fabric-anisotropy, soft-tissue, bag-volume (the library), load-cell-gain
+/// (kept out of it).
 const std::vector<Effect>& getEffects();
 /// The effect of that name in a library (this one, or the patient's: PatientDiagnosis.h), or
 /// nullptr; and the library's names joined by ", ".
@@ -94,7 +94,8 @@ std::string listEffectNames();
 /// viscoelasticity options.prony, one term; fabric-anisotropy wraps options.material in a
 /// bags::FabricMaterial whose warp and weft moduli are both the ratio times 3 mu, angle 0;
 /// soft-tissue sets options.blockContact.tissueThickness and .tissueModulus, both 0 for a
-/// thickness of 0).
+/// thickness of 0; bag-volume scales options.geometry by bags::scaleBagVolume, so the
+/// geometry must be fixed first: a fill mass's sizing done, as bagsim's commands do before).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,

@@ -34,11 +34,22 @@ struct LoadTestScenario {
     double fillMass = 0.0;
     /// airbag.fill_scaling: which sizes the fill mass scales.
     bags::FillScaling fillScaling = bags::FillScaling::Profile;
+    /// airbag.volume_change: the bag's volume (and fill mass) relative to its sizes' reading
+    /// [-], 0 when absent. Applied after the fill mass's sizing by bags::scaleBagVolume (every
+    /// size and the mesh size times cbrt(1 + change)); options.geometry does not hold it until
+    /// then (applyBagSizing).
+    double volumeChange = 0.0;
     /// Section `rig`: the test rig's effects the airbag model leaves out (instruments, rig
     /// compliance). The flowmeter's offset is already applied: options.gasMasses are the
     /// masses the bag holds, test.gas_masses minus rig.flowmeter.offset.
     diagnose::RigEffects rig;
 };
+
+/// Fixes the bag's geometry before a run: with airbag.fill_mass, sizes it (a few inflations,
+/// bags::findFillScale), then applies airbag.volume_change (bags::scaleBagVolume); both are
+/// then cleared (fillMass and volumeChange 0), so a second call changes nothing. Returns the
+/// fill mass's search (scale 1 and no measurements without a fill mass).
+bags::FillScaleResult applyBagSizing(LoadTestScenario& sc);
 
 /// Limits that keep a run within memory and time (docs/scenario-reference.md#limits); a
 /// scenario beyond one is refused before anything runs, naming the key and the limit.
