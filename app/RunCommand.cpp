@@ -679,11 +679,12 @@ int runRunCommand(int argc, char** argv) {
                 std::cout << ", volume changed by " << fmt("%+.4g", volumeChange * 100.0)
                           << " % (every size and the mesh size times "
                           << fmt("%.4f", std::cbrt(1.0 + volumeChange)) << ")";
-            std::cout << ": long side " << fmt("%.1f mm", o.geometry.longSide * 1e3)
-                      << ", short side " << fmt("%.1f mm", o.geometry.shortSide * 1e3)
-                      << ", width " << fmt("%.1f mm", o.geometry.width * 1e3) << ", height "
-                      << fmt("%.1f mm", o.geometry.height * 1e3) << ", mesh size "
-                      << fmt("%.2f mm", o.geometry.meshSize * 1e3) << "\n";
+            const bags::DoubleWedgeParams g = o.getBagGeometry();
+            std::cout << ": long side " << fmt("%.1f mm", g.longSide * 1e3) << ", short side "
+                      << fmt("%.1f mm", g.shortSide * 1e3) << ", width "
+                      << fmt("%.1f mm", g.width * 1e3) << ", height "
+                      << fmt("%.1f mm", g.height * 1e3) << ", mesh size "
+                      << fmt("%.2f mm", g.meshSize * 1e3) << "\n";
         }
         result = bags::runLoadTest(o, observer);
         progress.finish();

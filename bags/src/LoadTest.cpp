@@ -44,9 +44,25 @@ Eigen::Isometry3d makeBlockPose(const Vec3& centreXY, double zBottom) {
 
 }  // namespace
 
+DoubleWedgeParams LoadTestOptions::getBagGeometry() const {
+    if (bagScale == 1.0) return geometry;
+    DoubleWedgeParams g = geometry;
+    g.longSide *= bagScale;
+    g.shortSide *= bagScale;
+    g.width *= bagScale;
+    g.height *= bagScale;
+    g.meshSize *= bagScale;
+    return g;
+}
+
 AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     AirbagSpec spec;
-    spec.geometry = o.geometry;
+    spec.geometry = o.getBagGeometry();
+    if (o.bagScale != 1.0) {
+        // A similar bag: the geometry's own mesh, every node scaled (the same triangles).
+        spec.mesh = makeDoubleWedgeBag(o.geometry);
+        spec.mesh.X *= o.bagScale;
+    }
     spec.material = o.material;
     spec.thickness = o.thickness;
     spec.density = o.density;
@@ -64,7 +80,7 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     spec.selfContact = o.selfContact;
     spec.selfContactPenalty = o.blockContact.pressurePenalty;
     spec.solver = o.solver;
-    if (spec.solver.maxStep == 0.0) spec.solver.maxStep = o.geometry.meshSize;
+    if (spec.solver.maxStep == 0.0) spec.solver.maxStep = spec.geometry.meshSize;
     spec.stabilization = o.stabilization;
     spec.damping = o.damping;
     spec.forceTolerance = calcLoadTestForceTolerance(o);
@@ -77,8 +93,9 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
 
 std::vector<Eigen::Isometry3d> calcNeighbourPoses(const LoadTestOptions& o) {
     using N = LoadTestOptions::Neighbours;
-    const double py = o.geometry.width + o.neighbourGap;
-    const double px = o.geometry.longSide + o.neighbourGap;
+    const DoubleWedgeParams g = o.getBagGeometry();
+    const double py = g.width + o.neighbourGap;
+    const double px = g.longSide + o.neighbourGap;
     std::vector<Vec3> at;
     switch (o.neighbours) {
         case N::None: return {};
@@ -127,7 +144,10 @@ void LoadTestOptions::validate() const {
     if (gasMasses.empty()) throw std::invalid_argument("load test option 'gasMasses' is empty");
     for (double m : gasMasses)
         require(m > 0.0 && m < 1.0, "gasMasses", m, "use masses > 0 (in kg inside; e.g. 3.5 g)");
-    require(blockSize > 0.0 && blockSize <= geometry.longSide, "blockSize", blockSize,
+    require(bagScale >= 0.5 && bagScale <= 2.0, "bagScale", bagScale,
+            "use 0.5 to 2 (a similar bag, every size times this; 1: as built)");
+    getBagGeometry().validate();
+    require(blockSize > 0.0 && blockSize <= getBagGeometry().longSide, "blockSize", blockSize,
             "use 0 < block <= the airbag's long side");
     require(loadingRate > 0.0, "loadingRate", loadingRate, "use a positive rate (e.g. 10 mm/min)");
     require(peakForce > 0.0, "peakForce", peakForce, "use a positive force (e.g. 50 N)");

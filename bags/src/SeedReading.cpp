@@ -55,28 +55,23 @@ DoubleWedgeParams scaleDoubleWedge(const DoubleWedgeParams& p, FillScaling scali
     return q;
 }
 
-DoubleWedgeParams scaleBagVolume(const DoubleWedgeParams& p, double change) {
+void changeBagVolume(LoadTestOptions& o, double change) {
     if (!(change >= -kMaxVolumeChange && change <= kMaxVolumeChange)) {
         std::ostringstream s;
         s << "volume change " << change << " is invalid; valid: " << -kMaxVolumeChange << " to "
           << kMaxVolumeChange << " (the bag's volume times 1 + change)";
         throw std::invalid_argument(s.str());
     }
-    if (change == 0.0) return p;
-    const double s = std::cbrt(1.0 + change);
-    DoubleWedgeParams q = p;
-    q.longSide *= s;
-    q.shortSide *= s;
-    q.width *= s;
-    q.height *= s;
-    q.meshSize *= s;  // the same mesh, scaled: the response is smooth in the change
+    if (change == 0.0) return;
+    LoadTestOptions q = o;
+    q.bagScale *= std::cbrt(1.0 + change);
     try {
-        q.validate();
+        q.getBagGeometry().validate();
     } catch (const std::invalid_argument& e) {
         throw std::invalid_argument("volume change " + std::to_string(change) +
                                     " gives an invalid bag: " + e.what());
     }
-    return q;
+    o.bagScale = q.bagScale;
 }
 
 void FillMassOptions::validate() const {

@@ -166,7 +166,7 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
     } else if (effect.name == "bag-volume") {
         // On the bag as the scenario sizes it (its sizes, or its fill mass's scale, and its
         // own airbag.volume_change): the base options' geometry is already fixed.
-        options.geometry = bags::scaleBagVolume(options.geometry, values[0]);
+        bags::changeBagVolume(options, values[0]);
     } else if (effect.name == "block-friction") {
         options.blockContact.friction = values[0];
     } else {

@@ -876,7 +876,7 @@ bags::FillScaleResult applyBagSizing(LoadTestScenario& sc) {
         sc.fillMass = 0.0;
     }
     if (sc.volumeChange != 0.0) {
-        sc.options.geometry = bags::scaleBagVolume(sc.options.geometry, sc.volumeChange);
+        bags::changeBagVolume(sc.options, sc.volumeChange);
         sc.volumeChange = 0.0;
     }
     return fs;

@@ -1,14 +1,20 @@
 // The rig's effects (diagnose/RigEffects.h) against their analytic answers: a first-order
 // sensor on a ramp and a step, the offset, the compliance in series, the flowmeter's bias.
-// The fabric-anisotropy candidate applied to the film.
+// The fabric-anisotropy candidate applied to the film; the bag-volume candidate's similar bag
+// and its fill mass.
 #include <gtest/gtest.h>
 
 #include <diagnose/Effects.h>
 #include <diagnose/RigEffects.h>
 
+#include <bags/Airbag.h>
+#include <bags/Geometry.h>
 #include <bags/Material.h>
+#include <bags/MaterialFit.h>
+#include <bags/SeedReading.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 using diagnose::RigEffects;
@@ -219,4 +225,87 @@ TEST(Effects, SoftTissuePutsALayerOnTheBlockOnly) {
     EXPECT_FALSE(o.blockContact.hasTissue());
     EXPECT_EQ(o.blockContact.tissueModulus, 0.0);
     EXPECT_NO_THROW(o.blockContact.validate());
+}
+
+// The bag's volume as a candidate: a geometrically similar bag, the mesh built from the
+// scenario's sizes with every node times cbrt(1 + volume) (the same triangles: a mesh built
+// anew from scaled sizes flips diagonals of the side panels on round-off ties, at a third of
+// the values on the tiny rig's 25 mm mesh), so its flat volume is exactly 1 + volume times the
+// scenario's; applied twice the scales multiply; outside the bounds (-0.25 to 0.25) it is
+// refused naming them.
+TEST(Effects, BagVolumeScalesTheBagSimilarly) {
+    const diagnose::Effect* effect = diagnose::findEffect("bag-volume");
+    ASSERT_NE(effect, nullptr);
+    EXPECT_TRUE(effect->changesTheBag);
+    EXPECT_TRUE(effect->inLibrary);
+    ASSERT_EQ(effect->parameters.size(), 1u);
+    bags::LoadTestOptions o;
+    o.geometry.meshSize = 0.025;  // the tiny rig's
+    o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.gasMasses = {4e-3};
+    const bags::DoubleWedgeParams g0 = o.geometry;
+    const bags::Mesh m0 = bags::makeDoubleWedgeBag(g0);
+    diagnose::RigEffects rig;
+    for (double v : {-0.25, -0.15, 0.01, 0.02, 0.1, 0.25}) {
+        bags::LoadTestOptions on = o;
+        diagnose::applyEffect(*effect, {v}, {}, rig, on);
+        const double s = std::cbrt(1.0 + v);
+        EXPECT_NEAR(on.bagScale, s, 1e-15) << v;
+        EXPECT_EQ(on.geometry.longSide, g0.longSide);  // the sizes the mesh is built from
+        const bags::DoubleWedgeParams g = on.getBagGeometry();
+        EXPECT_NEAR(g.calcFlatVolume(), (1.0 + v) * g0.calcFlatVolume(), 1e-15) << v;
+        EXPECT_NEAR(g.width, s * g0.width, 1e-15) << v;
+        EXPECT_NEAR(g.meshSize, s * g0.meshSize, 1e-15) << v;
+        EXPECT_NO_THROW(on.validate()) << v;
+        // The bag the load test builds: the same mesh, every node scaled.
+        const bags::AirbagSpec spec = bags::makeAirbagSpec(on);
+        ASSERT_EQ(spec.mesh.tris, m0.tris) << v;
+        EXPECT_LT((spec.mesh.X - s * m0.X).cwiseAbs().maxCoeff(), 1e-15) << v;
+        EXPECT_EQ(spec.solver.maxStep, g.meshSize);
+    }
+    EXPECT_TRUE(rig.isNone());
+    bags::LoadTestOptions twice = o;
+    diagnose::applyEffect(*effect, {0.1}, {}, rig, twice);
+    diagnose::applyEffect(*effect, {-0.1}, {}, rig, twice);
+    EXPECT_NEAR(std::pow(twice.bagScale, 3), 1.1 * 0.9, 1e-14);
+    bags::LoadTestOptions same = o;
+    diagnose::applyEffect(*effect, {0.0}, {}, rig, same);
+    EXPECT_EQ(same.bagScale, 1.0);
+    EXPECT_EQ(bags::makeAirbagSpec(same).mesh.getNumNodes(), 0);  // built from the geometry
+    try {
+        diagnose::applyEffect(*effect, {0.3}, {}, rig, same);
+        ADD_FAILURE() << "a volume change of 0.3 accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("valid: -0.25 to 0.25"), std::string::npos)
+            << e.what();
+    }
+    // A bag whose mesh size would pass 50 mm once scaled is refused, not built.
+    bags::LoadTestOptions coarse = o;
+    coarse.geometry.meshSize = 0.049;
+    EXPECT_THROW(diagnose::applyEffect(*effect, {0.25}, {}, rig, coarse), std::invalid_argument);
+}
+
+// What the parameter says, measured: the fill mass (the gas that just fills the inflated bag,
+// bags::measureFillMass) moves by the factor 1 + volume. Exact for the flat panels; the
+// inflated bag departs from similarity by its film's strain at the probes' 1-4 kPa (the strain
+// at a pressure grows with the size) and its weight. Tolerance 0.5 % of the fill mass (measured
+// on the tiny rig's 25 mm bag at -0.15 and +0.1: see docs/diagnosis.md#bag-volume).
+TEST(Effects, BagVolumeMovesTheFillMassAsStated) {
+    const diagnose::Effect* effect = diagnose::findEffect("bag-volume");
+    ASSERT_NE(effect, nullptr);
+    bags::LoadTestOptions o;  // the tiny rig's bag and film
+    o.geometry.meshSize = 0.025;
+    o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    const double m0 = bags::measureFillMass(o, 3.6e-3).fillMass;
+    EXPECT_GT(m0, 3.3e-3);
+    EXPECT_LT(m0, 3.9e-3);
+    diagnose::RigEffects rig;
+    for (double v : {-0.15, 0.1}) {
+        bags::LoadTestOptions on = o;
+        diagnose::applyEffect(*effect, {v}, {}, rig, on);
+        const double m1 = bags::measureFillMass(on, (1.0 + v) * m0).fillMass;
+        EXPECT_NEAR(m1 / m0, 1.0 + v, 0.005 * (1.0 + v)) << v << ": " << m1 / m0;
+        std::printf("bag-volume %+.2f: fill mass %.4f g -> %.4f g (ratio %.5f)\n", v, m0 * 1e3,
+                    m1 * 1e3, m1 / m0);
+    }
 }

@@ -25,6 +25,14 @@ namespace bags {
 
 struct LoadTestOptions {
     DoubleWedgeParams geometry;
+    /// The bag as a similar one (airbag.volume_change, the bag-volume candidate): the mesh built
+    /// from `geometry`, every node times bagScale, so its volume is bagScale^3 times the
+    /// geometry's and its mesh the same one (a new mesh of scaled sizes would not be: the side
+    /// panels' diagonals are chosen on ties that round-off breaks). 1: the bag as built.
+    /// getBagGeometry() gives the sizes as built.
+    double bagScale = 1.0;
+    /// `geometry` with its sizes and mesh size times bagScale: the bag's sizes as built.
+    DoubleWedgeParams getBagGeometry() const;
     std::shared_ptr<const MembraneMaterial> material;  ///< base material (wrinkling added)
     double thickness = 0.2e-3;          ///< membrane thickness [m]
     double density = 1150.0;            ///< membrane density [kg/m^3] (gravity on the sheet)

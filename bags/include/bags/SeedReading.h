@@ -36,13 +36,13 @@ DoubleWedgeParams scaleDoubleWedge(const DoubleWedgeParams& p, FillScaling scali
 /// nearer its drawing (a few mm on each side of 100-350 mm: a few per cent in volume).
 inline constexpr double kMaxVolumeChange = 0.25;
 
-/// The bag `p` with its volume times 1 + change: every size and the mesh size times
-/// cbrt(1 + change), a geometrically similar bag (the same mesh, every node scaled), so its
-/// flat-panel volume is exactly 1 + change times p's and its fill mass that to within the
-/// membrane's strain. change in [-kMaxVolumeChange, kMaxVolumeChange]; 0 returns p.
-/// @throws std::invalid_argument outside the bound, or when the mesh size would pass its
-/// upper bound (DoubleWedgeParams::validate), naming the value and what is valid.
-DoubleWedgeParams scaleBagVolume(const DoubleWedgeParams& p, double change);
+/// Makes o's bag a similar one with its volume times 1 + change: o.bagScale times
+/// cbrt(1 + change), so the mesh stays the one built from o.geometry, every node scaled; its
+/// flat-panel volume is exactly 1 + change times the bag's before, its fill mass that to
+/// within the membrane's strain. change in [-kMaxVolumeChange, kMaxVolumeChange]; 0 leaves o.
+/// @throws std::invalid_argument outside the bound, or when the scaled bag is not valid (its
+/// mesh size beyond 50 mm: DoubleWedgeParams::validate), naming the value and what is valid.
+void changeBagVolume(LoadTestOptions& o, double change);
 
 /// How a fill mass is measured and searched for.
 struct FillMassOptions {

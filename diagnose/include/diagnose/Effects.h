@@ -94,8 +94,8 @@ std::string listEffectNames();
 /// viscoelasticity options.prony, one term; fabric-anisotropy wraps options.material in a
 /// bags::FabricMaterial whose warp and weft moduli are both the ratio times 3 mu, angle 0;
 /// soft-tissue sets options.blockContact.tissueThickness and .tissueModulus, both 0 for a
-/// thickness of 0; bag-volume scales options.geometry by bags::scaleBagVolume, so the
-/// geometry must be fixed first: a fill mass's sizing done, as bagsim's commands do before).
+/// thickness of 0; bag-volume scales the bag, options.bagScale, by bags::changeBagVolume: on
+/// the bag as sized, a fill mass's sizing done first, as bagsim's commands do).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
                  const std::vector<double>& readings, RigEffects& rig,

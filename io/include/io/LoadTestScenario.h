@@ -35,8 +35,8 @@ struct LoadTestScenario {
     /// airbag.fill_scaling: which sizes the fill mass scales.
     bags::FillScaling fillScaling = bags::FillScaling::Profile;
     /// airbag.volume_change: the bag's volume (and fill mass) relative to its sizes' reading
-    /// [-], 0 when absent. Applied after the fill mass's sizing by bags::scaleBagVolume (every
-    /// size and the mesh size times cbrt(1 + change)); options.geometry does not hold it until
+    /// [-], 0 when absent. Applied after the fill mass's sizing by bags::changeBagVolume (a
+    /// similar bag: options.bagScale times cbrt(1 + change)); options do not hold it until
     /// then (applyBagSizing).
     double volumeChange = 0.0;
     /// Section `rig`: the test rig's effects the airbag model leaves out (instruments, rig
@@ -46,7 +46,7 @@ struct LoadTestScenario {
 };
 
 /// Fixes the bag's geometry before a run: with airbag.fill_mass, sizes it (a few inflations,
-/// bags::findFillScale), then applies airbag.volume_change (bags::scaleBagVolume); both are
+/// bags::findFillScale), then applies airbag.volume_change (bags::changeBagVolume); both are
 /// then cleared (fillMass and volumeChange 0), so a second call changes nothing. Returns the
 /// fill mass's search (scale 1 and no measurements without a fill mass).
 bags::FillScaleResult applyBagSizing(LoadTestScenario& sc);
