@@ -473,6 +473,44 @@ TEST(LoadTestScenario, FillMassKeys) {
     EXPECT_EQ(e7.getKey(), "airbag.mesh_size");
 }
 
+// airbag.volume_change: the bag's volume and fill mass relative to its sizes' reading, a
+// similar bag (docs/diagnosis.md#bag-volume); applied after a fill mass's sizing
+// (io::applyBagSizing), the sizes as written kept until then; out of range or scaling the mesh
+// beyond 50 mm, a located error naming the valid range.
+TEST(LoadTestScenario, VolumeChangeKey) {
+    io::LoadTestScenario sc = io::readLoadTestScenario(ScenarioFile::parse(
+        replaceLine(kBase, 6, "  height: 150 mm\n  volume_change: -0.1"), "v.yaml"));
+    EXPECT_DOUBLE_EQ(sc.volumeChange, -0.1);
+    EXPECT_EQ(sc.options.bagScale, 1.0);  // applied before the run
+    const bags::DoubleWedgeParams g0 = sc.options.geometry;
+    io::applyBagSizing(sc);
+    EXPECT_EQ(sc.volumeChange, 0.0);
+    EXPECT_NEAR(std::pow(sc.options.bagScale, 3), 0.9, 1e-14);
+    EXPECT_EQ(sc.options.geometry.longSide, g0.longSide);
+    EXPECT_NEAR(sc.options.getBagGeometry().calcFlatVolume(), 0.9 * g0.calcFlatVolume(), 1e-15);
+    io::applyBagSizing(sc);  // a second call changes nothing
+    EXPECT_NEAR(std::pow(sc.options.bagScale, 3), 0.9, 1e-14);
+    // Absent: 0, the bag as written.
+    io::LoadTestScenario none = io::readLoadTestScenario(ScenarioFile::parse(kBase, "n.yaml"));
+    EXPECT_EQ(none.volumeChange, 0.0);
+    io::applyBagSizing(none);
+    EXPECT_EQ(none.options.bagScale, 1.0);
+
+    const InputError e = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  volume_change: 0.3"));
+    EXPECT_EQ(e.getLine(), 7);
+    EXPECT_EQ(e.getKey(), "airbag.volume_change");
+    EXPECT_NE(std::string(e.what()).find("must be in [-0.25, 0.25]"), std::string::npos)
+        << e.what();
+    const InputError e2 =
+        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  volume_change: 5 %"));
+    EXPECT_EQ(e2.getKey(), "airbag.volume_change");
+    const InputError e3 = errorFor(replaceLine(
+        kBase, 6, "  height: 150 mm\n  mesh_size: 49 mm\n  volume_change: 0.2"));
+    EXPECT_EQ(e3.getLine(), 8);
+    EXPECT_EQ(e3.getKey(), "airbag.volume_change");
+    EXPECT_NE(std::string(e3.what()).find("beyond 50 mm"), std::string::npos) << e3.what();
+}
+
 TEST(LoadTestScenario, BendingStiffnessKey) {
     // Absent or `plate`: the film's plate value E t^3 / (12 (1 - nu^2)) with E = 6 C10 and
     // nu = 0.5: 6 * 31.587917 MPa * (0.2 mm)^3 / 9 = 1.68469e-4 N m; a moment in N m or N mm;
