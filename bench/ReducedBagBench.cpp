@@ -12,12 +12,18 @@
 //   bench_reduced_bag replay SCENARIO CAL RUN_DIR
 //                                                a run's body motion onto reduced bags, per
 //                                                bag beside the run's forces
-//   bench_reduced_bag fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1
-//                                                one bag of a run alone, FE and reduced
+//   bench_reduced_bag lateral SCENARIO CAL RUN_DIR T0 T1
+//                                                the lateral forces of replay, per segment
+//                                                and kind of contact sample
+//   bench_reduced_bag fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points]
+//                                                one bag of a run alone, FE and reduced;
+//                                                points: at T1 the FE's contact nodes (N)
+//                                                and the reduced contact samples (S)
 //
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
 #include <bags/Airbag.h>
+#include <body/Anthropometry.h>
 #include <cosim/ArrayReadings.h>
 #include <cosim/ReducedBag.h>
 #include <cosim/ArrayShapes.h>
@@ -933,13 +939,138 @@ int replay(const std::string& scenario, const std::string& calPath, const std::s
     return 0;
 }
 
+// A run's body.csv: time [ms] -> the centre of mass [m].
+std::map<long, Vec3> readRunCentres(const std::string& dir) {
+    std::map<long, Vec3> out;
+    std::ifstream in(dir + "/body.csv");
+    if (!in) throw std::runtime_error("cannot read " + dir + "/body.csv");
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+        std::stringstream ss(line);
+        std::string f[4];
+        for (auto& x : f) std::getline(ss, x, ',');
+        out[std::lround(std::stod(f[0]) * 1e3)] =
+            1e-3 * Vec3(std::stod(f[1]), std::stod(f[2]), std::stod(f[3]));
+    }
+    return out;
+}
+
+// The lateral (y, across the bed) forces of the reduced bags at a run's poses (as replay),
+// from T0 to T1 [s]. Per frame: the run's own lateral balance, m y'' + d sum |F_s| v_s,y (the
+// body's lateral acceleration from body.csv and the contact damping at the shapes' velocities
+// from the neighbouring frames, |F_s| the reduced force scaled per bag to the run's), which is
+// the run's bags' lateral force on him; beside it the reduced bags' sum F_y, sum F_z and roll
+// moment M_x about the run's centre of mass (his left side down is negative). Then per
+// segment, over all its bags: F_z, F_y, and F_y split by the kind of contact sample (inside
+// the shape from the unloaded top, the skirt outside it, column samples under a sunk shape,
+// the bed board's term of any of them), M_x; and per bag column F_z and F_y.
+int lateral(const std::string& scenario, const std::string& calPath, const std::string& run,
+            double t0, double t1) {
+    RunReplay rr(scenario, calPath, run);
+    auto& [sc, poa, model, surf, fe, frames] = rr;
+    const std::map<long, Vec3> com = readRunCentres(run);
+    const double mass = model.calcTotalMass(), damping = sc.options.integrator.contactDamping;
+    std::vector<cosim::ReducedBag*> bags;
+    for (size_t i = 0; i < poa.getBagIndices().size(); ++i)
+        bags.push_back(dynamic_cast<cosim::ReducedBag*>(&poa.updBag(int(i))));
+    const int columns = sc.options.layout.columns;
+    const size_t npairs = poa.getPairs().size();
+    std::printf("lateral forces [N] (y across the bed, his left negative), roll moment M_x [N m] "
+                "about the run's centre of mass; d %.1f s/m, m %.2f kg\n",
+                damping, mass);
+    std::map<long, std::vector<Eigen::Isometry3d>> poses;
+    for (const auto& [tk, x] : frames) {
+        std::vector<Eigen::Isometry3d>& X = poses[tk];
+        for (size_t k = 0; k < npairs; ++k)
+            X.push_back(shapePoseOf(model, surf, x, poa.getPairs()[k].shape));
+    }
+    for (const auto& [tk, x] : frames) {
+        if (tk < std::lround(t0 * 1e3) || tk > std::lround(t1 * 1e3) || !fe.at.count(tk)) continue;
+        const auto prev = frames.find(tk), next = std::next(prev);
+        if (prev == frames.begin() || next == frames.end()) continue;
+        const long tp = std::prev(prev)->first, tn = next->first;
+        if (!com.count(tp) || !com.count(tn) || !com.count(tk)) continue;
+        const auto& ran = fe.at.at(tk);
+        for (size_t i = 0; i < bags.size(); ++i)
+            bags[i]->setGasMass(ran.at(poa.getBagIndices()[i])[0]);
+        for (size_t k = 0; k < npairs; ++k) {
+            const cosim::Link& L = poa.getLinks()[k];
+            cosim::ShapeState st;
+            st.X_GS = poses.at(tk)[k];
+            bags[size_t(L.participant)]->setShapeState(L.shape, st);
+        }
+        for (cosim::ReducedBag* b : bags) {
+            b->advance(0.0);
+            b->commit();
+        }
+        const Vec3 c = com.at(tk);
+        const double h1 = (tk - tp) * 1e-3, h2 = (tn - tk) * 1e-3;
+        const double ydd = 2.0 * ((com.at(tn).y() - c.y()) / h2 - (c.y() - com.at(tp).y()) / h1) /
+                           (h1 + h2);
+        // per segment: Fz, Fy, Fy inside / skirt / column / board, M_x
+        std::map<int, std::array<double, 7>> seg;
+        std::vector<std::array<double, 2>> col(size_t(columns), {0.0, 0.0});
+        std::array<double, 4> kinds{};
+        double Fy = 0.0, Fz = 0.0, Mx = 0.0, damp = 0.0;
+        std::vector<double> redBag(bags.size(), 0.0);
+        for (size_t k = 0; k < npairs; ++k) {
+            const cosim::Link& L = poa.getLinks()[k];
+            redBag[size_t(L.participant)] += bags[size_t(L.participant)]->calcWrench(L.shape).force.z();
+        }
+        for (size_t k = 0; k < npairs; ++k) {
+            const cosim::Link& L = poa.getLinks()[k];
+            const size_t i = size_t(L.participant);
+            const int bag = poa.getBagIndices()[i], segment = poa.getPairs()[k].shape;
+            const cosim::ShapeWrench w = bags[i]->calcWrench(L.shape);
+            const Vec3 o = poses.at(tk)[k].translation();
+            const Vec3 M = w.torque + (o - c).cross(w.force);
+            std::array<double, 7>& a = seg[segment];
+            a[0] += w.force.z(), a[1] += w.force.y(), a[6] += M.x();
+            for (const cosim::ReducedBag::SampleForce& f : bags[i]->getSampleForces(L.shape)) {
+                const double q = f.gasPressure + f.boardPressure;
+                if (!(q > 0.0)) continue;
+                const double gasY = f.force.y() * f.gasPressure / q;
+                const int kind = f.column ? 4 : f.delta >= 0.0 ? 2 : 3;
+                a[size_t(kind)] += gasY, a[5] += f.force.y() - gasY;
+                kinds[size_t(kind - 2)] += gasY, kinds[3] += f.force.y() - gasY;
+            }
+            col[size_t(bag % columns)][0] += w.force.z();
+            col[size_t(bag % columns)][1] += w.force.y();
+            Fy += w.force.y(), Fz += w.force.z(), Mx += M.x();
+            // the contact damping of the run: |F_s| scaled to the run's bag force
+            const double scale = redBag[i] > 1e-9 ? ran.at(bag)[2] / redBag[i] : 0.0;
+            const double vy = (poses.at(tn)[k].translation().y() -
+                               poses.at(tp)[k].translation().y()) / (h1 + h2);
+            damp += damping * w.force.norm() * scale * vy;
+        }
+        std::printf("%.2f run: m y'' %+6.1f + d sum|F|v_y %+6.1f = F_y %+6.1f (y %+6.1f mm)  "
+                    "reduced: F_y %+6.1f F_z %6.1f M_x %+6.1f; F_y inside %+6.1f skirt %+6.1f "
+                    "column %+6.1f board %+6.1f\n",
+                    tk * 1e-3, mass * ydd, damp, mass * ydd + damp, c.y() * 1e3, Fy, Fz, Mx,
+                    kinds[0], kinds[1], kinds[2], kinds[3]);
+        for (const auto& [segment, a] : seg) {
+            if (std::abs(a[1]) < 0.5 && std::abs(a[0]) < 5.0) continue;
+            std::printf("   %-12s F_z %6.1f F_y %+6.1f (inside %+6.1f skirt %+6.1f column %+6.1f "
+                        "board %+6.1f) M_x %+6.2f\n",
+                        body::getSegmentName(static_cast<body::Segment>(segment)), a[0], a[1],
+                        a[2], a[3], a[4], a[5], a[6]);
+        }
+        std::printf("   columns F_z/F_y:");
+        for (int j = 0; j < columns; ++j)
+            std::printf(" %d: %.1f/%+.1f", j, col[size_t(j)][0], col[size_t(j)][1]);
+        std::printf("\n");
+    }
+    return 0;
+}
+
 // One bag of a finite-element run alone, FE and reduced, along the run's poses (as replay)
 // and gas masses from T0 to T1 [s]: its shapes, or only the segments listed (body::Segment
 // indices, comma separated; "all": every one). The FE bag is inflated at T0's mass with the
 // shapes lifted 0.3 m, lowered onto T0's poses in 30 steps, then taken frame by frame (its
 // gas changed, then the shapes moved).
 int feBag(const std::string& scenario, const std::string& calPath, const std::string& run,
-          int bagIndex, const std::string& segList, double t0, double t1) {
+          int bagIndex, const std::string& segList, double t0, double t1, bool points) {
     RunReplay rr(scenario, calPath, run);
     auto& [sc, poa, model, surf, fe, frames] = rr;
     std::vector<int> segs;
@@ -1031,7 +1162,7 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
     for (int s : segs) std::printf(" %d", s);
     std::printf(
         "\ntime_s mass_g P_run_kPa F_run P_FE_kPa V_FE_L F_FE P_red_kPa F_red  "
-        "per shape: segment:Fz_FE/Fz_red\n");
+        "per shape: segment:Fz_FE/Fz_red:Fy_FE/Fy_red\n");
     for (const auto& [tk, x] : frames) {
         if (tk < k0 || tk > k1 || !fe.at.count(tk)) continue;
         const auto& ran = fe.at.at(tk).at(bagIndex);
@@ -1052,14 +1183,42 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
         }
         red.advance(0.0);
         red.commit();
+        if (points && tk == k1) {
+            // Where each model puts its contact force at T1: the FE's nodes in contact (shape,
+            // node, contact pressure [Pa], nodal area [cm^2], position [mm], the shape's
+            // outward normal at the node's closest point; its force is -p A n), the reduced
+            // bag's samples (cosim::ReducedBag::SampleForce: [mm], [Pa], [N]).
+            const Eigen::VectorXd areas = bag.getMesh().calcNodalAreas();
+            for (size_t i = 0; i < segs.size(); ++i) {
+                const Eigen::VectorXd p = bag.calcShapeContactPressure(int(i));
+                for (Eigen::Index n = 0; n < p.size(); ++n) {
+                    if (!(p[n] > 0.0)) continue;
+                    const Vec3 xn = bag.getPositions().col(n);
+                    double phi = 0.0;
+                    Vec3 cp, nrm;
+                    feShapes[i]->calcContactGeometry(xn, &phi, &cp, &nrm, nullptr);
+                    std::printf("N %d node %ld p %.0f A %.2f x %.1f %.1f %.1f n %.3f %.3f %.3f\n",
+                                segs[i], long(n), p[n], areas[n] * 1e4, xn.x() * 1e3,
+                                xn.y() * 1e3, xn.z() * 1e3, nrm.x(), nrm.y(), nrm.z());
+                }
+                for (const cosim::ReducedBag::SampleForce& f : red.getSampleForces(int(i)))
+                    std::printf("S %d pt %d col %d delta %.2f blend %.3f qg %.0f qb %.0f "
+                                "c %.1f %.1f %.1f n %.3f %.3f %.3f f %.3f %.3f %.3f\n",
+                                segs[i], f.point, int(f.column), f.delta * 1e3, f.blend,
+                                f.gasPressure, f.boardPressure, f.c.x() * 1e3, f.c.y() * 1e3,
+                                f.c.z() * 1e3, f.n.x(), f.n.y(), f.n.z(), f.force.x(),
+                                f.force.y(), f.force.z());
+            }
+        }
         double fFE = 0.0, fRed = 0.0, V = 0.0;
         std::string per;
         for (size_t i = 0; i < segs.size(); ++i) {
-            const double a = bag.calcShapeWrench(int(i)).force.z();
-            const double b = red.calcWrench(int(i)).force.z();
-            fFE += a, fRed += b;
-            char buf[64];
-            std::snprintf(buf, sizeof buf, " %d:%.1f/%.1f", segs[i], a, b);
+            const Vec3 a = bag.calcShapeWrench(int(i)).force;
+            const Vec3 b = red.calcWrench(int(i)).force;
+            fFE += a.z(), fRed += b.z();
+            char buf[96];
+            std::snprintf(buf, sizeof buf, " %d:%.1f/%.1f:%+.1f/%+.1f", segs[i], a.z(), b.z(),
+                          a.y(), b.y());
             per += buf;
         }
         for (int c = 0; c < bag.getNumChambers(); ++c) V += bag.getChamberState(c).volume;
@@ -1087,13 +1246,15 @@ int main(int argc, char** argv) {
         if (mode == "trace" && argc == 12) return trace(argv[2], argv[3], argv + 4);
         if (mode == "footprint" && argc == 13) return footprint(argv[2], argv[3], argv + 4);
         if (mode == "replay" && argc == 5) return replay(argv[2], argv[3], argv[4]);
-        if (mode == "fe-bag" && argc == 9)
+        if (mode == "lateral" && argc == 7)
+            return lateral(argv[2], argv[3], argv[4], std::stod(argv[5]), std::stod(argv[6]));
+        if (mode == "fe-bag" && (argc == 9 || (argc == 10 && std::string(argv[9]) == "points")))
             return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
-                         std::stod(argv[7]), std::stod(argv[8]));
+                         std::stod(argv[7]), std::stod(argv[8]), argc == 10);
         std::cerr << "usage: bench_reduced_bag calibrate SCENARIO OUT | validate SCENARIO CAL | "
                      "speed CAL | trace SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G | "
                      "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM | "
-                     "replay SCENARIO CAL RUN_DIR | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1\n";
+                     "replay SCENARIO CAL RUN_DIR | lateral SCENARIO CAL RUN_DIR T0 T1 | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points]\n";
         return 2;
     } catch (const io::InputError& e) {
         std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";

@@ -562,6 +562,29 @@ void ReducedBag::evaluate() {
 
 ShapeWrench ReducedBag::calcWrench(int shape) const { return m_results.at(shape).wrench; }
 
+std::vector<ReducedBag::SampleForce> ReducedBag::getSampleForces(int shape) const {
+    const ReducedBagCalibration& c = *m_cal;
+    const ShapeResult& r = m_results.at(shape);
+    const double a = c.pitch * c.pitch;
+    const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr);
+    std::vector<SampleForce> out;
+    for (const Sample& smp : r.samples) {
+        SampleForce f;
+        f.point = smp.point;
+        const int g = m_gridIndex[smp.point];
+        const Vec3 top = m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
+                                       interpolateTop(smp.point, m_cur.mass));
+        f.column = (smp.t - top).norm() > 1e-12;
+        f.delta = smp.delta, f.blend = smp.blend, f.c = smp.c, f.n = smp.n;
+        f.gasPressure = kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr);
+        f.boardPressure = c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
+        const double gs = std::max(-smp.n.z(), kMinSlope);
+        f.force = smp.blend * a * (f.gasPressure + f.boardPressure) / gs * -smp.n;
+        out.push_back(f);
+    }
+    return out;
+}
+
 Eigen::VectorXd ReducedBag::calcContactPressure(int shape) const {
     const ReducedBagCalibration& c = *m_cal;
     const ShapeResult& r = m_results.at(shape);

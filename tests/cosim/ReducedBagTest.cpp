@@ -219,6 +219,47 @@ TEST(ReducedBag, ThePressureFootprintCarriesTheContactForce) {
     EXPECT_NEAR(mat.calcTotalForce(), Wf.z(), 1e-9 * Wf.z());
 }
 
+TEST(ReducedBag, TheSampleForcesAddUpToTheWrench) {
+    // Reference: the wrench. getSampleForces() (the diagnostics' split of the wrench by
+    // sample) adds up to its force and its torque about the shape's origin (1e-12 relative),
+    // with each kind of sample present: inside the shape, the skirt outside it, column samples
+    // (a capsule sunk below the top) and the bed board's term (an ellipsoid pressed through
+    // it).
+    auto cal = makeCalibration(
+        2e-3, [](double x, double y, double) { return 0.05 - 0.5 * x * x - 1.0 * y * y; });
+    cal->skirt = 0.5;
+    cal->boardPenalty = 1e6;
+    ReducedBag bag(cal, Eigen::Isometry3d(Eigen::Translation3d(0.3, -0.2, 0.0)));
+    bag.addShape(bags::makeEllipsoid(Eigen::Vector3d(0.08, 0.05, 0.04)));
+    bag.addShape(bags::makeCapsule(0.012, 0.03));
+    bag.setGasMass(4.0e-3);
+    bag.setShapeState(0, at(Eigen::Vector3d(0.27, -0.2, 0.035),
+                            rotation(Eigen::Vector3d(0.1, -0.2, 0.3))));
+    bag.setShapeState(1, at(Eigen::Vector3d(0.36, -0.2, 0.042),  // along x
+                            rotation(Eigen::Vector3d(0.0, 0.5 * kPi, 0.0))));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    int skirt = 0, column = 0, board = 0;
+    for (int s = 0; s < 2; ++s) {
+        const ShapeWrench W = bag.calcWrench(s);
+        const Eigen::Vector3d o = s == 0 ? Eigen::Vector3d(0.27, -0.2, 0.035)
+                                         : Eigen::Vector3d(0.36, -0.2, 0.042);
+        Eigen::Vector3d F = Eigen::Vector3d::Zero(), M = Eigen::Vector3d::Zero();
+        for (const ReducedBag::SampleForce& f : bag.getSampleForces(s)) {
+            F += f.force;
+            M += (f.c - o).cross(f.force);
+            skirt += f.delta < 0.0 && f.gasPressure > 0.0;
+            column += f.column;
+            board += f.boardPressure > 0.0;
+        }
+        ASSERT_GT(W.force.norm(), 1.0);
+        EXPECT_NEAR((F - W.force).norm(), 0.0, 1e-12 * W.force.norm()) << "shape " << s;
+        EXPECT_NEAR((M - W.torque).norm(), 0.0, 1e-12 * (W.torque.norm() + 1.0)) << "shape " << s;
+    }
+    EXPECT_GT(skirt, 0);
+    EXPECT_GT(column, 0);
+    EXPECT_GT(board, 0);
+}
+
 TEST(ReducedBag, GasFlowsReachTheirTargetRollBackAndTheEnvelopeCountsExits) {
     // Reference: m(t) of the stated flow and target (exact); a rollback restores the
     // committed mass; a mass beyond the calibration's 3-5 g is counted.

@@ -129,6 +129,17 @@ class ReducedBag : public Bag {
     double getDepth(int shape) const;
     /// The shape's projected contact area sum a w_i [m^2] (current state).
     double getContactArea(int shape) const;
+    /// One contact sample's share of a shape's wrench (current state), for diagnostics
+    /// (bench_reduced_bag lateral): its grid point, whether it is a column sample (the film
+    /// under a sunk shape), its depth, blend, pressures [Pa] (the gas's kappa P w and the
+    /// board's), contact point, normal and force [N] (Ground). They add up to calcWrench().
+    struct SampleForce {
+        int point = -1;
+        bool column = false;
+        double delta = 0.0, blend = 0.0, gasPressure = 0.0, boardPressure = 0.0;
+        Vec3 c = Vec3::Zero(), n = Vec3::Zero(), force = Vec3::Zero();
+    };
+    std::vector<SampleForce> getSampleForces(int shape) const;
     const EnvelopeCounts& getEnvelopeCounts() const { return m_envelope; }
     const ReducedBagCalibration& getCalibration() const { return *m_cal; }
 
