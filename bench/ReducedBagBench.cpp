@@ -15,6 +15,9 @@
 //   bench_reduced_bag lateral SCENARIO CAL RUN_DIR T0 T1
 //                                                the lateral forces of replay, per segment
 //                                                and kind of contact sample
+//   bench_reduced_bag shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG
+//                         TRAVEL_MM D_MM
+//                                                pressed with friction, then moved sideways
 //   bench_reduced_bag fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points]
 //                                                one bag of a run alone, FE and reduced;
 //                                                points: at T1 the FE's contact nodes (N)
@@ -724,6 +727,69 @@ int footprint(const std::string& scenario, const std::string& calPath, char** a)
     return 0;
 }
 
+// A shape pressed into one bag with friction on, then moved sideways: the friction force
+// against the travel, FE bag against reduced (docs/reduced-bag.md#friction). The FE bag's film
+// is held by the shape's friction and shears with the bag; the reduced bag's stick distance d
+// is the travel over which it takes hold.
+int shear(const std::string& scenario, const std::string& calPath, char** a) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const auto cal = io::readReducedBagCalibration(calPath);
+    const double depth = std::stod(a[8]) * 1e-3, mu = std::stod(a[9]);
+    const double dir = std::stod(a[10]) * kPi / 180, travel = std::stod(a[11]) * 1e-3;
+    const double d = std::stod(a[12]) * 1e-3;
+    const Case c = parseCase(a, depth);
+    const Vec3 e(std::cos(dir), std::sin(dir), 0.0);
+    bags::RigidContact::Options contact = sc.options.contact;
+    contact.friction = mu;
+    bags::Airbag bag(spec);
+    auto shape = makeShape(c);
+    shape->setPose(pose(c, 1.0));
+    const int s = bag.addShape(shape, contact);
+    bag.inflate(c.mass);
+    const double z0 = touchHeight(c, bag);
+    cosim::ReducedBag red(cal, Eigen::Isometry3d::Identity());
+    auto rs = makeShape(c);
+    rs->setPose(pose(c, 1.0));
+    red.addShape(rs);
+    red.setGasMass(c.mass);
+    cosim::ReducedBagFriction f;
+    f.coefficient = mu, f.stickDistance = d, f.dampingTime = 0.0;
+    red.setFriction(f);
+    auto place = [&](const Eigen::Isometry3d& X) {
+        bag.setShapePose(s, X);
+        if (!bag.advance(1.0).converged) return false;
+        bag.commit();
+        cosim::ShapeState st;
+        st.X_GS = X;
+        red.setShapeState(0, st);
+        red.advance(1.0);
+        red.commit();
+        return true;
+    };
+    for (double dz = 0.002; dz <= depth + 1e-9; dz += 0.002)
+        if (!place(pose(c, z0 - dz))) {
+            std::fprintf(stderr, "the FE bag did not reach %.1f mm\n", dz * 1e3);
+            return 1;
+        }
+    std::printf("travel_mm Fn_FE Ft_FE ratio_FE Fn_red Ft_red ratio_red (Ft along the travel, "
+                "against it positive; mu %.2f, reduced d %.1f mm)\n", mu, d * 1e3);
+    for (double t = 0.0; t <= travel + 1e-9; t += 0.0005) {
+        Eigen::Isometry3d X = pose(c, z0 - depth);
+        X.pretranslate(t * e);
+        if (!place(X)) {
+            std::fprintf(stderr, "the FE bag did not converge at %.1f mm\n", t * 1e3);
+            return 1;
+        }
+        const Vec3 F = bag.calcShapeWrench(s).force, G = red.calcWrench(0).force;
+        const double fn = F.z(), ft = -F.dot(e), gn = G.z(), gt = -G.dot(e);
+        std::printf("%5.1f %8.2f %8.2f %6.3f %8.2f %8.2f %6.3f\n", t * 1e3, fn, ft, ft / fn, gn,
+                    gt, gn > 0 ? gt / gn : 0.0);
+    }
+    return 0;
+}
+
 int speed(const std::string& calPath) {
     const auto cal = io::readReducedBagCalibration(calPath);
     cosim::ReducedBag bag(cal, Eigen::Isometry3d::Identity());
@@ -1248,13 +1314,16 @@ int main(int argc, char** argv) {
         if (mode == "replay" && argc == 5) return replay(argv[2], argv[3], argv[4]);
         if (mode == "lateral" && argc == 7)
             return lateral(argv[2], argv[3], argv[4], std::stod(argv[5]), std::stod(argv[6]));
+        if (mode == "shear" && argc == 17) return shear(argv[2], argv[3], argv + 4);
         if (mode == "fe-bag" && (argc == 9 || (argc == 10 && std::string(argv[9]) == "points")))
             return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
                          std::stod(argv[7]), std::stod(argv[8]), argc == 10);
         std::cerr << "usage: bench_reduced_bag calibrate SCENARIO OUT | validate SCENARIO CAL | "
                      "speed CAL | trace SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G | "
                      "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM | "
-                     "replay SCENARIO CAL RUN_DIR | lateral SCENARIO CAL RUN_DIR T0 T1 | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points]\n";
+                     "replay SCENARIO CAL RUN_DIR | lateral SCENARIO CAL RUN_DIR T0 T1 | "
+                     "shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG "
+                     "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points]\n";
         return 2;
     } catch (const io::InputError& e) {
         std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";

@@ -27,13 +27,12 @@ void PatientOnArrayOptions::validate() const {
             throw std::invalid_argument(
                 "bag.calibration: made for another bag (sizes or diaphragm differ from the "
                 "scenario's bag reading); valid: a calibration of this bag");
-        if (contact.friction > 0.0)
-            throw std::invalid_argument(
-                "bag.body_friction: the reduced bag carries normal force only; valid: 0 with "
-                "the reduced model");
+        ReducedBagFriction f = reducedFriction;
+        f.coefficient = contact.friction;
+        f.validate();
     }
     contact.validate();
-    if (contact.friction > 0.0 && coupling.scheme == Scheme::Tangent)
+    if (contact.friction > 0.0 && coupling.scheme == Scheme::Tangent && model == BagModel::FiniteElement)
         throw std::invalid_argument(
             "coupling.scheme: tangent is not valid with body friction (bag.body_friction > 0): "
             "its one pass would hold the friction force from the step's start "
@@ -186,6 +185,9 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         for (int i = 0; i < numBags; ++i) {
             m.reducedBags.push_back(
                 std::make_unique<ReducedBag>(options.reduced, cells[m.bagIndices[i]].X_GB));
+            ReducedBagFriction f = options.reducedFriction;
+            f.coefficient = options.contact.friction;
+            m.reducedBags.back()->setFriction(f);
             m.participants.push_back(m.reducedBags.back().get());
             m.bags.push_back(m.reducedBags.back().get());
             m.modules.push_back({i});

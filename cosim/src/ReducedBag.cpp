@@ -81,6 +81,17 @@ void ReducedBagCalibration::validate() const {
         fail("envelope: depth, radii and tilt must be positive, radii ordered");
 }
 
+void ReducedBagFriction::validate() const {
+    if (!(coefficient >= 0.0 && coefficient <= 2.0))
+        throw std::invalid_argument("reduced bag friction: coefficient must be in [0, 2]");
+    if (coefficient == 0.0) return;
+    if (!(stickDistance > 0.0 && stickDistance <= 0.1))
+        throw std::invalid_argument(
+            "reduced bag friction: stickDistance must be in (0, 0.1] m with friction on");
+    if (!(dampingTime >= 0.0 && dampingTime <= 1.0))
+        throw std::invalid_argument("reduced bag friction: dampingTime must be in [0, 1] s");
+}
+
 ReducedBag::ReducedBag(std::shared_ptr<const ReducedBagCalibration> calibration,
                        const Eigen::Isometry3d& X_GB)
     : m_cal(std::move(calibration)), m_X_GB(X_GB) {
@@ -114,6 +125,9 @@ int ReducedBag::addShape(std::shared_ptr<bags::RigidShape> shape) {
     if (!shape) throw std::invalid_argument("ReducedBag::addShape: null shape");
     m_poses.push_back(shape->getPose());
     m_committedPoses.push_back(shape->getPose());
+    m_velocities.push_back(Vec6::Zero());
+    m_committedVelocities.push_back(Vec6::Zero());
+    m_anchors.emplace_back();
     m_shapes.push_back(std::move(shape));
     m_results.emplace_back();
     evaluate();
@@ -129,8 +143,16 @@ void ReducedBag::setGasMass(double mass) {
     commit();
 }
 
+void ReducedBag::setFriction(const ReducedBagFriction& friction) {
+    friction.validate();
+    m_friction = friction;
+    for (Anchor& a : m_anchors) a = Anchor{};
+    evaluate();
+}
+
 void ReducedBag::setShapeState(int shape, const ShapeState& state) {
     m_poses.at(shape) = state.X_GS;
+    m_velocities.at(shape) << state.w_GS, state.v_GS;
 }
 
 ParticipantStep ReducedBag::advance(double dt) {
@@ -155,13 +177,63 @@ ParticipantStep ReducedBag::advance(double dt) {
 void ReducedBag::commit() {
     m_committed = m_cur;
     m_committedPoses = m_poses;
+    m_committedVelocities = m_velocities;
+    updateAnchors();
     checkEnvelope();
 }
 
 void ReducedBag::rollback() {
     m_cur = m_committed;
     m_poses = m_committedPoses;
+    m_velocities = m_committedVelocities;
     evaluate();
+}
+
+void ReducedBag::addFriction(size_t s) {
+    ShapeResult& r = m_results[s];
+    r.normalForce = r.wrench.force;
+    const Anchor& anchor = m_anchors[s];
+    const double mu = m_friction.coefficient, N = r.normalForce.norm();
+    if (!(mu > 0.0 && anchor.on && r.load > 0.0 && N > 0.0)) return;
+    const Eigen::Isometry3d& X = m_poses[s];
+    const Vec3 rp = X.linear() * anchor.onShape;
+    const Vec3 vp = m_velocities[s].tail<3>() + m_velocities[s].head<3>().cross(rp);
+    const Vec3 n = r.normalForce / N;
+    r.anchored = true;
+    r.point = X.translation() + rp;
+    r.raw = r.point - anchor.inGround + m_friction.dampingTime * vp;
+    r.slip = r.raw - n * n.dot(r.raw);
+    const double ns = r.slip.norm();
+    r.sliding = ns > m_friction.stickDistance;
+    r.frictionForce = -mu * N / std::max(ns, m_friction.stickDistance) * r.slip;
+    r.wrench.force += r.frictionForce;
+    r.wrench.torque += rp.cross(r.frictionForce);
+}
+
+void ReducedBag::updateAnchors() {
+    // The anchor follows a slide (return mapping: |s| = d, the force unchanged), then the
+    // spring moves to the pressure centroid keeping its tangential stretch: a shape rolling
+    // on the film without slipping is not held back.
+    for (size_t s = 0; s < m_shapes.size(); ++s) {
+        const ShapeResult& r = m_results[s];
+        Anchor& a = m_anchors[s];
+        if (!(m_friction.coefficient > 0.0 && r.load > 0.0 && r.normalForce.norm() > 0.0)) {
+            a = Anchor{};
+            continue;
+        }
+        Vec3 keep = Vec3::Zero();
+        if (r.anchored) {
+            const Vec3 n = r.normalForce.normalized();
+            const Vec3 u = r.point - a.inGround;
+            keep = u - n * n.dot(u);
+            const double ns = r.slip.norm();
+            if (ns > m_friction.stickDistance)
+                keep -= (ns - m_friction.stickDistance) / ns * r.slip;
+        }
+        a.on = true;
+        a.onShape = m_poses[s].linear().transpose() * (r.centroid - m_poses[s].translation());
+        a.inGround = r.centroid - keep;
+    }
 }
 
 void ReducedBag::setMassFlow(double massFlow) {
@@ -550,6 +622,8 @@ void ReducedBag::evaluate() {
             const Vec3 f = smp.blend * a * q / g * -smp.n;
             w.force += f;
             w.torque += (smp.c - o).cross(f);
+            r.load += smp.blend * a * q / g;
+            r.centroid += smp.blend * a * q / g * smp.c;
             if (q > owner[smp.point]) {
                 owner[smp.point] = q;
                 m_points.col(smp.point) = smp.c;
@@ -557,6 +631,8 @@ void ReducedBag::evaluate() {
             }
         }
         r.wrench = w;
+        if (r.load > 0.0) r.centroid /= r.load;
+        addFriction(s);
     }
 }
 
@@ -676,6 +752,33 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
         const Mat36 df = -ab * (smp.n * (dq / g - q / (g * g) * dg) + q / g * dn);
         T.bottomRows<3>() += df;
         T.topRows<3>() += -cross(f) * (dc - Ju) + cross(smp.c - o) * df;
+    }
+    if (r.anchored) {
+        // The friction force f = -mu N s / max(|s|, d), s = P (u + tau v), P = I - n n^T,
+        // n = F_n / N: through the spring point p (dp = J(p) xi; its velocity w x (p - o)
+        // turns with the shape) and through F_n, whose derivative is the rows above.
+        const double mu = m_friction.coefficient, d = m_friction.stickDistance;
+        const Mat36 Jp = jacobian(r.point);
+        const Vec3 w = m_velocities.at(shape).head<3>();
+        const Mat36 dRaw = Jp + m_friction.dampingTime * cross(w) * (Jp - Ju);
+        const Mat36 dF = T.bottomRows<3>();
+        const double N = r.normalForce.norm();
+        const Vec3 n = r.normalForce / N;
+        const Eigen::Matrix3d Pn = Eigen::Matrix3d::Identity() - n * n.transpose();
+        const Row6 dN = n.transpose() * dF;
+        const Mat36 dn = Pn * dF / N;
+        const Mat36 dS = Pn * dRaw - dn * n.dot(r.raw) - n * (r.raw.transpose() * dn);
+        Mat36 df;
+        if (!r.sliding) {
+            df = -(mu / d) * (r.slip * dN + N * dS);
+        } else {
+            const double ns = r.slip.norm();
+            const Vec3 sh = r.slip / ns;
+            df = -mu * (sh * dN + N / ns * (Eigen::Matrix3d::Identity() - sh * sh.transpose()) * dS);
+        }
+        const Vec3& f = r.frictionForce;
+        T.bottomRows<3>() += df;
+        T.topRows<3>() += -cross(f) * (Jp - Ju) + cross(r.point - o) * df;
     }
     return T;
 }
@@ -824,7 +927,7 @@ void loadFixed(bags::StateReader& r, V& v) {
 }  // namespace
 
 void ReducedBag::saveState(bags::StateWriter& w) const {
-    w.tag("reduced bag 2");
+    w.tag("reduced bag 3");
     for (const State* s : {&m_cur, &m_committed}) {
         w.pod(s->mass), w.pod(s->pressure), w.pod(s->time);
         w.pod(s->flow), w.pod(s->target), w.pod(s->rate);
@@ -832,6 +935,9 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
     w.pod(std::uint64_t(m_poses.size()));
     for (const Eigen::Isometry3d& X : m_poses) w.pose(X);
     for (const Eigen::Isometry3d& X : m_committedPoses) w.pose(X);
+    for (const Vec6& v : m_velocities) saveFixed(w, v);
+    for (const Vec6& v : m_committedVelocities) saveFixed(w, v);
+    for (const Anchor& a : m_anchors) w.pod(a.on), saveFixed(w, a.onShape), saveFixed(w, a.inGround);
     for (const ShapeResult& res : m_results) {
         w.pod(std::uint64_t(res.samples.size()));
         for (const Sample& smp : res.samples) {
@@ -847,6 +953,9 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
         w.pod(res.volume), w.pod(res.depth), w.pod(res.area);
         w.pod(res.depthSum1), w.pod(res.depthSum2), w.pod(res.deepest);
         saveFixed(w, res.wrench.torque), saveFixed(w, res.wrench.force);
+        saveFixed(w, res.normalForce), saveFixed(w, res.point), saveFixed(w, res.raw);
+        saveFixed(w, res.slip), saveFixed(w, res.frictionForce), saveFixed(w, res.centroid);
+        w.pod(res.load), w.pod(res.anchored), w.pod(res.sliding);
     }
     w.pod(m_displaced), w.pod(m_dPdV);
     w.mat(m_points);
@@ -855,7 +964,7 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
 }
 
 void ReducedBag::loadState(bags::StateReader& r) {
-    r.tag("reduced bag 2");
+    r.tag("reduced bag 3");
     for (State* s : {&m_cur, &m_committed}) {
         r.pod(s->mass), r.pod(s->pressure), r.pod(s->time);
         r.pod(s->flow), r.pod(s->target), r.pod(s->rate);
@@ -864,6 +973,9 @@ void ReducedBag::loadState(bags::StateReader& r) {
     if (n != m_poses.size()) bags::StateReader::mismatch("shapes of a reduced bag", n, m_poses.size());
     for (Eigen::Isometry3d& X : m_poses) X = r.pose();
     for (Eigen::Isometry3d& X : m_committedPoses) X = r.pose();
+    for (Vec6& v : m_velocities) loadFixed(r, v);
+    for (Vec6& v : m_committedVelocities) loadFixed(r, v);
+    for (Anchor& a : m_anchors) r.pod(a.on), loadFixed(r, a.onShape), loadFixed(r, a.inGround);
     for (ShapeResult& res : m_results) {
         res.samples.resize(r.pod<std::uint64_t>());
         for (Sample& smp : res.samples) {
@@ -879,6 +991,9 @@ void ReducedBag::loadState(bags::StateReader& r) {
         r.pod(res.volume), r.pod(res.depth), r.pod(res.area);
         r.pod(res.depthSum1), r.pod(res.depthSum2), r.pod(res.deepest);
         loadFixed(r, res.wrench.torque), loadFixed(r, res.wrench.force);
+        loadFixed(r, res.normalForce), loadFixed(r, res.point), loadFixed(r, res.raw);
+        loadFixed(r, res.slip), loadFixed(r, res.frictionForce), loadFixed(r, res.centroid);
+        r.pod(res.load), r.pod(res.anchored), r.pod(res.sliding);
     }
     r.pod(m_displaced), r.pod(m_dPdV);
     r.matOfCols(m_points, m_points.cols(), "points of a reduced bag");

@@ -123,7 +123,8 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
                      "contact_penalty", "body_friction", "friction_law", "slip_velocity",
-                     "body_tissue", "model", "calibration", "bending_stiffness"});
+                     "body_tissue", "model", "calibration", "bending_stiffness",
+                     "stick_distance"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -176,11 +177,20 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     b.bendingStiffness = readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness);
     b.threads = 1;  // bags run in parallel, one per thread
     readReducedBagKeys(s, sc.options, fileName);
-    if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&
-        sc.options.contact.friction > 0.0)
-        s.fail("body_friction",
-               fmtNumber(sc.options.contact.friction) + " is not valid with model: reduced (the reduced bag carries normal force "
-                   "only); valid: 0, or model: finite-element");
+    // The reduced bag's friction (docs/reduced-bag.md#friction): one stick spring per shape,
+    // capped at mu times its contact force; the travel over which it takes hold.
+    const bool reduced = sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced;
+    if (s.has("stick_distance")) {
+        if (!reduced)
+            s.fail("stick_distance", "is the reduced bag's (model: reduced); the finite-element "
+                                     "bag's film takes hold node by node");
+        sc.options.reducedFriction.stickDistance = s.getQuantity("stick_distance", D::Length);
+        checkBetween(s, "stick_distance", sc.options.reducedFriction.stickDistance, 1e-4, 0.05,
+                     "mm");
+    }
+    if (reduced && s.has("friction_law") && law != "stick-slip")
+        s.fail("friction_law", law + " is not valid with model: reduced; valid: stick-slip "
+                                     "(the reduced bag's one law)");
     if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&
         sc.options.contact.hasTissue())
         s.fail("body_tissue",
@@ -885,7 +895,10 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     readBag(root.getSection("bag", false), sc, file.getFileName());
     readArray(root.getSection("array"), sc);
     readCoupling(root.getSection("coupling", false), sc.options);
-    if (sc.options.contact.friction > 0.0 && sc.options.coupling.scheme == cosim::Scheme::Tangent)
+    // (Reduced bags hand the body their friction's tangent: the tangent scheme holds only its
+    // damping over a step; docs/reduced-bag.md#friction.)
+    if (sc.options.contact.friction > 0.0 && sc.options.coupling.scheme == cosim::Scheme::Tangent &&
+        sc.options.model == cosim::PatientOnArrayOptions::BagModel::FiniteElement)
         root.getSection("coupling", false)
             .fail("scheme", "tangent is not valid with bag.body_friction " +
                                 fmtNumber(sc.options.contact.friction) +

@@ -3,11 +3,13 @@
 // of its wrench, its pressure footprint against its force, gas flows, rollback and the
 // envelope counter. The calibration here is synthetic (stated in each test); the shipped
 // calibrations from FE runs are validated by bench_reduced_bag (docs/reduced-bag.md).
+#include <bags/StateStream.h>
 #include <cosim/PressureMat.h>
 #include <cosim/ReducedBag.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 
 using namespace cosim;
 
@@ -328,4 +330,164 @@ TEST(ReducedBag, ASlackBagPressedByALongShapeStaysAtAmbientUntilItsShapeFillsThe
     EXPECT_NEAR(V, L * segment(0.025), 0.01 * L * segment(0.025));
     EXPECT_GT(P, 3e3);
     EXPECT_NEAR((P + c.ambientPressure) * (vfree(P) - V), mrt, 1e-9 * mrt);
+}
+
+namespace {
+
+// An ellipsoid pressed `depth` into a bag of the calibration (bisection on its height), with
+// friction; the pose is committed (the film takes hold: the anchor at the pressure centroid).
+Eigen::Vector3d pressWithFriction(ReducedBag& bag, double depth, const Eigen::Matrix3d& R,
+                                  Eigen::Vector3d p) {
+    double lo = p.z() - 0.3, hi = p.z() + 0.3;
+    for (int it = 0; it < 60; ++it) {
+        p.z() = 0.5 * (lo + hi);
+        bag.setShapeState(0, at(p, R));
+        bag.advance(0.0);
+        (bag.getDepth(0) > depth ? lo : hi) = p.z();
+    }
+    bag.commit();
+    return p;
+}
+
+ReducedBagFriction friction(double mu, double d, double tau) {
+    ReducedBagFriction f;
+    f.coefficient = mu;
+    f.stickDistance = d;
+    f.dampingTime = tau;
+    return f;
+}
+
+}  // namespace
+
+TEST(ReducedBag, FrictionSticksAsASpringUpToItsStickDistanceThenSlidesAtTheCoulombLimit) {
+    // Reference: the law itself with the normal force N = |F_n| of the same state: a shape
+    // translated by u along the flat top (tangential to its contact force) after the film took
+    // hold carries f = -mu N u / d while |u| <= d, and mu N against the slide beyond it
+    // (1e-12 relative). After a committed slide the anchor has followed (|s| = d): the same
+    // pose gives the same force, and moving back by d frees it (1e-9 of mu N).
+    auto cal = makeCalibration(2e-3, [](double, double, double) { return 0.06; });
+    ReducedBag bag(cal, Eigen::Isometry3d::Identity());
+    bag.addShape(bags::makeEllipsoid(Eigen::Vector3d(0.08, 0.05, 0.04)));
+    bag.setGasMass(4.4e-3);
+    const double mu = 0.4, d = 5e-3;
+    bag.setFriction(friction(mu, d, 0.0));
+    const Eigen::Vector3d p0 = pressWithFriction(bag, 0.012, Eigen::Matrix3d::Identity(),
+                                                 Eigen::Vector3d(0.0, 0.0, 0.09));
+    EXPECT_EQ(bag.getFrictionForce(0).norm(), 0.0);  // anchored where it stands
+    for (double travel : {1e-3, 3e-3, 12e-3}) {
+        bag.setShapeState(0, at(p0 + Eigen::Vector3d(travel, 0.0, 0.0)));
+        ASSERT_TRUE(bag.advance(0.0).converged);
+        const Eigen::Vector3d f = bag.getFrictionForce(0);
+        const Eigen::Vector3d Fn = bag.calcWrench(0).force - f;
+        const double N = Fn.norm();
+        EXPECT_GT(N, 10.0);
+        EXPECT_LT(std::abs(Fn.x()), 1e-9 * N);  // symmetric: the normal force is vertical
+        const double expected = travel <= d ? mu * N * travel / d : mu * N;
+        EXPECT_NEAR(f.x(), -expected, 1e-12 * N) << "travel " << travel;
+        EXPECT_NEAR(f.y(), 0.0, 1e-12 * N);
+        EXPECT_EQ(bag.isSliding(0), travel > d);
+    }
+    // Slid 12 mm: committed, the anchor follows.
+    bag.commit();
+    const double slid = bag.getFrictionForce(0).x();
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    EXPECT_NEAR(bag.getFrictionForce(0).x(), slid, 1e-9 * std::abs(slid));
+    bag.setShapeState(0, at(p0 + Eigen::Vector3d(12e-3 - d, 0.0, 0.0)));
+    ASSERT_TRUE(bag.advance(0.0).converged);
+    EXPECT_LT(bag.getFrictionForce(0).norm(), 1e-9 * std::abs(slid));
+    // A step rolled back leaves the committed anchor: the slid pose's force again.
+    bag.rollback();
+    EXPECT_NEAR(bag.getFrictionForce(0).x(), slid, 1e-9 * std::abs(slid));
+    // Frictionless (the default) gives the normal force alone.
+    bag.setFriction(ReducedBagFriction{});
+    EXPECT_EQ(bag.getFrictionForce(0).norm(), 0.0);
+}
+
+TEST(ReducedBag, TheTangentWithFrictionMatchesFiniteDifferencesOfTheWrench) {
+    // Reference: central differences of the wrench re-evaluated by advance() (the committed
+    // anchor held; rotation 1e-6 rad, translation 1e-7 m), tolerance 1e-4 of the largest
+    // entry. The curved top and factors of the frictionless tangent test; the shape tilted
+    // and moving (the stick spring's damping), anchored 12 mm deep, then moved 2 mm (the
+    // film sticks) and 9 mm (it slides) along and across the bag with a turn.
+    for (double travel : {2e-3, 9e-3}) {
+        auto cal = makeCalibration(2e-3, [](double x, double y, double m) {
+            return 0.06 + 4.0 * (m - 3e-3) - 0.8 * x * x - 2.0 * y * y + 0.05 * x;
+        });
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 4; ++j) {
+                cal->pressureFactor(i, j) = 1.0 + 0.3 * j + 0.1 * i;
+                cal->volumeFactor(i, j) = 1.2 - 0.1 * j + 0.05 * i;
+            }
+        cal->skirt = 0.5;
+        ReducedBag bag(cal, Eigen::Isometry3d(Eigen::Translation3d(0.01, 0.0, 0.0)));
+        bag.addShape(bags::makeEllipsoid(Eigen::Vector3d(0.08, 0.05, 0.04)));
+        bag.setGasMass(4.4e-3);
+        bag.setFriction(friction(0.4, 5e-3, 0.02));
+        const Eigen::Matrix3d R0 = rotation(Eigen::Vector3d(0.3, -0.2, 0.4));
+        const Eigen::Vector3d p0 =
+            pressWithFriction(bag, 0.012, R0, Eigen::Vector3d(0.02, -0.01, 0.1));
+        const Eigen::Vector3d p = p0 + travel * Eigen::Vector3d(0.8, 0.6, 0.0);
+        const Eigen::Matrix3d R = rotation(Eigen::Vector3d(0.0, 0.0, 0.02)) * R0;
+        auto moving = [](ShapeState s) {
+            s.w_GS = Eigen::Vector3d(0.1, -0.2, 0.3);
+            s.v_GS = Eigen::Vector3d(0.01, -0.02, 0.005);
+            return s;
+        };
+        bag.setShapeState(0, moving(at(p, R)));
+        ASSERT_TRUE(bag.advance(0.0).converged);
+        ASSERT_EQ(bag.isSliding(0), travel > 5e-3);
+        ASSERT_GT(bag.getFrictionForce(0).norm(), 1.0);
+        const Mat6 T = bag.calcWrenchTangent(0);
+        Mat6 fd;
+        for (int k = 0; k < 6; ++k) {
+            const double h = k < 3 ? 1e-6 : 1e-7;
+            Vec6 w[2];
+            for (int sgn = 0; sgn < 2; ++sgn) {
+                Eigen::Vector3d dth = Eigen::Vector3d::Zero(), du = Eigen::Vector3d::Zero();
+                (k < 3 ? dth : du)[k % 3] = sgn ? -h : h;
+                bag.setShapeState(0, moving(at(p + du, rotation(dth) * R)));
+                ASSERT_TRUE(bag.advance(0.0).converged);
+                w[sgn] = bag.calcWrench(0).asVector();
+            }
+            fd.col(k) = (w[0] - w[1]) / (2 * h);
+        }
+        const double scale = fd.cwiseAbs().maxCoeff();
+        EXPECT_LT((T - fd).cwiseAbs().maxCoeff(), 1e-4 * scale)
+            << "travel " << travel << "\nanalytic\n"
+            << T << "\nfinite differences\n"
+            << fd;
+    }
+}
+
+TEST(ReducedBag, ItsStateWithFrictionAnchorsRoundTripsThroughACheckpoint) {
+    // Reference: the bag that was not saved. A bag loaded from another's saved state gives the
+    // same wrench, bit for bit, at the next pose (the anchors and velocities came along).
+    auto cal = makeCalibration(2e-3, [](double, double, double) { return 0.06; });
+    auto make = [&] {
+        auto b = std::make_unique<ReducedBag>(cal, Eigen::Isometry3d::Identity());
+        b->addShape(bags::makeEllipsoid(Eigen::Vector3d(0.08, 0.05, 0.04)));
+        b->setGasMass(4.4e-3);
+        b->setFriction(friction(0.4, 5e-3, 0.02));
+        return b;
+    };
+    auto a = make();
+    const Eigen::Vector3d p0 = pressWithFriction(*a, 0.012, Eigen::Matrix3d::Identity(),
+                                                 Eigen::Vector3d(0.0, 0.0, 0.09));
+    ShapeState s = at(p0 + Eigen::Vector3d(7e-3, 1e-3, 0.0));
+    s.v_GS = Eigen::Vector3d(0.01, 0.0, 0.0);
+    a->setShapeState(0, s);
+    a->advance(0.01);
+    a->commit();
+    bags::StateWriter w;
+    a->saveState(w);
+    auto b = make();
+    bags::StateReader r(w.getData());
+    b->loadState(r);
+    s = at(p0 + Eigen::Vector3d(9e-3, 2e-3, 0.0));
+    for (ReducedBag* bag : {a.get(), b.get()}) {
+        bag->setShapeState(0, s);
+        ASSERT_TRUE(bag->advance(0.01).converged);
+    }
+    EXPECT_GT(a->getFrictionForce(0).norm(), 1.0);
+    EXPECT_EQ(a->calcWrench(0).asVector(), b->calcWrench(0).asVector());
 }

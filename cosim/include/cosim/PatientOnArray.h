@@ -40,6 +40,16 @@ struct PatientOnArrayOptions {
     BagModel model = BagModel::FiniteElement;
     std::shared_ptr<const ReducedBagCalibration> reduced;  ///< Reduced: required
     bags::RigidContact::Options contact;  ///< contact of the body's shapes with the membranes
+    /// Reduced bags with body friction (contact.friction > 0, its coefficient): the stick
+    /// spring's travel to sliding and its damping time (ReducedBagFriction,
+    /// docs/reduced-bag.md#friction). The coefficient here is ignored.
+    ReducedBagFriction reducedFriction = makeReducedFriction();
+    static ReducedBagFriction makeReducedFriction() {
+        ReducedBagFriction f;
+        f.stickDistance = 5e-3;
+        f.dampingTime = 0.02;
+        return f;
+    }
     double pairMargin = 0.03;  ///< [m] findShapeBagPairs() margin around each flat footprint
     double dropHeight = 0.0;   ///< [m] released this far above the touching height
     body::BodyModelOptions body;

@@ -76,6 +76,22 @@ struct ReducedBagCalibration {
     void validate() const;
 };
 
+/// Coulomb friction of the shapes on the film (docs/reduced-bag.md#friction). Per shape one
+/// elastic stick spring with Kelvin-Voigt damping between a point of the shape and an anchor
+/// fixed in Ground, in the plane normal to the shape's contact force F_n (magnitude N):
+///   s = P (u + tau v),  f = -mu N s / max(|s|, d),  P = I - n n^T,  n = F_n / N,
+/// u the point's travel from its anchor, v its velocity. While |s| <= d the film sticks (a
+/// spring of mu N / d); beyond it slides at the Coulomb limit mu N. After each committed step
+/// the anchor follows a slide (|s| = d, the force unchanged) and the spring moves to the
+/// contact's pressure centroid (the shape rolls on the film without slipping).
+struct ReducedBagFriction {
+    double coefficient = 0.0;    ///< mu (0: frictionless, the default)
+    double stickDistance = 0.0;  ///< d [m]: tangential travel to sliding
+    double dampingTime = 0.0;    ///< tau [s]: the stick spring's damping over its stiffness
+    /// @throws std::invalid_argument naming the member if a value is out of range.
+    void validate() const;
+};
+
 /// Steps (committed) outside the envelope, per reason.
 struct EnvelopeCounts {
     int mass = 0, depth = 0, radius = 0, tilt = 0;
@@ -100,6 +116,13 @@ class ReducedBag : public Bag {
     int addShape(std::shared_ptr<bags::RigidShape> shape);
     /// Sets the gas mass [kg] now, shapes where they are; commits.
     void setGasMass(double mass);
+    /// Friction of the shapes on the film (off by default); before the coupling starts.
+    void setFriction(const ReducedBagFriction& friction);
+    const ReducedBagFriction& getFriction() const { return m_friction; }
+    /// The friction force [N] on a shape (Ground; zero when not anchored or frictionless).
+    Vec3 getFrictionForce(int shape) const { return m_results.at(shape).frictionForce; }
+    /// Whether a shape's contact slides (|s| > d) in the current state.
+    bool isSliding(int shape) const { return m_results.at(shape).sliding; }
 
     // Participant
     int getNumShapes() const override { return int(m_shapes.size()); }
@@ -175,6 +198,19 @@ class ReducedBag : public Bag {
         double depthSum1 = 0.0, depthSum2 = 0.0;  // sum a b delta, sum a b delta^2
         int deepest = -1;  // sample index
         ShapeWrench wrench;
+        // Friction (with the committed anchor): the normal force F_n (before friction), the
+        // shape point p of the spring (Ground), s unprojected (u + tau v) and projected, the
+        // friction force; the pressure centroid (Ground) and the normal force's total weight.
+        Vec3 normalForce = Vec3::Zero(), point = Vec3::Zero(), raw = Vec3::Zero();
+        Vec3 slip = Vec3::Zero(), frictionForce = Vec3::Zero(), centroid = Vec3::Zero();
+        double load = 0.0;  // sum of q A over the samples
+        bool anchored = false, sliding = false;
+    };
+    // A shape's friction anchor (committed state): a point fixed on the shape (its frame) and
+    // where it was in Ground when the film last held it.
+    struct Anchor {
+        bool on = false;
+        Vec3 onShape = Vec3::Zero(), inGround = Vec3::Zero();
     };
     struct State {
         double mass = 0.0, pressure = 0.0, time = 0.0;
@@ -193,12 +229,17 @@ class ReducedBag : public Bag {
     double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
     double solvePressure(double displaced, double* dPdV) const;
     void checkEnvelope();
+    void addFriction(size_t s);      // the friction force onto m_results[s] (evaluate)
+    void updateAnchors();            // commit: anchors follow slides and the centroid
 
     std::shared_ptr<const ReducedBagCalibration> m_cal;
     Eigen::Isometry3d m_X_GB;
     std::vector<int> m_gridIndex;  // point -> ix + nx iy
     std::vector<std::shared_ptr<bags::RigidShape>> m_shapes;
     std::vector<Eigen::Isometry3d> m_poses, m_committedPoses;
+    std::vector<Vec6> m_velocities, m_committedVelocities;  // per shape (w_GS, v_GS)
+    ReducedBagFriction m_friction;
+    std::vector<Anchor> m_anchors;  // per shape, committed
     std::vector<ShapeResult> m_results;
     State m_cur, m_committed;
     double m_displaced = 0.0, m_dPdV = 0.0;
