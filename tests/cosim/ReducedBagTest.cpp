@@ -334,11 +334,12 @@ TEST(ReducedBag, ASlackBagPressedByALongShapeStaysAtAmbientUntilItsShapeFillsThe
 
 namespace {
 
-// An ellipsoid pressed `depth` into a bag of the calibration (bisection on its height), with
+// An ellipsoid pressed `depth` into a bag of the calibration (bisection on its height between
+// 30 mm below the given point and 100 mm above it; further down it sinks below the top), with
 // friction; the pose is committed (the film takes hold: the anchor at the pressure centroid).
 Eigen::Vector3d pressWithFriction(ReducedBag& bag, double depth, const Eigen::Matrix3d& R,
                                   Eigen::Vector3d p) {
-    double lo = p.z() - 0.3, hi = p.z() + 0.3;
+    double lo = p.z() - 0.03, hi = p.z() + 0.1;  // from deep in to clear above
     for (int it = 0; it < 60; ++it) {
         p.z() = 0.5 * (lo + hi);
         bag.setShapeState(0, at(p, R));
