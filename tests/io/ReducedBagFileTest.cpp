@@ -153,13 +153,37 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
     const io::InputError e5 =
         expectInputError([&] { readWith("30 mm", "finite-element", shipped); });
     EXPECT_EQ(e5.getKey(), "bag.calibration");
-    // The reduced bag carries normal force only: friction of the body on its film is refused.
-    const io::InputError e6 = expectInputError(
-        [&] { readWith("30 mm", "reduced", shipped + ", body_friction: 0.4"); });
-    EXPECT_EQ(e6.getKey(), "bag.body_friction");
+    // Friction of the body on the reduced bag's film (docs/reduced-bag.md#friction): taken,
+    // with the tangent scheme (the bag hands the body its friction's tangent) and its stick
+    // distance (5 mm unless set); bag.stick_distance is the reduced bag's alone, in range,
+    // and the reduced bag has the stick-slip law only.
+    const io::PatientOnArrayScenario fr =
+        readWith("30 mm", "reduced", shipped + ", body_friction: 0.4, stick_distance: 8 mm");
+    EXPECT_DOUBLE_EQ(fr.options.contact.friction, 0.4);
+    EXPECT_DOUBLE_EQ(fr.options.reducedFriction.stickDistance, 8e-3);
+    EXPECT_EQ(fr.options.coupling.scheme, cosim::Scheme::Tangent);
+    EXPECT_NO_THROW(fr.options.validate());
+    EXPECT_DOUBLE_EQ(
+        readWith("30 mm", "reduced", shipped + ", body_friction: 0.4").options.reducedFriction.stickDistance,
+        5e-3);
+    const io::InputError e6 = expectInputError([] {
+        std::string t = kScenario;
+        t.replace(t.find("MESH"), 4, "30 mm");
+        t.replace(t.find("MODEL"), 5, "finite-element");
+        t.replace(t.find("CAL"), 3, ", stick_distance: 8 mm");
+        io::readPatientOnArrayScenario(io::ScenarioFile::parse(
+            t, std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/r.yaml"));
+    });
+    EXPECT_EQ(e6.getKey(), "bag.stick_distance");
     EXPECT_NE(std::string(e6.what()).find("model: reduced"), std::string::npos) << e6.what();
-    EXPECT_EQ(readWith("30 mm", "reduced", shipped + ", body_friction: 0").options.contact.friction,
-              0.0);
+    const io::InputError e6b = expectInputError(
+        [&] { readWith("30 mm", "reduced", shipped + ", body_friction: 0.4, stick_distance: 90 mm"); });
+    EXPECT_EQ(e6b.getKey(), "bag.stick_distance");
+    const io::InputError e6c = expectInputError([&] {
+        readWith("30 mm", "reduced", shipped + ", body_friction: 0.4, friction_law: regularised");
+    });
+    EXPECT_EQ(e6c.getKey(), "bag.friction_law");
+    EXPECT_NE(std::string(e6c.what()).find("stick-slip"), std::string::npos) << e6c.what();
     // Nor a soft-tissue layer: the reduced bag's contact law is its own.
     const io::InputError e7 = expectInputError([&] {
         readWith("30 mm", "reduced",
