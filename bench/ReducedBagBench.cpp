@@ -837,19 +837,27 @@ struct RunBags {  // time [ms] -> array bag index -> (mass [kg], gauge pressure 
     std::map<long, std::map<int, std::array<double, 3>>> at;
 };
 
-RunBags readRunBags(const std::string& dir) {
-    RunBags r;
-    std::ifstream in(dir + "/bags.csv");
-    if (!in) throw std::runtime_error("cannot read " + dir + "/bags.csv");
+// Each data row of a run's CSV file (after its header), split into its first n fields.
+template <class F>
+void forEachRunRow(const std::string& dir, const std::string& file, int n, F&& f) {
+    std::ifstream in(dir + "/" + file);
+    if (!in) throw std::runtime_error("cannot read " + dir + "/" + file);
     std::string line;
     std::getline(in, line);
+    std::vector<std::string> fields(n);
     while (std::getline(in, line)) {
         std::stringstream ss(line);
-        std::string f[7];
-        for (auto& x : f) std::getline(ss, x, ',');
+        for (auto& x : fields) std::getline(ss, x, ',');
+        f(fields);
+    }
+}
+
+RunBags readRunBags(const std::string& dir) {
+    RunBags r;
+    forEachRunRow(dir, "bags.csv", 7, [&](const std::vector<std::string>& f) {
         r.at[std::lround(std::stod(f[0]) * 1e3)][std::stoi(f[1])] = {
             std::stod(f[2]) * 1e-3, std::stod(f[3]) * 1e3, std::stod(f[5])};
-    }
+    });
     return r;
 }
 
@@ -1008,17 +1016,10 @@ int replay(const std::string& scenario, const std::string& calPath, const std::s
 // A run's body.csv: time [ms] -> the centre of mass [m].
 std::map<long, Vec3> readRunCentres(const std::string& dir) {
     std::map<long, Vec3> out;
-    std::ifstream in(dir + "/body.csv");
-    if (!in) throw std::runtime_error("cannot read " + dir + "/body.csv");
-    std::string line;
-    std::getline(in, line);
-    while (std::getline(in, line)) {
-        std::stringstream ss(line);
-        std::string f[4];
-        for (auto& x : f) std::getline(ss, x, ',');
+    forEachRunRow(dir, "body.csv", 4, [&](const std::vector<std::string>& f) {
         out[std::lround(std::stod(f[0]) * 1e3)] =
             1e-3 * Vec3(std::stod(f[1]), std::stod(f[2]), std::stod(f[3]));
-    }
+    });
     return out;
 }
 

@@ -57,6 +57,27 @@ Eigen::Matrix3d rotation(const Eigen::Vector3d& v) {
                         : Eigen::Matrix3d::Identity();
 }
 
+// Central differences of a shape's wrench re-evaluated by advance() (rotation 1e-6 rad about
+// Ground axes through its origin, translation 1e-7 m), the pose (p, R) given as state(p, R).
+template <class State>
+Mat6 finiteDifferenceTangent(ReducedBag& bag, const Eigen::Vector3d& p, const Eigen::Matrix3d& R,
+                             State state) {
+    Mat6 fd;
+    for (int k = 0; k < 6; ++k) {
+        const double h = k < 3 ? 1e-6 : 1e-7;
+        Vec6 w[2];
+        for (int sgn = 0; sgn < 2; ++sgn) {
+            Eigen::Vector3d dth = Eigen::Vector3d::Zero(), du = Eigen::Vector3d::Zero();
+            (k < 3 ? dth : du)[k % 3] = sgn ? -h : h;
+            bag.setShapeState(0, state(p + du, rotation(dth) * R));
+            EXPECT_TRUE(bag.advance(0.0).converged);
+            w[sgn] = bag.calcWrench(0).asVector();
+        }
+        fd.col(k) = (w[0] - w[1]) / (2 * h);
+    }
+    return fd;
+}
+
 }  // namespace
 
 TEST(ReducedBag, ASpherePressedIntoAFlatTopCarriesGasPressureTimesItsContactArea) {
@@ -146,19 +167,8 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
         }
         bag.commit();
         const Mat6 T = bag.calcWrenchTangent(0);
-        Mat6 fd;
-        for (int k = 0; k < 6; ++k) {
-            const double h = k < 3 ? 1e-6 : 1e-7;
-            Vec6 w[2];
-            for (int sgn = 0; sgn < 2; ++sgn) {
-                Eigen::Vector3d dth = Eigen::Vector3d::Zero(), du = Eigen::Vector3d::Zero();
-                (k < 3 ? dth : du)[k % 3] = sgn ? -h : h;
-                bag.setShapeState(0, at(p + du, rotation(dth) * R0));
-                ASSERT_TRUE(bag.advance(0.0).converged);
-                w[sgn] = bag.calcWrench(0).asVector();
-            }
-            fd.col(k) = (w[0] - w[1]) / (2 * h);
-        }
+        const Mat6 fd = finiteDifferenceTangent(
+            bag, p, R0, [](const Eigen::Vector3d& q, const Eigen::Matrix3d& Q) { return at(q, Q); });
         bag.rollback();
         const double scale = fd.cwiseAbs().maxCoeff();
         EXPECT_GT(scale, 1.0);
@@ -439,19 +449,8 @@ TEST(ReducedBag, TheTangentWithFrictionMatchesFiniteDifferencesOfTheWrench) {
         ASSERT_EQ(bag.isSliding(0), travel > 5e-3);
         ASSERT_GT(bag.getFrictionForce(0).norm(), 1.0);
         const Mat6 T = bag.calcWrenchTangent(0);
-        Mat6 fd;
-        for (int k = 0; k < 6; ++k) {
-            const double h = k < 3 ? 1e-6 : 1e-7;
-            Vec6 w[2];
-            for (int sgn = 0; sgn < 2; ++sgn) {
-                Eigen::Vector3d dth = Eigen::Vector3d::Zero(), du = Eigen::Vector3d::Zero();
-                (k < 3 ? dth : du)[k % 3] = sgn ? -h : h;
-                bag.setShapeState(0, moving(at(p + du, rotation(dth) * R)));
-                ASSERT_TRUE(bag.advance(0.0).converged);
-                w[sgn] = bag.calcWrench(0).asVector();
-            }
-            fd.col(k) = (w[0] - w[1]) / (2 * h);
-        }
+        const Mat6 fd = finiteDifferenceTangent(
+            bag, p, R, [&](const Eigen::Vector3d& q, const Eigen::Matrix3d& Q) { return moving(at(q, Q)); });
         const double scale = fd.cwiseAbs().maxCoeff();
         EXPECT_LT((T - fd).cwiseAbs().maxCoeff(), 1e-4 * scale)
             << "travel " << travel << "\nanalytic\n"
