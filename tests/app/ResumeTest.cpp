@@ -2,7 +2,8 @@
 // as by Ctrl-C (--stop-after) and resumed from its last checkpoint writes every CSV file byte
 // for byte as the run that was never stopped; the supine settle (body, bags, coupling) and the
 // pneumatic turn (network, valves, noisy lagged sensors, turn controller, and the body's
-// friction on the films: every contact node's anchor is in the checkpoint). A resumed run is
+// friction on the films: every contact node's anchor is in the checkpoint), and the same turn
+// with reduced bags and friction, on two threads against one stopped and resumed. A resumed run is
 // refused, naming what differs, when given another scenario or other overrides, and when its
 // checkpoint is cut short or of another bagsim.
 #include <bagsim/Version.h>
@@ -25,9 +26,11 @@ namespace {
 const std::string kBagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\"";
 const std::string kScenarios = std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/";
 
-// Runs `bagsim run ARGS`, its output into log; returns the exit status.
-int runBagsim(const std::string& args, const fs::path& log) {
-    const std::string cmd = kBagsim + " run " + args + " > \"" + log.string() + "\" 2>&1";
+// Runs `bagsim run ARGS` (with the environment assignments env before it), its output into
+// log; returns the exit status.
+int runBagsim(const std::string& args, const fs::path& log, const std::string& env = "") {
+    const std::string cmd =
+        env + (env.empty() ? "" : " ") + kBagsim + " run " + args + " > \"" + log.string() + "\" 2>&1";
     const int rc = std::system(cmd.c_str());
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
@@ -172,6 +175,43 @@ TEST(Resume, PneumaticTurnWithNoisySensorsEndsByteIdentical) {
               130)
         << readLog(dir / "stopped.log");
     ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log"), 0)
+        << readLog(dir / "resumed.log");
+    expectSameCsvFiles(dir / "whole", out);
+    EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
+}
+
+TEST(Resume, ReducedBagsWithFrictionOnOneAndTwoThreadsEndByteIdentical) {
+    // The coarse pneumatic turn with reduced bags and friction between body and films
+    // (docs/reduced-bag.md#friction): each bag's stick anchors are in its checkpoint part. The
+    // run on two threads, never stopped, and the run on one thread stopped 0.7 s into the turn
+    // (checkpoint at 2.0 s) and resumed, write every CSV file byte for byte alike. A few
+    // seconds of wall-clock.
+    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/reduced";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string scenario = "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"";
+    const std::string sets =
+        " --set bag.model=reduced --set bag.calibration=../../data/reduced-bag/literal-30mm.txt"
+        " --set bag.body_friction=0.4 --set run.duration='1 s'"
+        " --set output.checkpoint_every='0.5 s' --quiet";
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets,
+                        dir / "whole.log", "OMP_NUM_THREADS=2"),
+              0)
+        << readLog(dir / "whole.log");
+    // He lies on the films with friction and the turn has begun: the left bags have gas
+    // pumped in by the end.
+    const app::test::Csv events = app::test::readCsv(dir / "whole" / "events.csv");
+    ASSERT_GE(events.rows.size(), 3u);
+    const fs::path out = dir / "stopped";
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
+                            " --stop-after '2.2 s'",
+                        dir / "stopped.log", "OMP_NUM_THREADS=1"),
+              130)
+        << readLog(dir / "stopped.log");
+    ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
+    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log",
+                        "OMP_NUM_THREADS=1"),
+              0)
         << readLog(dir / "resumed.log");
     expectSameCsvFiles(dir / "whole", out);
     EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
