@@ -26,11 +26,9 @@ namespace {
 const std::string kBagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\"";
 const std::string kScenarios = std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/";
 
-// Runs `bagsim run ARGS` (with the environment assignments env before it), its output into
-// log; returns the exit status.
-int runBagsim(const std::string& args, const fs::path& log, const std::string& env = "") {
-    const std::string cmd =
-        env + (env.empty() ? "" : " ") + kBagsim + " run " + args + " > \"" + log.string() + "\" 2>&1";
+// Runs `bagsim run ARGS`, its output into log; returns the exit status.
+int runBagsim(const std::string& args, const fs::path& log) {
+    const std::string cmd = kBagsim + " run " + args + " > \"" + log.string() + "\" 2>&1";
     const int rc = std::system(cmd.c_str());
     return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
@@ -194,8 +192,9 @@ TEST(Resume, ReducedBagsWithFrictionOnOneAndTwoThreadsEndByteIdentical) {
         " --set bag.model=reduced --set bag.calibration=../../data/reduced-bag/literal-30mm.txt"
         " --set bag.body_friction=0.4 --set run.duration='1 s'"
         " --set output.checkpoint_every='0.5 s' --quiet";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets,
-                        dir / "whole.log", "OMP_NUM_THREADS=2"),
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets +
+                            " --set coupling.threads=2",
+                        dir / "whole.log"),
               0)
         << readLog(dir / "whole.log");
     // He lies on the films with friction and the turn has begun: the left bags have gas
@@ -204,13 +203,12 @@ TEST(Resume, ReducedBagsWithFrictionOnOneAndTwoThreadsEndByteIdentical) {
     ASSERT_GE(events.rows.size(), 3u);
     const fs::path out = dir / "stopped";
     ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
-                            " --stop-after '2.2 s'",
-                        dir / "stopped.log", "OMP_NUM_THREADS=1"),
+                            " --set coupling.threads=1 --stop-after '2.2 s'",
+                        dir / "stopped.log"),
               130)
         << readLog(dir / "stopped.log");
     ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
-    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log",
-                        "OMP_NUM_THREADS=1"),
+    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log"),
               0)
         << readLog(dir / "resumed.log");
     expectSameCsvFiles(dir / "whole", out);
