@@ -24,6 +24,12 @@ void RigidShape::calcContactGeometry(const Vec3& p_G, double* distance, Vec3* cl
 
 double RigidShape::getBoundingRadius() const { return std::numeric_limits<double>::infinity(); }
 
+double RigidShape::getLowerBoundReach(double t) const {
+    // |p - o| - R <= t holds inside R + t.
+    const double R = getBoundingRadius();
+    return std::isfinite(R) ? std::max(0.0, R + t) : std::numeric_limits<double>::infinity();
+}
+
 double RigidShape::calcDistanceLowerBound(const Vec3& p_G) const {
     const double R = getBoundingRadius();
     if (!std::isfinite(R)) return calcSignedDistance(p_G, nullptr, nullptr);
@@ -87,6 +93,10 @@ public:
     double calcDistanceLowerBound(const Vec3& p_G) const override {
         const Vec3 p = m_X_GS.linear().transpose() * (p_G - m_X_GS.translation());
         return (p.cwiseAbs() - m_h).maxCoeff();
+    }
+    /// max |p_i| - h_i <= t puts p in the box of half extents h + t.
+    double getLowerBoundReach(double t) const override {
+        return (m_h.array() + t).max(0.0).matrix().norm();
     }
 
 protected:
@@ -182,6 +192,10 @@ public:
         const Vec3 p = m_X_GS.linear().transpose() * (p_G - m_X_GS.translation());
         const double rho = p.cwiseQuotient(m_a).norm();
         return (rho >= 1.0 ? m_a[m_k] : m_a.maxCoeff()) * (rho - 1.0);
+    }
+    /// |p| <= a_max rho, and the bound at most t >= 0 means rho <= 1 + t / a_min.
+    double getLowerBoundReach(double t) const override {
+        return m_a.maxCoeff() * std::max(1.0, 1.0 + t / m_a[m_k]);
     }
 
 protected:

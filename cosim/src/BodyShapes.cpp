@@ -40,6 +40,10 @@ class RoundCone : public bags::LocalRigidShape {
         const double y = std::clamp((p - m_pA).dot(m_e), 0.0, m_h);
         return (p - m_pA - y * m_e).norm() - std::max(m_rA, m_rB);
     }
+    /// The capsule's bound at most t: within max(rA, rB) + t of the segment AB.
+    double getLowerBoundReach(double t) const override {
+        return std::max(m_pA.norm(), m_pB.norm()) + std::max(0.0, std::max(m_rA, m_rB) + t);
+    }
     std::string getName() const override { return "round-cone"; }
 
   protected:

@@ -440,11 +440,18 @@ void ReducedBag::evaluate() {
     const int n = int(m_gridIndex.size());
     const double a = c.pitch * c.pitch;
     // The unloaded top at this mass, in Ground.
+    // (xyB: the columns' place in the bag's plane; topHeight: the highest top above the board)
+    const Eigen::Isometry3d X_BG = m_X_GB.inverse();
     Eigen::Matrix3Xd top(3, n);
+    Eigen::Matrix2Xd xyB(2, n);
+    double topHeight = 0.0;
     for (int i = 0; i < n; ++i) {
         const int g = m_gridIndex[i];
-        top.col(i) = m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
-                                   interpolateTop(i, m_cur.mass));
+        const Vec3 tB(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
+                      interpolateTop(i, m_cur.mass));
+        top.col(i) = m_X_GB * tB;
+        xyB.col(i) = tB.head<2>();
+        topHeight = std::max(topHeight, tB.z());
     }
     m_points = top;
     m_areas.setConstant(a);
@@ -507,8 +514,18 @@ void ReducedBag::evaluate() {
             if (phi > 0.0) smp.blend *= smoothstep((0.15 - smp.n.z()) / 0.3, nullptr);
             if (smp.blend > 0.0) out.push_back(smp);
         };
-        std::vector<double> bound(n);
+        // A column further across from the shape's origin (in the bag's plane) than the
+        // shape's lower-bound reach for t has a bound above t at every height: skipped
+        // without asking the shape (the same samples, fewer queries). kUnasked: above 0, not
+        // yet asked.
+        constexpr double kUnasked = std::numeric_limits<double>::infinity();
+        const Vec3 oB = X_BG * m_poses[s].translation();
+        std::vector<double> across2(n);
+        for (int i = 0; i < n; ++i) across2[i] = (xyB.col(i) - oB.head<2>()).squaredNorm();
+        std::vector<double> bound(n, kUnasked);
+        const double reach0 = shape.getLowerBoundReach(0.0);
         for (int i = 0; i < n; ++i) {
+            if (across2[i] > reach0 * reach0) continue;
             bound[i] = shape.calcDistanceLowerBound(top.col(i));
             if (bound[i] <= 0.0) sample(i, found);
         }
@@ -522,9 +539,11 @@ void ReducedBag::evaluate() {
             }
         // The overlap volume: the shape's volume inside the columns below the top and above
         // the board, column by column.
+        const double reachColumn = shape.getLowerBoundReach(0.5 * topHeight + 1e-5);
         for (int i = 0; i < n; ++i) {
             // (a column whose midpoint is further from the shape than half its height misses)
-            const double hcol = (m_X_GB.inverse() * Vec3(top.col(i))).z();
+            if (across2[i] > reachColumn * reachColumn) continue;
+            const double hcol = (X_BG * Vec3(top.col(i))).z();
             const Vec3 mid = top.col(i) - 0.5 * hcol * m_X_GB.linear().col(2);
             if (shape.calcDistanceLowerBound(mid) > 0.5 * hcol + 1e-6) continue;
             Chord ch;
@@ -538,8 +557,12 @@ void ReducedBag::evaluate() {
         // The skirt: points outside the shape, within skirt x depth of it, touch it too.
         const double skirt = c.skirt * r.depth;
         if (r.depth > 0.0) {
-            for (int i = 0; i < n; ++i)
-                if (bound[i] > 0.0 && bound[i] < skirt) sample(i, rim);
+            const double reachSkirt = shape.getLowerBoundReach(skirt);
+            for (int i = 0; i < n; ++i) {
+                if (bound[i] <= 0.0 || across2[i] > reachSkirt * reachSkirt) continue;
+                if (bound[i] == kUnasked) bound[i] = shape.calcDistanceLowerBound(top.col(i));
+                if (bound[i] < skirt) sample(i, rim);
+            }
             // Merge the two passes in grid order (each is ascending in the point).
             size_t ia = 0, ib = 0;
             while (ia < found.size() || ib < rim.size()) {
@@ -617,7 +640,7 @@ void ReducedBag::evaluate() {
         ShapeWrench w;
         for (const Sample& smp : r.samples) {
             const double q = kappa * P * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
-                             c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
+                             c.boardPenalty * std::max(0.0, -(X_BG * smp.c).z());
             const double g = std::max(-smp.n.z(), kMinSlope);
             const Vec3 f = smp.blend * a * q / g * -smp.n;
             w.force += f;

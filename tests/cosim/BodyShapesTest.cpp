@@ -57,6 +57,26 @@ TEST(BodyShapes, RoundConeAgreesWithTheBodysOwnShapeAnywhere) {
     }
 }
 
+TEST(BodyShapes, RoundConeLowerBoundReachHoldsEveryPointWithinTheBound) {
+    // The larger radius at the end nearer the frame origin: there the capsule of the bound
+    // reaches beyond the cone's bounding sphere (0.3 + 0.06 m against 0.33 m), and the reach
+    // must hold it. Points along the axis past B and at random; bounds at -1, 0 and 3 cm.
+    auto cone = makeRoundCone(Vec3(0, 0, 0), 0.06, Vec3(0, 0, 0.3), 0.03);
+    cone->setPose(somePose());
+    const Eigen::Isometry3d X = somePose();
+    std::vector<Vec3> pts = samplePoints(0.45, 4000, 3);
+    for (double z = 0.30; z < 0.45; z += 0.002) pts.push_back(Vec3(0.0, 0.0, z));
+    for (double t : {-0.01, 0.0, 0.03}) {
+        const double reach = cone->getLowerBoundReach(t);
+        for (const Vec3& p_S : pts) {
+            const Vec3 p = X * p_S;
+            if (cone->calcDistanceLowerBound(p) <= t)
+                EXPECT_LE(p_S.norm(), reach + 1e-12) << p_S.transpose() << " t " << t;
+        }
+    }
+    EXPECT_NEAR(cone->getLowerBoundReach(0.0), 0.36, 1e-12);
+}
+
 TEST(BodyShapes, RoundConeNormalDerivativeMatchesFiniteDifferences) {
     // Reference: central differences of the normal, h = 1e-7 m, at points off the axis in the
     // A sphere, the cone and the B sphere regions. Tolerance 1e-6 of 1 / (distance to the axis

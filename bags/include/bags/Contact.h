@@ -41,6 +41,11 @@ public:
     virtual double getBoundingRadius() const;
     /// A cheap lower bound [m] of the signed distance at p (Ground), used to skip far nodes.
     virtual double calcDistanceLowerBound(const Vec3& p_G) const;
+    /// Radius [m] of a sphere about the frame origin that holds every point whose
+    /// calcDistanceLowerBound() is at most t: further out the bound is above t, so a caller
+    /// may skip such points without asking (infinite when no sphere holds them). A shape
+    /// that overrides calcDistanceLowerBound() overrides this with it.
+    virtual double getLowerBoundReach(double t) const;
     virtual std::string getName() const = 0;
     void setPose(const Eigen::Isometry3d& X_GS) { m_X_GS = X_GS; }
     const Eigen::Isometry3d& getPose() const { return m_X_GS; }
