@@ -150,32 +150,47 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
         << readLog(dir / "again.log");
 }
 
-TEST(Resume, PneumaticTurnWithNoisySensorsEndsByteIdentical) {
-    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/pneumatic";
+namespace {
+
+// The scenario run with the options `whole` into dir/whole, never stopped, and with the
+// options `stopped` into dir/stopped, stopped as by Ctrl-C at `stopAfter` and resumed from its
+// last checkpoint: every CSV file of the two alike. The turn has started in the whole run
+// (its events hold the release, the settle's end and the turn's start).
+void expectResumedRunAsWhole(const fs::path& dir, const std::string& scenario,
+                             const std::string& whole, const std::string& stopped,
+                             const std::string& stopAfter) {
     fs::remove_all(dir);
     fs::create_directories(dir);
-    const std::string scenario = "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"";
-    const std::string sets =
-        " --set run.settle_time='0.15 s' --set run.duration='0.15 s' --set output.every='50 ms'"
-        " --set output.checkpoint_every='0.1 s' --set bag.body_friction=0.4 --quiet";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets,
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + whole,
                         dir / "whole.log"),
               0)
         << readLog(dir / "whole.log");
-    // The turn has started (valves open, noisy sensors read) before the checkpoint at 0.2 s,
-    // and the body has lain on the films with friction since his release.
     const app::test::Csv events = app::test::readCsv(dir / "whole" / "events.csv");
     ASSERT_GE(events.rows.size(), 3u);
     const fs::path out = dir / "stopped";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
-                            " --stop-after '0.23 s'",
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + stopped +
+                            " --stop-after '" + stopAfter + "'",
                         dir / "stopped.log"),
               130)
         << readLog(dir / "stopped.log");
+    ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
     ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log"), 0)
         << readLog(dir / "resumed.log");
     expectSameCsvFiles(dir / "whole", out);
     EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
+}
+
+}  // namespace
+
+TEST(Resume, PneumaticTurnWithNoisySensorsEndsByteIdentical) {
+    // The turn starts (valves open, noisy sensors read) before the checkpoint at 0.2 s, and
+    // the body has lain on the films with friction since his release.
+    const std::string sets =
+        " --set run.settle_time='0.15 s' --set run.duration='0.15 s' --set output.every='50 ms'"
+        " --set output.checkpoint_every='0.1 s' --set bag.body_friction=0.4 --quiet";
+    expectResumedRunAsWhole(fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/pneumatic",
+                            "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"", sets, sets,
+                            "0.23 s");
 }
 
 TEST(Resume, ReducedBagsWithFrictionOnOneAndTwoThreadsEndByteIdentical) {
@@ -184,35 +199,14 @@ TEST(Resume, ReducedBagsWithFrictionOnOneAndTwoThreadsEndByteIdentical) {
     // run on two threads, never stopped, and the run on one thread stopped 0.7 s into the turn
     // (checkpoint at 2.0 s) and resumed, write every CSV file byte for byte alike. A few
     // seconds of wall-clock.
-    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/reduced";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    const std::string scenario = "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"";
     const std::string sets =
         " --set bag.model=reduced --set bag.calibration=../../data/reduced-bag/literal-30mm.txt"
         " --set bag.body_friction=0.4 --set run.duration='1 s'"
         " --set output.checkpoint_every='0.5 s' --quiet";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + (dir / "whole").string() + "\"" + sets +
-                            " --set coupling.threads=2",
-                        dir / "whole.log"),
-              0)
-        << readLog(dir / "whole.log");
-    // He lies on the films with friction and the turn has begun: the left bags have gas
-    // pumped in by the end.
-    const app::test::Csv events = app::test::readCsv(dir / "whole" / "events.csv");
-    ASSERT_GE(events.rows.size(), 3u);
-    const fs::path out = dir / "stopped";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
-                            " --set coupling.threads=1 --stop-after '2.2 s'",
-                        dir / "stopped.log"),
-              130)
-        << readLog(dir / "stopped.log");
-    ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
-    ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log"),
-              0)
-        << readLog(dir / "resumed.log");
-    expectSameCsvFiles(dir / "whole", out);
-    EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
+    expectResumedRunAsWhole(fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/reduced",
+                            "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"",
+                            sets + " --set coupling.threads=2",
+                            sets + " --set coupling.threads=1", "2.2 s");
 }
 
 namespace {
