@@ -27,11 +27,15 @@ struct Csv {
     }
 };
 
-inline Csv readCsv(const std::filesystem::path& path) {
+/// Reads a CSV file; with skipComments, lines starting with '#' (a reference file's notes)
+/// are left out.
+inline Csv readCsv(const std::filesystem::path& path, bool skipComments = false) {
     Csv c;
     std::ifstream in(path);
-    std::getline(in, c.header);
+    while (std::getline(in, c.header) && skipComments && c.header.rfind('#', 0) == 0) {
+    }
     for (std::string line; std::getline(in, line);) {
+        if (skipComments && line.rfind('#', 0) == 0) continue;
         std::vector<std::string> cells;
         std::stringstream s(line);
         for (std::string cell; std::getline(s, cell, ',');) cells.push_back(cell);
