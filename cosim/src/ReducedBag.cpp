@@ -116,8 +116,6 @@ ReducedBag::ReducedBag(std::shared_ptr<const ReducedBagCalibration> calibration,
             "reduced bag calibration: needs at least 2 taut unloaded states (above 200 Pa)");
     for (size_t i = 0; i < c.masses.size() && m_tautMass == 0.0; ++i)
         if (c.gaugePressures[i] > 200.0) m_tautMass = c.masses[i];
-    m_points.resize(3, int(m_gridIndex.size()));
-    m_areas = Eigen::VectorXd::Constant(int(m_gridIndex.size()), c.pitch * c.pitch);
     setGasMass(c.masses.front());
 }
 
@@ -442,20 +440,14 @@ void ReducedBag::evaluate() {
     // The unloaded top at this mass, in Ground.
     // (xyB: the columns' place in the bag's plane; topHeight: the highest top above the board)
     const Eigen::Isometry3d X_BG = m_X_GB.inverse();
-    Eigen::Matrix3Xd top(3, n);
+    const Eigen::Matrix3Xd top = calcTop();
     Eigen::Matrix2Xd xyB(2, n);
     double topHeight = 0.0;
     for (int i = 0; i < n; ++i) {
-        const int g = m_gridIndex[i];
-        const Vec3 tB(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
-                      interpolateTop(i, m_cur.mass));
-        top.col(i) = m_X_GB * tB;
+        const Vec3 tB = X_BG * Vec3(top.col(i));
         xyB.col(i) = tB.head<2>();
         topHeight = std::max(topHeight, tB.z());
     }
-    m_points = top;
-    m_areas.setConstant(a);
-    std::vector<double> owner(n, 0.0);  // deepest contact so far per point
     m_displaced = 0.0;
     for (size_t s = 0; s < m_shapes.size(); ++s) {
         bags::RigidShape& shape = *m_shapes[s];
@@ -647,16 +639,48 @@ void ReducedBag::evaluate() {
             w.torque += (smp.c - o).cross(f);
             r.load += smp.blend * a * q / g;
             r.centroid += smp.blend * a * q / g * smp.c;
-            if (q > owner[smp.point]) {
-                owner[smp.point] = q;
-                m_points.col(smp.point) = smp.c;
-                m_areas[smp.point] = a / g;
-            }
         }
         r.wrench = w;
         if (r.load > 0.0) r.centroid /= r.load;
         addFriction(s);
     }
+    buildFootprint(top);
+}
+
+Eigen::Matrix3Xd ReducedBag::calcTop() const {
+    const ReducedBagCalibration& c = *m_cal;
+    const int n = int(m_gridIndex.size());
+    Eigen::Matrix3Xd top(3, n);
+    for (int i = 0; i < n; ++i) {
+        const int g = m_gridIndex[i];
+        top.col(i) = m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
+                                   interpolateTop(i, m_cur.mass));
+    }
+    return top;
+}
+
+void ReducedBag::buildFootprint(const Eigen::Matrix3Xd& top) {
+    // The grid's tops first (no pressure: where nothing presses), then one point per sample
+    // of each shape, at its contact point over its area a / g, so that each shape's pressures
+    // on them give its wrench exactly (docs/reduced-bag.md#the-pressure-footprint).
+    const double a = m_cal->pitch * m_cal->pitch;
+    const int n = int(top.cols());
+    int total = n;
+    m_slotStart.assign(m_results.size(), 0);
+    for (size_t s = 0; s < m_results.size(); ++s) {
+        m_slotStart[s] = total;
+        total += int(m_results[s].samples.size());
+    }
+    m_points.resize(3, total);
+    m_areas.resize(total);
+    m_points.leftCols(n) = top;
+    m_areas.head(n).setConstant(a);
+    for (size_t s = 0; s < m_results.size(); ++s)
+        for (size_t k = 0; k < m_results[s].samples.size(); ++k) {
+            const Sample& smp = m_results[s].samples[k];
+            m_points.col(m_slotStart[s] + int(k)) = smp.c;
+            m_areas[m_slotStart[s] + int(k)] = a / std::max(-smp.n.z(), kMinSlope);
+        }
 }
 
 ShapeWrench ReducedBag::calcWrench(int shape) const { return m_results.at(shape).wrench; }
@@ -687,12 +711,17 @@ std::vector<ReducedBag::SampleForce> ReducedBag::getSampleForces(int shape) cons
 Eigen::VectorXd ReducedBag::calcContactPressure(int shape) const {
     const ReducedBagCalibration& c = *m_cal;
     const ShapeResult& r = m_results.at(shape);
-    Eigen::VectorXd p = Eigen::VectorXd::Zero(int(m_gridIndex.size()));
+    Eigen::VectorXd p = Eigen::VectorXd::Zero(m_points.cols());
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr);
-    for (const Sample& smp : r.samples)
-        p[smp.point] +=
-            smp.blend * kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
-            c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
+    // Each sample's own point (buildFootprint): its whole pressure, gas and board, times its
+    // blend, as in the wrench.
+    const Eigen::Isometry3d X_BG = m_X_GB.inverse();
+    for (size_t k = 0; k < r.samples.size(); ++k) {
+        const Sample& smp = r.samples[k];
+        p[m_slotStart.at(size_t(shape)) + int(k)] =
+            smp.blend * (kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
+                         c.boardPenalty * std::max(0.0, -(X_BG * smp.c).z()));
+    }
     return p;
 }
 
@@ -950,7 +979,7 @@ void loadFixed(bags::StateReader& r, V& v) {
 }  // namespace
 
 void ReducedBag::saveState(bags::StateWriter& w) const {
-    w.tag("reduced bag 3");
+    w.tag("reduced bag 4");
     for (const State* s : {&m_cur, &m_committed}) {
         w.pod(s->mass), w.pod(s->pressure), w.pod(s->time);
         w.pod(s->flow), w.pod(s->target), w.pod(s->rate);
@@ -981,13 +1010,11 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
         w.pod(res.load), w.pod(res.anchored), w.pod(res.sliding);
     }
     w.pod(m_displaced), w.pod(m_dPdV);
-    w.mat(m_points);
-    w.mat(m_areas);
     w.pod(m_envelope);
 }
 
 void ReducedBag::loadState(bags::StateReader& r) {
-    r.tag("reduced bag 3");
+    r.tag("reduced bag 4");
     for (State* s : {&m_cur, &m_committed}) {
         r.pod(s->mass), r.pod(s->pressure), r.pod(s->time);
         r.pod(s->flow), r.pod(s->target), r.pod(s->rate);
@@ -1019,14 +1046,9 @@ void ReducedBag::loadState(bags::StateReader& r) {
         r.pod(res.load), r.pod(res.anchored), r.pod(res.sliding);
     }
     r.pod(m_displaced), r.pod(m_dPdV);
-    r.matOfCols(m_points, m_points.cols(), "points of a reduced bag");
-    Eigen::VectorXd areas;
-    r.mat(areas);
-    if (areas.size() != m_areas.size())
-        bags::StateReader::mismatch("points of a reduced bag", areas.size(), m_areas.size());
-    m_areas = areas;
     r.pod(m_envelope);
     for (size_t s = 0; s < m_shapes.size(); ++s) m_shapes[s]->setPose(m_poses[s]);
+    buildFootprint(calcTop());
 }
 
 }  // namespace cosim

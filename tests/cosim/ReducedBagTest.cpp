@@ -231,7 +231,7 @@ TEST(ReducedBag, ThePressureFootprintCarriesTheContactForce) {
     EXPECT_NEAR(mat.calcTotalForce(), Wf.z(), 1e-9 * Wf.z());
 }
 
-TEST(ReducedBag, TheSampleForcesAddUpToTheWrench) {
+TEST(ReducedBag, TheSampleForcesAndTheFootprintAddUpToTheWrench) {
     // Reference: the wrench. getSampleForces() (the diagnostics' split of the wrench by
     // sample) adds up to its force and its torque about the shape's origin (1e-12 relative),
     // with each kind of sample present: inside the shape, the skirt outside it, column samples
@@ -270,6 +270,32 @@ TEST(ReducedBag, TheSampleForcesAddUpToTheWrench) {
     EXPECT_GT(skirt, 0);
     EXPECT_GT(column, 0);
     EXPECT_GT(board, 0);
+    // The footprint carries the same force in this scene too (column samples beside their
+    // top samples, two shapes over some of the same grid points, the board's term): each
+    // shape's pressure on the points, over their areas, along its inward normal there, as
+    // the region loads and the pressure mat read it (cosim::calcRegionLoads). Tolerance
+    // 1e-9 (the normal found again at each contact point).
+    const Eigen::VectorXd A = bag.getPressureAreas();
+    const Eigen::Matrix3Xd& x = bag.getPressurePoints();
+    for (int s = 0; s < 2; ++s) {
+        const Eigen::VectorXd p = bag.calcContactPressure(s);
+        ASSERT_EQ(p.size(), x.cols());
+        auto probe = s == 0 ? bags::makeEllipsoid(Eigen::Vector3d(0.08, 0.05, 0.04))
+                            : bags::makeCapsule(0.012, 0.03);
+        probe->setPose(s == 0 ? at(Eigen::Vector3d(0.27, -0.2, 0.035),
+                                   rotation(Eigen::Vector3d(0.1, -0.2, 0.3))).X_GS
+                              : at(Eigen::Vector3d(0.36, -0.2, 0.042),
+                                   rotation(Eigen::Vector3d(0.0, 0.5 * kPi, 0.0))).X_GS);
+        Eigen::Vector3d F = Eigen::Vector3d::Zero();
+        for (int i = 0; i < p.size(); ++i) {
+            if (p[i] == 0.0) continue;
+            Eigen::Vector3d n;
+            probe->calcSignedDistance(x.col(i), nullptr, &n);
+            F += p[i] * A[i] * -n;
+        }
+        const Eigen::Vector3d W = bag.calcWrench(s).force;
+        EXPECT_NEAR((F - W).norm(), 0.0, 1e-9 * W.norm()) << "shape " << s;
+    }
 }
 
 TEST(ReducedBag, GasFlowsReachTheirTargetRollBackAndTheEnvelopeCountsExits) {

@@ -226,6 +226,8 @@ class ReducedBag : public Bag {
     /// `depth`, and its derivatives.
     double calcWeight(double delta, double depth, double* dDelta, double* dDepth) const;
     void evaluate();  // m_cur.mass and the shapes' poses -> everything
+    Eigen::Matrix3Xd calcTop() const;  // the unloaded top at m_cur.mass (Ground), per grid point
+    void buildFootprint(const Eigen::Matrix3Xd& top);  // m_points, m_areas from the samples
     double calcFreeVolume(double P, double* dVdP) const;
     double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
     double solvePressure(double displaced, double* dPdV) const;
@@ -244,7 +246,8 @@ class ReducedBag : public Bag {
     std::vector<ShapeResult> m_results;
     State m_cur, m_committed;
     double m_displaced = 0.0, m_dPdV = 0.0;
-    Eigen::Matrix3Xd m_points;  // per point: contact point or the top
+    Eigen::Matrix3Xd m_points;  // the grid's tops, then each shape's samples' contact points
+    std::vector<int> m_slotStart;  // per shape: its first sample's column in m_points
     Eigen::VectorXd m_areas;
     std::vector<double> m_pVfree, m_Vfree;  // taut unloaded states, ascending pressure
     double m_tautMass = 0.0;                // the calibration's first taut mass [kg]
