@@ -581,6 +581,53 @@ void calibratePairs(WhichReport& report, const MeasuredData& data,
 
 }  // namespace
 
+std::string listConfusableWith(const WhichReport& report, const std::string& effect) {
+    std::string others;
+    for (const auto& [a, b] : report.confusable)
+        if (a == effect || b == effect) others += (others.empty() ? "" : ", ") + (a == effect ? b : a);
+    return others;
+}
+
+void judgeCandidates(WhichReport& report, bool withinValidation, const std::string& noneReason,
+                     const CalibrationOptions& o) {
+    std::stable_sort(report.candidates.begin(), report.candidates.end(),
+                     [](const CandidateResult& a, const CandidateResult& b) {
+                         return a.score > b.score;
+                     });
+    report.confusable.clear();
+    for (size_t i = 0; i < report.candidates.size(); ++i)
+        for (size_t j = i + 1; j < report.candidates.size(); ++j) {
+            const CandidateResult &a = report.candidates[i], &b = report.candidates[j];
+            if (a.score >= o.explainThreshold && b.score >= o.explainThreshold &&
+                std::fabs(a.excessShrink - b.excessShrink) < 0.1)
+                report.confusable.push_back({a.effect, b.effect});
+        }
+    const CandidateResult* best = report.candidates.empty() ? nullptr : &report.candidates[0];
+    report.verdictEffects.clear();
+    if (withinValidation) {
+        report.verdict = "none";
+        report.reason = noneReason;
+    } else if (best && best->score >= o.explainThreshold) {
+        report.verdict = best->effect;
+        report.verdictEffects = {best->effect};
+        report.reason = "it shrinks the held-out gap beyond the validation uncertainty by " +
+                        fmt("%.0f", 100 * best->excessShrink) + " % (from " +
+                        fmt("%.4f", best->excessBefore) + " to " + fmt("%.4f", best->excessAfter) +
+                        "; the whole gap by " + fmt("%.0f", 100 * best->shrink) + " %, from " +
+                        fmt("%.4f", best->heldoutBefore) + " to " + fmt("%.4f", best->heldoutAfter) + ")";
+        const std::string others = listConfusableWith(report, best->effect);
+        if (!others.empty()) report.reason += "; confusable with " + others + " on these data";
+    } else {
+        report.verdict = "unexplained";
+        report.reason = "no candidate shrinks the held-out gap beyond the validation "
+                        "uncertainty by " +
+                        fmt("%.0f", 100 * o.explainThreshold) + " % after its parameter penalty" +
+                        (best ? " (best: " + best->effect + ", " +
+                                    fmt("%.0f", 100 * best->excessShrink) + " %)"
+                              : std::string());
+    }
+}
+
 WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOptions& base,
                                 const RigEffects& baseRig, const bags::LoadTestResult& baseResult,
                                 const std::vector<TestComparison>& baseline,
@@ -609,50 +656,10 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
             return std::vector<std::vector<double>>();
         }));
     }
-    std::stable_sort(report.candidates.begin(), report.candidates.end(),
-                     [](const CandidateResult& a, const CandidateResult& b) {
-                         return a.score > b.score;
-                     });
-    for (size_t i = 0; i < report.candidates.size(); ++i)
-        for (size_t j = i + 1; j < report.candidates.size(); ++j) {
-            const CandidateResult &a = report.candidates[i], &b = report.candidates[j];
-            if (a.score >= o.explainThreshold && b.score >= o.explainThreshold &&
-                std::fabs(a.excessShrink - b.excessShrink) < 0.1)
-                report.confusable.push_back({a.effect, b.effect});
-        }
-
-    // The effects these data cannot tell from the one named.
-    auto confusableWith = [&](const std::string& effect) {
-        std::string others;
-        for (const auto& [a, b] : report.confusable)
-            if (a == effect || b == effect)
-                others += (others.empty() ? "" : ", ") + (a == effect ? b : a);
-        return others;
-    };
-    const CandidateResult* best = report.candidates.empty() ? nullptr : &report.candidates[0];
-    if (where.withinValidation) {
-        report.verdict = "none";
-        report.reason = "every channel's RMSE is within twice its validation uncertainty "
-                        "(sensor noise, numerical and input uncertainty)";
-    } else if (best && best->score >= o.explainThreshold) {
-        report.verdict = best->effect;
-        report.verdictEffects = {best->effect};
-        report.reason = "it shrinks the held-out gap beyond the validation uncertainty by " +
-                        fmt("%.0f", 100 * best->excessShrink) + " % (from " +
-                        fmt("%.4f", best->excessBefore) + " to " + fmt("%.4f", best->excessAfter) +
-                        "; the whole gap by " + fmt("%.0f", 100 * best->shrink) + " %, from " +
-                        fmt("%.4f", best->heldoutBefore) + " to " + fmt("%.4f", best->heldoutAfter) + ")";
-        const std::string others = confusableWith(best->effect);
-        if (!others.empty()) report.reason += "; confusable with " + others + " on these data";
-    } else {
-        report.verdict = "unexplained";
-        report.reason = "no candidate shrinks the held-out gap beyond the validation "
-                        "uncertainty by " +
-                        fmt("%.0f", 100 * o.explainThreshold) + " % after its parameter penalty" +
-                        (best ? " (best: " + best->effect + ", " +
-                                    fmt("%.0f", 100 * best->excessShrink) + " %)"
-                              : std::string());
-    }
+    judgeCandidates(report, where.withinValidation,
+                    "every channel's RMSE is within twice its validation uncertainty "
+                    "(sensor noise, numerical and input uncertainty)",
+                    o);
 
     calibratePairs(report, data, base, baseRig, baseResult, baseline, where, simulate, o, cache, g);
     if (report.pairChosen >= 0) {
@@ -667,7 +674,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
             "; the whole gap by " + fmt("%.0f", 100 * p.result.shrink) + " %); the pair " + p.why +
             " (the single stage's verdict: " + single + ")";
         for (const std::string& m : {p.first, p.second}) {
-            const std::string others = confusableWith(m);
+            const std::string others = listConfusableWith(report, m);
             if (!others.empty())
                 report.reason += "; " + m + " confusable with " + others + " on these data";
         }

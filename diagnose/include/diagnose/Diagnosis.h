@@ -310,6 +310,16 @@ struct WhichReport {
     std::vector<std::pair<std::string, std::string>> confusablePairs;
 };
 
+/// Ranks the candidates by score, names the confusable pairs (both scores at least the
+/// threshold, shrinks beyond the uncertainty within 0.1) and gives the verdict: `none` when
+/// `withinValidation` (with `noneReason`), the best effect when its score reaches the
+/// threshold, else `unexplained`. Shared by the tests' and the stiffness curve's which part.
+void judgeCandidates(WhichReport& report, bool withinValidation, const std::string& noneReason,
+                     const CalibrationOptions& options);
+
+/// The effects `report.confusable` pairs with `effect`, joined by ", " ("" if none).
+std::string listConfusableWith(const WhichReport& report, const std::string& effect);
+
 /// Calibrates each candidate with leave-one-test-out folds (needs two tests or more).
 /// `base` are the options the diagnosis simulates (the protocol applied; the flowmeter's
 /// readings are the tests' gas masses), `baseRig` the scenario's rig effects, `baseResult` the load test
