@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "Commands.h"
+#include "DiagnoseCurve.h"
 #include "DiagnoseShared.h"
 #include "Interrupt.h"
 #include "PatientCoSim.h"
@@ -39,6 +40,7 @@ namespace fs = std::filesystem;
 const char* kHelp =
     "usage: bagsim diagnose --measured DIR [--out DIR] [--force] [--where-only]\n"
     "           [--candidates E1,E2,...] [--threads N] [--quiet]\n"
+    "           [--curve-step MASS] [--curve-volumes N] [--cache DIR]\n"
     "\n"
     "Compares measured data of the seed's rig (docs/measured-data.md) with a simulation of the\n"
     "same protocol and says where they disagree: residuals per channel (force at the measured\n"
@@ -69,7 +71,19 @@ const char* kHelp =
     "                      load-cell-gain is kept out of it on purpose)\n"
     "  --threads N         simulations run at once (default 1)\n"
     "  --windows N         a patient's data: the time windows the folds leave out (default 3)\n"
+    "  --curve-step MASS   a stiffness curve: the mass step of the model's dense curve that\n"
+    "                      the gas-mass shifts re-read (default 0.125 g)\n"
+    "  --curve-volumes N   a stiffness curve: bag-volume's grid over its bounds, odd, 3 to 41\n"
+    "                      (default 9: every 0.0625)\n"
+    "  --cache DIR         a stiffness curve: where the model's curves are kept and found\n"
+    "                      again (default OUT/curve-cache)\n"
     "  --quiet             print only the verdict\n"
+    "\n"
+    "A stiffness curve k(m) in the data (no tests needed): the model's curve at its masses\n"
+    "beside it, then which effect explains the departure: the gas-mass shifts\n"
+    "(flowmeter-bias, gas-temperature) re-read one dense curve of the model, bag-volume\n"
+    "reads a grid of volumes, machine- and bed-compliance act in series; each fitted on all\n"
+    "masses but one and judged on the one left out. The curves are cached (--cache).\n"
     "\n"
     "A patient's data (manifest protocol kind: patient-on-array) are compared with a\n"
     "co-simulation of their scenario: the mat by body region, the tilt, each bag's sensor,\n"
@@ -85,6 +99,9 @@ struct Args {
     std::vector<std::string> candidates;
     int threads = 1;
     int windows = 3;  ///< a patient's data: the time windows of the folds
+    double curveStep = 0.125e-3;  ///< a stiffness curve: the dense curve's step [kg]
+    int curveVolumes = 9;         ///< a stiffness curve: bag-volume's grid points
+    std::string cache;            ///< a stiffness curve: the cache folder ("": OUT/curve-cache)
 };
 
 Args parseArgs(int argc, char** argv) {
@@ -115,10 +132,32 @@ Args parseArgs(int argc, char** argv) {
                 std::stoi(v) < 2 || std::stoi(v) > 20)
                 throw UsageError("--windows '" + v + "' is not valid; valid: 2 to 20");
             a.windows = std::stoi(v);
+        } else if (arg == "--curve-step") {
+            const std::string v = value();
+            double m = 0.0;
+            try {
+                m = io::parseQuantity(v, io::Dimension::Mass);
+            } catch (const std::exception&) {
+                m = -1.0;
+            }
+            if (!(m >= 0.01e-3 && m <= 1e-3))
+                throw UsageError("--curve-step '" + v +
+                                 "' is not valid; valid: a mass with its unit from 0.01 g to 1 g "
+                                 "(e.g. 0.125 g)");
+            a.curveStep = m;
+        } else if (arg == "--curve-volumes") {
+            const std::string v = value();
+            if (v.empty() || v.size() > 3 || v.find_first_not_of("0123456789") != std::string::npos ||
+                std::stoi(v) < 3 || std::stoi(v) > 41 || std::stoi(v) % 2 == 0)
+                throw UsageError("--curve-volumes '" + v + "' is not valid; valid: an odd count from 3 to 41");
+            a.curveVolumes = std::stoi(v);
+        } else if (arg == "--cache") {
+            a.cache = value();
         } else
             throw UsageError("unknown option '" + arg +
                              "'; valid: --measured, --out, --force, --where-only, --candidates, "
-                             "--threads, --windows, --quiet, --help");
+                             "--threads, --windows, --curve-step, --curve-volumes, --cache, "
+                             "--quiet, --help");
     }
     if (a.measured.empty()) throw UsageError("--measured DIR is required");
     if (a.out.empty()) {
@@ -249,23 +288,47 @@ int run(const Args& a) {
     // seed's test, loading only. A curve that stops or gives no stiffness is a finding, not a
     // failure of the diagnosis.
     std::unique_ptr<diagnose::StiffnessComparison> stiffness;
+    std::unique_ptr<diagnose::StiffnessWhich> curveWhich;
+    std::string curveNotRun;
     if (!data.stiffness.empty()) {
-        bags::LoadTestOptions o = sc.options;
-        o.gasMasses.assign(data.stiffness.gasMass.rbegin(), data.stiffness.gasMass.rend());
-        o.unload = false;
+        CurveRunOptions co;
+        co.cache = a.cache.empty() ? out / "curve-cache" : fs::path(a.cache);
+        co.threads = a.threads;
+        co.shiftStep = a.curveStep;
+        co.volumePoints = a.curveVolumes;
+        co.candidates = a.candidates;
+        co.quiet = a.quiet;
+        int runs = 0;
+        const bags::LoadTestResult model = runModelCurve(data, sc, co, runs);
         stiffness = std::make_unique<diagnose::StiffnessComparison>(
-            diagnose::compareStiffness(data.stiffness, bags::runLoadTest(o)));
-        ++simulations;
+            diagnose::compareStiffness(data.stiffness, model));
         if (!a.quiet) printStiffness(*stiffness, std::cout);
         write("stiffness.csv", io::formatStiffnessCsv(*stiffness));
+        if (!a.whereOnly) {
+            try {
+                curveWhich = std::make_unique<diagnose::StiffnessWhich>(
+                    runCurveWhich(data, sc, model, *stiffness, co, runs));
+                if (!a.quiet) printCurveWhich(*curveWhich, std::cout);
+            } catch (const std::invalid_argument& e) {
+                curveNotRun = e.what();
+            }
+        }
+        simulations += runs;
     }
     if (data.tests.empty()) {
         info.simulations = simulations;
         info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        write("diagnosis.json", io::formatDiagnosisJson(info, {}, nullptr, stiffness.get()));
-        std::cout << "verdict: not run (a stiffness curve alone: no tests to hold out)\n"
-                  << "diagnosis in " << out.string() << "/: diagnosis.json, stiffness.csv ("
-                  << simulations << " simulation, " << fmt("%.1f", info.seconds) << " s)\n";
+        write("diagnosis.json", io::formatDiagnosisJson(info, {}, nullptr, stiffness.get(),
+                                                        curveWhich.get(), curveNotRun));
+        if (curveWhich)
+            std::cout << "verdict: " << curveWhich->which.verdict << " ("
+                      << curveWhich->which.reason << ")\n";
+        else
+            std::cout << "verdict: not run ("
+                      << (a.whereOnly ? std::string("--where-only") : curveNotRun) << ")\n";
+        std::cout << "diagnosis in " << out.string() << "/: diagnosis.json, stiffness.csv ("
+                  << simulations << (simulations == 1 ? " simulation, " : " simulations, ")
+                  << fmt("%.1f", info.seconds) << " s)\n";
         return 0;
     }
     // The protocol as stated, then the runs its uncertainties need, all at once (--threads):
@@ -411,7 +474,8 @@ int run(const Args& a) {
     info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     write("residuals.csv", io::formatResidualsCsv(tests));
     write("report.html", io::formatDiagnosisReportHtml(info, tests, where, which.get()));
-    write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get(), stiffness.get()));
+    write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get(), stiffness.get(),
+                                                    curveWhich.get(), curveNotRun));
     if (which)
         std::cout << "verdict: " << which->verdict << " (" << which->reason << ")\n";
     else

@@ -97,6 +97,68 @@ std::string formatStiffness(const diagnose::StiffnessComparison& k) {
     return os.str() + "]}";
 }
 
+// The which part on a stiffness curve: its candidates ranked (as the tests', held out by gas
+// mass), those not applicable, the transformations that are the same on a curve, the verdict.
+std::string formatCurveWhich(const diagnose::StiffnessWhich& w) {
+    std::ostringstream os;
+    std::vector<std::string> masses;
+    for (double m : w.gasMasses) masses.push_back(num(m * 1e3) + " g");
+    os << "{\"unit\": \"N/mm\", \"gas_masses_g\": [";
+    for (size_t i = 0; i < w.gasMasses.size(); ++i) os << (i ? ", " : "") << num(w.gasMasses[i] * 1e3);
+    os << "], \"range\": " << num(w.range * 1e-3) << ", \"rmse\": " << num(w.rmse * 1e-3)
+       << ", \"validation_uncertainty\": " << num(w.validation * 1e-3)
+       << ", \"validation_uncertainty_is\": " << str(w.validationWhat)
+       << ", \"within_validation_uncertainty\": " << (w.withinValidation ? "true" : "false")
+       << ",\n    \"candidates\": [\n";
+    for (size_t i = 0; i < w.which.candidates.size(); ++i) {
+        const auto& c = w.which.candidates[i];
+        const diagnose::Effect* e = diagnose::findEffect(c.effect);
+        double interp = NAN;
+        for (const auto& [name, v] : w.interpolationErrors)
+            if (name == c.effect) interp = v;
+        os << "      {\"rank\": " << i + 1 << ", \"effect\": " << str(c.effect)
+           << ", \"parameters\": " << formatParameters(e, c.parameters, &c.parameterStdDev) << ", "
+           << formatGaps(c) << ", \"simulations\": " << c.simulations
+           << ", \"interpolation_error\": " << num(interp * 1e-3) << ",\n       \"heldout_metrics\": {";
+        if (!c.heldoutMetricsBefore.empty()) {
+            const auto& b = c.heldoutMetricsBefore[0];
+            auto metric = [](const diagnose::GapMetrics& g) {
+                return "{\"rmse\": " + num(g.rmse * 1e-3) + ", \"mean_error\": " +
+                       num(g.meanError * 1e-3) + ", \"max_error\": " + num(g.maxError * 1e-3) +
+                       ", \"area_validation_metric\": " + num(g.areaMetric * 1e-3) + "}";
+            };
+            os << "\"stiffness\": {\"unit\": \"N/mm\", \"samples\": " << b.samples
+               << ", \"validation_uncertainty\": " << num(w.validation * 1e-3)
+               << ", \"before\": " << metric(b) << ", \"after\": "
+               << (c.heldoutMetricsAfter.empty() ? std::string("null")
+                                                 : metric(c.heldoutMetricsAfter[0]))
+               << "}";
+        }
+        os << "},\n       \"folds\": "
+           << formatFolds(
+                  c, [&](const std::vector<double>& v) { return formatParameters(e, v, nullptr); },
+                  "held_out_gas_mass", &masses)
+           << "}" << (i + 1 < w.which.candidates.size() ? "," : "") << "\n";
+    }
+    os << "    ],\n    \"confusable\": [";
+    for (size_t i = 0; i < w.which.confusable.size(); ++i)
+        os << (i ? ", " : "") << "[" << str(w.which.confusable[i].first) << ", "
+           << str(w.which.confusable[i].second) << "]";
+    os << "],\n    \"same_on_a_curve\": [";
+    for (size_t i = 0; i < w.identical.size(); ++i)
+        os << (i ? ", " : "") << "{\"effects\": [" << str(w.identical[i].first.first) << ", "
+           << str(w.identical[i].first.second) << "], \"why\": " << str(w.identical[i].second) << "}";
+    os << "],\n    \"not_applicable\": [";
+    for (size_t i = 0; i < w.notApplicable.size(); ++i)
+        os << (i ? ",\n      " : "\n      ") << "{\"effect\": " << str(w.notApplicable[i].effect)
+           << ", \"why\": " << str(w.notApplicable[i].why) << "}";
+    os << "],\n    \"verdict\": " << str(w.which.verdict) << ", \"verdict_effects\": [";
+    for (size_t i = 0; i < w.which.verdictEffects.size(); ++i)
+        os << (i ? ", " : "") << str(w.which.verdictEffects[i]);
+    os << "], \"reason\": " << str(w.which.reason) << "}";
+    return os.str();
+}
+
 // The protocol's stated input uncertainties (the where report's statedInputs).
 std::string formatStatedInputs(const diagnose::WhereReport& w) {
     std::ostringstream os;
@@ -137,7 +199,9 @@ std::string formatStatedInput(const diagnose::WhereReport::StatedInput& s) {
 
 std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::WhereReport& w,
                                 const diagnose::WhichReport* which,
-                                const diagnose::StiffnessComparison* stiffness) {
+                                const diagnose::StiffnessComparison* stiffness,
+                                const diagnose::StiffnessWhich* curveWhich,
+                                const std::string& curveNotRun) {
     std::ostringstream os;
     os << "{\n  \"format\": \"bagsim diagnosis 1\",\n"
        << "  \"measured\": " << str(info.measuredFolder) << ",\n"
@@ -146,10 +210,23 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
        << "  \"command\": " << str(info.commandLine) << ",\n"
        << "  \"simulations\": " << info.simulations << ",\n"
        << "  \"seconds\": " << num(info.seconds, "%.1f") << ",\n";
-    if (stiffness) os << "  \"stiffness\": " << formatStiffness(*stiffness) << ",\n";
+    if (stiffness) {
+        os << "  \"stiffness\": " << formatStiffness(*stiffness) << ",\n";
+        if (curveWhich) os << "  \"stiffness_which\": " << formatCurveWhich(*curveWhich) << ",\n";
+        else os << "  \"stiffness_which\": null,\n  \"stiffness_which_not_run\": " << str(curveNotRun) << ",\n";
+    }
     if (w.channels.empty()) {
-        os << "  \"where\": null,\n  \"verdict\": null,\n  \"reason\": \"which effect: not run "
-              "(a stiffness curve alone: no tests to hold out)\"\n}\n";
+        os << "  \"where\": null,\n";
+        if (curveWhich) {
+            os << "  \"verdict\": " << str(curveWhich->which.verdict) << ",\n  \"verdict_effects\": [";
+            for (size_t i = 0; i < curveWhich->which.verdictEffects.size(); ++i)
+                os << (i ? ", " : "") << str(curveWhich->which.verdictEffects[i]);
+            os << "],\n  \"reason\": " << str("the stiffness curve's: " + curveWhich->which.reason) << "\n}\n";
+        } else {
+            os << "  \"verdict\": null,\n  \"reason\": "
+               << str("which effect: not run (" + (curveNotRun.empty() ? std::string("--where-only") : curveNotRun) + ")")
+               << "\n}\n";
+        }
         return os.str();
     }
     os << "  \"where\": {\n    \"gap\": " << num(w.gap)

@@ -6,6 +6,7 @@
 
 #include <diagnose/Diagnosis.h>
 #include <diagnose/Stiffness.h>
+#include <diagnose/StiffnessWhich.h>
 
 #include <string>
 #include <vector>
@@ -22,11 +23,15 @@ struct DiagnosisInfo {
 };
 
 /// The whole diagnosis as JSON text; `which` may be null (part 2 not run); `stiffness`, when
-/// given, the measured stiffness curve beside the simulated one (key `stiffness`); a `where`
-/// without channels (no tests, a stiffness curve alone) is written as null.
+/// given, the measured stiffness curve beside the simulated one (key `stiffness`), and
+/// `curveWhich` the which part on it (key `stiffness_which`; `curveNotRun` says why when it
+/// did not run); a `where` without channels (no tests, a stiffness curve alone) is written as
+/// null, and the verdict is then the curve's.
 std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::WhereReport& where,
                                 const diagnose::WhichReport* which,
-                                const diagnose::StiffnessComparison* stiffness = nullptr);
+                                const diagnose::StiffnessComparison* stiffness = nullptr,
+                                const diagnose::StiffnessWhich* curveWhich = nullptr,
+                                const std::string& curveNotRun = "");
 
 /// A stated input uncertainty as the outputs say it: "0.05 g (every test)", "0.05 g, 0.04 g,
 /// not stated (per test)", "0.5 K", or "not stated".
