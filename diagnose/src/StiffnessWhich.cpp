@@ -77,8 +77,10 @@ CurveFit fitCandidate(const CurveCandidate& c, const std::vector<double>& masses
         if (f1 <= f2) b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = cost(x1);
         else a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = cost(x2);
     }
+    // Taken only for a real gain: on a flat cost (the model as it is, exactly) roundoff would
+    // move the value off the scan's point.
     const double xr = 0.5 * (a + b);
-    if (cost(xr) < bestCost) fit.value = xr;
+    if (cost(xr) < bestCost - 1e-12) fit.value = xr;
 
     // Gauss-Newton's variance, J^T J of the residuals by central difference, scaled by the
     // residuals' own variance (the weights are the range, not a noise).

@@ -170,6 +170,16 @@ TEST(StiffnessWhich, TheModelsOwnCurveIsNone) {
     // Each candidate fits to nothing (the model as it is wins the ties).
     EXPECT_NEAR(find(w, "flowmeter-bias").parameters[0], 0.0, 1e-9);
     EXPECT_NEAR(find(w, "machine-compliance").parameters[0], 0.0, 1e-9);
+    // The model's curve as a file keeps it (rounded to 1e-9): the fit stays at 0, not a
+    // roundoff's step beside it (where bag-volume's grid may give no stiffness).
+    const StiffnessWhich r = calibrateStiffnessCandidates(
+        makeComparison([](double m) { return modelStiffness(m) * (1.0 + 1e-9); }),
+        makeCandidates(), kValidation, "stand-in", CalibrationOptions());
+    EXPECT_EQ(r.which.verdict, "none");
+    for (const CandidateResult& c : r.which.candidates) {
+        EXPECT_EQ(c.parameters[0], 0.0) << c.effect;
+        for (const FoldResult& f : c.folds) EXPECT_EQ(f.parameters[0], 0.0) << c.effect;
+    }
 }
 
 TEST(StiffnessWhich, ACurveNoCandidateMakesIsUnexplained) {
