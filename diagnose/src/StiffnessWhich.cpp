@@ -329,6 +329,17 @@ StiffnessWhich calibrateStiffnessCandidates(const StiffnessComparison& cmp,
                                  "isothermal gas acts through m T: a temperature offset dT is a "
                                  "gas-mass scale of dT / T, which a flowmeter reading its mass "
                                  "by a gain would make too (the library has no such gain)"});
+    // A verdict at its parameter's bound explains what it does only as far as the bound lets
+    // it: the data ask for more.
+    if (!out.which.verdictEffects.empty()) {
+        const CandidateResult& best = out.which.candidates.front();
+        const EffectParameter& p = findEffect(best.effect)->parameters[0];
+        const double v = best.parameters[0], tol = 1e-6 * (p.upper - p.lower);
+        if (v <= p.lower + tol || v >= p.upper - tol)
+            out.which.reason += "; fitted at its bound (" + p.name + " " +
+                                fmt("%g", v / p.siPerUnit) + (p.unit.empty() ? "" : " " + p.unit) +
+                                "): the data ask for more than its physical bounds allow";
+    }
     for (const auto& [pair, why] : out.identical)
         if (out.which.verdict == pair.first || out.which.verdict == pair.second)
             out.which.reason += "; on a stiffness curve it is the same as " +

@@ -126,6 +126,20 @@ TEST(StiffnessWhich, NamesTheFlowmeterOffsetOfAShiftedCurve) {
     EXPECT_LT(c.heldoutMetricsAfter[0].rmse, 0.1 * c.heldoutMetricsBefore[0].rmse);
     // The temperature reaches a 5 % scale only: at its bound, it explains less.
     EXPECT_LT(find(w, "gas-temperature").score, c.score);
+    EXPECT_EQ(w.which.reason.find("at its bound"), std::string::npos);
+}
+
+TEST(StiffnessWhich, SaysWhenTheVerdictIsFittedAtItsBound) {
+    // The bag holds 0.4 g more than the flowmeter reads: beyond the offset's bound (0.25 g);
+    // the flowmeter and a compliance the candidates.
+    const std::vector<CurveCandidate> all = makeCandidates();
+    const StiffnessWhich w = calibrateStiffnessCandidates(
+        makeComparison([](double m) { return modelStiffness(m + 0.4 * kGram); }),
+        {all[0], all[3]}, kValidation, "stand-in", CalibrationOptions());
+    ASSERT_EQ(w.which.verdict, "flowmeter-bias") << w.which.reason;
+    EXPECT_DOUBLE_EQ(w.which.candidates.front().parameters[0], -0.25 * kGram);
+    EXPECT_NE(w.which.reason.find("fitted at its bound (offset -0.25 g)"), std::string::npos)
+        << w.which.reason;
 }
 
 TEST(StiffnessWhich, NamesTheBagVolumeAndTheTemperatureAsAFlowmeterGain) {
