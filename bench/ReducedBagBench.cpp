@@ -1140,6 +1140,19 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
           int bagIndex, const std::string& segList, double t0, double t1, bool points) {
     RunReplay rr(scenario, calPath, run);
     auto& [sc, poa, model, surf, fe, frames] = rr;
+    // T0 (and T1, where the points are printed) must be shape frames of the run: results.h5
+    // keeps fewer of them than the output rows in a long run.
+    for (const double t : {t0, points ? t1 : t0}) {
+        const long k = std::lround(t * 1e3);
+        if (frames.count(k)) continue;
+        const auto after = frames.lower_bound(k);
+        std::fprintf(stderr, "%s/results.h5 has no shape frame at %.3f s; the nearest are at",
+                     run.c_str(), t);
+        if (after != frames.begin()) std::fprintf(stderr, " %.3f s", std::prev(after)->first * 1e-3);
+        if (after != frames.end()) std::fprintf(stderr, " %.3f s", after->first * 1e-3);
+        std::fprintf(stderr, "\n");
+        return 1;
+    }
     std::vector<int> segs;
     for (const cosim::ShapeBagPair& p : poa.getPairs())
         if (p.bag == bagIndex &&
