@@ -25,7 +25,7 @@ struct Series {
     std::vector<double> x, y;  ///< NaN in y breaks the line; a line of more than ~1200
                                ///< points is thinned to each bucket's lowest and highest
     bool points = false;       ///< markers instead of a line (at most ~400 drawn)
-    std::string dash;          ///< stroke-dasharray ("" solid)
+    std::string dash = "";     ///< stroke-dasharray ("" solid)
     double width = 1.6;        ///< line width [px]
 };
 
