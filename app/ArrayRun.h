@@ -48,7 +48,8 @@ struct CheckpointHeader {
 /// A checkpoint file: this magic line, the length of the data that follows and its FNV-1a
 /// hash (two little-endian uint64), then the data (header first).
 inline constexpr const char* kCheckpointMagic = "bagsim checkpoint 1\n";
-/// FNV-1a 64-bit hash of `data`: tells a damaged checkpoint from a sound one.
+/// FNV-1a 64-bit hash of `data`: tells a damaged checkpoint from a sound one (also the key of
+/// a cached stiffness curve of bagsim diagnose).
 inline std::uint64_t calcCheckpointHash(const std::string& data) {
     std::uint64_t h = 14695981039346656037ull;
     for (unsigned char c : data) {

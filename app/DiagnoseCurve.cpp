@@ -16,6 +16,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ArrayRun.h"
 #include "DiagnoseShared.h"
 #include "Interrupt.h"
 
@@ -33,12 +34,6 @@ struct CurveRun {
     bags::LoadTestOptions options;
     fs::path file;  // in the cache
 };
-
-std::uint64_t hashText(const std::string& s) {  // FNV-1a: stable across builds and machines
-    std::uint64_t h = 1469598103934665603ull;
-    for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
-    return h;
-}
 
 std::string readText(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -61,7 +56,7 @@ fs::path makeCacheFile(const fs::path& dir, const diagnose::MeasuredData& data,
     for (double m : o.gasMasses) key << " " << m;
     char name[160];
     std::snprintf(name, sizeof name, "%s_%+.6g_%016llx.csv", effect.c_str(), value,
-                  static_cast<unsigned long long>(hashText(key.str())));
+                  static_cast<unsigned long long>(calcCheckpointHash(key.str())));
     return dir / name;
 }
 

@@ -94,7 +94,7 @@ void ReducedBagFriction::validate() const {
 
 ReducedBag::ReducedBag(std::shared_ptr<const ReducedBagCalibration> calibration,
                        const Eigen::Isometry3d& X_GB)
-    : m_cal(std::move(calibration)), m_X_GB(X_GB) {
+    : m_cal(std::move(calibration)), m_X_GB(X_GB), m_X_BG(X_GB.inverse()) {
     if (!m_cal) throw std::invalid_argument("ReducedBag: no calibration");
     m_cal->validate();
     const ReducedBagCalibration& c = *m_cal;
@@ -439,15 +439,16 @@ void ReducedBag::evaluate() {
     const double a = c.pitch * c.pitch;
     // The unloaded top at this mass, in Ground.
     // (xyB: the columns' place in the bag's plane; topHeight: the highest top above the board)
-    const Eigen::Isometry3d X_BG = m_X_GB.inverse();
+    const Eigen::Isometry3d& X_BG = m_X_BG;
     const Eigen::Matrix3Xd top = calcTop();
     Eigen::Matrix2Xd xyB(2, n);
-    double topHeight = 0.0;
+    Eigen::VectorXd heightB(n);  // each column's top above the board
     for (int i = 0; i < n; ++i) {
         const Vec3 tB = X_BG * Vec3(top.col(i));
         xyB.col(i) = tB.head<2>();
-        topHeight = std::max(topHeight, tB.z());
+        heightB[i] = tB.z();
     }
+    const double topHeight = n > 0 ? std::max(0.0, heightB.maxCoeff()) : 0.0;
     m_displaced = 0.0;
     for (size_t s = 0; s < m_shapes.size(); ++s) {
         bags::RigidShape& shape = *m_shapes[s];
@@ -535,7 +536,7 @@ void ReducedBag::evaluate() {
         for (int i = 0; i < n; ++i) {
             // (a column whose midpoint is further from the shape than half its height misses)
             if (across2[i] > reachColumn * reachColumn) continue;
-            const double hcol = (X_BG * Vec3(top.col(i))).z();
+            const double hcol = heightB[i];
             const Vec3 mid = top.col(i) - 0.5 * hcol * m_X_GB.linear().col(2);
             if (shape.calcDistanceLowerBound(mid) > 0.5 * hcol + 1e-6) continue;
             Chord ch;
@@ -632,7 +633,7 @@ void ReducedBag::evaluate() {
         ShapeWrench w;
         for (const Sample& smp : r.samples) {
             const double q = kappa * P * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
-                             c.boardPenalty * std::max(0.0, -(X_BG * smp.c).z());
+                             calcBoardPressure(smp.c);
             const double g = std::max(-smp.n.z(), kMinSlope);
             const Vec3 f = smp.blend * a * q / g * -smp.n;
             w.force += f;
@@ -645,6 +646,10 @@ void ReducedBag::evaluate() {
         addFriction(s);
     }
     buildFootprint(top);
+}
+
+double ReducedBag::calcBoardPressure(const Vec3& p) const {
+    return m_cal->boardPenalty * std::max(0.0, -(m_X_BG * p).z());
 }
 
 Eigen::Matrix3Xd ReducedBag::calcTop() const {
@@ -700,7 +705,7 @@ std::vector<ReducedBag::SampleForce> ReducedBag::getSampleForces(int shape) cons
         f.column = (smp.t - top).norm() > 1e-12;
         f.delta = smp.delta, f.blend = smp.blend, f.c = smp.c, f.n = smp.n;
         f.gasPressure = kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr);
-        f.boardPressure = c.boardPenalty * std::max(0.0, -(m_X_GB.inverse() * smp.c).z());
+        f.boardPressure = calcBoardPressure(smp.c);
         const double gs = std::max(-smp.n.z(), kMinSlope);
         f.force = smp.blend * a * (f.gasPressure + f.boardPressure) / gs * -smp.n;
         out.push_back(f);
@@ -715,12 +720,11 @@ Eigen::VectorXd ReducedBag::calcContactPressure(int shape) const {
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr);
     // Each sample's own point (buildFootprint): its whole pressure, gas and board, times its
     // blend, as in the wrench.
-    const Eigen::Isometry3d X_BG = m_X_GB.inverse();
     for (size_t k = 0; k < r.samples.size(); ++k) {
         const Sample& smp = r.samples[k];
         p[m_slotStart.at(size_t(shape)) + int(k)] =
             smp.blend * (kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
-                         c.boardPenalty * std::max(0.0, -(X_BG * smp.c).z()));
+                         calcBoardPressure(smp.c));
     }
     return p;
 }
@@ -855,7 +859,7 @@ double ReducedBag::calcPotentialEnergy() const {
     const double a = c.pitch * c.pitch;
     for (const ShapeResult& r : m_results)
         for (const Sample& smp : r.samples) {
-            const double z = (m_X_GB.inverse() * smp.c).z();
+            const double z = (m_X_BG * smp.c).z();
             if (z < 0.0) e += 0.5 * c.boardPenalty * a * z * z;
         }
     return e;

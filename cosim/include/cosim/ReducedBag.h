@@ -227,6 +227,7 @@ class ReducedBag : public Bag {
     double calcWeight(double delta, double depth, double* dDelta, double* dDepth) const;
     void evaluate();  // m_cur.mass and the shapes' poses -> everything
     Eigen::Matrix3Xd calcTop() const;  // the unloaded top at m_cur.mass (Ground), per grid point
+    double calcBoardPressure(const Vec3& p) const;  // the board's penalty pressure at p [Pa]
     void buildFootprint(const Eigen::Matrix3Xd& top);  // m_points, m_areas from the samples
     double calcFreeVolume(double P, double* dVdP) const;
     double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
@@ -237,6 +238,7 @@ class ReducedBag : public Bag {
 
     std::shared_ptr<const ReducedBagCalibration> m_cal;
     Eigen::Isometry3d m_X_GB;
+    Eigen::Isometry3d m_X_BG;  // its inverse
     std::vector<int> m_gridIndex;  // point -> ix + nx iy
     std::vector<std::shared_ptr<bags::RigidShape>> m_shapes;
     std::vector<Eigen::Isometry3d> m_poses, m_committedPoses;
