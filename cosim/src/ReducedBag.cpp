@@ -466,6 +466,7 @@ void ReducedBag::evaluate() {
             smp.t = top.col(i);
             shape.calcContactGeometry(smp.t, &phi, &smp.c, &smp.n, &smp.dndp);
             smp.delta = -phi;
+            smp.topDelta = smp.delta, smp.topN = smp.n;
             // Where the shape's closest surface faces sideways or up (it lies below the
             // unloaded top), the film meets its underside: down the column to where it
             // leaves the shape, and the point that far inside along the normal there. Blended
@@ -624,6 +625,7 @@ void ReducedBag::evaluate() {
             m_displaced += beta[s] * r.volume;
         }
     }
+    shareFilm(top);
     m_cur.pressure = solvePressure(m_displaced, &m_dPdV);
     const double P = m_cur.pressure;
     for (size_t s = 0; s < m_shapes.size(); ++s) {
@@ -635,17 +637,61 @@ void ReducedBag::evaluate() {
             const double q = kappa * P * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
                              calcBoardPressure(smp.c);
             const double g = std::max(-smp.n.z(), kMinSlope);
-            const Vec3 f = smp.blend * a * q / g * -smp.n;
+            const double ab = smp.blend * smp.film * a;
+            const Vec3 f = ab * q / g * -smp.n;
             w.force += f;
             w.torque += (smp.c - o).cross(f);
-            r.load += smp.blend * a * q / g;
-            r.centroid += smp.blend * a * q / g * smp.c;
+            r.load += ab * q / g;
+            r.centroid += ab * q / g * smp.c;
         }
         r.wrench = w;
         if (r.load > 0.0) r.centroid /= r.load;
         addFriction(s);
     }
     buildFootprint(top);
+}
+
+void ReducedBag::shareFilm(const Eigen::Matrix3Xd& top) {
+    // The film over a column touches one surface. Where several shapes reach a grid point
+    // (segments overlap at the joints; one shape's skirt reaches into another's contact),
+    // the one whose surface lies deepest under the top point takes it: shape s takes
+    // exp(delta_s / w) / sum_r exp(delta_r / w) of the column's film, delta the top point's
+    // depth in each shape, w the rim width, so that the wrench stays continuous in the poses.
+    // Alone at a point a shape keeps all of it (the calibration's single shapes are unchanged).
+    const int n = int(top.cols());
+    const double w = m_cal->rimWidth;
+    constexpr double kNone = -std::numeric_limits<double>::infinity();
+    std::vector<int> count(n, 0), last(n, -1);
+    std::vector<double> deepest(n, kNone), sum(n, 0.0);
+    for (size_t s = 0; s < m_results.size(); ++s)
+        for (const Sample& smp : m_results[s].samples) {
+            const int i = smp.point;
+            if (last[i] == int(s)) continue;  // a shape's samples at a point are adjacent
+            last[i] = int(s);
+            ++count[i];
+            deepest[i] = std::max(deepest[i], smp.topDelta);
+        }
+    std::fill(last.begin(), last.end(), -1);
+    for (size_t s = 0; s < m_results.size(); ++s)
+        for (const Sample& smp : m_results[s].samples) {
+            const int i = smp.point;
+            if (count[i] < 2 || last[i] == int(s)) continue;
+            last[i] = int(s);
+            sum[i] += std::exp((smp.topDelta - deepest[i]) / w);
+        }
+    for (size_t s = 0; s < m_results.size(); ++s) {
+        const Vec3 o = m_poses[s].translation();
+        for (Sample& smp : m_results[s].samples) {
+            const int i = smp.point;
+            if (count[i] < 2) continue;
+            smp.film = std::exp((smp.topDelta - deepest[i]) / w) / sum[i];
+            // d delta_top = n . (theta x (t - o) + u) at the fixed top point t
+            const Vec3 t = top.col(i);
+            Eigen::Matrix<double, 1, 6> dDelta;
+            dDelta << ((t - o).cross(smp.topN)).transpose(), smp.topN.transpose();
+            smp.dFilm = smp.film * (1.0 - smp.film) / w * dDelta;
+        }
+    }
 }
 
 double ReducedBag::calcBoardPressure(const Vec3& p) const {
@@ -703,11 +749,11 @@ std::vector<ReducedBag::SampleForce> ReducedBag::getSampleForces(int shape) cons
         const Vec3 top = m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
                                        interpolateTop(smp.point, m_cur.mass));
         f.column = (smp.t - top).norm() > 1e-12;
-        f.delta = smp.delta, f.blend = smp.blend, f.c = smp.c, f.n = smp.n;
+        f.delta = smp.delta, f.blend = smp.blend, f.film = smp.film, f.c = smp.c, f.n = smp.n;
         f.gasPressure = kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr);
         f.boardPressure = calcBoardPressure(smp.c);
         const double gs = std::max(-smp.n.z(), kMinSlope);
-        f.force = smp.blend * a * (f.gasPressure + f.boardPressure) / gs * -smp.n;
+        f.force = smp.blend * smp.film * a * (f.gasPressure + f.boardPressure) / gs * -smp.n;
         out.push_back(f);
     }
     return out;
@@ -723,7 +769,7 @@ Eigen::VectorXd ReducedBag::calcContactPressure(int shape) const {
     for (size_t k = 0; k < r.samples.size(); ++k) {
         const Sample& smp = r.samples[k];
         p[m_slotStart.at(size_t(shape)) + int(k)] =
-            smp.blend * (kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
+            smp.blend * smp.film * (kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
                          calcBoardPressure(smp.c));
     }
     return p;
@@ -803,9 +849,11 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
             g = kMinSlope;
             dg.setZero();
         }
-        const double ab = a * smp.blend;
+        const double ab = a * smp.blend * smp.film;
         const Vec3 f = ab * q / g * -smp.n;
-        const Mat36 df = -ab * (smp.n * (dq / g - q / (g * g) * dg) + q / g * dn);
+        // (the film's share moves with this shape's depth at the top point, the others held)
+        const Mat36 df = -ab * (smp.n * (dq / g - q / (g * g) * dg) + q / g * dn) -
+                         a * smp.blend * q / g * smp.n * smp.dFilm;
         T.bottomRows<3>() += df;
         T.topRows<3>() += -cross(f) * (dc - Ju) + cross(smp.c - o) * df;
     }
@@ -860,7 +908,7 @@ double ReducedBag::calcPotentialEnergy() const {
     for (const ShapeResult& r : m_results)
         for (const Sample& smp : r.samples) {
             const double z = (m_X_BG * smp.c).z();
-            if (z < 0.0) e += 0.5 * c.boardPenalty * a * z * z;
+            if (z < 0.0) e += 0.5 * c.boardPenalty * a * smp.film * z * z;
         }
     return e;
 }
@@ -983,7 +1031,7 @@ void loadFixed(bags::StateReader& r, V& v) {
 }  // namespace
 
 void ReducedBag::saveState(bags::StateWriter& w) const {
-    w.tag("reduced bag 4");
+    w.tag("reduced bag 5");
     for (const State* s : {&m_cur, &m_committed}) {
         w.pod(s->mass), w.pod(s->pressure), w.pod(s->time);
         w.pod(s->flow), w.pod(s->target), w.pod(s->rate);
@@ -998,6 +1046,7 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
         w.pod(std::uint64_t(res.samples.size()));
         for (const Sample& smp : res.samples) {
             w.pod(smp.point), w.pod(smp.delta), w.pod(smp.blend);
+            w.pod(smp.topDelta), w.pod(smp.film), saveFixed(w, smp.topN), saveFixed(w, smp.dFilm);
             saveFixed(w, smp.t), saveFixed(w, smp.c), saveFixed(w, smp.n), saveFixed(w, smp.dndp);
         }
         w.pod(std::uint64_t(res.chords.size()));
@@ -1018,7 +1067,7 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
 }
 
 void ReducedBag::loadState(bags::StateReader& r) {
-    r.tag("reduced bag 4");
+    r.tag("reduced bag 5");
     for (State* s : {&m_cur, &m_committed}) {
         r.pod(s->mass), r.pod(s->pressure), r.pod(s->time);
         r.pod(s->flow), r.pod(s->target), r.pod(s->rate);
@@ -1034,6 +1083,7 @@ void ReducedBag::loadState(bags::StateReader& r) {
         res.samples.resize(r.pod<std::uint64_t>());
         for (Sample& smp : res.samples) {
             r.pod(smp.point), r.pod(smp.delta), r.pod(smp.blend);
+            r.pod(smp.topDelta), r.pod(smp.film), loadFixed(r, smp.topN), loadFixed(r, smp.dFilm);
             loadFixed(r, smp.t), loadFixed(r, smp.c), loadFixed(r, smp.n), loadFixed(r, smp.dndp);
         }
         res.chords.resize(r.pod<std::uint64_t>());

@@ -161,6 +161,12 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
             bag.setShapeState(1, at(Eigen::Vector3d(0.04, 0.0, h + 0.026)));
             bag.advance(0.0);
             ASSERT_NEAR(bag.getOverlapVolume(0), shared, 1e-15);
+            // and their films: some of the ellipsoid's samples share their column's film
+            // with the sphere in part, so that the share's derivative is checked too
+            int partial = 0;
+            for (const ReducedBag::SampleForce& f : bag.getSampleForces(0))
+                partial += f.film > 0.05 && f.film < 0.95;
+            EXPECT_GE(partial, 2);
         }
         if (depth > 0.02) {  // its underside is below the board: the penalty acts
             ASSERT_LT(bag.getPressurePoints().row(2).minCoeff(), -1e-3);
@@ -177,6 +183,51 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
             << T << "\nfinite differences\n"
             << fd;
     }
+}
+
+TEST(ReducedBag, TwoShapesInOnePlaceCarryWhatOneCarriesAloneAndAShallowSkirtYieldsItsFilm) {
+    // The film over a column touches one surface (docs/reduced-bag.md#shapes-that-reach-the-same-film).
+    // Reference: two copies of one tilted ellipsoid in the same pose displace its volume once
+    // and take half of each column's film each, so together they carry the single shape's
+    // wrench and the gas its pressure (1e-9 relative). Without the share the film would be
+    // counted twice.
+    auto cal = makeCalibration(2e-3, [](double x, double y, double) {
+        return 0.06 - 0.8 * x * x - 2.0 * y * y;
+    });
+    cal->skirt = 1.0;
+    const Eigen::Vector3d semi(0.08, 0.05, 0.04);
+    const ShapeState pose = at(Eigen::Vector3d(0.01, -0.005, 0.06 + 0.04 - 0.012),
+                               rotation(Eigen::Vector3d(0.2, -0.1, 0.3)));
+    ReducedBag one(cal, Eigen::Isometry3d::Identity()), two(cal, Eigen::Isometry3d::Identity());
+    one.addShape(bags::makeEllipsoid(semi));
+    two.addShape(bags::makeEllipsoid(semi));
+    two.addShape(bags::makeEllipsoid(semi));
+    for (auto [b, shapes] : {std::pair{&one, 1}, std::pair{&two, 2}}) {
+        b->setGasMass(4.4e-3);
+        for (int s = 0; s < shapes; ++s) b->setShapeState(s, pose);
+        ASSERT_TRUE(b->advance(0.0).converged);
+    }
+    const ShapeWrench w = one.calcWrench(0);
+    ASSERT_GT(w.force.norm(), 1.0);
+    EXPECT_NEAR(two.getGaugePressure(), one.getGaugePressure(), 1e-9 * one.getGaugePressure());
+    const Eigen::Vector3d f = two.calcWrench(0).force + two.calcWrench(1).force;
+    const Eigen::Vector3d t = two.calcWrench(0).torque + two.calcWrench(1).torque;
+    EXPECT_LT((f - w.force).norm(), 1e-9 * w.force.norm());
+    EXPECT_LT((t - w.torque).norm(), 1e-9 * w.force.norm() * 0.1);
+    EXPECT_LT((two.calcWrench(0).force - 0.5 * w.force).norm(), 1e-9 * w.force.norm());
+    // A small shape just touching the top inside the first's contact, where the first lies
+    // deeper, yields the film there to it.
+    ReducedBag beside(cal, Eigen::Isometry3d::Identity());
+    beside.addShape(bags::makeEllipsoid(semi));
+    beside.addShape(bags::makeEllipsoid(Eigen::Vector3d::Constant(0.03)));
+    beside.setGasMass(4.4e-3);
+    beside.setShapeState(0, pose);
+    beside.setShapeState(1, at(Eigen::Vector3d(0.03, 0.0, 0.06 + 0.03 - 0.002)));
+    ASSERT_TRUE(beside.advance(0.0).converged);
+    int yielded = 0;
+    for (const ReducedBag::SampleForce& sf : beside.getSampleForces(1))
+        yielded += sf.film < 0.05;
+    EXPECT_GE(yielded, 1);
 }
 
 TEST(ReducedBag, ThePressureFootprintCarriesTheContactForce) {

@@ -154,13 +154,14 @@ class ReducedBag : public Bag {
     double getContactArea(int shape) const;
     /// One contact sample's share of a shape's wrench (current state), for diagnostics
     /// (bench_reduced_bag lateral): its grid point, whether it is a column sample (the film
-    /// under a sunk shape), its depth, blend, pressures [Pa] (the gas's kappa P w and the
+    /// under a sunk shape), its depth, blend, share of the column's film, pressures [Pa] (the gas's kappa P w and the
     /// board's), contact point, normal and force [N] (Ground). They add up to calcWrench()
     /// less the friction force (getFrictionForce(), applied at the stick spring's point).
     struct SampleForce {
         int point = -1;
         bool column = false;
         double delta = 0.0, blend = 0.0, gasPressure = 0.0, boardPressure = 0.0;
+        double film = 1.0;  // the shape's share of the column's film (1 alone there)
         Vec3 c = Vec3::Zero(), n = Vec3::Zero(), force = Vec3::Zero();
     };
     std::vector<SampleForce> getSampleForces(int shape) const;
@@ -174,6 +175,14 @@ class ReducedBag : public Bag {
         Vec3 t, c, n;
         Eigen::Matrix3d dndp;
         double blend = 1.0;  // share of the point (closest surface or down the column)
+        // The top point's depth in the shape and its normal (the same point for every shape
+        // at this grid point), which decide which shape the column's film touches.
+        double topDelta = 0.0;
+        Vec3 topN = Vec3::Zero();
+        // This shape's share of the column's film where several shapes reach it (1 alone),
+        // and its derivative in this shape's pose (the others held).
+        double film = 1.0;
+        Eigen::Matrix<double, 1, 6> dFilm = Eigen::Matrix<double, 1, 6>::Zero();
     };
     // One grid column through one shape: the part of the vertical line through the top point
     // that lies inside the shape, below the top and above the bed board (its length is the
@@ -229,6 +238,7 @@ class ReducedBag : public Bag {
     Eigen::Matrix3Xd calcTop() const;  // the unloaded top at m_cur.mass (Ground), per grid point
     double calcBoardPressure(const Vec3& p) const;  // the board's penalty pressure at p [Pa]
     void buildFootprint(const Eigen::Matrix3Xd& top);  // m_points, m_areas from the samples
+    void shareFilm(const Eigen::Matrix3Xd& top);  // each sample's film share (evaluate)
     double calcFreeVolume(double P, double* dVdP) const;
     double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
     double solvePressure(double displaced, double* dPdV) const;
