@@ -44,13 +44,13 @@ const char* kHelp =
     "usage: bagsim synth-measurement --scenario S.yaml --effect E [--param NAME=VALUE]...\n"
     "           [--noise CHANNEL=VALUE]... [--seed N] [--sample-interval T]\n"
     "           [--gas-mass-uncertainty U] [--room-temperature-uncertainty U]\n"
-    "           --out DIR --label-out FILE [--force] [--quiet]\n"
+    "           [--truth-mesh SIZE] --out DIR --label-out FILE [--force] [--quiet]\n"
     "\n"
     "Makes measured data (docs/measured-data.md) of the seed's rig from a truth simulation of\n"
     "the scenario with one unmodelled effect switched on, sensor noise, and a model-form\n"
     "difference from what bagsim diagnose simulates: the truth run takes half the scenario's\n"
     "displacement step and, if the scenario has an imperfection, another imperfection seed\n"
-    "(the scenario's + 100).\n"
+    "(the scenario's + 100); with --truth-mesh, a finer mesh too.\n"
     "The folder names neither the effect nor its parameters; they go to the label file only.\n"
     "\n"
     "  --gas-mass-uncertainty U          the manifest states U as the standard uncertainty of\n"
@@ -60,6 +60,11 @@ const char* kHelp =
     "                                    the room temperature (e.g. 0.5K; at most 10 K)\n"
     "  (statements only: the data are made as without them; bagsim diagnose adds their\n"
     "  sensitivities to the validation uncertainty)\n"
+    "  --truth-mesh SIZE                 the truth run's mesh size in place of the scenario's\n"
+    "                                    airbag.mesh_size (e.g. 20mm; finer than the\n"
+    "                                    scenario's, at least 5 mm; scaled with the bag as the\n"
+    "                                    scenario's is): a model-form difference the diagnosis\n"
+    "                                    does not simulate\n"
     "\n"
     "effects (--effect E, or several: --effect E1,E2) and their parameters (--param NAME=VALUE\n"
     "with units, or EFFECT.NAME=VALUE where two effects share a name; default in brackets):\n"
@@ -132,6 +137,7 @@ struct Args {
     std::string sampleInterval;  ///< "" the kind's default (0.5 s rig, 0.02 s patient)
     std::string matInterval = "0.1 s";
     std::string gasMassUncertainty, roomTemperatureUncertainty;  ///< "" not stated
+    std::string truthMesh;  ///< --truth-mesh as given; "" the scenario's mesh
     bool force = false, quiet = false;
 };
 
@@ -156,6 +162,7 @@ Args parseArgs(int argc, char** argv) {
         else if (arg == "--mat-interval") a.matInterval = value();
         else if (arg == "--gas-mass-uncertainty") a.gasMassUncertainty = value();
         else if (arg == "--room-temperature-uncertainty") a.roomTemperatureUncertainty = value();
+        else if (arg == "--truth-mesh") a.truthMesh = value();
         else if (arg == "--out") a.out = value();
         else if (arg == "--label-out") a.labelOut = value();
         else if (arg == "--force") a.force = true;
@@ -164,8 +171,8 @@ Args parseArgs(int argc, char** argv) {
             throw UsageError("unknown option '" + arg +
                              "'; valid: --scenario, --effect, --param, --noise, --test, --seed, "
                              "--sample-interval, --mat-interval, --gas-mass-uncertainty, "
-                             "--room-temperature-uncertainty, --out, --label-out, --force, --quiet, "
-                             "--help");
+                             "--room-temperature-uncertainty, --truth-mesh, --out, --label-out, --force, "
+                             "--quiet, --help");
     }
     if (a.scenario.empty()) throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
     if (a.effect.empty())
@@ -611,12 +618,39 @@ StatedUncertainties parseStatedUncertainties(const Args& a, const std::vector<do
     return s;
 }
 
+/// The smallest truth mesh --truth-mesh takes [m].
+constexpr double kMinTruthMesh = 0.005;
+
+// --truth-mesh's size [m], finer than the scenario's airbag.mesh_size `scenarioMesh` [m] and
+// at least kMinTruthMesh; 0 when not given.
+double parseTruthMesh(const std::string& text, double scenarioMesh) {
+    if (text.empty()) return 0.0;
+    const std::string valid = "valid: a length finer than the scenario's airbag.mesh_size (" +
+                              io::formatSignificant(scenarioMesh, "mm") + ") and at least " +
+                              io::formatSignificant(kMinTruthMesh, "mm") + " (e.g. 20mm)";
+    double h = 0.0;
+    try {
+        h = io::parseQuantity(text, io::Dimension::Length);
+    } catch (const io::UnitError& ex) {
+        throw UsageError("--truth-mesh '" + text + "': " + ex.what() + "; " + valid);
+    }
+    if (!(h < scenarioMesh))
+        throw UsageError("--truth-mesh '" + text + "' is not finer than the scenario's "
+                         "airbag.mesh_size (" + io::formatSignificant(scenarioMesh, "mm") +
+                         "); " + valid);
+    if (!(h >= kMinTruthMesh)) throw UsageError("--truth-mesh '" + text + "' is too fine; " + valid);
+    return h;
+}
+
 int run(const Args& a) {
     const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
     if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) {
         if (!a.gasMassUncertainty.empty() || !a.roomTemperatureUncertainty.empty())
             throw UsageError("--gas-mass-uncertainty and --room-temperature-uncertainty are for the "
                              "rig's data (a patient-on-array scenario's manifest does not state them)");
+        if (!a.truthMesh.empty())
+            throw UsageError("--truth-mesh is for the rig's data (a patient-on-array scenario's "
+                             "truth differs by its macro step)");
         return runPatient(a, file);
     }
     if (!a.tests.empty())
@@ -650,8 +684,25 @@ int run(const Args& a) {
     // diagnosis will; the effects act on that bag (bag-volume scales it; a warmer gas does not
     // resize it).
     sc.options.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
+    const double writtenMesh = sc.options.geometry.meshSize;  // airbag.mesh_size as read
+    const double truthMesh = parseTruthMesh(a.truthMesh, writtenMesh);
     prepareGeometry(sc);
     bags::LoadTestOptions truth = sc.options;
+    std::string meshForm;
+    if (truthMesh > 0.0) {
+        // The sizing (fill mass, volume change) scales the truth's mesh as it scales the
+        // scenario's; the effects act on the truth's bag after it (bag-volume scales it again).
+        truth.geometry.meshSize = truthMesh * sc.options.geometry.meshSize / writtenMesh;
+        const double nodes = io::estimateNumNodes(truth.geometry);
+        if (nodes > io::kMaxMeshNodes)
+            throw UsageError("--truth-mesh '" + a.truthMesh + "' gives a mesh of about " +
+                             fmt("%.0f", std::round(nodes / 1000) * 1000) +
+                             " nodes for this airbag; at most " + std::to_string(io::kMaxMeshNodes) +
+                             " are allowed; valid: a coarser truth mesh, below the scenario's " +
+                             io::formatSignificant(writtenMesh, "mm"));
+        meshForm = "mesh size " + io::formatSignificant(truthMesh, "mm") + " (the scenario's " +
+                   io::formatSignificant(writtenMesh, "mm") + "), ";
+    }
     diagnose::RigEffects rig;
     for (size_t i = 0; i < effects.size(); ++i) {
         try {
@@ -664,7 +715,7 @@ int run(const Args& a) {
     // loaded to the force the load cell reads as the protocol's peak.
     const double peakReading = sc.options.peakForce;  // the protocol's, as the load cell reads it
     truth.peakForce = peakReading / (1.0 + rig.loadCellGain);
-    std::string modelForm = "displacement step " + io::formatSignificant(0.5 * truth.displacementStep, "mm") +
+    std::string modelForm = meshForm + "displacement step " + io::formatSignificant(0.5 * truth.displacementStep, "mm") +
                             " (the scenario's " + io::formatSignificant(truth.displacementStep, "mm") + ")";
     truth.displacementStep *= 0.5;
     if (truth.imperfection.amplitude > 0.0) {
