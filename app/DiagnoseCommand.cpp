@@ -40,7 +40,7 @@ namespace fs = std::filesystem;
 const char* kHelp =
     "usage: bagsim diagnose --measured DIR [--out DIR] [--force] [--where-only]\n"
     "           [--candidates E1,E2,...] [--threads N] [--quiet]\n"
-    "           [--curve-step MASS] [--curve-volumes N] [--cache DIR]\n"
+    "           [--curve-step MASS] [--curve-volumes N] [--cache DIR] [--mesh-check SIZE]\n"
     "\n"
     "Compares measured data of the seed's rig (docs/measured-data.md) with a simulation of the\n"
     "same protocol and says where they disagree: residuals per channel (force at the measured\n"
@@ -56,6 +56,8 @@ const char* kHelp =
     "root sum square of the noise, the numerical uncertainty, a stated imperfection's spread\n"
     "and, when the manifest states them, the gas mass's and room temperature's standard\n"
     "uncertainties times their sensitivities (each simulated at +- its uncertainty).\n"
+    "The numerical uncertainty is the difference from a run at half the displacement step;\n"
+    "with --mesh-check, also from a run on a finer mesh (root sum square of the two).\n"
     "See docs/diagnosis.md.\n"
     "\n"
     "options:\n"
@@ -77,6 +79,10 @@ const char* kHelp =
     "                      (default 9: every 0.0625)\n"
     "  --cache DIR         a stiffness curve: where the model's curves are kept and found\n"
     "                      again (default OUT/curve-cache)\n"
+    "  --mesh-check SIZE   the tests' numerical uncertainty holds the mesh too: the\n"
+    "                      protocol also on a mesh of SIZE (finer than the scenario's\n"
+    "                      airbag.mesh_size, at least 5 mm), its difference added (one\n"
+    "                      more simulation; the rig's tests only)\n"
     "  --quiet             print only the verdict\n"
     "\n"
     "A stiffness curve k(m) in the data (no tests needed): the model's curve at its masses\n"
@@ -102,6 +108,7 @@ struct Args {
     double curveStep = 0.125e-3;  ///< a stiffness curve: the dense curve's step [kg]
     int curveVolumes = 9;         ///< a stiffness curve: bag-volume's grid points
     std::string cache;            ///< a stiffness curve: the cache folder ("": OUT/curve-cache)
+    std::string meshCheck;        ///< --mesh-check as given ("": the step's uncertainty only)
 };
 
 Args parseArgs(int argc, char** argv) {
@@ -153,11 +160,13 @@ Args parseArgs(int argc, char** argv) {
             a.curveVolumes = std::stoi(v);
         } else if (arg == "--cache") {
             a.cache = value();
+        } else if (arg == "--mesh-check") {
+            a.meshCheck = value();
         } else
             throw UsageError("unknown option '" + arg +
                              "'; valid: --measured, --out, --force, --where-only, --candidates, "
                              "--threads, --windows, --curve-step, --curve-volumes, --cache, "
-                             "--quiet, --help");
+                             "--mesh-check, --quiet, --help");
     }
     if (a.measured.empty()) throw UsageError("--measured DIR is required");
     if (a.out.empty()) {
@@ -246,6 +255,9 @@ void printStiffness(const diagnose::StiffnessComparison& k, std::ostream& out) {
 
 int run(const Args& a) {
     if (io::readMeasuredKind(a.measured) != "") {
+        if (!a.meshCheck.empty())
+            throw UsageError("--mesh-check is for the rig's tests; a patient's numerical "
+                             "uncertainty is its run at half the macro step");
         PatientDiagnoseArgs p;
         p.measured = a.measured, p.out = a.out, p.commandLine = a.commandLine;
         p.force = a.force, p.whereOnly = a.whereOnly, p.quiet = a.quiet;
@@ -259,6 +271,11 @@ int run(const Args& a) {
     const auto start = std::chrono::steady_clock::now();
     const diagnose::MeasuredData data = io::readMeasuredData(a.measured);
     io::LoadTestScenario sc = io::readMeasuredScenario(data);
+    const double writtenMesh = sc.options.geometry.meshSize;  // airbag.mesh_size as read
+    const double meshCheck = parseFinerMesh("--mesh-check", a.meshCheck, writtenMesh);
+    if (meshCheck > 0.0 && data.tests.empty())
+        throw UsageError("--mesh-check is for the rig's tests; " + a.measured +
+                         " holds a stiffness curve only");
     const fs::path out(a.out);
     claimOutputFolder(out, a.force,
                       {"diagnosis.json", "residuals.csv", "report.html", "stiffness.csv"});
@@ -340,6 +357,11 @@ int run(const Args& a) {
     constexpr int kPopulation = 3;
     std::vector<bags::LoadTestOptions> runs = {sc.options, sc.options};
     runs[1].displacementStep *= 0.5;
+    if (meshCheck > 0.0) {  // --mesh-check: the same protocol on the finer mesh
+        runs.push_back(sc.options);
+        applyFinerMesh("--mesh-check", a.meshCheck, meshCheck, writtenMesh, runs.back());
+    }
+    const size_t firstPopulationRun = runs.size();
     if (sc.options.imperfection.amplitude > 0.0)
         for (int k = 1; k <= kPopulation; ++k) {
             runs.push_back(sc.options);
@@ -352,7 +374,8 @@ int run(const Args& a) {
     simulations += static_cast<int>(runs.size());
     const bags::LoadTestResult base = std::move(results[0]);
     const bags::LoadTestResult& fine = results[1];
-    const std::vector<bags::LoadTestResult> population(results.begin() + 2,
+    const bags::LoadTestResult* finerMesh = meshCheck > 0.0 ? &results[2] : nullptr;
+    const std::vector<bags::LoadTestResult> population(results.begin() + firstPopulationRun,
                                                        results.begin() + firstInputRun);
     const std::vector<bags::LoadTestResult> inputResults(results.begin() + firstInputRun,
                                                          results.end());
@@ -364,6 +387,13 @@ int run(const Args& a) {
         const diagnose::TestComparison f = diagnose::compareTest(
             data.tests[i], int(i), fine.curves[i], sc.rig, sc.options.loadingRate);
         t.numericalUncertainty = diagnose::calcSimulatedRmsDifference(t, f);
+        if (finerMesh) {  // the mesh's part beside the step's (root sum square)
+            const std::vector<double> dm = diagnose::calcSimulatedRmsDifference(
+                t, diagnose::compareTest(data.tests[i], int(i), finerMesh->curves[i], sc.rig,
+                                         sc.options.loadingRate));
+            for (size_t c = 0; c < dm.size(); ++c)
+                t.numericalUncertainty[c] = std::hypot(t.numericalUncertainty[c], dm[c]);
+        }
         std::vector<double> sum2(t.channels.size(), 0.0);
         for (const bags::LoadTestResult& p : population) {
             const std::vector<double> d = diagnose::calcSimulatedRmsDifference(

@@ -2,6 +2,9 @@
 
 #include <bags/SeedReading.h>
 #include <io/InputError.h>
+#include <io/Units.h>
+
+#include <cmath>
 
 #include <cstdio>
 #include <cstring>
@@ -60,6 +63,39 @@ int runCommandMain(const std::string& command, const char* help, int argc, char*
 }
 
 void prepareGeometry(io::LoadTestScenario& sc) { io::applyBagSizing(sc); }
+
+/// The smallest finer mesh parseFinerMesh takes [m].
+constexpr double kMinFinerMesh = 0.005;
+
+double parseFinerMesh(const std::string& option, const std::string& text, double written) {
+    if (text.empty()) return 0.0;
+    const std::string valid = "valid: a length finer than the scenario's airbag.mesh_size (" +
+                              io::formatSignificant(written, "mm") + ") and at least " +
+                              io::formatSignificant(kMinFinerMesh, "mm") + " (e.g. 20mm)";
+    double h = 0.0;
+    try {
+        h = io::parseQuantity(text, io::Dimension::Length);
+    } catch (const io::UnitError& ex) {
+        throw UsageError(option + " '" + text + "': " + ex.what() + "; " + valid);
+    }
+    if (!(h < written))
+        throw UsageError(option + " '" + text + "' is not finer than the scenario's "
+                         "airbag.mesh_size (" + io::formatSignificant(written, "mm") + "); " + valid);
+    if (!(h >= kMinFinerMesh)) throw UsageError(option + " '" + text + "' is too fine; " + valid);
+    return h;
+}
+
+void applyFinerMesh(const std::string& option, const std::string& text, double finer,
+                    double written, bags::LoadTestOptions& o) {
+    o.geometry.meshSize = finer * o.geometry.meshSize / written;
+    const double nodes = io::estimateNumNodes(o.geometry);
+    if (nodes > io::kMaxMeshNodes)
+        throw UsageError(option + " '" + text + "' gives a mesh of about " +
+                         fmt("%.0f", std::round(nodes / 1000) * 1000) +
+                         " nodes for this airbag; at most " + std::to_string(io::kMaxMeshNodes) +
+                         " are allowed; valid: a coarser mesh, below the scenario's " +
+                         io::formatSignificant(written, "mm"));
+}
 
 void claimOutputFolder(const fs::path& dir, bool force, const std::vector<std::string>& owned) {
     std::error_code ec;

@@ -39,6 +39,17 @@ int runCommandMain(const std::string& command, const char* help, int argc, char*
 /// sizing, a few inflations, then airbag.volume_change); prints nothing.
 void prepareGeometry(io::LoadTestScenario& sc);
 
+/// A finer mesh for one run beside the scenario's (synth-measurement's --truth-mesh,
+/// diagnose's --mesh-check): `text`, the value of `option`, read as a length finer than the
+/// scenario's airbag.mesh_size `written` [m] and at least 5 mm; 0 when `text` is empty.
+/// @throws UsageError naming the option, the value and what is valid.
+double parseFinerMesh(const std::string& option, const std::string& text, double written);
+
+/// Sets `o`'s mesh to the finer size `finer` [m] as the sizing (fill mass, volume change)
+/// scaled the written `written` [m] into o's; refused (UsageError) beyond the node limit.
+void applyFinerMesh(const std::string& option, const std::string& text, double finer,
+                    double written, bags::LoadTestOptions& o);
+
 /// Claims an output folder for a command that writes the files `owned` (names; one '*' in a
 /// name matches any run of characters): creates it; an existing folder that is not empty is refused (io::InputError)
 /// unless `force`, in which case the owned files in it are removed first and others kept.

@@ -618,30 +618,6 @@ StatedUncertainties parseStatedUncertainties(const Args& a, const std::vector<do
     return s;
 }
 
-/// The smallest truth mesh --truth-mesh takes [m].
-constexpr double kMinTruthMesh = 0.005;
-
-// --truth-mesh's size [m], finer than the scenario's airbag.mesh_size `scenarioMesh` [m] and
-// at least kMinTruthMesh; 0 when not given.
-double parseTruthMesh(const std::string& text, double scenarioMesh) {
-    if (text.empty()) return 0.0;
-    const std::string valid = "valid: a length finer than the scenario's airbag.mesh_size (" +
-                              io::formatSignificant(scenarioMesh, "mm") + ") and at least " +
-                              io::formatSignificant(kMinTruthMesh, "mm") + " (e.g. 20mm)";
-    double h = 0.0;
-    try {
-        h = io::parseQuantity(text, io::Dimension::Length);
-    } catch (const io::UnitError& ex) {
-        throw UsageError("--truth-mesh '" + text + "': " + ex.what() + "; " + valid);
-    }
-    if (!(h < scenarioMesh))
-        throw UsageError("--truth-mesh '" + text + "' is not finer than the scenario's "
-                         "airbag.mesh_size (" + io::formatSignificant(scenarioMesh, "mm") +
-                         "); " + valid);
-    if (!(h >= kMinTruthMesh)) throw UsageError("--truth-mesh '" + text + "' is too fine; " + valid);
-    return h;
-}
-
 int run(const Args& a) {
     const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
     if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) {
@@ -685,21 +661,14 @@ int run(const Args& a) {
     // resize it).
     sc.options.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
     const double writtenMesh = sc.options.geometry.meshSize;  // airbag.mesh_size as read
-    const double truthMesh = parseTruthMesh(a.truthMesh, writtenMesh);
+    const double truthMesh = parseFinerMesh("--truth-mesh", a.truthMesh, writtenMesh);
     prepareGeometry(sc);
     bags::LoadTestOptions truth = sc.options;
     std::string meshForm;
     if (truthMesh > 0.0) {
         // The sizing (fill mass, volume change) scales the truth's mesh as it scales the
         // scenario's; the effects act on the truth's bag after it (bag-volume scales it again).
-        truth.geometry.meshSize = truthMesh * sc.options.geometry.meshSize / writtenMesh;
-        const double nodes = io::estimateNumNodes(truth.geometry);
-        if (nodes > io::kMaxMeshNodes)
-            throw UsageError("--truth-mesh '" + a.truthMesh + "' gives a mesh of about " +
-                             fmt("%.0f", std::round(nodes / 1000) * 1000) +
-                             " nodes for this airbag; at most " + std::to_string(io::kMaxMeshNodes) +
-                             " are allowed; valid: a coarser truth mesh, below the scenario's " +
-                             io::formatSignificant(writtenMesh, "mm"));
+        applyFinerMesh("--truth-mesh", a.truthMesh, truthMesh, writtenMesh, truth);
         meshForm = "mesh size " + io::formatSignificant(truthMesh, "mm") + " (the scenario's " +
                    io::formatSignificant(writtenMesh, "mm") + "), ";
     }
