@@ -393,6 +393,7 @@ int run(const Args& a) {
                                          sc.options.loadingRate));
             for (size_t c = 0; c < dm.size(); ++c)
                 t.numericalUncertainty[c] = std::hypot(t.numericalUncertainty[c], dm[c]);
+            t.numericalUncertaintyMesh = dm;
         }
         std::vector<double> sum2(t.channels.size(), 0.0);
         for (const bags::LoadTestResult& p : population) {

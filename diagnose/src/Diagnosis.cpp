@@ -245,7 +245,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             }
             it->second.push_back(res);
         };
-        double lo = INFINITY, hi = -INFINITY, numSum = 0.0, inSum = 0.0, sumSq = 0.0;
+        double lo = INFINITY, hi = -INFINITY, numSum = 0.0, meshSum = 0.0, inSum = 0.0, sumSq = 0.0;
         double massSum = 0.0, tempSum = 0.0;  // the stated inputs' terms, weighted by samples
         long numN = 0, inN = 0, total = 0;
         std::vector<double> secondDifferences;
@@ -277,6 +277,8 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             addSecondDifferences(ch.measured, secondDifferences);
             if (c < t.numericalUncertainty.size()) {
                 numSum += t.numericalUncertainty[c] * t.numericalUncertainty[c];
+                if (c < t.numericalUncertaintyMesh.size())
+                    meshSum += t.numericalUncertaintyMesh[c] * t.numericalUncertaintyMesh[c];
                 ++numN;
             }
             if (c < t.inputUncertainty.size()) {
@@ -307,6 +309,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         cs.range = hi - lo;
         cs.noise = calcNoise(secondDifferences);
         cs.numerical = numN ? std::sqrt(numSum / double(numN)) : 0.0;
+        cs.numericalMesh = numN ? std::sqrt(meshSum / double(numN)) : 0.0;
         cs.input = inN ? std::sqrt(inSum / double(inN)) : 0.0;
         cs.inputGasMass = total ? std::sqrt(massSum / double(total)) : 0.0;
         cs.inputTemperature = total ? std::sqrt(tempSum / double(total)) : 0.0;

@@ -240,6 +240,7 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
            << num(inUnit(c.channel, c.rmse)) << ", \"range\": " << num(inUnit(c.channel, c.range))
            << ", \"noise\": " << num(inUnit(c.channel, c.noise))
            << ", \"numerical_uncertainty\": " << num(inUnit(c.channel, c.numerical))
+           << ", \"numerical_uncertainty_mesh\": " << num(inUnit(c.channel, c.numericalMesh))
            << ", \"input_uncertainty\": " << num(inUnit(c.channel, c.input))
            << ", \"input_uncertainty_gas_mass\": " << num(inUnit(c.channel, c.inputGasMass))
            << ", \"input_uncertainty_temperature\": "

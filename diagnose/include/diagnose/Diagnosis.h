@@ -51,8 +51,12 @@ struct TestComparison {
     double gasMass = 0.0;  ///< [kg] as the flowmeter read it
     std::vector<ChannelComparison> channels;  ///< force, pressure, mass
     /// RMS of (simulated - simulated at half the step) per channel [SI], when given: the
-    /// numerical uncertainty (0 if not estimated).
+    /// numerical uncertainty (0 if not estimated); with a finer mesh's run (diagnose
+    /// --mesh-check) the root sum square of that and numericalUncertaintyMesh.
     std::vector<double> numericalUncertainty;
+    /// RMS of (simulated - simulated on the finer mesh) per channel [SI]: the mesh's part of
+    /// numericalUncertainty (empty or 0 if not estimated).
+    std::vector<double> numericalUncertaintyMesh;
     /// RMS over other bags of the population (imperfection seeds) of (simulated - theirs) per
     /// channel [SI]: the input uncertainty of a stated imperfection (0 if not estimated).
     std::vector<double> inputUncertainty;
@@ -148,6 +152,7 @@ struct ChannelSummary {
     double range = 0.0;        ///< measured max - min [SI] (normalises the gap)
     double noise = 0.0;        ///< sensor noise from the data (median second difference) [SI]
     double numerical = 0.0;    ///< numerical uncertainty [SI] (0 if not estimated)
+    double numericalMesh = 0.0;  ///< the mesh's part of `numerical` [SI] (0 if not estimated)
     double input = 0.0;        ///< input uncertainty (the imperfection's spread) [SI]
     /// Input uncertainty of the protocol's stated gas mass and room temperature [SI]: over the
     /// channel's samples of all tests, the RMS of |dS/dx| u_x (0 where not stated).
