@@ -5,7 +5,6 @@
 #include <io/Units.h>
 
 #include <cmath>
-
 #include <cstdio>
 #include <cstring>
 #include <fstream>

@@ -1046,7 +1046,7 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
         w.pod(std::uint64_t(res.samples.size()));
         for (const Sample& smp : res.samples) {
             w.pod(smp.point), w.pod(smp.delta), w.pod(smp.blend);
-            w.pod(smp.topDelta), w.pod(smp.film), saveFixed(w, smp.topN), saveFixed(w, smp.dFilm);
+            w.pod(smp.film), saveFixed(w, smp.dFilm);  // (topDelta, topN: inputs of evaluate's share)
             saveFixed(w, smp.t), saveFixed(w, smp.c), saveFixed(w, smp.n), saveFixed(w, smp.dndp);
         }
         w.pod(std::uint64_t(res.chords.size()));
@@ -1083,7 +1083,7 @@ void ReducedBag::loadState(bags::StateReader& r) {
         res.samples.resize(r.pod<std::uint64_t>());
         for (Sample& smp : res.samples) {
             r.pod(smp.point), r.pod(smp.delta), r.pod(smp.blend);
-            r.pod(smp.topDelta), r.pod(smp.film), loadFixed(r, smp.topN), loadFixed(r, smp.dFilm);
+            r.pod(smp.film), loadFixed(r, smp.dFilm);
             loadFixed(r, smp.t), loadFixed(r, smp.c), loadFixed(r, smp.n), loadFixed(r, smp.dndp);
         }
         res.chords.resize(r.pod<std::uint64_t>());

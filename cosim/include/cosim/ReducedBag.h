@@ -154,9 +154,10 @@ class ReducedBag : public Bag {
     double getContactArea(int shape) const;
     /// One contact sample's share of a shape's wrench (current state), for diagnostics
     /// (bench_reduced_bag lateral): its grid point, whether it is a column sample (the film
-    /// under a sunk shape), its depth, blend, share of the column's film, pressures [Pa] (the gas's kappa P w and the
-    /// board's), contact point, normal and force [N] (Ground). They add up to calcWrench()
-    /// less the friction force (getFrictionForce(), applied at the stick spring's point).
+    /// under a sunk shape), its depth, blend, share of the column's film, pressures [Pa] (the
+    /// gas's kappa P w and the board's), contact point, normal and force [N] (Ground). They add
+    /// up to calcWrench() less the friction force (getFrictionForce(), applied at the stick
+    /// spring's point).
     struct SampleForce {
         int point = -1;
         bool column = false;
