@@ -436,6 +436,45 @@ int calibrate(const std::string& scenario, const std::string& out) {
             bestMiss = areaMiss, bestSpread = spread, bestSkirt = skirt, bestK = K, bestB = B;
     }
     c.skirt = bestSkirt;
+    // By the sphere's radius (the table above averages them): kappa with the reduced
+    // footprint's area and the FE's own mean contact pressure over its gas pressure
+    // (F_FE / (P_FE A_FE), A_FE the nodes in contact), over the taut masses and both places.
+    {
+        std::printf("kappa by sphere radius (taut masses, both places; reduced area / FE's "
+                    "own contact area), at depths [mm]:\n        ");
+        for (double d : c.depths) std::printf(" %11.0f", d * 1e3);
+        for (double radius : {0.04, 0.10, 0.22}) {
+            std::printf("\n  %3.0f mm", radius * 1e3);
+            for (size_t j = 0; j < c.depths.size(); ++j) {
+                double sr = 0, sf = 0;
+                int n = 0;
+                for (size_t r = 0; r < runs.size(); ++r) {
+                    if (std::abs(cases[r].size.x() - radius) > 1e-9) continue;
+                    const std::vector<Row>& rows = runs[r];
+                    for (size_t k = 0; k + 1 < rows.size(); ++k) {
+                        const Row& a0 = rows[k];
+                        const Row& a1 = rows[k + 1];
+                        if (!(a0.pFE > 300.0 && a1.pFE > 300.0 && a0.area > 0 && a1.area > 0 &&
+                              a0.areaFE > 0 && a1.areaFE > 0 && a0.forceFE > 5.0))
+                            continue;
+                        if (!(a0.redDepth <= c.depths[j] && c.depths[j] <= a1.redDepth &&
+                              a1.redDepth > a0.redDepth))
+                            continue;
+                        const double u = (c.depths[j] - a0.redDepth) / (a1.redDepth - a0.redDepth);
+                        auto kr = [](const Row& x) { return x.forceFE / (x.pFE * x.area); };
+                        auto kf = [](const Row& x) { return x.forceFE / (x.pFE * x.areaFE); };
+                        sr += (1 - u) * kr(a0) + u * kr(a1);
+                        sf += (1 - u) * kf(a0) + u * kf(a1);
+                        ++n;
+                        break;
+                    }
+                }
+                if (n) std::printf(" %5.2f/%5.2f", sr / n, sf / n);
+                else std::printf("           -");
+            }
+        }
+        std::printf("\n");
+    }
     // The envelope's depth: the deepest (mean) depth any calibration run reached.
     c.depthMax = 0.0;
     for (const std::vector<Row>& rows : runs)
