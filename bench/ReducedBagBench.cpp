@@ -18,6 +18,9 @@
 //   bench_reduced_bag shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG
 //                         TRAVEL_MM D_MM
 //                                                pressed with friction, then moved sideways
+//   bench_reduced_bag section SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM
+//                                                the FE film's nodes about one section across
+//                                                the bag, unloaded and pressed
 //   bench_reduced_bag fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points]
 //                                                one bag of a run alone, FE and reduced;
 //                                                points: at T1 the FE's contact nodes (N)
@@ -708,6 +711,47 @@ int trace(const std::string& scenario, const std::string& calPath, char** a) {
     return 0;
 }
 
+// One case at one travel: the FE film's nodes within half a mesh size of the section x =
+// SECTION_MM (bag frame), unloaded (inflated, the shape clear) and pressed, with their contact
+// pressure, for the film-section model (docs/reduced-bag.md#a-film-section).
+int section(const std::string& scenario, char** a) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const double travel = std::stod(a[8]) * 1e-3, x0 = std::stod(a[9]) * 1e-3;
+    const Case c = parseCase(a, travel);
+    std::vector<Row> rows = pressFE(c, spec, sc.options.contact);
+    if (rows.empty() || std::abs(rows.back().depth - travel) > 1e-6) {
+        std::fprintf(stderr, "the FE bag did not reach %.1f mm\n", travel * 1e3);
+        return 1;
+    }
+    bags::Airbag bag(spec);
+    auto shape = makeShape(c);
+    shape->setPose(pose(c, 1.0));
+    const int s = bag.addShape(shape, sc.options.contact);
+    bag.inflate(c.mass);
+    const Eigen::Matrix3Xd x0s = bag.getPositions();
+    const double p0 = bag.getChamberState(0).gaugePressure;
+    for (const Row& r : rows) {
+        bag.setShapePose(s, pose(c, r.z));
+        if (!bag.advance(1.0).converged) return 1;
+        bag.commit();
+    }
+    const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
+    const Eigen::Matrix3Xd& x = bag.getPositions();
+    const Eigen::Isometry3d X = pose(c, rows.back().z);
+    std::printf("# gas %.4f kPa unloaded, %.4f kPa pressed; force %.3f N; shape origin %.2f %.2f "
+                "%.2f mm\n# node y0 z0 y z (mm, bag frame; 0: unloaded) x0 x p_kPa\n",
+                p0 * 1e-3, rows.back().pFE * 1e-3, rows.back().forceFE, X.translation().x() * 1e3,
+                X.translation().y() * 1e3, X.translation().z() * 1e3);
+    for (int n = 0; n < x.cols(); ++n)
+        if (std::abs(x0s(0, n) - x0) <= 0.5 * spec.geometry.meshSize)
+            std::printf("N %5d %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f\n", n, x0s(1, n) * 1e3,
+                        x0s(2, n) * 1e3, x(1, n) * 1e3, x(2, n) * 1e3, x0s(0, n) * 1e3,
+                        x(0, n) * 1e3, p[n] * 1e-3);
+    return 0;
+}
+
 // One case at one travel: every FE node and reduced grid point that carries contact pressure
 // (position in the bag frame, pressure, area), to compare where each puts its pressure.
 int footprint(const std::string& scenario, const std::string& calPath, char** a) {
@@ -1364,6 +1408,7 @@ int main(int argc, char** argv) {
         if (mode == "speed" && argc == 3) return speed(argv[2]);
         if (mode == "trace" && argc == 12) return trace(argv[2], argv[3], argv + 4);
         if (mode == "footprint" && argc == 13) return footprint(argv[2], argv[3], argv + 4);
+        if (mode == "section" && argc == 13) return section(argv[2], argv + 3);
         if (mode == "replay" && argc == 5) return replay(argv[2], argv[3], argv[4]);
         if (mode == "lateral" && argc == 7)
             return lateral(argv[2], argv[3], argv[4], std::stod(argv[5]), std::stod(argv[6]));
@@ -1376,7 +1421,8 @@ int main(int argc, char** argv) {
                      "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM | "
                      "replay SCENARIO CAL RUN_DIR | lateral SCENARIO CAL RUN_DIR T0 T1 | "
                      "shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG "
-                     "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points]\n";
+                     "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points] | section "
+                     "SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM\n";
         return 2;
     } catch (const io::InputError& e) {
         std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";
