@@ -711,6 +711,41 @@ int trace(const std::string& scenario, const std::string& calPath, char** a) {
     return 0;
 }
 
+// One case pressed to `travel` on the FE bag, kept (pressFE does not hand it out): its steps,
+// the bag at the last one, the shape's index, and the inflated bag's nodes and gauge pressure
+// before the press. False (with a message) if the bag does not get there.
+struct PressedBag {
+    std::vector<Row> rows;
+    std::unique_ptr<bags::Airbag> bag;
+    int shape = -1;
+    Eigen::Matrix3Xd unloaded;
+    double unloadedPressure = 0.0;
+};
+bool pressAndKeep(const Case& c, const bags::AirbagSpec& spec,
+                  const bags::RigidContact::Options& contact, double travel, PressedBag& out) {
+    out.rows = pressFE(c, spec, contact);
+    if (out.rows.empty() || std::abs(out.rows.back().depth - travel) > 1e-6) {
+        std::fprintf(stderr, "the FE bag did not reach %.1f mm\n", travel * 1e3);
+        return false;
+    }
+    out.bag = std::make_unique<bags::Airbag>(spec);
+    auto shape = makeShape(c);
+    shape->setPose(pose(c, 1.0));
+    out.shape = out.bag->addShape(shape, contact);
+    out.bag->inflate(c.mass);
+    out.unloaded = out.bag->getPositions();
+    out.unloadedPressure = out.bag->getChamberState(0).gaugePressure;
+    for (const Row& r : out.rows) {
+        out.bag->setShapePose(out.shape, pose(c, r.z));
+        if (!out.bag->advance(1.0).converged) {
+            std::fprintf(stderr, "the kept FE bag did not converge at %.1f mm\n", r.depth * 1e3);
+            return false;
+        }
+        out.bag->commit();
+    }
+    return true;
+}
+
 // One case at one travel: the FE film's nodes within half a mesh size of the section x =
 // SECTION_MM (bag frame), unloaded (inflated, the shape clear) and pressed, with their contact
 // pressure, for the film-section model (docs/reduced-bag.md#a-film-section).
@@ -720,23 +755,13 @@ int section(const std::string& scenario, char** a) {
     spec.solver.monitor = nullptr;
     const double travel = std::stod(a[8]) * 1e-3, x0 = std::stod(a[9]) * 1e-3;
     const Case c = parseCase(a, travel);
-    std::vector<Row> rows = pressFE(c, spec, sc.options.contact);
-    if (rows.empty() || std::abs(rows.back().depth - travel) > 1e-6) {
-        std::fprintf(stderr, "the FE bag did not reach %.1f mm\n", travel * 1e3);
-        return 1;
-    }
-    bags::Airbag bag(spec);
-    auto shape = makeShape(c);
-    shape->setPose(pose(c, 1.0));
-    const int s = bag.addShape(shape, sc.options.contact);
-    bag.inflate(c.mass);
-    const Eigen::Matrix3Xd x0s = bag.getPositions();
-    const double p0 = bag.getChamberState(0).gaugePressure;
-    for (const Row& r : rows) {
-        bag.setShapePose(s, pose(c, r.z));
-        if (!bag.advance(1.0).converged) return 1;
-        bag.commit();
-    }
+    PressedBag pb;
+    if (!pressAndKeep(c, spec, sc.options.contact, travel, pb)) return 1;
+    const bags::Airbag& bag = *pb.bag;
+    const std::vector<Row>& rows = pb.rows;
+    const int s = pb.shape;
+    const Eigen::Matrix3Xd& x0s = pb.unloaded;
+    const double p0 = pb.unloadedPressure;
     const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
     const Eigen::Matrix3Xd& x = bag.getPositions();
     const Eigen::Isometry3d X = pose(c, rows.back().z);
@@ -761,22 +786,11 @@ int footprint(const std::string& scenario, const std::string& calPath, char** a)
     const auto cal = io::readReducedBagCalibration(calPath);
     const double travel = std::stod(a[8]) * 1e-3;
     const Case c = parseCase(a, travel);
-    std::vector<Row> rows = pressFE(c, spec, sc.options.contact);
-    if (rows.empty() || std::abs(rows.back().depth - travel) > 1e-6) {
-        std::fprintf(stderr, "the FE bag did not reach %.1f mm\n", travel * 1e3);
-        return 1;
-    }
-    // Again to the last step, keeping the bag (pressFE does not hand it out).
-    bags::Airbag bag(spec);
-    auto shape = makeShape(c);
-    shape->setPose(pose(c, 1.0));
-    const int s = bag.addShape(shape, sc.options.contact);
-    bag.inflate(c.mass);
-    for (const Row& r : rows) {
-        bag.setShapePose(s, pose(c, r.z));
-        if (!bag.advance(1.0).converged) return 1;
-        bag.commit();
-    }
+    PressedBag pb;
+    if (!pressAndKeep(c, spec, sc.options.contact, travel, pb)) return 1;
+    const bags::Airbag& bag = *pb.bag;
+    const std::vector<Row>& rows = pb.rows;
+    const int s = pb.shape;
     const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
     const Eigen::VectorXd areas = bag.getMesh().calcNodalAreas();
     const Eigen::Matrix3Xd& x = bag.getPositions();
