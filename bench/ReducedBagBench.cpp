@@ -1233,8 +1233,191 @@ int lateral(const std::string& scenario, const std::string& calPath, const std::
 // indices, comma separated; "all": every one). The FE bag is inflated at T0's mass with the
 // shapes lifted 0.3 m, lowered onto T0's poses in 30 steps, then taken frame by frame (its
 // gas changed, then the shapes moved).
+// A membrane footprint (prototype, docs/reduced-bag.md#a-membrane-footprint-measured-against-the-fe-bag):
+// the top panels between the seams (|y| < 50 mm, 0 < x < 350 mm) as a membrane of tension
+// P R_x along the profile and P R_y across, on the calibration's grid, deflected down by w
+// from the unloaded top (w = 0 at the seams and the base's edges), kept below the shapes:
+//   minimise 1/2 w^T K w  over  w >= delta,  K w = the contact's vertical force per node,
+// K from edges of stiffness P R_x c^3 (x) and P R_y c (y), c the unloaded top's cosine of its
+// slope along x. The free film keeps its unloaded curvature (K w = 0); a flat plate on a top
+// in equilibrium (-(R_x c^3 h_xx + R_y c h_yy) = 1) carries P over its contact.
+struct Membrane {
+    std::vector<int> ix, iy;            // the domain's nodes
+    Eigen::VectorXd h0, delta, w, r;    // unloaded top, obstacle depth, deflection [m]; r [N]
+    std::vector<int> owner;             // the shape whose surface bounds the node (-1: none)
+    std::vector<std::vector<std::pair<int, double>>> nb;  // neighbour (-1: the edge), k [m]
+};
+
+Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::MatrixXd& top,
+                       const Eigen::Isometry3d& X_GB,
+                       const std::vector<std::shared_ptr<bags::RigidShape>>& shapes, double P,
+                       double Rx, double Ry, double ridgeK) {
+    Membrane m;
+    const double h = cal.pitch, seam = 0.5 * cal.geometry.width, len = cal.geometry.longSide;
+    Eigen::MatrixXi index = Eigen::MatrixXi::Constant(cal.nx, cal.ny, -1);
+    for (int ix = 0; ix < cal.nx; ++ix)
+        for (int iy = 0; iy < cal.ny; ++iy) {
+            const double x = cal.x0 + h * ix, y = cal.y0 + h * iy;
+            if (!std::isfinite(top(ix, iy)) || std::abs(y) >= seam || x <= 0.0 || x >= len) continue;
+            index(ix, iy) = int(m.ix.size());
+            m.ix.push_back(ix), m.iy.push_back(iy);
+        }
+    const int n = int(m.ix.size());
+    m.h0.resize(n), m.delta.setConstant(n, -1.0), m.owner.assign(size_t(n), -1), m.nb.resize(size_t(n));
+    auto hAt = [&](int ix, int iy) {
+        return (ix >= 0 && ix < cal.nx && iy >= 0 && iy < cal.ny) ? top(ix, iy) : std::nan("");
+    };
+    for (int i = 0; i < n; ++i) {
+        const int ix = m.ix[size_t(i)], iy = m.iy[size_t(i)];
+        m.h0[i] = top(ix, iy);
+        auto cosX = [&](int jx) {
+            const double hj = hAt(jx, iy);
+            const double s = std::isfinite(hj) ? (hj - m.h0[i]) / h : 0.0;
+            return 1.0 / std::sqrt(1.0 + s * s);
+        };
+        const double cx = 0.5 * (cosX(ix - 1) + cosX(ix + 1));
+        for (const auto& [jx, jy] : {std::pair{ix - 1, iy}, {ix + 1, iy}, {ix, iy - 1}, {ix, iy + 1}}) {
+            const int j = (jx >= 0 && jx < cal.nx && jy >= 0 && jy < cal.ny) ? index(jx, jy) : -1;
+            m.nb[size_t(i)].push_back({j, jy == iy ? Rx * std::pow(cosX(jx), 3) : Ry * cx});
+        }
+        // The obstacle: the lowest point of each shape on the node's vertical.
+        const double x = cal.x0 + h * ix, y = cal.y0 + h * iy;
+        // The apex ridge, tied by the diaphragm: a spring to the unloaded top (k_r [m], as R;
+        // its vertical force P k_r w).
+        if (ridgeK > 0.0 && std::abs(x - cal.geometry.calcApexX()) < 0.5 * h)
+            m.nb[size_t(i)].push_back({-1, ridgeK});
+        for (size_t s = 0; s < shapes.size(); ++s) {
+            auto inside = [&](double z) {
+                return shapes[s]->calcSignedDistance(X_GB * Vec3(x, y, z), nullptr, nullptr) < 0.0;
+            };
+            double zl = std::nan("");
+            for (double z = -0.05; z < m.h0[i] + 0.3; z += 0.002)
+                if (inside(z)) {
+                    double a = z - 0.002, b = z;
+                    for (int it = 0; it < 40; ++it) (inside(0.5 * (a + b)) ? b : a) = 0.5 * (a + b);
+                    zl = b;
+                    break;
+                }
+            if (!std::isfinite(zl)) continue;
+            const double d = m.h0[i] - std::max(zl, 0.0);
+            if (d > m.delta[i]) m.delta[i] = d, m.owner[size_t(i)] = int(s);
+        }
+    }
+    // Projected successive over-relaxation on the obstacle problem.
+    m.w = m.delta.cwiseMax(0.0);
+    for (int sweep = 0; sweep < 200000; ++sweep) {
+        double change = 0.0;
+        for (int i = 0; i < n; ++i) {
+            double num = 0.0, den = 0.0;
+            for (const auto& [j, k] : m.nb[size_t(i)]) num += k * (j >= 0 ? m.w[j] : 0.0), den += k;
+            const double next = std::max(m.delta[i], m.w[i] + 1.8 * (num / den - m.w[i]));
+            change = std::max(change, std::abs(next - m.w[i]));
+            m.w[i] = next;
+        }
+        if (change < 1e-12) break;
+    }
+    m.r.setZero(n);
+    for (int i = 0; i < n; ++i)
+        for (const auto& [j, k] : m.nb[size_t(i)]) m.r[i] += P * k * (m.w[i] - (j >= 0 ? m.w[j] : 0.0));
+    return m;
+}
+
+// R_x, R_y from the unloaded top alone: least squares of -(R_x c^3 h_xx + R_y c h_yy) = 1 over
+// the domain's nodes with four neighbours, away from the apex ridge (15 mm) and its edges.
+std::pair<double, double> fitRadii(const cosim::ReducedBagCalibration& cal, const Eigen::MatrixXd& top,
+                                   double* rms) {
+    const double h = cal.pitch, seam = 0.5 * cal.geometry.width, a = cal.geometry.calcApexX();
+    Eigen::MatrixX2d A(0, 2);
+    std::vector<std::array<double, 2>> rows;
+    for (int ix = 1; ix + 1 < cal.nx; ++ix)
+        for (int iy = 1; iy + 1 < cal.ny; ++iy) {
+            const double x = cal.x0 + h * ix, y = cal.y0 + h * iy;
+            if (std::abs(y) + h >= seam || std::abs(x - a) < 0.015 || x - h <= 0.0 ||
+                x + h >= cal.geometry.longSide)
+                continue;
+            const double c0 = top(ix, iy), xm = top(ix - 1, iy), xp = top(ix + 1, iy),
+                         ym = top(ix, iy - 1), yp = top(ix, iy + 1);
+            if (!std::isfinite(c0 + xm + xp + ym + yp)) continue;
+            const double s = (xp - xm) / (2 * h), c = 1.0 / std::sqrt(1 + s * s);
+            rows.push_back({-std::pow(c, 3) * (xp - 2 * c0 + xm) / (h * h), -c * (yp - 2 * c0 + ym) / (h * h)});
+        }
+    A.resize(Eigen::Index(rows.size()), 2);
+    for (size_t k = 0; k < rows.size(); ++k) A(Eigen::Index(k), 0) = rows[k][0], A(Eigen::Index(k), 1) = rows[k][1];
+    const Eigen::VectorXd b = Eigen::VectorXd::Ones(A.rows());
+    const Eigen::Vector2d R = A.colPivHouseholderQr().solve(b);
+    *rms = std::sqrt((A * R - b).squaredNorm() / double(A.rows()));
+    return {R[0], R[1]};
+}
+
+
+// The membrane prototype (solveMembrane) on the calibration's spheres (4.5 g) and the
+// validation's taut shapes (4.25 and 5.25 g): the FE bag pressed once per case, then per
+// parameter set R_X,R_Y,K_R [mm] the membrane's vertical force at the FE's gas pressure and
+// poses against the FE's, beside the reduced bag's (its own gas), rms over 5-250 N.
+int membraneCases(const std::string& scenario, const std::string& calPath, int n, char** a) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const auto cal = io::readReducedBagCalibration(calPath);
+    std::vector<Case> cases = calibrationCases(spec.geometry, 4.5e-3);
+    for (const Case& c : validationCases(spec.geometry))
+        if (c.mass == 4.25e-3 || c.mass == 5.25e-3) cases.push_back(c);
+    std::vector<std::array<double, 3>> sets;
+    for (int k = 0; k < n; ++k) {
+        std::array<double, 3> v{};
+        std::sscanf(a[k], "%lf,%lf,%lf", &v[0], &v[1], &v[2]);
+        sets.push_back({v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3});
+    }
+    std::vector<double> tot2(sets.size(), 0.0), totRed2(1, 0.0);
+    int totN = 0;
+    for (const Case& c : cases) {
+        std::vector<Row> rows = press(c, spec, sc.options.contact, cal);
+        size_t k = 0;
+        while (k + 2 < cal->masses.size() && cal->masses[k + 1] < c.mass) ++k;
+        const double t = (c.mass - cal->masses[k]) / (cal->masses[k + 1] - cal->masses[k]);
+        const Eigen::MatrixXd top0 = (1 - t) * cal->top[k] + t * cal->top[k + 1];
+        std::printf("%s, %.2f g:\n  depth_mm F_FE F_red", c.name.c_str(), c.mass * 1e3);
+        for (const auto& v : sets) std::printf(" F(%.0f,%.0f,%.0f)", v[0] * 1e3, v[1] * 1e3, v[2] * 1e3);
+        std::printf("\n");
+        std::vector<double> e2(sets.size(), 0.0);
+        double eRed2 = 0.0;
+        int m = 0;
+        auto shape = makeShape(c);
+        for (const Row& r : rows) {
+            shape->setPose(pose(c, r.z));
+            std::printf("  %4.0f %6.1f %6.1f", r.depth * 1e3, r.forceFE, r.forceRed);
+            const bool in = r.forceFE >= 5.0 && r.forceFE <= 250.0;
+            for (size_t j = 0; j < sets.size(); ++j) {
+                const Membrane mb = solveMembrane(*cal, top0, Eigen::Isometry3d::Identity(),
+                                                  {shape}, r.pFE, sets[j][0], sets[j][1], sets[j][2]);
+                double f = 0.0;
+                for (Eigen::Index i = 0; i < mb.w.size(); ++i)
+                    if (mb.owner[size_t(i)] == 0 && mb.w[i] <= mb.delta[i] + 1e-9) f += mb.r[i];
+                std::printf(" %6.1f", f);
+                if (in) e2[j] += std::pow(f / r.forceFE - 1.0, 2);
+            }
+            if (in) eRed2 += std::pow(r.forceRed / r.forceFE - 1.0, 2), ++m;
+            std::printf("\n");
+        }
+        std::printf("  rms force error over %d steps: reduced %.1f %%, membrane", m,
+                    m ? 100 * std::sqrt(eRed2 / m) : 0.0);
+        for (size_t j = 0; j < sets.size(); ++j) {
+            std::printf(" %.1f %%", m ? 100 * std::sqrt(e2[j] / m) : 0.0);
+            tot2[j] += e2[j];
+        }
+        std::printf("\n");
+        totRed2[0] += eRed2, totN += m;
+        std::fflush(stdout);
+    }
+    std::printf("all cases, %d steps: reduced %.1f %%, membrane", totN, 100 * std::sqrt(totRed2[0] / totN));
+    for (size_t j = 0; j < sets.size(); ++j) std::printf(" %.1f %%", 100 * std::sqrt(tot2[j] / totN));
+    std::printf("\n");
+    return 0;
+}
+
 int feBag(const std::string& scenario, const std::string& calPath, const std::string& run,
-          int bagIndex, const std::string& segList, double t0, double t1, bool points) {
+          int bagIndex, const std::string& segList, double t0, double t1, bool points,
+          double memRx = -1.0, double memRy = -1.0, double memKr = 0.0) {
     RunReplay rr(scenario, calPath, run);
     auto& [sc, poa, model, surf, fe, frames] = rr;
     // T0 (and T1, where the points are printed) must be shape frames of the run: results.h5
@@ -1387,6 +1570,42 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
                                 f.force.y(), f.force.z());
             }
         }
+        if (memRx >= 0.0 && tk == k1) {
+            // The membrane prototype at the FE bag's gas pressure, on the top at this mass.
+            const double mass = ran[0];
+            size_t k = 0;
+            while (k + 2 < cal.masses.size() && cal.masses[k + 1] < mass) ++k;
+            const double t = std::clamp((mass - cal.masses[k]) / (cal.masses[k + 1] - cal.masses[k]), 0.0, 1.0);
+            const Eigen::MatrixXd top0 = (1 - t) * cal.top[k] + t * cal.top[k + 1];
+            double rms = 0.0;
+            const auto [fx, fy] = fitRadii(cal, top0, &rms);
+            std::printf("M unloaded top at %.3f g: R_x %.1f mm, R_y %.1f mm (rms of the fit %.2f)\n",
+                        mass * 1e3, fx * 1e3, fy * 1e3, rms);
+            const double Rx = memRx > 0 ? memRx : fx, Ry = memRy > 0 ? memRy : fy;
+            const double P = bag.getChamberState(0).gaugePressure;
+            const Membrane m = solveMembrane(cal, top0, spec.X_GB, feShapes, P, Rx, Ry, memKr);
+            Eigen::Matrix3Xd xB = spec.X_GB.inverse() * bag.getPositions();
+            const Eigen::MatrixXd hFE = columnTops(xB, bag.getMesh().tris, cal);
+            std::vector<double> fz(segs.size(), 0.0);
+            double vol = 0.0, rest = 0.0;
+            for (Eigen::Index i = 0; i < m.w.size(); ++i) {
+                vol += cal.pitch * cal.pitch * m.w[i];
+                if (m.owner[size_t(i)] >= 0 && m.w[i] <= m.delta[i] + 1e-9) fz[size_t(m.owner[size_t(i)])] += m.r[i];
+                else rest += m.r[i];
+            }
+            std::printf("M R_x %.1f mm, R_y %.1f mm, k_r %.0f mm at %.2f kPa: film volume %.0f mL; "
+                        "Fz per shape", Rx * 1e3, Ry * 1e3, memKr * 1e3, P * 1e-3, vol * 1e6);
+            for (size_t i = 0; i < segs.size(); ++i) std::printf(" %d:%.1f", segs[i], fz[i]);
+            std::printf(" (free nodes %.2g N)\n", rest);
+            std::printf("M x_mm y_mm h0_mm delta_mm w_FE_mm w_mem_mm r_mem_N owner\n");
+            for (Eigen::Index i = 0; i < m.w.size(); ++i) {
+                const int ix = m.ix[size_t(i)], iy = m.iy[size_t(i)];
+                std::printf("M %.0f %.0f %.1f %.1f %.2f %.2f %.2f %d\n", (cal.x0 + cal.pitch * ix) * 1e3,
+                            (cal.y0 + cal.pitch * iy) * 1e3, m.h0[i] * 1e3, m.delta[i] * 1e3,
+                            (m.h0[i] - hFE(ix, iy)) * 1e3, m.w[i] * 1e3, m.r[i],
+                            m.owner[size_t(i)] >= 0 ? segs[size_t(m.owner[size_t(i)])] : -1);
+            }
+        }
         double fFE = 0.0, fRed = 0.0, V = 0.0;
         std::string per;
         for (size_t i = 0; i < segs.size(); ++i) {
@@ -1427,6 +1646,12 @@ int main(int argc, char** argv) {
         if (mode == "lateral" && argc == 7)
             return lateral(argv[2], argv[3], argv[4], std::stod(argv[5]), std::stod(argv[6]));
         if (mode == "shear" && argc == 17) return shear(argv[2], argv[3], argv + 4);
+        if (mode == "membrane" && argc >= 5)
+            return membraneCases(argv[2], argv[3], argc - 4, argv + 4);
+        if (mode == "fe-bag" && argc == 13 && std::string(argv[9]) == "membrane")
+            return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
+                         std::stod(argv[7]), std::stod(argv[8]), false, std::stod(argv[10]) * 1e-3,
+                         std::stod(argv[11]) * 1e-3, std::stod(argv[12]) * 1e-3);
         if (mode == "fe-bag" && (argc == 9 || (argc == 10 && std::string(argv[9]) == "points")))
             return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
                          std::stod(argv[7]), std::stod(argv[8]), argc == 10);
