@@ -25,6 +25,13 @@
 //                                                one bag of a run alone, FE and reduced;
 //                                                points: at T1 the FE's contact nodes (N)
 //                                                and the reduced contact samples (S)
+//   bench_reduced_bag fe-bag ... T0 T1 membrane R_X R_Y K_R RAMP   (mm)
+//                                                and at T1 the membrane prototype's film
+//                                                and forces (M lines)
+//   bench_reduced_bag membrane SCENARIO CAL SET...
+//                                                the membrane prototype against the FE bag
+//                                                on the calibration and validation shapes;
+//                                                SET: R_X,R_Y,K_R[,tension|gas|film[,RAMP]]
 //
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
@@ -1246,6 +1253,23 @@ struct Membrane {
     Eigen::VectorXd h0, delta, w, r;    // unloaded top, obstacle depth, deflection [m]; r [N]
     std::vector<int> owner;             // the shape whose surface bounds the node (-1: none)
     std::vector<std::vector<std::pair<int, double>>> nb;  // neighbour (-1: the edge), k [m]
+    std::vector<int> held;              // nodes held at max(delta, 0): the apex ridge
+    /// The contact set's force: P a over the nodes of shape s whose film is within g0 of it,
+    /// weighted 1 - gap / g0 (the pressure from the gas, the extent from the film).
+    /// With R_x, R_y > 0 the pressure is P (1 + R_x c^3 s_xx + R_y c s_yy) (at least 0): the
+    /// film on the shape's own curvature (s the shape's lowest point over the node). With
+    /// ramp > 0 a node's pressure rises over its first `ramp` of depth.
+    double setForce(int s, double P, double a, double g0, double Rx = 0.0, double Ry = 0.0,
+                    double ramp = 0.0) const {
+        double f = 0.0;
+        for (Eigen::Index i = 0; i < w.size(); ++i)
+            if (owner[size_t(i)] == s)
+                f += P * a * std::clamp(1.0 - (w[i] - delta[i]) / g0, 0.0, 1.0) *
+                     (ramp > 0.0 ? std::clamp(delta[i] / ramp, 0.0, 1.0) : 1.0) *
+                     std::max(0.0, 1.0 + Rx * cx3[i] * sxx[i] + Ry * cy[i] * syy[i]);
+        return f;
+    }
+    Eigen::VectorXd sxx, syy, cx3, cy;  // the shape's curvature over the node, the slope cosines
 };
 
 Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::MatrixXd& top,
@@ -1264,6 +1288,7 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
         }
     const int n = int(m.ix.size());
     m.h0.resize(n), m.delta.setConstant(n, -1.0), m.owner.assign(size_t(n), -1), m.nb.resize(size_t(n));
+    m.sxx.setZero(n), m.syy.setZero(n), m.cx3.setOnes(n), m.cy.setOnes(n);
     auto hAt = [&](int ix, int iy) {
         return (ix >= 0 && ix < cal.nx && iy >= 0 && iy < cal.ny) ? top(ix, iy) : std::nan("");
     };
@@ -1284,8 +1309,10 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
         const double x = cal.x0 + h * ix, y = cal.y0 + h * iy;
         // The apex ridge, tied by the diaphragm: a spring to the unloaded top (k_r [m], as R;
         // its vertical force P k_r w).
-        if (ridgeK > 0.0 && std::abs(x - cal.geometry.calcApexX()) < 0.5 * h)
-            m.nb[size_t(i)].push_back({-1, ridgeK});
+        const bool ridge = std::abs(x - cal.geometry.calcApexX()) < 0.5 * h;
+        if (ridgeK > 0.0 && ridge) m.nb[size_t(i)].push_back({-1, ridgeK});
+        // k_r < 0: the ridge held where no shape presses it (w = max(delta, 0) there).
+        if (ridgeK < 0.0 && ridge) m.held.push_back(i);
         for (size_t s = 0; s < shapes.size(); ++s) {
             auto inside = [&](double z) {
                 return shapes[s]->calcSignedDistance(X_GB * Vec3(x, y, z), nullptr, nullptr) < 0.0;
@@ -1302,12 +1329,30 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
             const double d = m.h0[i] - std::max(zl, 0.0);
             if (d > m.delta[i]) m.delta[i] = d, m.owner[size_t(i)] = int(s);
         }
+        m.cx3[i] = std::pow(cx, 3), m.cy[i] = cx;
+    }
+    // The owner's surface curvature over each node, by central differences of its lowest
+    // points (0 where a neighbour is not on the same shape).
+    for (int i = 0; i < n; ++i) {
+        const int ix = m.ix[size_t(i)], iy = m.iy[size_t(i)];
+        auto zAt = [&](int jx, int jy) {
+            const int j = (jx >= 0 && jx < cal.nx && jy >= 0 && jy < cal.ny) ? index(jx, jy) : -1;
+            return (j >= 0 && m.owner[size_t(j)] == m.owner[size_t(i)]) ? m.h0[j] - m.delta[j] : std::nan("");
+        };
+        const double z0 = m.h0[i] - m.delta[i];
+        const double xx = (zAt(ix - 1, iy) - 2 * z0 + zAt(ix + 1, iy)) / (h * h);
+        const double yy = (zAt(ix, iy - 1) - 2 * z0 + zAt(ix, iy + 1)) / (h * h);
+        m.sxx[i] = std::isfinite(xx) ? xx : 0.0;
+        m.syy[i] = std::isfinite(yy) ? yy : 0.0;
     }
     // Projected successive over-relaxation on the obstacle problem.
     m.w = m.delta.cwiseMax(0.0);
+    std::vector<char> fixed(size_t(n), 0);
+    for (int i : m.held) fixed[size_t(i)] = 1;
     for (int sweep = 0; sweep < 200000; ++sweep) {
         double change = 0.0;
         for (int i = 0; i < n; ++i) {
+            if (fixed[size_t(i)]) continue;
             double num = 0.0, den = 0.0;
             for (const auto& [j, k] : m.nb[size_t(i)]) num += k * (j >= 0 ? m.w[j] : 0.0), den += k;
             const double next = std::max(m.delta[i], m.w[i] + 1.8 * (num / den - m.w[i]));
@@ -1362,11 +1407,23 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
     std::vector<Case> cases = calibrationCases(spec.geometry, 4.5e-3);
     for (const Case& c : validationCases(spec.geometry))
         if (c.mass == 4.25e-3 || c.mass == 5.25e-3) cases.push_back(c);
-    std::vector<std::array<double, 3>> sets;
+    // A set: R_X,R_Y,K_R[,FORCE[,RAMP]] (mm; FORCE: tension, the film's K w on the contact,
+    // the default; gas, P over the contact set; film, P (1 + R kappa_shape) over it).
+    struct Set {
+        double rx, ry, kr, ramp;
+        std::string force;
+    };
+    std::vector<Set> sets;
     for (int k = 0; k < n; ++k) {
-        std::array<double, 3> v{};
-        std::sscanf(a[k], "%lf,%lf,%lf", &v[0], &v[1], &v[2]);
-        sets.push_back({v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3});
+        double v[4] = {0, 0, 0, 0};
+        char f[16] = "tension";
+        const int got = std::sscanf(a[k], "%lf,%lf,%lf,%15[a-z],%lf", &v[0], &v[1], &v[2], f, &v[3]);
+        const std::string force = f;
+        if (got < 3 || (force != "tension" && force != "gas" && force != "film")) {
+            std::fprintf(stderr, "bench_reduced_bag membrane: the set '%s' is not R_X,R_Y,K_R[,tension|gas|film[,RAMP]] in mm\n", a[k]);
+            return 2;
+        }
+        sets.push_back({v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3, v[3] * 1e-3, force});
     }
     std::vector<double> tot2(sets.size(), 0.0), totRed2(1, 0.0);
     int totN = 0;
@@ -1377,7 +1434,8 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
         const double t = (c.mass - cal->masses[k]) / (cal->masses[k + 1] - cal->masses[k]);
         const Eigen::MatrixXd top0 = (1 - t) * cal->top[k] + t * cal->top[k + 1];
         std::printf("%s, %.2f g:\n  depth_mm F_FE F_red", c.name.c_str(), c.mass * 1e3);
-        for (const auto& v : sets) std::printf(" F(%.0f,%.0f,%.0f)", v[0] * 1e3, v[1] * 1e3, v[2] * 1e3);
+        for (const Set& v : sets)
+            std::printf(" F(%g,%g,%g,%s,%g)", v.rx * 1e3, v.ry * 1e3, v.kr * 1e3, v.force.c_str(), v.ramp * 1e3);
         std::printf("\n");
         std::vector<double> e2(sets.size(), 0.0);
         double eRed2 = 0.0;
@@ -1388,11 +1446,17 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
             std::printf("  %4.0f %6.1f %6.1f", r.depth * 1e3, r.forceFE, r.forceRed);
             const bool in = r.forceFE >= 5.0 && r.forceFE <= 250.0;
             for (size_t j = 0; j < sets.size(); ++j) {
+                const Set& v = sets[j];
                 const Membrane mb = solveMembrane(*cal, top0, Eigen::Isometry3d::Identity(),
-                                                  {shape}, r.pFE, sets[j][0], sets[j][1], sets[j][2]);
+                                                  {shape}, r.pFE, v.rx, v.ry, v.kr);
                 double f = 0.0;
-                for (Eigen::Index i = 0; i < mb.w.size(); ++i)
-                    if (mb.owner[size_t(i)] == 0 && mb.w[i] <= mb.delta[i] + 1e-9) f += mb.r[i];
+                if (v.force != "tension")
+                    f = mb.setForce(0, r.pFE, cal->pitch * cal->pitch, 1e-3,
+                                    v.force == "film" ? v.rx : 0.0, v.force == "film" ? v.ry : 0.0,
+                                    v.ramp);
+                else
+                    for (Eigen::Index i = 0; i < mb.w.size(); ++i)
+                        if (mb.owner[size_t(i)] == 0 && mb.w[i] <= mb.delta[i] + 1e-9) f += mb.r[i];
                 std::printf(" %6.1f", f);
                 if (in) e2[j] += std::pow(f / r.forceFE - 1.0, 2);
             }
@@ -1417,7 +1481,7 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
 
 int feBag(const std::string& scenario, const std::string& calPath, const std::string& run,
           int bagIndex, const std::string& segList, double t0, double t1, bool points,
-          double memRx = -1.0, double memRy = -1.0, double memKr = 0.0) {
+          double memRx = -1.0, double memRy = -1.0, double memKr = 0.0, double memRamp = 0.0) {
     RunReplay rr(scenario, calPath, run);
     auto& [sc, poa, model, surf, fe, frames] = rr;
     // T0 (and T1, where the points are printed) must be shape frames of the run: results.h5
@@ -1520,6 +1584,15 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
     }
     std::printf("bag %d, segments", bagIndex);
     for (int s : segs) std::printf(" %d", s);
+    for (size_t i = 0; i < segs.size(); ++i) {
+        // Each shape's pose at T1 in the bag frame: origin [mm] and its axes.
+        const Eigen::Isometry3d X = spec.X_GB.inverse() * shapePoseOf(model, surf, frames.at(k1), segs[i]);
+        const Eigen::Matrix3d R = X.linear();
+        std::printf("\n  shape %d at T1, bag frame: origin %.0f %.0f %.0f mm, axes x (%.2f %.2f %.2f) "
+                    "y (%.2f %.2f %.2f) z (%.2f %.2f %.2f)", segs[i], X.translation().x() * 1e3,
+                    X.translation().y() * 1e3, X.translation().z() * 1e3, R(0, 0), R(1, 0), R(2, 0),
+                    R(0, 1), R(1, 1), R(2, 1), R(0, 2), R(1, 2), R(2, 2));
+    }
     std::printf(
         "\ntime_s mass_g P_run_kPa F_run P_FE_kPa V_FE_L F_FE P_red_kPa F_red  "
         "per shape: segment:Fz_FE/Fz_red:Fy_FE/Fy_red\n");
@@ -1596,7 +1669,11 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
             std::printf("M R_x %.1f mm, R_y %.1f mm, k_r %.0f mm at %.2f kPa: film volume %.0f mL; "
                         "Fz per shape", Rx * 1e3, Ry * 1e3, memKr * 1e3, P * 1e-3, vol * 1e6);
             for (size_t i = 0; i < segs.size(); ++i) std::printf(" %d:%.1f", segs[i], fz[i]);
-            std::printf(" (free nodes %.2g N)\n", rest);
+            std::printf(" (free nodes %.2g N); contact set (gap to 1 mm): gas / film", rest);
+            for (size_t i = 0; i < segs.size(); ++i)
+                std::printf(" %d:%.1f/%.1f", segs[i], m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3),
+                            m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp));
+            std::printf("\n");
             std::printf("M x_mm y_mm h0_mm delta_mm w_FE_mm w_mem_mm r_mem_N owner\n");
             for (Eigen::Index i = 0; i < m.w.size(); ++i) {
                 const int ix = m.ix[size_t(i)], iy = m.iy[size_t(i)];
@@ -1648,10 +1725,11 @@ int main(int argc, char** argv) {
         if (mode == "shear" && argc == 17) return shear(argv[2], argv[3], argv + 4);
         if (mode == "membrane" && argc >= 5)
             return membraneCases(argv[2], argv[3], argc - 4, argv + 4);
-        if (mode == "fe-bag" && argc == 13 && std::string(argv[9]) == "membrane")
+        if (mode == "fe-bag" && argc == 14 && std::string(argv[9]) == "membrane")
             return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
                          std::stod(argv[7]), std::stod(argv[8]), false, std::stod(argv[10]) * 1e-3,
-                         std::stod(argv[11]) * 1e-3, std::stod(argv[12]) * 1e-3);
+                         std::stod(argv[11]) * 1e-3, std::stod(argv[12]) * 1e-3,
+                         std::stod(argv[13]) * 1e-3);
         if (mode == "fe-bag" && (argc == 9 || (argc == 10 && std::string(argv[9]) == "points")))
             return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
                          std::stod(argv[7]), std::stod(argv[8]), argc == 10);
@@ -1660,7 +1738,8 @@ int main(int argc, char** argv) {
                      "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM | "
                      "replay SCENARIO CAL RUN_DIR | lateral SCENARIO CAL RUN_DIR T0 T1 | "
                      "shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG "
-                     "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points] | section "
+                     "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points | membrane "
+                     "R_X R_Y K_R RAMP] | membrane SCENARIO CAL R_X,R_Y,K_R[,FORCE[,RAMP]]... | section "
                      "SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM\n";
         return 2;
     } catch (const io::InputError& e) {
