@@ -31,7 +31,7 @@
 //   bench_reduced_bag membrane SCENARIO CAL SET...
 //                                                the membrane prototype against the FE bag
 //                                                on the calibration and validation shapes;
-//                                                SET: R_X,R_Y,K_R[,tension|gas|film[,RAMP]]
+//                                                SET: R_X,R_Y,K_R[,tension|gas|film|shape[,RAMP]]
 //
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
@@ -1260,16 +1260,18 @@ struct Membrane {
     /// film on the shape's own curvature (s the shape's lowest point over the node). With
     /// ramp > 0 a node's pressure rises over its first `ramp` of depth.
     double setForce(int s, double P, double a, double g0, double Rx = 0.0, double Ry = 0.0,
-                    double ramp = 0.0) const {
+                    double ramp = 0.0, bool exactCurvature = false) const {
         double f = 0.0;
         for (Eigen::Index i = 0; i < w.size(); ++i)
             if (owner[size_t(i)] == s)
                 f += P * a * std::clamp(1.0 - (w[i] - delta[i]) / g0, 0.0, 1.0) *
                      (ramp > 0.0 ? std::clamp(delta[i] / ramp, 0.0, 1.0) : 1.0) *
-                     std::max(0.0, 1.0 + Rx * cx3[i] * sxx[i] + Ry * cy[i] * syy[i]);
+                     std::max(0.0, exactCurvature ? 1.0 + Rx * kx[i] + Ry * ky[i]
+                                                  : 1.0 + Rx * cx3[i] * sxx[i] + Ry * cy[i] * syy[i]);
         return f;
     }
     Eigen::VectorXd sxx, syy, cx3, cy;  // the shape's curvature over the node, the slope cosines
+    Eigen::VectorXd kx, ky;             // the shape's normal curvature along x, y (dn/dp) [1/m]
 };
 
 Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::MatrixXd& top,
@@ -1288,7 +1290,7 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
         }
     const int n = int(m.ix.size());
     m.h0.resize(n), m.delta.setConstant(n, -1.0), m.owner.assign(size_t(n), -1), m.nb.resize(size_t(n));
-    m.sxx.setZero(n), m.syy.setZero(n), m.cx3.setOnes(n), m.cy.setOnes(n);
+    m.sxx.setZero(n), m.syy.setZero(n), m.cx3.setOnes(n), m.cy.setOnes(n), m.kx.setZero(n), m.ky.setZero(n);
     auto hAt = [&](int ix, int iy) {
         return (ix >= 0 && ix < cal.nx && iy >= 0 && iy < cal.ny) ? top(ix, iy) : std::nan("");
     };
@@ -1327,7 +1329,21 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
                 }
             if (!std::isfinite(zl)) continue;
             const double d = m.h0[i] - std::max(zl, 0.0);
-            if (d > m.delta[i]) m.delta[i] = d, m.owner[size_t(i)] = int(s);
+            if (d > m.delta[i]) {
+                m.delta[i] = d, m.owner[size_t(i)] = int(s);
+                // The shape's curvature along the bag's x and y at that point: the shape
+                // operator dn/dp on the tangents of x and y (bag frame).
+                const Vec3 pG = X_GB * Vec3(x, y, zl);
+                Vec3 nG;
+                shapes[s]->calcSignedDistance(pG, nullptr, &nG);
+                const Eigen::Matrix3d S = X_GB.linear().transpose() * shapes[s]->calcNormalDerivative(pG) * X_GB.linear();
+                const Vec3 nB = X_GB.linear().transpose() * nG;
+                auto curv = [&](const Vec3& e) {
+                    const Vec3 t = (e - e.dot(nB) * nB).normalized();
+                    return t.dot(S * t);
+                };
+                m.kx[i] = curv(Vec3::UnitX()), m.ky[i] = curv(Vec3::UnitY());
+            }
         }
         m.cx3[i] = std::pow(cx, 3), m.cy[i] = cx;
     }
@@ -1408,7 +1424,9 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
     for (const Case& c : validationCases(spec.geometry))
         if (c.mass == 4.25e-3 || c.mass == 5.25e-3) cases.push_back(c);
     // A set: R_X,R_Y,K_R[,FORCE[,RAMP]] (mm; FORCE: tension, the film's K w on the contact,
-    // the default; gas, P over the contact set; film, P (1 + R kappa_shape) over it).
+    // the default; gas, P over the contact set; film, P (1 + R kappa_shape) over it with the
+    // curvature from differences of the shape's lowest points; shape, with the shape's own
+    // normal curvatures along x and y).
     struct Set {
         double rx, ry, kr, ramp;
         std::string force;
@@ -1419,8 +1437,8 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
         char f[16] = "tension";
         const int got = std::sscanf(a[k], "%lf,%lf,%lf,%15[a-z],%lf", &v[0], &v[1], &v[2], f, &v[3]);
         const std::string force = f;
-        if (got < 3 || (force != "tension" && force != "gas" && force != "film")) {
-            std::fprintf(stderr, "bench_reduced_bag membrane: the set '%s' is not R_X,R_Y,K_R[,tension|gas|film[,RAMP]] in mm\n", a[k]);
+        if (got < 3 || (force != "tension" && force != "gas" && force != "film" && force != "shape")) {
+            std::fprintf(stderr, "bench_reduced_bag membrane: the set '%s' is not R_X,R_Y,K_R[,tension|gas|film|shape[,RAMP]] in mm\n", a[k]);
             return 2;
         }
         sets.push_back({v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3, v[3] * 1e-3, force});
@@ -1452,8 +1470,8 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
                 double f = 0.0;
                 if (v.force != "tension")
                     f = mb.setForce(0, r.pFE, cal->pitch * cal->pitch, 1e-3,
-                                    v.force == "film" ? v.rx : 0.0, v.force == "film" ? v.ry : 0.0,
-                                    v.ramp);
+                                    v.force != "gas" ? v.rx : 0.0, v.force != "gas" ? v.ry : 0.0,
+                                    v.ramp, v.force == "shape");
                 else
                     for (Eigen::Index i = 0; i < mb.w.size(); ++i)
                         if (mb.owner[size_t(i)] == 0 && mb.w[i] <= mb.delta[i] + 1e-9) f += mb.r[i];
@@ -1669,10 +1687,11 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
             std::printf("M R_x %.1f mm, R_y %.1f mm, k_r %.0f mm at %.2f kPa: film volume %.0f mL; "
                         "Fz per shape", Rx * 1e3, Ry * 1e3, memKr * 1e3, P * 1e-3, vol * 1e6);
             for (size_t i = 0; i < segs.size(); ++i) std::printf(" %d:%.1f", segs[i], fz[i]);
-            std::printf(" (free nodes %.2g N); contact set (gap to 1 mm): gas / film", rest);
+            std::printf(" (free nodes %.2g N); contact set (gap to 1 mm): gas / film / shape", rest);
             for (size_t i = 0; i < segs.size(); ++i)
-                std::printf(" %d:%.1f/%.1f", segs[i], m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3),
-                            m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp));
+                std::printf(" %d:%.1f/%.1f/%.1f", segs[i], m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3),
+                            m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp),
+                            m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp, true));
             std::printf("\n");
             std::printf("M x_mm y_mm h0_mm delta_mm w_FE_mm w_mem_mm r_mem_N owner\n");
             for (Eigen::Index i = 0; i < m.w.size(); ++i) {
