@@ -614,6 +614,22 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                                   : "each bag solved alone")
                   << ")\n";
     }
+    {  // how deep a segment lies inside a film between its nodes, which the contact does not see
+        const std::vector<cosim::PassThrough> pass = cosim::calcPassThroughs(*poa);
+        const auto worst = std::max_element(
+            pass.begin(), pass.end(),
+            [](const cosim::PassThrough& a, const cosim::PassThrough& b) { return a.depth < b.depth; });
+        if (worst != pass.end() && worst->segment >= 0)
+            table << "segments lie inside a film between its nodes by at most "
+                  << fmt("%.2f mm", 1e3 * worst->depth) << " ("
+                  << body::getSegmentName(static_cast<body::Segment>(worst->segment)) << ", bag "
+                  << worst->bag << "; its nodes by " << fmt("%.2f mm", 1e3 * worst->nodeDepth) << ")"
+                  << (worst->depth > 5e-3
+                          ? ": the contact acts at the nodes and lets it through; a finer "
+                            "bag.mesh_size holds it (docs/cosim.md#shapes-between-the-films-nodes)"
+                          : "")
+                  << "\n";
+    }
     if (const double board = poa->calcBoardForce(); board > 0.0)
         table << "the bed board carries " << fmt("%.2f N", board)
               << " of him directly (pressed through slack bags or beside the array)\n";

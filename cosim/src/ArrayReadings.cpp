@@ -154,6 +154,47 @@ std::vector<double> calcPressedNodeHeights(const PatientOnArray& poa, double thr
     return out;
 }
 
+double calcFilmPassThrough(const bags::Mesh& film, const Eigen::Matrix3Xd& x,
+                           const bags::RigidShape& shape) {
+    if (x.cols() != film.getNumNodes())
+        throw std::invalid_argument("calcFilmPassThrough: positions and film differ in node count");
+    double depth = 0.0;
+    for (int t = 0; t < film.getNumTris(); ++t) {
+        const Eigen::Vector3d a = x.col(film.tris(0, t)), b = x.col(film.tris(1, t)),
+                              c = x.col(film.tris(2, t));
+        const Eigen::Vector3d centroid = (a + b + c) / 3.0;
+        // Far triangles cannot hold a point inside (the bound is at most the distance).
+        const double reach = std::max({(a - centroid).norm(), (b - centroid).norm(),
+                                       (c - centroid).norm()});
+        if (shape.calcDistanceLowerBound(centroid) > reach) continue;
+        for (const Eigen::Vector3d& p :
+             {centroid, Eigen::Vector3d(0.5 * (a + b)), Eigen::Vector3d(0.5 * (b + c)),
+              Eigen::Vector3d(0.5 * (c + a))})
+            depth = std::max(depth, -shape.calcSignedDistance(p, nullptr, nullptr));
+    }
+    return depth;
+}
+
+std::vector<PassThrough> calcPassThroughs(const PatientOnArray& poa) {
+    std::vector<PassThrough> out;
+    for (int b : poa.getBagIndices()) out.push_back(PassThrough{b, -1, 0.0});
+    const std::vector<Link>& links = poa.getLinks();
+    for (size_t i = 0; i < links.size(); ++i) {
+        const Bag& bag = poa.getBag(links[i].participant);
+        const bags::Mesh* film = bag.getFilmMesh();
+        if (!film) continue;
+        const std::shared_ptr<bags::RigidShape> shape = poa.makePairShape(int(i));
+        const Eigen::Matrix3Xd& x = bag.getPressurePoints();
+        const double d = calcFilmPassThrough(*film, x, *shape);
+        PassThrough& o = out[size_t(links[i].participant)];
+        if (!(d > o.depth)) continue;
+        o.depth = d, o.segment = poa.getPairs()[i].shape, o.nodeDepth = 0.0;
+        for (Eigen::Index n = 0; n < x.cols(); ++n)
+            o.nodeDepth = std::max(o.nodeDepth, -shape->calcSignedDistance(x.col(n), nullptr, nullptr));
+    }
+    return out;
+}
+
 void fillPressureMat(const PatientOnArray& poa, PressureMat& mat) {
     mat.clear();
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {

@@ -366,6 +366,15 @@ std::vector<double> PatientOnArray::calcNeighbourOverlaps() const {
     }
     return out;
 }
+std::shared_ptr<bags::RigidShape> PatientOnArray::makePairShape(int pair) const {
+    const Impl& m = *m_impl;
+    const int seg = m.pairs.at(size_t(pair)).shape;
+    BagShapeOfBody b = makeBagShape(m.model->getContactShape(static_cast<body::Segment>(seg)));
+    const SimTK::State& s = m.body->getState();
+    m.model->getSystem().realize(s, SimTK::Stage::Position);
+    b.shape->setPose(shapePose(*m.model, s, seg, b.X_BS));
+    return b.shape;
+}
 Coupling& PatientOnArray::updCoupling() { return *m_impl->coupling; }
 
 void PatientOnArray::saveState(bags::StateWriter& w) const {

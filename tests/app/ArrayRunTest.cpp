@@ -1,7 +1,8 @@
 // bagsim run on a patient-on-array scenario, end to end and short: the coarse supine scenario
 // released and stepped for 0.1 s. Every file is written with its columns, the run is marked
 // complete, and at every output time the regions' forces add up to the bags' (both the
-// vertical force of the bags on him; reference: the coupling's link wrenches).
+// vertical force of the bags on him; reference: the coupling's link wrenches); the summary
+// names the deepest segment between a film's nodes.
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -41,6 +42,13 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     // Every bag holds the scenario's 4.5 g (no gas command).
     const int mass = bags.column("mass_g");
     for (const auto& r : bags.rows) EXPECT_NEAR(std::stod(r.at(mass)), 4.5, 1e-6);
+    // The summary says how deep a segment lies inside a film between its nodes, naming the
+    // segment and the bag (on this 30 mm mesh a hand does).
+    std::stringstream summary;
+    summary << std::ifstream(out / "summary.txt").rdbuf();
+    EXPECT_NE(summary.str().find("segments lie inside a film between its nodes by at most "),
+              std::string::npos)
+        << summary.str();
 
     // report.html is written at the end, complete; bagsim report remakes it in place, refuses
     // to replace another existing file without --force, and refuses a folder that is no result.

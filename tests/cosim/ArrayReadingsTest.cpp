@@ -128,3 +128,32 @@ TEST(ArrayReadings, ThePatchPeakAddsTheLoadsOneDiscHolds) {
                      8.0 / area);
     EXPECT_THROW(calcPatchPeakPressure({{0, 0}}, {1.0}, 0.0), std::invalid_argument);
 }
+
+// A sphere poking up through one triangle of a flat film between its nodes: the film's
+// nodes all lie outside it (the node contact sees nothing), and the pass-through is the
+// sphere's depth at the triangle's centroid, exactly: r - |centroid - centre| (reference:
+// the sphere's signed distance, 1e-12 m). A sphere clear of the film reads 0.
+TEST(ArrayReadings, AShapeBetweenAFilmsNodesIsMeasuredAtTheTrianglesCentroid) {
+    bags::Mesh film;
+    film.X.resize(3, 4);
+    film.X << 0.0, 0.04, 0.04, 0.0,  //
+        0.0, 0.0, 0.04, 0.04,        //
+        0.0, 0.0, 0.0, 0.0;
+    film.tris.resize(3, 2);
+    film.tris << 0, 0, 1, 2, 2, 3;
+    film.triPanel = {0, 0};
+    film.panelNames = {"top"};
+    const Eigen::Vector3d centroid = (film.X.col(0) + film.X.col(1) + film.X.col(2)) / 3.0;
+    const double r = 0.012, depth = 0.004;
+    auto sphere = bags::makeEllipsoid(Eigen::Vector3d::Constant(r));
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = centroid - Eigen::Vector3d(0.0, 0.0, r - depth);  // its top 4 mm above
+    sphere->setPose(X);
+    for (int n = 0; n < 4; ++n)
+        EXPECT_GT(sphere->calcSignedDistance(film.X.col(n), nullptr, nullptr), 0.0) << n;
+    EXPECT_NEAR(calcFilmPassThrough(film, film.X, *sphere), depth, 1e-12);
+    X.translation().z() -= 0.01;
+    sphere->setPose(X);
+    EXPECT_EQ(calcFilmPassThrough(film, film.X, *sphere), 0.0);
+    EXPECT_THROW(calcFilmPassThrough(film, film.X.leftCols(3), *sphere), std::invalid_argument);
+}

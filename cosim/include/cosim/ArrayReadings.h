@@ -95,6 +95,26 @@ Eigen::Vector3d calcCentreOfMass(const PatientOnArray& poa);
 /// the board. Infinity where no node is pressed.
 std::vector<double> calcPressedNodeHeights(const PatientOnArray& poa, double threshold);
 
+/// Largest depth [m] of a film's surface inside a rigid shape between the film's nodes: minus
+/// the shape's signed distance at each triangle's centroid and edge midpoints (x: the nodes,
+/// Ground, one column per film node); 0 where none lies inside. The finite-element bag's
+/// contact acts at its nodes, so a shape narrower than about two elements can pass between
+/// them unresisted (docs/cosim.md#shapes-between-the-films-nodes).
+double calcFilmPassThrough(const bags::Mesh& film, const Eigen::Matrix3Xd& x,
+                           const bags::RigidShape& shape);
+
+/// The deepest pass-through of one coupled bag's film (calcFilmPassThrough()) by a segment.
+struct PassThrough {
+    int bag = 0;         ///< ArrayBag index
+    int segment = -1;    ///< the deepest segment (body::Segment), -1 if none passes
+    double depth = 0.0;  ///< [m]
+    /// [m] the same segment's deepest film node inside it (the contact's own penetration)
+    double nodeDepth = 0.0;
+};
+/// One per participant (getBagIndices() order) at the committed state, over the pairs;
+/// depth 0 and segment -1 for bags without a film (ReducedBag).
+std::vector<PassThrough> calcPassThroughs(const PatientOnArray& poa);
+
 /// Clears the mat and adds every coupled bag's nodal contact pressures (all shapes) to it.
 void fillPressureMat(const PatientOnArray& poa, PressureMat& mat);
 

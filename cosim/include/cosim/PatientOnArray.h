@@ -165,6 +165,9 @@ class PatientOnArray {
     /// coupled bag, per coupled bag, at the current state (calcFilmOverlap() with every bag
     /// whose nodes' bounding box meets its own); 0 for bags without a film.
     std::vector<double> calcNeighbourOverlaps() const;
+    /// Pair i's shape (getPairs()) posed where the body's segment is at the committed state:
+    /// a new shape for measurements (calcPassThroughs()); the bags' own are the coupling's.
+    std::shared_ptr<bags::RigidShape> makePairShape(int pair) const;
     Coupling& updCoupling();
 
     // --- checkpoints (bags/StateStream.h), between steps
