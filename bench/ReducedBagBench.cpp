@@ -428,10 +428,15 @@ int calibrate(const std::string& scenario, const std::string& out) {
         // tried: it picks no skirt at 20 mm, and the slack bags' force goes far wrong.
         double miss = 0.0, areaMiss = 0.0;
         int steps = 0, areaSteps = 0;
-        for (const std::vector<Row>& rows : runs)
-            for (const Row& r : rows) {
+        std::map<double, std::pair<double, int>> byRadius;  // mean ln(A_reduced / A_FE)
+        for (size_t q = 0; q < runs.size(); ++q)
+            for (const Row& r : runs[q]) {
                 if (!(r.pFE > 300.0 && r.forceFE > 5.0 && r.area > 0.0)) continue;
-                if (r.areaFE > 0.0) areaMiss += std::abs(std::log(r.area / r.areaFE)), ++areaSteps;
+                if (r.areaFE > 0.0) {
+                    areaMiss += std::abs(std::log(r.area / r.areaFE)), ++areaSteps;
+                    auto& [sum, n] = byRadius[cases[q].size.x()];
+                    sum += std::log(r.area / r.areaFE), ++n;
+                }
                 const double kappa = r.forceFE / (r.pFE * r.area);
                 // (the reduced gas taut too: its footprint scales with its own pressure)
                 if (r.forceFE < 250.0 && r.pRed > 300.0 && r.patchFE > 0.0 && r.patchRed > 0.0)
@@ -440,8 +445,11 @@ int calibrate(const std::string& scenario, const std::string& out) {
             }
         miss /= std::max(1, steps);
         areaMiss /= std::max(1, areaSteps);
-        std::printf("  %.2f: %.3f, %.3f, %.3f (%d steps, %d mass-depth cells)\n", skirt, areaMiss,
-                    miss, spread, steps, count);
+        std::printf("  %.2f: %.3f, %.3f, %.3f (%d steps, %d mass-depth cells); mean ln(A/A_FE) by "
+                    "radius:", skirt, areaMiss, miss, spread, steps, count);
+        for (const auto& [radius, sn] : byRadius)
+            std::printf(" %.0f mm %+.3f", radius * 1e3, sn.first / std::max(1, sn.second));
+        std::printf("\n");
         if (areaMiss < bestMiss)
             bestMiss = areaMiss, bestSpread = spread, bestSkirt = skirt, bestK = K, bestB = B;
     }
