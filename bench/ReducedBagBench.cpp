@@ -809,6 +809,30 @@ int footprint(const std::string& scenario, const std::string& calPath, char** a)
     const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
     const Eigen::VectorXd areas = bag.getMesh().calcNodalAreas();
     const Eigen::Matrix3Xd& x = bag.getPositions();
+    {
+        // How the FE top moved where the shape is not (its film more than 10 mm below the
+        // shape): the mean change of the column tops over each panel, steep (x < apex) and
+        // gentle, between the seams (|y| < 45 mm), per 100 N of the shape's force
+        // (docs/reduced-bag.md: a load on one panel lifts the other).
+        const Eigen::MatrixXd h0 = columnTops(pb.unloaded, bag.getMesh().tris, *cal);
+        const Eigen::MatrixXd h1 = columnTops(x, bag.getMesh().tris, *cal);
+        auto shape = makeShape(c);
+        shape->setPose(pose(c, rows.back().z));
+        double sum[2] = {0, 0};
+        int n[2] = {0, 0};
+        for (int ix = 0; ix < cal->nx; ++ix)
+            for (int iy = 0; iy < cal->ny; ++iy) {
+                const double px = cal->x0 + cal->pitch * ix, py = cal->y0 + cal->pitch * iy;
+                if (std::abs(py) > 0.045 || !std::isfinite(h0(ix, iy) + h1(ix, iy))) continue;
+                if (shape->calcSignedDistance(Vec3(px, py, h1(ix, iy)), nullptr, nullptr) < 0.01) continue;
+                const int k = px < spec.geometry.calcApexX() ? 0 : 1;
+                sum[k] += h1(ix, iy) - h0(ix, iy), ++n[k];
+            }
+        const double f = rows.back().forceFE / 100.0;
+        std::printf("# FE top away from the shape, mean change per 100 N: steep panel %+.2f mm "
+                    "(%d columns), gentle panel %+.2f mm (%d columns)\n",
+                    n[0] ? 1e3 * sum[0] / n[0] / f : 0.0, n[0], n[1] ? 1e3 * sum[1] / n[1] / f : 0.0, n[1]);
+    }
     std::printf("# FE: x_mm y_mm z_mm p_kPa area_cm2 (gas %.3f kPa, force %.2f N)\n",
                 rows.back().pFE * 1e-3, rows.back().forceFE);
     for (int n = 0; n < p.size(); ++n)
