@@ -1267,12 +1267,17 @@ int lateral(const std::string& scenario, const std::string& calPath, const std::
     return 0;
 }
 
-// One bag of a finite-element run alone, FE and reduced, along the run's poses (as replay)
-// and gas masses from T0 to T1 [s]: its shapes, or only the segments listed (body::Segment
-// indices, comma separated; "all": every one). The FE bag is inflated at T0's mass with the
-// shapes lifted 0.3 m, lowered onto T0's poses in 30 steps, then taken frame by frame (its
-// gas changed, then the shapes moved).
-// A membrane footprint (prototype, docs/reduced-bag.md#a-membrane-footprint-measured-against-the-fe-bag):
+// The calibration's unloaded top at a gas mass: linear between the two nearest masses
+// (held at the ends).
+Eigen::MatrixXd topAtMass(const cosim::ReducedBagCalibration& cal, double mass) {
+    size_t k = 0;
+    while (k + 2 < cal.masses.size() && cal.masses[k + 1] < mass) ++k;
+    const double t =
+        std::clamp((mass - cal.masses[k]) / (cal.masses[k + 1] - cal.masses[k]), 0.0, 1.0);
+    return (1 - t) * cal.top[k] + t * cal.top[k + 1];
+}
+
+// A membrane footprint (prototype, docs/reduced-bag.md#a-membrane-footprint-measured-and-not-kept):
 // the top panels between the seams (|y| < 50 mm, 0 < x < 350 mm) as a membrane of tension
 // P R_x along the profile and P R_y across, on the calibration's grid, deflected down by w
 // from the unloaded top (w = 0 at the seams and the base's edges), kept below the shapes:
@@ -1479,10 +1484,7 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
     int totN = 0;
     for (const Case& c : cases) {
         std::vector<Row> rows = press(c, spec, sc.options.contact, cal);
-        size_t k = 0;
-        while (k + 2 < cal->masses.size() && cal->masses[k + 1] < c.mass) ++k;
-        const double t = (c.mass - cal->masses[k]) / (cal->masses[k + 1] - cal->masses[k]);
-        const Eigen::MatrixXd top0 = (1 - t) * cal->top[k] + t * cal->top[k + 1];
+        const Eigen::MatrixXd top0 = topAtMass(*cal, c.mass);
         std::printf("%s, %.2f g:\n  depth_mm F_FE F_red", c.name.c_str(), c.mass * 1e3);
         for (const Set& v : sets)
             std::printf(" F(%g,%g,%g,%s,%g)", v.rx * 1e3, v.ry * 1e3, v.kr * 1e3, v.force.c_str(), v.ramp * 1e3);
@@ -1529,6 +1531,11 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
     return 0;
 }
 
+// One bag of a finite-element run alone, FE and reduced, along the run's poses (as replay)
+// and gas masses from T0 to T1 [s]: its shapes, or only the segments listed (body::Segment
+// indices, comma separated; "all": every one). The FE bag is inflated at T0's mass with the
+// shapes lifted 0.3 m, lowered onto T0's poses in 30 steps, then taken frame by frame (its
+// gas changed, then the shapes moved).
 int feBag(const std::string& scenario, const std::string& calPath, const std::string& run,
           int bagIndex, const std::string& segList, double t0, double t1, bool points,
           double memRx = -1.0, double memRy = -1.0, double memKr = 0.0, double memRamp = 0.0) {
@@ -1696,10 +1703,7 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
         if (memRx >= 0.0 && tk == k1) {
             // The membrane prototype at the FE bag's gas pressure, on the top at this mass.
             const double mass = ran[0];
-            size_t k = 0;
-            while (k + 2 < cal.masses.size() && cal.masses[k + 1] < mass) ++k;
-            const double t = std::clamp((mass - cal.masses[k]) / (cal.masses[k + 1] - cal.masses[k]), 0.0, 1.0);
-            const Eigen::MatrixXd top0 = (1 - t) * cal.top[k] + t * cal.top[k + 1];
+            const Eigen::MatrixXd top0 = topAtMass(cal, mass);
             double rms = 0.0;
             const auto [fx, fy] = fitRadii(cal, top0, &rms);
             std::printf("M unloaded top at %.3f g: R_x %.1f mm, R_y %.1f mm (rms of the fit %.2f)\n",
