@@ -792,6 +792,75 @@ int section(const std::string& scenario, char** a) {
     return 0;
 }
 
+// How the FE top moved where the shape is not (its film more than 10 mm below the shape): the
+// mean change of the column tops over each panel, steep (x < apex) and gentle, between the
+// seams (|y| < 45 mm), per newton of the shape's force [m/N] (docs/reduced-bag.md#a-load-on-
+// one-panel-lifts-the-other).
+std::array<double, 2> measurePanelChange(const Case& c, const PressedBag& pb,
+                                         const cosim::ReducedBagCalibration& cal,
+                                         const bags::DoubleWedgeParams& g) {
+    const Eigen::MatrixXd h0 = columnTops(pb.unloaded, pb.bag->getMesh().tris, cal);
+    const Eigen::MatrixXd h1 = columnTops(pb.bag->getPositions(), pb.bag->getMesh().tris, cal);
+    auto shape = makeShape(c);
+    shape->setPose(pose(c, pb.rows.back().z));
+    double sum[2] = {0, 0};
+    int n[2] = {0, 0};
+    for (int ix = 0; ix < cal.nx; ++ix)
+        for (int iy = 0; iy < cal.ny; ++iy) {
+            const double px = cal.x0 + cal.pitch * ix, py = cal.y0 + cal.pitch * iy;
+            if (std::abs(py) > 0.045 || !std::isfinite(h0(ix, iy) + h1(ix, iy))) continue;
+            if (shape->calcSignedDistance(Vec3(px, py, h1(ix, iy)), nullptr, nullptr) < 0.01) continue;
+            const int k = px < g.calcApexX() ? 0 : 1;
+            sum[k] += h1(ix, iy) - h0(ix, iy), ++n[k];
+        }
+    const double f = pb.rows.back().forceFE;
+    return {n[0] ? sum[0] / n[0] / f : 0.0, n[1] ? sum[1] / n[1] / f : 0.0};
+}
+
+// The panel coupling's coefficients from FE presses (docs/reduced-bag.md#a-load-on-one-panel-
+// lifts-the-other): a 100 mm sphere on each panel's middle and a 120 x 90 x 80 mm ellipsoid on
+// the gentle one, 4.5 g, pressed 20 mm from touch; the sink is the mean fall of the pressed
+// panel's top per newton, the lift the mean rise of the other's. Writes CAL_IN with them as
+// CAL_OUT.
+int panels(const std::string& scenario, const std::string& calIn, const std::string& calOut) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    auto cal = std::make_shared<cosim::ReducedBagCalibration>(*io::readReducedBagCalibration(calIn));
+    const bags::DoubleWedgeParams& g = spec.geometry;
+    const double apex = g.calcApexX(), travel = 0.02;
+    std::vector<Case> cases;
+    auto add = [&](const char* name, const char* kind, const Vec3& size, double x) {
+        Case c;
+        c.name = name, c.kind = kind, c.size = size, c.x = x, c.mass = 4.5e-3, c.maxDepth = travel;
+        cases.push_back(c);
+    };
+    add("sphere 100 mm, steep", "sphere", Vec3::Constant(0.1), 0.5 * apex);
+    add("sphere 100 mm, gentle", "sphere", Vec3::Constant(0.1), apex + 0.5 * (g.longSide - apex));
+    add("ellipsoid 120x90x80, gentle", "ellipsoid", Vec3(0.12, 0.09, 0.08),
+        apex + 0.5 * (g.longSide - apex));
+    double sink = 0.0, lift = 0.0;
+    for (const Case& c : cases) {
+        PressedBag pb;
+        if (!pressAndKeep(c, spec, sc.options.contact, travel, pb)) return 1;
+        const std::array<double, 2> m = measurePanelChange(c, pb, *cal, g);
+        const int own = c.x < apex ? 0 : 1;
+        std::printf("%-28s force %6.1f N: own panel %+.2f mm, other %+.2f mm per 100 N\n",
+                    c.name.c_str(), pb.rows.back().forceFE, 1e5 * m[own], 1e5 * m[1 - own]);
+        sink += -m[own] / cases.size(), lift += m[1 - own] / cases.size();
+    }
+    cal->panelSink = std::max(0.0, sink), cal->panelLift = std::max(0.0, lift);
+    cal->source += "\npanel coupling: bench_reduced_bag panels " + scenario + " " + calIn + " " +
+                   calOut + " (commit " + shell("git rev-parse --short HEAD 2>/dev/null") +
+                   "): sink " + std::to_string(cal->panelSink * 1e5) + " mm, lift " +
+                   std::to_string(cal->panelLift * 1e5) + " mm per 100 N";
+    cal->validate();
+    io::writeReducedBagCalibration(calOut, *cal);
+    std::printf("sink %.3f mm, lift %.3f mm per 100 N -> %s\n", 1e5 * cal->panelSink,
+                1e5 * cal->panelLift, calOut.c_str());
+    return 0;
+}
+
 // One case at one travel: every FE node and reduced grid point that carries contact pressure
 // (position in the bag frame, pressure, area), to compare where each puts its pressure.
 int footprint(const std::string& scenario, const std::string& calPath, char** a) {
@@ -810,28 +879,9 @@ int footprint(const std::string& scenario, const std::string& calPath, char** a)
     const Eigen::VectorXd areas = bag.getMesh().calcNodalAreas();
     const Eigen::Matrix3Xd& x = bag.getPositions();
     {
-        // How the FE top moved where the shape is not (its film more than 10 mm below the
-        // shape): the mean change of the column tops over each panel, steep (x < apex) and
-        // gentle, between the seams (|y| < 45 mm), per 100 N of the shape's force
-        // (docs/reduced-bag.md: a load on one panel lifts the other).
-        const Eigen::MatrixXd h0 = columnTops(pb.unloaded, bag.getMesh().tris, *cal);
-        const Eigen::MatrixXd h1 = columnTops(x, bag.getMesh().tris, *cal);
-        auto shape = makeShape(c);
-        shape->setPose(pose(c, rows.back().z));
-        double sum[2] = {0, 0};
-        int n[2] = {0, 0};
-        for (int ix = 0; ix < cal->nx; ++ix)
-            for (int iy = 0; iy < cal->ny; ++iy) {
-                const double px = cal->x0 + cal->pitch * ix, py = cal->y0 + cal->pitch * iy;
-                if (std::abs(py) > 0.045 || !std::isfinite(h0(ix, iy) + h1(ix, iy))) continue;
-                if (shape->calcSignedDistance(Vec3(px, py, h1(ix, iy)), nullptr, nullptr) < 0.01) continue;
-                const int k = px < spec.geometry.calcApexX() ? 0 : 1;
-                sum[k] += h1(ix, iy) - h0(ix, iy), ++n[k];
-            }
-        const double f = rows.back().forceFE / 100.0;
-        std::printf("# FE top away from the shape, mean change per 100 N: steep panel %+.2f mm "
-                    "(%d columns), gentle panel %+.2f mm (%d columns)\n",
-                    n[0] ? 1e3 * sum[0] / n[0] / f : 0.0, n[0], n[1] ? 1e3 * sum[1] / n[1] / f : 0.0, n[1]);
+        const std::array<double, 2> m = measurePanelChange(c, pb, *cal, spec.geometry);
+        std::printf("# FE top away from the shape, mean change per 100 N: steep panel %+.2f mm, "
+                    "gentle panel %+.2f mm\n", 1e5 * m[0], 1e5 * m[1]);
     }
     std::printf("# FE: x_mm y_mm z_mm p_kPa area_cm2 (gas %.3f kPa, force %.2f N)\n",
                 rows.back().pFE * 1e-3, rows.back().forceFE);
@@ -1774,6 +1824,7 @@ int main(int argc, char** argv) {
         if (mode == "trace" && argc == 12) return trace(argv[2], argv[3], argv + 4);
         if (mode == "footprint" && argc == 13) return footprint(argv[2], argv[3], argv + 4);
         if (mode == "section" && argc == 13) return section(argv[2], argv + 3);
+        if (mode == "panels" && argc == 5) return panels(argv[2], argv[3], argv[4]);
         if (mode == "replay" && argc == 5) return replay(argv[2], argv[3], argv[4]);
         if (mode == "lateral" && argc == 7)
             return lateral(argv[2], argv[3], argv[4], std::stod(argv[5]), std::stod(argv[6]));
@@ -1795,7 +1846,8 @@ int main(int argc, char** argv) {
                      "shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG "
                      "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points | membrane "
                      "R_X R_Y K_R RAMP] | membrane SCENARIO CAL R_X,R_Y,K_R[,FORCE[,RAMP]]... | section "
-                     "SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM\n";
+                     "SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM | panels "
+                     "SCENARIO CAL_IN CAL_OUT\n";
         return 2;
     } catch (const io::InputError& e) {
         std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";

@@ -79,6 +79,10 @@ void ReducedBagCalibration::validate() const {
         fail("board penalty and rim width must be > 0, skirt in [0, 10]");
     if (!(depthMax > 0.0) || !(radiusMin > 0.0) || !(radiusMax >= radiusMin) || !(tiltMax > 0.0))
         fail("envelope: depth, radii and tilt must be positive, radii ordered");
+    if (!(panelSink >= 0.0 && panelSink < 1e-3) || !(panelLift >= 0.0 && panelLift < 1e-3) ||
+        !(panelBlend > 0.0 && panelBlend < geometry.longSide))
+        fail("panel coupling: sink and lift must be in [0, 1e-3) m/N, the blend in (0, the long "
+             "side)");
 }
 
 void ReducedBagFriction::validate() const {
@@ -104,6 +108,12 @@ ReducedBag::ReducedBag(std::shared_ptr<const ReducedBagCalibration> calibration,
             for (const Eigen::MatrixXd& t : c.top) ok = ok && std::isfinite(t(ix, iy));
             if (ok) m_gridIndex.push_back(ix + c.nx * iy);
         }
+    // The coupling's panels: steep below the apex's x, blended across the ridge.
+    const double apex = c.geometry.calcApexX();
+    for (int g : m_gridIndex) {
+        const double x = c.x0 + c.pitch * (g % c.nx);
+        m_steep.push_back(smoothstep((apex + c.panelBlend - x) / (2.0 * c.panelBlend), nullptr));
+    }
     // The taut unloaded states give V_free(P) (the slack ones carry no pressure).
     for (size_t i = 0; i < c.masses.size(); ++i)
         if (c.gaugePressures[i] > 200.0 &&
@@ -627,6 +637,7 @@ void ReducedBag::evaluate() {
     }
     shareFilm(top);
     m_cur.pressure = solvePressure(m_displaced, &m_dPdV);
+    coupleThePanels();
     const double P = m_cur.pressure;
     for (size_t s = 0; s < m_shapes.size(); ++s) {
         ShapeResult& r = m_results[s];
@@ -694,6 +705,60 @@ void ReducedBag::shareFilm(const Eigen::Matrix3Xd& top) {
     }
 }
 
+void ReducedBag::coupleThePanels() {
+    // A load on one panel sinks that panel's top beyond the contact and lifts the other's
+    // (the FE bag's film keeps its length; docs/reduced-bag.md#a-load-on-one-panel-lifts-the-
+    // other). Each shape sees the top moved by the other shapes' gas loads under the unloaded
+    // top (its own is in the calibration's single shapes), so at its sample i the top rises by
+    //   shift_i = st_i (-sink L_st + lift L_ge) + (1 - st_i) (lift L_st - sink L_ge),
+    // st_i the point's steep share and L the others' loads per panel; its depth there becomes
+    // delta0 - (n.e) shift. The loads are kappa P w times the film's area, so d shift / dP =
+    // shift / P with the poses held.
+    const ReducedBagCalibration& c = *m_cal;
+    const double a = c.pitch * c.pitch, P = m_cur.pressure;
+    const bool on = (c.panelSink > 0.0 || c.panelLift > 0.0) && m_results.size() > 1 && P > 0.0;
+    std::array<double, 2> total{};
+    for (ShapeResult& r : m_results) {
+        r.depth0 = r.depth, r.depth0Sum1 = r.depthSum1, r.depth0Sum2 = r.depthSum2;
+        r.panelLoad = {}, r.dPanelLoad = {};
+        const double kappa = on ? lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr) : 0.0;
+        for (Sample& smp : r.samples) {
+            smp.delta0 = smp.delta, smp.shift = 0.0, smp.dShift = 0.0;
+            if (!on) continue;
+            const double q = smp.blend * smp.film * a * kappa * P *
+                             calcWeight(smp.delta, r.depth, nullptr, nullptr);
+            r.panelLoad[0] += q * m_steep[smp.point];
+            r.panelLoad[1] += q * (1.0 - m_steep[smp.point]);
+        }
+        for (int k = 0; k < 2; ++k) r.dPanelLoad[k] = on ? r.panelLoad[k] / P : 0.0, total[k] += r.panelLoad[k];
+    }
+    if (!on) return;
+    const Vec3 e = m_X_GB.linear().col(2);
+    for (ShapeResult& r : m_results) {
+        const double Ls = total[0] - r.panelLoad[0], Lg = total[1] - r.panelLoad[1];
+        double s1 = 0.0, s2 = 0.0;
+        for (Sample& smp : r.samples) {
+            const double st = m_steep[smp.point];
+            smp.shift = st * (-c.panelSink * Ls + c.panelLift * Lg) +
+                        (1.0 - st) * (c.panelLift * Ls - c.panelSink * Lg);
+            smp.dShift = smp.shift / P;
+            smp.delta = smp.delta0 - smp.n.dot(e) * smp.shift;
+            if (smp.delta > 0.0) {
+                s1 += a * smp.blend * smp.delta;
+                s2 += a * smp.blend * smp.delta * smp.delta;
+            }
+        }
+        r.depthSum1 = s1, r.depthSum2 = s2;
+        r.depth = s1 > 0.0 ? s2 / s1 : 0.0;
+        r.deepest = -1, r.area = 0.0;
+        for (size_t k = 0; k < r.samples.size(); ++k) {
+            const Sample& smp = r.samples[k];
+            if (r.deepest < 0 || smp.delta > r.samples[r.deepest].delta) r.deepest = int(k);
+            r.area += a * smp.blend * calcWeight(smp.delta, r.depth, nullptr, nullptr);
+        }
+    }
+}
+
 double ReducedBag::calcBoardPressure(const Vec3& p) const {
     return m_cal->boardPenalty * std::max(0.0, -(m_X_BG * p).z());
 }
@@ -750,6 +815,7 @@ std::vector<ReducedBag::SampleForce> ReducedBag::getSampleForces(int shape) cons
                                        interpolateTop(smp.point, m_cur.mass));
         f.column = (smp.t - top).norm() > 1e-12;
         f.delta = smp.delta, f.blend = smp.blend, f.film = smp.film, f.c = smp.c, f.n = smp.n;
+        f.shift = smp.shift;
         f.gasPressure = kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr);
         f.boardPressure = calcBoardPressure(smp.c);
         const double gs = std::max(-smp.n.z(), kMinSlope);
@@ -798,15 +864,19 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
 
     double dKappa = 0.0, dBeta = 0.0;
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, &dKappa);
-    const double beta = lookup(c.volumeFactor, m_cur.mass, r.depth, &dBeta);
-    Row6 dDepth = Row6::Zero();
-    // The depth s2 / s1 over delta > 0 (the blend b held).
-    const double s1 = r.depthSum1, s2 = r.depthSum2;
-    for (const Sample& smp : r.samples) {
-        if (!(smp.delta > 0.0)) continue;
-        const Row6 dDelta = smp.n.transpose() * jacobian(smp.t);
-        dDepth += a * smp.blend * (2.0 * smp.delta * s1 - s2) / (s1 * s1) * dDelta;
-    }
+    const double beta = lookup(c.volumeFactor, m_cur.mass, r.depth0, &dBeta);
+    // The depth s2 / s1 over delta > 0 (the blend b held), of the given depths' derivatives.
+    auto calcDepthDerivative = [&](double s1, double s2, auto deltaOf, auto dDeltaOf) {
+        Row6 dDepth = Row6::Zero();
+        for (const Sample& smp : r.samples)
+            if (deltaOf(smp) > 0.0)
+                dDepth += a * smp.blend * (2.0 * deltaOf(smp) * s1 - s2) / (s1 * s1) * dDeltaOf(smp);
+        return dDepth;
+    };
+    // Under the unloaded top (the displaced volume's beta reads it).
+    const Row6 dDepth0 = calcDepthDerivative(
+        r.depth0Sum1, r.depth0Sum2, [](const Sample& smp) { return smp.delta0; },
+        [&](const Sample& smp) -> Row6 { return smp.n.transpose() * jacobian(smp.t); });
     // V_s = sum a (z_hi - z_lo) over the chords: a surface end moves along the fixed column by
     // dz = n.v / n.e (e up); the top point and the board stay.
     const Vec3 e = m_X_GB.linear().col(2);
@@ -825,15 +895,29 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
         const Row6 dU = (ch.hiBounds ? dHi : Row6::Zero()) - (ch.loBounds ? dLo : Row6::Zero());
         dVd += a * (beta * ch.share * dl + ch.betaSum / ch.sum * (dU - ch.share * dl));
     }
-    const Row6 dP = m_dPdV * (dVd + r.volume * dBeta * dDepth);
+    const Row6 dP = m_dPdV * (dVd + r.volume * dBeta * dDepth0);
+    // Under the top the other shapes' loads moved (the panel coupling): delta = delta0 - (n.e)
+    // shift, the shift following the gas pressure (their poses held).
+    auto dDeltaOf = [&](const Sample& smp) -> Row6 {
+        const Mat36 J = jacobian(smp.t);
+        Row6 d = smp.n.transpose() * J;
+        if (smp.shift != 0.0 || smp.dShift != 0.0) {
+            const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
+            d -= smp.shift * (e.transpose() * dn) + smp.n.dot(e) * smp.dShift * dP;
+        }
+        return d;
+    };
+    const Row6 dDepth = calcDepthDerivative(
+        r.depthSum1, r.depthSum2, [](const Sample& smp) { return smp.delta; }, dDeltaOf);
     const Row6 dK = dKappa * dDepth;
 
     Mat6 T = Mat6::Zero();
     for (const Sample& smp : r.samples) {
         const Mat36 J = jacobian(smp.t);
-        const Row6 dDelta = smp.n.transpose() * J;
+        const Row6 dDelta0 = smp.n.transpose() * J;
+        const Row6 dDelta = dDeltaOf(smp);
         const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
-        const Mat36 dc = smp.n * dDelta + smp.delta * dn;
+        const Mat36 dc = smp.n * dDelta0 + smp.delta0 * dn;
         double dwDelta = 0.0, dwDepth = 0.0;
         const double w = calcWeight(smp.delta, r.depth, &dwDelta, &dwDepth);
         Row6 dq = kappa * w * dP + P * w * dK + kappa * P * (dwDelta * dDelta + dwDepth * dDepth);

@@ -99,6 +99,11 @@ std::shared_ptr<const cosim::ReducedBagCalibration> readReducedBagCalibration(
             c->rimWidth = numbers(r, rec, in, 1)[0];
         } else if (rec == "skirt") {
             c->skirt = numbers(r, rec, in, 1)[0];
+        } else if (rec == "panel_coupling") {
+            const std::vector<double> v = numbers(r, rec, in, 3);
+            c->panelSink = v[0], c->panelLift = v[1], c->panelBlend = v[2];
+            if (!(v[0] >= 0.0 && v[0] < 1e-3 && v[1] >= 0.0 && v[1] < 1e-3 && v[2] > 0.0))
+                r.fail(rec, "sink and lift [m/N] must be in [0, 1e-3), the blend [m] > 0");
         } else if (rec == "grid") {
             const std::vector<double> v = numbers(r, rec, in, 5);
             c->nx = int(v[0]), c->ny = int(v[1]), c->x0 = v[2], c->y0 = v[3], c->pitch = v[4];
@@ -141,7 +146,7 @@ std::shared_ptr<const cosim::ReducedBagCalibration> readReducedBagCalibration(
         } else {
             r.fail(rec,
                    "unknown record; valid: source, geometry, gas, board_penalty, rim_width, skirt, "
-                   "grid, depths, mass, top, pressure_factor, volume_factor, envelope");
+                   "panel_coupling, grid, depths, mass, top, pressure_factor, volume_factor, envelope");
         }
     }
     r.line = 0;
@@ -221,7 +226,10 @@ void writeReducedBagCalibration(const std::string& path, const cosim::ReducedBag
       << "gas " << c.gasConstant << " " << c.temperature << " " << c.ambientPressure << "\n"
       << "board_penalty " << c.boardPenalty << "\n"
       << "rim_width " << c.rimWidth << "\n"
-      << "skirt " << c.skirt << "\n"
+      << "skirt " << c.skirt << "\n";
+    if (c.panelSink > 0.0 || c.panelLift > 0.0)
+        f << "panel_coupling " << c.panelSink << " " << c.panelLift << " " << c.panelBlend << "\n";
+    f
       << "envelope " << c.depthMax << " " << c.radiusMin << " " << c.radiusMax << " " << c.tiltMax
       << "\n"
       << "grid " << c.nx << " " << c.ny << " " << c.x0 << " " << c.y0 << " " << c.pitch << "\n"

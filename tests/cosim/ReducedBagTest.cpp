@@ -119,9 +119,11 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
     // factors that vary with depth and mass, a skirt, a tilted ellipsoid off centre 12 mm
     // deep; a second case, a lower top, presses it 45 mm, through the bed board (the film's
     // penalty); a third as the first with the other shape pressed into the same columns
-    // (their common volume is displaced once: the union of their chords).
-    for (double depth : {0.012, 0.045, 0.0121}) {
-        const bool share = depth == 0.0121;
+    // (their common volume is displaced once: the union of their chords); a fourth as the
+    // first with the panel coupling on (the ridge through the ellipsoid's contact, the
+    // sphere's load moving its top by millimetres, through the gas pressure too).
+    for (double depth : {0.012, 0.045, 0.0121, 0.0122}) {
+        const bool share = depth == 0.0121, coupled = depth == 0.0122;
         const double h = depth < 0.02 ? 0.06 : 0.03;
         auto cal = makeCalibration(2e-3, [h](double x, double y, double m) {
             return h + 4.0 * (m - 3e-3) - 0.8 * x * x - 2.0 * y * y + 0.05 * x;
@@ -133,6 +135,10 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
             }
         cal->boardPenalty = 1e6;
         cal->skirt = 0.5;
+        if (coupled) {
+            cal->geometry.shortSide = 0.1505;  // the apex at x = 12.2 mm (bag frame)
+            cal->panelSink = 3e-4, cal->panelLift = 2e-4, cal->panelBlend = 0.02;
+        }
         ReducedBag bag(cal, Eigen::Isometry3d(Eigen::Translation3d(0.01, 0.0, 0.0)));
         const Eigen::Vector3d semi =
             depth < 0.02 ? Eigen::Vector3d(0.08, 0.05, 0.04) : Eigen::Vector3d(0.15, 0.10, 0.08);
@@ -167,6 +173,13 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
             for (const ReducedBag::SampleForce& f : bag.getSampleForces(0))
                 partial += f.film > 0.05 && f.film < 0.95;
             EXPECT_GE(partial, 2);
+        }
+        if (coupled) {  // the top moved under it by millimetres, up and down
+            double up = 0.0, down = 0.0;
+            for (const ReducedBag::SampleForce& f : bag.getSampleForces(0))
+                up = std::max(up, f.shift), down = std::min(down, f.shift);
+            EXPECT_GT(up, 1e-3);
+            EXPECT_LT(down, -1e-3);
         }
         if (depth > 0.02) {  // its underside is below the board: the penalty acts
             ASSERT_LT(bag.getPressurePoints().row(2).minCoeff(), -1e-3);

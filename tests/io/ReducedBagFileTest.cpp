@@ -72,6 +72,15 @@ TEST(ReducedBagFile, AWrittenCalibrationReadsBackTheSame) {
     EXPECT_DOUBLE_EQ(r->pressureFactor(2, 1), 1.5);
     EXPECT_TRUE(std::isnan(r->top[1](1, 1)));
     EXPECT_NEAR(r->top[2](0, 0), 0.12, 1e-6);
+    EXPECT_EQ(r->panelSink, 0.0);  // no record: the panel coupling off
+    // With the panel coupling, its record comes back to the digit written.
+    cosim::ReducedBagCalibration coupled = small();
+    coupled.panelSink = 1.057612147e-05, coupled.panelLift = 6.080769544e-06, coupled.panelBlend = 0.02;
+    io::writeReducedBagCalibration(path, coupled);
+    const auto rc = io::readReducedBagCalibration(path);
+    EXPECT_DOUBLE_EQ(rc->panelSink, 1.057612147e-05);
+    EXPECT_DOUBLE_EQ(rc->panelLift, 6.080769544e-06);
+    EXPECT_DOUBLE_EQ(rc->panelBlend, 0.02);
     std::remove(path.c_str());
 }
 
@@ -98,6 +107,10 @@ TEST(ReducedBagFile, BadRecordsAndNumbersAreLocated) {
     const io::InputError e2 = withLine("skirt 0.5", "skirt 0.5x");
     EXPECT_EQ(e2.getKey(), "skirt");
     EXPECT_NE(std::string(e2.what()).find("\"0.5x\" is not a number"), std::string::npos);
+    const io::InputError e6 = withLine("skirt 0.5", "skirt 0.5\npanel_coupling 1e-5 -6e-6 0.02");
+    EXPECT_EQ(e6.getKey(), "panel_coupling");
+    EXPECT_EQ(e6.getLine(), 10);
+    EXPECT_NE(std::string(e6.what()).find("[0, 1e-3)"), std::string::npos);
     const io::InputError e3 = withLine("depths 0 0.01 0.03", "depths 0 0.03 0.01");
     EXPECT_NE(std::string(e3.what()).find("ascending"), std::string::npos);
     // A calibration of format 1 (its volume factors belong to the overlap volume before

@@ -72,6 +72,12 @@ struct ReducedBagCalibration {
     double radiusMin = 0.05;  ///< [m] least curvature radius of the calibration's shapes
     double radiusMax = 0.2;   ///< [m] largest
     double tiltMax = 0.5;     ///< [rad] largest angle of the contact normal from vertical
+    /// The panel coupling (docs/reduced-bag.md#a-load-on-one-panel-lifts-the-other): the other
+    /// shapes' loads on the bag move a shape's top, per newton of load on a panel, down by
+    /// panelSink [m/N] on that panel and up by panelLift [m/N] on the other one. A grid point's
+    /// and a load's panel: the steep one at x < the apex's, blended over +-panelBlend [m]
+    /// across the ridge. 0 and 0: off (a calibration without the record).
+    double panelSink = 0.0, panelLift = 0.0, panelBlend = 0.02;
     /// @throws std::invalid_argument naming the member if sizes or values do not fit.
     void validate() const;
 };
@@ -154,7 +160,7 @@ class ReducedBag : public Bag {
     double getContactArea(int shape) const;
     /// One contact sample's share of a shape's wrench (current state), for diagnostics
     /// (bench_reduced_bag lateral): its grid point, whether it is a column sample (the film
-    /// under a sunk shape), its depth, blend, share of the column's film, pressures [Pa] (the
+    /// under a sunk shape), its depth (under the top the panel coupling moved), blend, share of the column's film, pressures [Pa] (the
     /// gas's kappa P w and the board's), contact point, normal and force [N] (Ground). They add
     /// up to calcWrench() less the friction force (getFrictionForce(), applied at the stick
     /// spring's point).
@@ -163,6 +169,7 @@ class ReducedBag : public Bag {
         bool column = false;
         double delta = 0.0, blend = 0.0, gasPressure = 0.0, boardPressure = 0.0;
         double film = 1.0;  // the shape's share of the column's film (1 alone there)
+        double shift = 0.0;  // the top's rise there by the other shapes' loads [m] (coupling)
         Vec3 c = Vec3::Zero(), n = Vec3::Zero(), force = Vec3::Zero();
     };
     std::vector<SampleForce> getSampleForces(int shape) const;
@@ -184,6 +191,10 @@ class ReducedBag : public Bag {
         // and its derivative in this shape's pose (the others held).
         double film = 1.0;
         Eigen::Matrix<double, 1, 6> dFilm = Eigen::Matrix<double, 1, 6>::Zero();
+        // The panel coupling: delta0 the depth under the unloaded top (delta = delta0 - (n.e)
+        // shift with it), shift [m] the top's rise here by the other shapes' loads, dShift its
+        // derivative in the gas pressure [m/Pa] (their poses held).
+        double delta0 = 0.0, shift = 0.0, dShift = 0.0;
     };
     // One grid column through one shape: the part of the vertical line through the top point
     // that lies inside the shape, below the top and above the bed board (its length is the
@@ -207,6 +218,11 @@ class ReducedBag : public Bag {
         std::vector<Chord> chords;
         double volume = 0.0, depth = 0.0, area = 0.0;
         double depthSum1 = 0.0, depthSum2 = 0.0;  // sum a b delta, sum a b delta^2
+        // The same under the unloaded top (delta0): the depth the displaced volume's beta reads.
+        double depth0 = 0.0, depth0Sum1 = 0.0, depth0Sum2 = 0.0;
+        // The load sum a b film q on the steep and the gentle panel [N] under the unloaded top,
+        // and its derivative in the gas pressure [N/Pa] (the panel coupling's source).
+        std::array<double, 2> panelLoad{}, dPanelLoad{};
         int deepest = -1;  // sample index
         ShapeWrench wrench;
         // Friction (with the committed anchor): the normal force F_n (before friction), the
@@ -240,6 +256,9 @@ class ReducedBag : public Bag {
     double calcBoardPressure(const Vec3& p) const;  // the board's penalty pressure at p [Pa]
     void buildFootprint(const Eigen::Matrix3Xd& top);  // m_points, m_areas from the samples
     void shareFilm(const Eigen::Matrix3Xd& top);  // each sample's film share (evaluate)
+    /// The panel coupling (evaluate, after the gas): each shape's depths under the top moved
+    /// by the other shapes' loads; its depth, deepest sample and area again.
+    void coupleThePanels();
     double calcFreeVolume(double P, double* dVdP) const;
     double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
     double solvePressure(double displaced, double* dPdV) const;
@@ -251,6 +270,7 @@ class ReducedBag : public Bag {
     Eigen::Isometry3d m_X_GB;
     Eigen::Isometry3d m_X_BG;  // its inverse
     std::vector<int> m_gridIndex;  // point -> ix + nx iy
+    std::vector<double> m_steep;   // point -> its share of the steep panel (the coupling)
     std::vector<std::shared_ptr<bags::RigidShape>> m_shapes;
     std::vector<Eigen::Isometry3d> m_poses, m_committedPoses;
     std::vector<Vec6> m_velocities, m_committedVelocities;  // per shape (w_GS, v_GS)
