@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -217,6 +218,68 @@ struct Residual {
     }
 };
 
+// The residuals and their central-difference Jacobian, as Ceres' numeric differentiation
+// (ceres::CENTRAL) makes them, to the bit: the step max(sqrt(eps), relative x |x_j|), the
+// column (r(x + h e_j) - r(x - h e_j)) (1 / h / 2). Its 2 p + 1 evaluations run `threads` at
+// a time when the effects change the bag (each a load test); the fit is the same at any
+// number of threads.
+class ParallelCentralCost : public ceres::CostFunction {
+  public:
+    ParallelCentralCost(Evaluator& e, const SampleSet& s, double fr, double pr, int threads,
+                        double relativeStep)
+        : m_residual{&e, &s, fr, pr}, m_threads(e.changesTheBag() ? std::max(1, threads) : 1),
+          m_relativeStep(relativeStep) {
+        mutable_parameter_block_sizes()->push_back(e.getParameterCount());
+        set_num_residuals(s.count);
+    }
+
+    bool Evaluate(double const* const* parameters, double* residuals,
+                  double** jacobians) const override {
+        const int np = parameter_block_sizes()[0], nr = num_residuals();
+        const double* x = parameters[0];
+        if (!jacobians || !jacobians[0]) return evaluateAt(x, residuals);
+        // Evaluation k: 0 at x, 2 j + 1 at x + h_j e_j, 2 j + 2 at x - h_j e_j.
+        const int n = 2 * np + 1;
+        std::vector<std::vector<double>> r(n, std::vector<double>(nr));
+        std::vector<double> h(np);
+        for (int j = 0; j < np; ++j)
+            h[j] = std::max(std::sqrt(std::numeric_limits<double>::epsilon()),
+                            std::abs(x[j]) * m_relativeStep);
+        std::vector<char> ok(n, 0);
+        std::vector<std::string> errors(n);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(m_threads)
+        for (int k = 0; k < n; ++k) {
+            try {
+                std::vector<double> xk(x, x + np);
+                if (k > 0) xk[(k - 1) / 2] += (k % 2 ? 1.0 : -1.0) * h[(k - 1) / 2];
+                ok[k] = evaluateAt(xk.data(), r[k].data());
+            } catch (const std::exception& ex) {
+                errors[k] = ex.what();
+            }
+        }
+        for (const std::string& err : errors)
+            if (!err.empty()) throw std::runtime_error(err);  // e.g. an interrupt
+        if (!ok[0]) return false;
+        std::copy(r[0].begin(), r[0].end(), residuals);
+        for (int j = 0; j < np; ++j) {
+            if (!ok[2 * j + 1] || !ok[2 * j + 2]) return false;
+            const double scale = 1.0 / h[j] / 2;
+            for (int i = 0; i < nr; ++i)  // row-major, as Ceres stores a block's Jacobian
+                jacobians[0][i * np + j] = (r[2 * j + 1][i] - r[2 * j + 2][i]) * scale;
+        }
+        return true;
+    }
+
+  private:
+    bool evaluateAt(const double* x, double* r) const {
+        const double* p[1] = {x};
+        return m_residual(p, r);
+    }
+    Residual m_residual;
+    int m_threads;
+    double m_relativeStep;
+};
+
 double calcCost(Evaluator& e, const double* x, const SampleSet& s, double fr, double pr) {
     std::vector<TestComparison> c;
     if (!e.compare(x, c)) return INFINITY;
@@ -291,12 +354,7 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
     if (!std::isfinite(costs[best])) return fit;
 
     ceres::Problem problem;
-    ceres::NumericDiffOptions nd;
-    nd.relative_step_size = 0.01;
-    auto* cf = new ceres::DynamicNumericDiffCostFunction<Residual, ceres::CENTRAL>(
-        new Residual{&e, &s, fr, pr}, ceres::TAKE_OWNERSHIP, nd);
-    cf->AddParameterBlock(np);
-    cf->SetNumResiduals(s.count);
+    auto* cf = new ParallelCentralCost(e, s, fr, pr, o.threads, 0.01);
     problem.AddResidualBlock(cf, nullptr, fit.x.data());
     for (int i = 0; i < np; ++i) {
         problem.SetParameterLowerBound(fit.x.data(), i, 1.0);
