@@ -826,8 +826,22 @@ int panels(const std::string& scenario, const std::string& calIn, const std::str
     const io::PatientOnArrayScenario sc = readScenario(scenario);
     bags::AirbagSpec spec = sc.options.bag;
     spec.solver.monitor = nullptr;
+    if (std::ifstream(calOut)) {
+        std::fprintf(stderr, "bench_reduced_bag panels: %s exists; valid: a new file (nothing is "
+                             "overwritten)\n", calOut.c_str());
+        return 2;
+    }
     auto cal = std::make_shared<cosim::ReducedBagCalibration>(*io::readReducedBagCalibration(calIn));
     const bags::DoubleWedgeParams& g = spec.geometry;
+    if (std::abs(cal->geometry.meshSize - g.meshSize) > 1e-9 ||
+        std::abs(cal->geometry.longSide - g.longSide) > 1e-9) {
+        std::fprintf(stderr,
+                     "bench_reduced_bag panels: %s was made for a %.0f mm bag on a %.0f mm mesh, %s's "
+                     "bag is %.0f mm on a %.0f mm mesh; valid: the calibration of this bag\n",
+                     calIn.c_str(), cal->geometry.longSide * 1e3, cal->geometry.meshSize * 1e3,
+                     scenario.c_str(), g.longSide * 1e3, g.meshSize * 1e3);
+        return 2;
+    }
     const double apex = g.calcApexX(), travel = 0.02;
     std::vector<Case> cases;
     auto add = [&](const char* name, const char* kind, const Vec3& size, double x) {
