@@ -39,7 +39,7 @@ namespace fs = std::filesystem;
 
 const char* kHelp =
     "usage: bagsim diagnose --measured DIR [--out DIR] [--force] [--where-only]\n"
-    "           [--candidates E1,E2,...] [--threads N] [--quiet]\n"
+    "           [--stop-if-within] [--candidates E1,E2,...] [--threads N] [--quiet]\n"
     "           [--curve-step MASS] [--curve-volumes N] [--cache DIR] [--mesh-check SIZE]\n"
     "\n"
     "Compares measured data of the seed's rig (docs/measured-data.md) with a simulation of the\n"
@@ -66,6 +66,9 @@ const char* kHelp =
     "                      (default: DIR/../<folder name>-diagnosis)\n"
     "  --force             replace this command's files in a folder that is not empty\n"
     "  --where-only        only where the gap lies (no calibration)\n"
+    "  --stop-if-within    the rig's tests: when every channel is within twice its validation\n"
+    "                      uncertainty, stop there (verdict none, no candidate fitted; by\n"
+    "                      default they are fitted and ranked all the same)\n"
     "  --candidates LIST   effects to calibrate (default: the library, pressure-sensor,\n"
     "                      flowmeter-bias, gas-temperature, machine-compliance,\n"
     "                      block-friction, leakage, heat-exchange, bed-compliance,\n"
@@ -101,7 +104,7 @@ const char* kHelp =
 
 struct Args {
     std::string measured, out, commandLine;
-    bool force = false, whereOnly = false, quiet = false;
+    bool force = false, whereOnly = false, quiet = false, stopIfWithin = false;
     std::vector<std::string> candidates;
     int threads = 1;
     int windows = 3;  ///< a patient's data: the time windows of the folds
@@ -122,6 +125,7 @@ Args parseArgs(int argc, char** argv) {
         else if (arg == "--out") a.out = value();
         else if (arg == "--force") a.force = true;
         else if (arg == "--where-only") a.whereOnly = true;
+        else if (arg == "--stop-if-within") a.stopIfWithin = true;
         else if (arg == "--quiet" || arg == "-q") a.quiet = true;
         else if (arg == "--threads") {
             const std::string v = value();
@@ -164,8 +168,8 @@ Args parseArgs(int argc, char** argv) {
             a.meshCheck = value();
         } else
             throw UsageError("unknown option '" + arg +
-                             "'; valid: --measured, --out, --force, --where-only, --candidates, "
-                             "--threads, --windows, --curve-step, --curve-volumes, --cache, "
+                             "'; valid: --measured, --out, --force, --where-only, --stop-if-within, "
+                             "--candidates, --threads, --windows, --curve-step, --curve-volumes, --cache, "
                              "--mesh-check, --quiet, --help");
     }
     if (a.measured.empty()) throw UsageError("--measured DIR is required");
@@ -258,6 +262,9 @@ int run(const Args& a) {
         if (!a.meshCheck.empty())
             throw UsageError("--mesh-check is for the rig's tests; a patient's numerical "
                              "uncertainty is its run at half the macro step");
+        if (a.stopIfWithin)
+            throw UsageError("--stop-if-within is for the rig's tests; a patient's diagnosis "
+                             "fits its candidates (or use --where-only)");
         PatientDiagnoseArgs p;
         p.measured = a.measured, p.out = a.out, p.commandLine = a.commandLine;
         p.force = a.force, p.whereOnly = a.whereOnly, p.quiet = a.quiet;
@@ -416,7 +423,17 @@ int run(const Args& a) {
     if (!a.quiet) printWhere(where, std::cout);
 
     std::unique_ptr<diagnose::WhichReport> which;
-    if (!a.whereOnly && data.tests.size() >= 2) {
+    if (!a.whereOnly && data.tests.size() >= 2 && a.stopIfWithin && where.withinValidation) {
+        // The verdict is `none` whatever the candidates would do (diagnose::judgeCandidates):
+        // --stop-if-within spares their fits.
+        which = std::make_unique<diagnose::WhichReport>();
+        which->verdict = "none";
+        which->reason = "every channel's RMSE is within twice its validation uncertainty "
+                        "(sensor noise, numerical and input uncertainty); no candidate fitted "
+                        "(--stop-if-within)";
+        which->pairStageReason = "not run: every channel is within twice its validation uncertainty";
+        if (!a.quiet) std::cout << "which: no candidate fitted (--stop-if-within)\n";
+    } else if (!a.whereOnly && data.tests.size() >= 2) {
         diagnose::CalibrationOptions co;
         co.candidates = a.candidates;
         co.threads = a.threads;
