@@ -475,7 +475,7 @@ void ReducedBag::evaluate() {
             smp.point = i;
             smp.t = top.col(i);
             shape.calcContactGeometry(smp.t, &phi, &smp.c, &smp.n, &smp.dndp);
-            smp.delta = -phi;
+            smp.delta = smp.delta0 = -phi;
             smp.topDelta = smp.delta, smp.topN = smp.n;
             // Where the shape's closest surface faces sideways or up (it lies below the
             // unloaded top), the film meets its underside: down the column to where it
@@ -506,7 +506,7 @@ void ReducedBag::evaluate() {
                                                k > 1e-12 ? 0.5 / k : 1e300);
                 col.t = p - inward * nrm;
                 shape.calcContactGeometry(col.t, &phi, &col.c, &col.n, &col.dndp);
-                col.delta = -phi;
+                col.delta = col.delta0 = -phi;
                 col.blend = b * calcAxisFade(col.dndp);
                 if (col.blend > 0.0) out.push_back(col);
                 smp.blend = 1.0 - b;
@@ -556,8 +556,8 @@ void ReducedBag::evaluate() {
                 r.chords.push_back(ch);
             }
         }
-        r.depthSum1 = s1, r.depthSum2 = s2;
-        r.depth = s1 > 0.0 ? s2 / s1 : 0.0;
+        r.depthSum1 = r.depth0Sum1 = s1, r.depthSum2 = r.depth0Sum2 = s2;
+        r.depth = r.depth0 = s1 > 0.0 ? s2 / s1 : 0.0;
         // The skirt: points outside the shape, within skirt x depth of it, touch it too.
         const double skirt = c.skirt * r.depth;
         if (r.depth > 0.0) {
@@ -576,11 +576,7 @@ void ReducedBag::evaluate() {
                 if (smp.delta > -skirt) r.samples.push_back(smp);
             }
         }
-        for (size_t k = 0; k < r.samples.size(); ++k) {
-            const Sample& smp = r.samples[k];
-            if (r.deepest < 0 || smp.delta > r.samples[r.deepest].delta) r.deepest = int(k);
-            r.area += a * smp.blend * calcWeight(smp.delta, r.depth, nullptr, nullptr);
-        }
+        findDeepestAndArea(r);
     }
     // The columns' overlap: per column the union of the shapes' chords, shared among them in
     // proportion to their lengths (V_s = sum a length U / S), so that where shapes overlap
@@ -714,25 +710,21 @@ void ReducedBag::coupleThePanels() {
     // st_i the point's steep share and L the others' loads per panel; its depth there becomes
     // delta0 - (n.e) shift. The loads are kappa P w times the film's area, so d shift / dP =
     // shift / P with the poses held.
+    // (Off, each sample keeps delta = delta0 and no shift, as sampled.)
     const ReducedBagCalibration& c = *m_cal;
     const double a = c.pitch * c.pitch, P = m_cur.pressure;
-    const bool on = (c.panelSink > 0.0 || c.panelLift > 0.0) && m_results.size() > 1 && P > 0.0;
+    if (!((c.panelSink > 0.0 || c.panelLift > 0.0) && m_results.size() > 1 && P > 0.0)) return;
     std::array<double, 2> total{};
     for (ShapeResult& r : m_results) {
-        r.depth0 = r.depth, r.depth0Sum1 = r.depthSum1, r.depth0Sum2 = r.depthSum2;
-        r.panelLoad = {}, r.dPanelLoad = {};
-        const double kappa = on ? lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr) : 0.0;
-        for (Sample& smp : r.samples) {
-            smp.delta0 = smp.delta, smp.shift = 0.0, smp.dShift = 0.0;
-            if (!on) continue;
+        const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, nullptr);
+        for (const Sample& smp : r.samples) {
             const double q = smp.blend * smp.film * a * kappa * P *
                              calcWeight(smp.delta, r.depth, nullptr, nullptr);
             r.panelLoad[0] += q * m_steep[smp.point];
             r.panelLoad[1] += q * (1.0 - m_steep[smp.point]);
         }
-        for (int k = 0; k < 2; ++k) r.dPanelLoad[k] = on ? r.panelLoad[k] / P : 0.0, total[k] += r.panelLoad[k];
+        for (int k = 0; k < 2; ++k) total[k] += r.panelLoad[k];
     }
-    if (!on) return;
     const Vec3 e = m_X_GB.linear().col(2);
     for (ShapeResult& r : m_results) {
         const double Ls = total[0] - r.panelLoad[0], Lg = total[1] - r.panelLoad[1];
@@ -750,12 +742,17 @@ void ReducedBag::coupleThePanels() {
         }
         r.depthSum1 = s1, r.depthSum2 = s2;
         r.depth = s1 > 0.0 ? s2 / s1 : 0.0;
-        r.deepest = -1, r.area = 0.0;
-        for (size_t k = 0; k < r.samples.size(); ++k) {
-            const Sample& smp = r.samples[k];
-            if (r.deepest < 0 || smp.delta > r.samples[r.deepest].delta) r.deepest = int(k);
-            r.area += a * smp.blend * calcWeight(smp.delta, r.depth, nullptr, nullptr);
-        }
+        findDeepestAndArea(r);
+    }
+}
+
+void ReducedBag::findDeepestAndArea(ShapeResult& r) const {
+    const double a = m_cal->pitch * m_cal->pitch;
+    r.deepest = -1, r.area = 0.0;
+    for (size_t k = 0; k < r.samples.size(); ++k) {
+        const Sample& smp = r.samples[k];
+        if (r.deepest < 0 || smp.delta > r.samples[r.deepest].delta) r.deepest = int(k);
+        r.area += a * smp.blend * calcWeight(smp.delta, r.depth, nullptr, nullptr);
     }
 }
 

@@ -220,9 +220,9 @@ class ReducedBag : public Bag {
         double depthSum1 = 0.0, depthSum2 = 0.0;  // sum a b delta, sum a b delta^2
         // The same under the unloaded top (delta0): the depth the displaced volume's beta reads.
         double depth0 = 0.0, depth0Sum1 = 0.0, depth0Sum2 = 0.0;
-        // The load sum a b film q on the steep and the gentle panel [N] under the unloaded top,
-        // and its derivative in the gas pressure [N/Pa] (the panel coupling's source).
-        std::array<double, 2> panelLoad{}, dPanelLoad{};
+        // The gas load sum a b film q on the steep and the gentle panel [N] under the unloaded
+        // top (the panel coupling's source; it follows the gas pressure, d/dP = load / P).
+        std::array<double, 2> panelLoad{};
         int deepest = -1;  // sample index
         ShapeWrench wrench;
         // Friction (with the committed anchor): the normal force F_n (before friction), the
@@ -259,6 +259,7 @@ class ReducedBag : public Bag {
     /// The panel coupling (evaluate, after the gas): each shape's depths under the top moved
     /// by the other shapes' loads; its depth, deepest sample and area again.
     void coupleThePanels();
+    void findDeepestAndArea(ShapeResult& r) const;  // r.deepest, r.area from its samples
     double calcFreeVolume(double P, double* dVdP) const;
     double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
     double solvePressure(double displaced, double* dPdV) const;
