@@ -44,7 +44,8 @@ const char* kHelp =
     "usage: bagsim synth-measurement --scenario S.yaml --effect E [--param NAME=VALUE]...\n"
     "           [--noise CHANNEL=VALUE]... [--seed N] [--sample-interval T]\n"
     "           [--gas-mass-uncertainty U] [--room-temperature-uncertainty U]\n"
-    "           [--truth-mesh SIZE] --out DIR --label-out FILE [--force] [--quiet]\n"
+    "           [--truth-mesh SIZE] [--bed-gauge] --out DIR --label-out FILE [--force]\n"
+    "           [--quiet]\n"
     "\n"
     "Makes measured data (docs/measured-data.md) of the seed's rig from a truth simulation of\n"
     "the scenario with one unmodelled effect switched on, sensor noise, and a model-form\n"
@@ -65,6 +66,9 @@ const char* kHelp =
     "                                    scenario's, at least 5 mm; scaled with the bag as the\n"
     "                                    scenario's is): a model-form difference the diagnosis\n"
     "                                    does not simulate\n"
+    "  --bed-gauge                       the rig has a gauge under the bed board: each test\n"
+    "                                    gets the board's sink (test<N>-bed.csv), which tells\n"
+    "                                    bed-compliance from machine-compliance\n"
     "\n"
     "effects (--effect E, or several: --effect E1,E2) and their parameters (--param NAME=VALUE\n"
     "with units, or EFFECT.NAME=VALUE where two effects share a name; default in brackets):\n"
@@ -93,8 +97,8 @@ const char* kHelp =
     "\n"
     "options:\n"
     "  --noise CH=VALUE     sensor noise (standard deviation) per channel: displacement\n"
-    "                       [0.002 mm], force [0.01 N], pressure [0.005 kPa], mass [0.002 g];\n"
-    "                       --noise none for none\n"
+    "                       [0.002 mm], force [0.01 N], pressure [0.005 kPa], mass [0.002 g],\n"
+    "                       bed [0.002 mm] (with --bed-gauge); --noise none for none\n"
     "  --seed N             seed of the noise (default 1)\n"
     "  --sample-interval T  instruments' sampling interval (default 0.5 s)\n"
     "  --out DIR            the measured-data folder to write (refused if not empty, unless\n"
@@ -139,6 +143,7 @@ struct Args {
     std::string gasMassUncertainty, roomTemperatureUncertainty;  ///< "" not stated
     std::string truthMesh;  ///< --truth-mesh as given; "" the scenario's mesh
     bool force = false, quiet = false;
+    bool bedGauge = false;  ///< --bed-gauge: the rig's data get the bed board's sink
 };
 
 Args parseArgs(int argc, char** argv) {
@@ -166,13 +171,14 @@ Args parseArgs(int argc, char** argv) {
         else if (arg == "--out") a.out = value();
         else if (arg == "--label-out") a.labelOut = value();
         else if (arg == "--force") a.force = true;
+        else if (arg == "--bed-gauge") a.bedGauge = true;
         else if (arg == "--quiet" || arg == "-q") a.quiet = true;
         else
             throw UsageError("unknown option '" + arg +
                              "'; valid: --scenario, --effect, --param, --noise, --test, --seed, "
                              "--sample-interval, --mat-interval, --gas-mass-uncertainty, "
-                             "--room-temperature-uncertainty, --truth-mesh, --out, --label-out, --force, "
-                             "--quiet, --help");
+                             "--room-temperature-uncertainty, --truth-mesh, --bed-gauge, --out, --label-out, "
+                             "--force, --quiet, --help");
     }
     if (a.scenario.empty()) throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
     if (a.effect.empty())
@@ -310,7 +316,8 @@ void parseNoise(const std::vector<std::string>& given, diagnose::SynthesisOption
     parseNoise(given, {{"displacement", io::Dimension::Length, &o.displacementNoise},
                        {"force", io::Dimension::Force, &o.forceNoise},
                        {"pressure", io::Dimension::Pressure, &o.pressureNoise},
-                       {"mass", io::Dimension::Mass, &o.massNoise}});
+                       {"mass", io::Dimension::Mass, &o.massNoise},
+                       {"bed", io::Dimension::Length, &o.bedNoise}});
 }
 
 // The effects named by --effect (none: empty), from `find`'s library.
@@ -627,6 +634,9 @@ int run(const Args& a) {
         if (!a.truthMesh.empty())
             throw UsageError("--truth-mesh is for the rig's data (a patient-on-array scenario's "
                              "truth differs by its macro step)");
+        if (a.bedGauge)
+            throw UsageError("--bed-gauge is for the rig's data (a patient lies on the array, "
+                             "which has no bed gauge)");
         return runPatient(a, file);
     }
     if (!a.tests.empty())
@@ -640,6 +650,7 @@ int run(const Args& a) {
     diagnose::SynthesisOptions so;
     parseNoise(a.noise, so);
     so.seed = a.seed;
+    so.bedGauge = a.bedGauge;
     so.sampleInterval = parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.5 s" : a.sampleInterval);
     try {
         so.validate();
@@ -699,7 +710,7 @@ int run(const Args& a) {
     const fs::path out(a.out);
     claimOutputFolder(out, a.force,
                       {io::kMeasuredManifest, "scenario.yaml", "test*-machine.csv",
-                       "test*-pressure.csv", "test*-flowmeter.csv"});
+                       "test*-pressure.csv", "test*-flowmeter.csv", "test*-bed.csv"});
     if (!a.quiet)
         std::cerr << "bagsim synth-measurement: truth run of " << a.scenario << " ("
                   << truth.gasMasses.size() << " gas masses, " << modelForm << ")\n";
@@ -727,7 +738,10 @@ int run(const Args& a) {
     std::ostringstream lines;
     lines << "noise: {displacement: " << fmt("%g", so.displacementNoise * 1e3) << " mm, force: "
           << fmt("%g", so.forceNoise) << " N, pressure: " << fmt("%g", so.pressureNoise * 1e-3)
-          << " kPa, mass: " << fmt("%g", so.massNoise * 1e3) << " g}\n"
+          << " kPa, mass: " << fmt("%g", so.massNoise * 1e3) << " g"
+          << (so.bedGauge ? ", bed: " + fmt("%g", so.bedNoise * 1e3) + " mm" : std::string())
+          << "}\n"
+          << "bed_gauge: " << (so.bedGauge ? "true" : "false") << "\n"
           << "seed: " << a.seed << "\n"
           << "sample_interval: " << fmt("%g", so.sampleInterval) << " s\n"
           << "model_form: \"" << modelForm << "\"\n"

@@ -190,8 +190,8 @@ SampleSet makeSamples(const std::vector<TestComparison>& baseline, const std::ve
 }
 
 // Normalised residuals of the sample set.
-void fillResiduals(const std::vector<TestComparison>& c, const SampleSet& s, double forceRange,
-                   double pressureRange, double* r) {
+void fillResiduals(const std::vector<TestComparison>& c, const SampleSet& s, const GapScale& g,
+                   double* r) {
     int k = 0;
     for (size_t ti = 0; ti < s.tests.size(); ++ti) {
         const TestComparison& t = c[s.tests[ti]];
@@ -199,7 +199,7 @@ void fillResiduals(const std::vector<TestComparison>& c, const SampleSet& s, dou
             const auto& idx = s.index[ti][ch];
             if (idx.empty()) continue;
             const ChannelComparison& cc = t.channels[ch];
-            const double range = cc.kind == ChannelKind::Force ? forceRange : pressureRange;
+            const double range = g.getRange(cc.kind);
             const double w = 1.0 / (range * std::sqrt(double(idx.size())));
             for (size_t i : idx) r[k++] = w * (cc.measured[i] - cc.simulated[i]);
         }
@@ -209,11 +209,11 @@ void fillResiduals(const std::vector<TestComparison>& c, const SampleSet& s, dou
 struct Residual {
     Evaluator* eval;
     const SampleSet* samples;
-    double forceRange, pressureRange;
+    GapScale scale;
     bool operator()(double const* const* x, double* r) const {
         std::vector<TestComparison> c;
         if (!eval->compare(x[0], c)) return false;
-        fillResiduals(c, *samples, forceRange, pressureRange, r);
+        fillResiduals(c, *samples, scale, r);
         return true;
     }
 };
@@ -225,9 +225,9 @@ struct Residual {
 // number of threads.
 class ParallelCentralCost : public ceres::CostFunction {
   public:
-    ParallelCentralCost(Evaluator& e, const SampleSet& s, double fr, double pr, int threads,
+    ParallelCentralCost(Evaluator& e, const SampleSet& s, const GapScale& g, int threads,
                         double relativeStep)
-        : m_residual{&e, &s, fr, pr}, m_threads(e.changesTheBag() ? std::max(1, threads) : 1),
+        : m_residual{&e, &s, g}, m_threads(e.changesTheBag() ? std::max(1, threads) : 1),
           m_relativeStep(relativeStep) {
         mutable_parameter_block_sizes()->push_back(e.getParameterCount());
         set_num_residuals(s.count);
@@ -280,11 +280,11 @@ class ParallelCentralCost : public ceres::CostFunction {
     double m_relativeStep;
 };
 
-double calcCost(Evaluator& e, const double* x, const SampleSet& s, double fr, double pr) {
+double calcCost(Evaluator& e, const double* x, const SampleSet& s, const GapScale& g) {
     std::vector<TestComparison> c;
     if (!e.compare(x, c)) return INFINITY;
     std::vector<double> r(s.count);
-    fillResiduals(c, s, fr, pr, r.data());
+    fillResiduals(c, s, g, r.data());
     double sum = 0.0;
     for (double v : r) sum += v * v;
     return 0.5 * sum;
@@ -315,7 +315,7 @@ std::vector<std::vector<double>> makeGrid(int params, int points) {
 // The least-squares cost at each of the points (scaled), their simulations run at once when
 // the effects change the bag.
 std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<double>>& points,
-                                  const SampleSet& s, double fr, double pr,
+                                  const SampleSet& s, const GapScale& g,
                                   const CalibrationOptions& o) {
     std::vector<double> costs(points.size(), INFINITY);
     if (e.changesTheBag()) {
@@ -323,7 +323,7 @@ std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<do
 #pragma omp parallel for schedule(dynamic, 1) num_threads(o.threads)
         for (int i = 0; i < static_cast<int>(points.size()); ++i) {
             try {
-                costs[i] = calcCost(e, points[i].data(), s, fr, pr);
+                costs[i] = calcCost(e, points[i].data(), s, g);
             } catch (const std::exception& ex) {
                 errors[i] = ex.what();
             }
@@ -332,7 +332,7 @@ std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<do
             if (!err.empty()) throw std::runtime_error(err);  // e.g. an interrupt
     } else {
         for (size_t i = 0; i < points.size(); ++i)
-            costs[i] = calcCost(e, points[i].data(), s, fr, pr);
+            costs[i] = calcCost(e, points[i].data(), s, g);
     }
     return costs;
 }
@@ -340,13 +340,13 @@ std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<do
 // Fits the parameters on the training tests: the best of the start points (scaled; empty:
 // the coarse grid of gridPoints per parameter), then Ceres from there.
 Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
-              const std::vector<int>& train, double fr, double pr, const CalibrationOptions& o,
+              const std::vector<int>& train, const GapScale& g, const CalibrationOptions& o,
               bool covariance, const std::vector<std::vector<double>>& starts = {}) {
     const SampleSet s = makeSamples(baseline, train);
     const int np = e.getParameterCount();
     const std::vector<std::vector<double>> grid =
         starts.empty() ? makeGrid(np, o.gridPoints) : starts;
-    const std::vector<double> costs = calcScanCosts(e, grid, s, fr, pr, o);
+    const std::vector<double> costs = calcScanCosts(e, grid, s, g, o);
     const size_t best = std::min_element(costs.begin(), costs.end()) - costs.begin();
     Fit fit;
     fit.x = grid[best];
@@ -354,7 +354,7 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
     if (!std::isfinite(costs[best])) return fit;
 
     ceres::Problem problem;
-    auto* cf = new ParallelCentralCost(e, s, fr, pr, o.threads, 0.01);
+    auto* cf = new ParallelCentralCost(e, s, g, o.threads, 0.01);
     problem.AddResidualBlock(cf, nullptr, fit.x.data());
     for (int i = 0; i < np; ++i) {
         problem.SetParameterLowerBound(fit.x.data(), i, 1.0);
@@ -389,11 +389,6 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
     return fit;
 }
 
-// The channel ranges and validation uncertainties the gaps are measured with.
-struct GapScale {
-    double forceRange = 0.0, pressureRange = 0.0, forceUncertainty = 0.0, pressureUncertainty = 0.0;
-};
-
 // Fits the evaluator's parameters with leave-one-test-out folds and on all tests, and measures
 // the held-out gap before and after. `starts(h)`: the scan's start points for the fit without
 // test h (h = -1: all tests); empty, the coarse grid.
@@ -401,8 +396,6 @@ CandidateResult calibrateCandidate(
     Evaluator& e, const std::string& name, int n, const std::vector<TestComparison>& baseline,
     const GapScale& g, const CalibrationOptions& o,
     const std::function<std::vector<std::vector<double>>(int)>& starts) {
-    const double fr = g.forceRange, pr = g.pressureRange, fu = g.forceUncertainty,
-                 pu = g.pressureUncertainty;
     CandidateResult cr;
     cr.effect = name;
     double sumBefore = 0.0, sumAfter = 0.0, sumExcessBefore = 0.0, sumExcessAfter = 0.0;
@@ -411,16 +404,16 @@ CandidateResult calibrateCandidate(
         std::vector<int> train;
         for (int i = 0; i < n; ++i)
             if (i != h) train.push_back(i);
-        const Fit fit = calibrate(e, baseline, train, fr, pr, o, false, starts(h));
+        const Fit fit = calibrate(e, baseline, train, g, o, false, starts(h));
         FoldResult f;
         f.heldOut = h;
         f.parameters = e.toValues(fit.x.data());
-        f.before = calcGap(baseline, {h}, fr, pr);
-        f.excessBefore = calcGap(baseline, {h}, fr, pr, fu, pu);
+        f.before = calcGap(baseline, {h}, g);
+        f.excessBefore = calcGap(baseline, {h}, g, true);
         std::vector<TestComparison> c;
         if (e.compare(fit.x.data(), c)) {
-            f.after = calcGap(c, {h}, fr, pr);
-            f.excessAfter = calcGap(c, {h}, fr, pr, fu, pu);
+            f.after = calcGap(c, {h}, g);
+            f.excessAfter = calcGap(c, {h}, g, true);
             heldAfter.push_back(c[h]);
         } else {
             f.after = f.excessAfter = INFINITY;
@@ -433,7 +426,7 @@ CandidateResult calibrateCandidate(
     }
     std::vector<int> all(n);
     for (int i = 0; i < n; ++i) all[i] = i;
-    const Fit full = calibrate(e, baseline, all, fr, pr, o, true, starts(-1));
+    const Fit full = calibrate(e, baseline, all, g, o, true, starts(-1));
     cr.parameters = e.toValues(full.x.data());
     if (!e.compare(full.x.data(), cr.fitted)) cr.fitted.clear();
     const int np = e.getParameterCount();
@@ -593,7 +586,7 @@ void calibratePairs(WhichReport& report, const MeasuredData& data,
             const std::vector<std::vector<double>> starts =
                 makePairStarts(e, a.parameters, b.parameters, o.gridPoints);
             const std::vector<double> costs = calcScanCosts(e, starts, makeSamples(baseline, all),
-                                                            g.forceRange, g.pressureRange, o);
+                                                            g, o);
             const size_t k = std::min_element(costs.begin(), costs.end()) - costs.begin();
             p.screenCost = costs[k];
             p.screenParameters = e.toValues(starts[k].data());
@@ -693,13 +686,8 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                                 const CalibrationOptions& o) {
     const int n = static_cast<int>(data.tests.size());
     if (n < 2) throw std::invalid_argument("the calibration needs two tests or more (one held out)");
-    GapScale g;
-    for (const ChannelSummary& c : where.channels) {
-        if (c.channel == "force") g.forceRange = c.range, g.forceUncertainty = c.validation;
-        if (c.channel == "pressure")
-            g.pressureRange = c.range, g.pressureUncertainty = c.validation;
-    }
-    if (!(g.forceRange > 0.0) || !(g.pressureRange > 0.0))
+    const GapScale g = makeGapScale(where);
+    if (!(g.force.range > 0.0) || !(g.pressure.range > 0.0))
         throw std::invalid_argument("the measured force and pressure must vary to be compared");
 
     SimulationCache cache;

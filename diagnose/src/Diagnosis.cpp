@@ -6,6 +6,7 @@
 #include <exception>
 #include <map>
 #include <numeric>
+#include <stdexcept>
 
 #include "Format.h"
 
@@ -33,18 +34,58 @@ struct Branch {
 }  // namespace
 
 std::string getChannelName(ChannelKind c) {
-    return c == ChannelKind::Force ? "force" : c == ChannelKind::Pressure ? "pressure" : "mass";
+    switch (c) {
+        case ChannelKind::Force: return "force";
+        case ChannelKind::Pressure: return "pressure";
+        case ChannelKind::Bed: return "bed";
+        default: return "mass";
+    }
 }
 ChannelKind getChannelKind(const std::string& name) {
     return name == "force"      ? ChannelKind::Force
            : name == "pressure" ? ChannelKind::Pressure
+           : name == "bed"      ? ChannelKind::Bed
                                 : ChannelKind::Mass;
 }
 std::string getChannelUnit(ChannelKind c) {
-    return c == ChannelKind::Force ? "N" : c == ChannelKind::Pressure ? "kPa" : "g";
+    switch (c) {
+        case ChannelKind::Force: return "N";
+        case ChannelKind::Pressure: return "kPa";
+        case ChannelKind::Bed: return "mm";
+        default: return "g";
+    }
 }
 double getChannelUnitScale(ChannelKind c) {
-    return c == ChannelKind::Force ? 1.0 : c == ChannelKind::Pressure ? 1e3 : 1e-3;
+    switch (c) {
+        case ChannelKind::Force: return 1.0;
+        case ChannelKind::Pressure: return 1e3;
+        default: return 1e-3;  // g, mm
+    }
+}
+
+const GapScale::Scale& GapScale::get(ChannelKind kind) const {
+    static const Scale none;
+    return kind == ChannelKind::Force      ? force
+           : kind == ChannelKind::Pressure ? pressure
+           : kind == ChannelKind::Bed      ? bed
+                                           : none;
+}
+GapScale::Scale& GapScale::get(ChannelKind kind) {
+    if (kind == ChannelKind::Mass)
+        throw std::invalid_argument("the flowmeter's mass is not a channel of the gap");
+    return kind == ChannelKind::Force ? force : kind == ChannelKind::Pressure ? pressure : bed;
+}
+
+GapScale makeGapScale(const WhereReport& where) {
+    GapScale g;
+    for (const ChannelSummary& c : where.channels) {
+        const ChannelKind k = getChannelKind(c.channel);
+        if (k == ChannelKind::Mass) continue;
+        GapScale::Scale& s = g.get(k);
+        s.range = c.range;
+        s.uncertainty = c.validation;
+    }
+    return g;
 }
 
 TestComparison compareTest(const MeasuredTest& test, int index, const bags::LoadCurve& sim,
@@ -116,10 +157,28 @@ TestComparison compareTest(const MeasuredTest& test, int index, const bags::Load
         m.simulated.push_back(sim.gasMass + rig.flowmeterOffset);
     }
     tc.channels = {std::move(f), std::move(p), std::move(m)};
-    tc.numericalUncertainty.assign(3, 0.0);
-    tc.inputUncertainty.assign(3, 0.0);
-    tc.inputUncertaintyGasMass.assign(3, 0.0);
-    tc.inputUncertaintyTemperature.assign(3, 0.0);
+    if (!test.bed.empty()) {
+        // The bed gauge: the board sinks by the force on it (the block's, as the load cell
+        // would read it without its gain) times the bed's compliance.
+        ChannelComparison b;
+        b.kind = ChannelKind::Bed;
+        b.time = test.bed.time;
+        b.measured = test.bed.value;
+        for (double t : b.time) {
+            const double d = interpolateClamped(test.time, test.displacement, t);
+            const bool l = t <= tTurn;
+            b.displacement.push_back(d);
+            b.force.push_back(interpolateClamped(test.time, test.force, t));
+            b.loading.push_back(l ? 1 : 0);
+            b.simulated.push_back(rig.bedCompliance * simAt(d, l, false) / (1.0 + rig.loadCellGain));
+        }
+        tc.channels.push_back(std::move(b));
+    }
+    const size_t nch = tc.channels.size();
+    tc.numericalUncertainty.assign(nch, 0.0);
+    tc.inputUncertainty.assign(nch, 0.0);
+    tc.inputUncertaintyGasMass.assign(nch, 0.0);
+    tc.inputUncertaintyTemperature.assign(nch, 0.0);
     return tc;
 }
 
@@ -245,7 +304,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             }
             it->second.push_back(res);
         };
-        double lo = INFINITY, hi = -INFINITY, numSum = 0.0, meshSum = 0.0, inSum = 0.0, sumSq = 0.0;
+        double lo = INFINITY, hi = -INFINITY, travel = 0.0, numSum = 0.0, meshSum = 0.0, inSum = 0.0, sumSq = 0.0;
         double massSum = 0.0, tempSum = 0.0;  // the stated inputs' terms, weighted by samples
         long numN = 0, inN = 0, total = 0;
         std::vector<double> secondDifferences;
@@ -258,6 +317,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
                 const double res = ch.measured[i] - ch.simulated[i];
                 lo = std::min(lo, ch.measured[i]);
                 hi = std::max(hi, ch.measured[i]);
+                travel = std::max(travel, ch.displacement[i]);
                 sumSq += res * res;
                 ++total;
                 add("all", res);
@@ -306,7 +366,7 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         ChannelSummary cs;
         cs.channel = name;
         cs.rmse = total ? std::sqrt(sumSq / double(total)) : 0.0;
-        cs.range = hi - lo;
+        cs.range = kind == ChannelKind::Bed ? travel : hi - lo;
         cs.noise = calcNoise(secondDifferences);
         cs.numerical = numN ? std::sqrt(numSum / double(numN)) : 0.0;
         cs.numericalMesh = numN ? std::sqrt(meshSum / double(numN)) : 0.0;
@@ -336,25 +396,26 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
 }
 
 double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
-               double forceRange, double pressureRange, double forceUncertainty,
-               double pressureUncertainty) {
-    double sf = 0.0, sp = 0.0;
-    long nf = 0, np = 0;
-    for (int w : which)
-        for (const ChannelComparison& ch : tests[w].channels) {
-            if (ch.kind == ChannelKind::Mass) continue;
-            double& s = ch.kind == ChannelKind::Force ? sf : sp;
-            long& n = ch.kind == ChannelKind::Force ? nf : np;
-            for (size_t i = 0; i < ch.measured.size(); ++i)
-                s += std::pow(ch.measured[i] - ch.simulated[i], 2), ++n;
-        }
-    const double f = nf ? std::max(0.0, sf / double(nf) - forceUncertainty * forceUncertainty) /
-                              (forceRange * forceRange)
-                        : 0.0;
-    const double p = np ? std::max(0.0, sp / double(np) - pressureUncertainty * pressureUncertainty) /
-                              (pressureRange * pressureRange)
-                        : 0.0;
-    return std::sqrt(0.5 * (f + p));
+               const GapScale& scale, bool beyondUncertainty) {
+    const ChannelKind kinds[] = {ChannelKind::Force, ChannelKind::Pressure, ChannelKind::Bed};
+    double sum = 0.0;
+    int counted = 0;
+    for (ChannelKind kind : kinds) {
+        double s = 0.0;
+        long n = 0;
+        for (int w : which)
+            for (const ChannelComparison& ch : tests[w].channels) {
+                if (ch.kind != kind) continue;
+                for (size_t i = 0; i < ch.measured.size(); ++i)
+                    s += std::pow(ch.measured[i] - ch.simulated[i], 2), ++n;
+            }
+        if (n == 0 && kind == ChannelKind::Bed) continue;  // no bed gauge
+        ++counted;
+        const double u = beyondUncertainty ? scale.getUncertainty(kind) : 0.0;
+        const double range = scale.getRange(kind);
+        if (n > 0 && range > 0.0) sum += std::max(0.0, s / double(n) - u * u) / (range * range);
+    }
+    return counted ? std::sqrt(sum / double(counted)) : 0.0;
 }
 
 std::vector<double> calcSimulatedRmsDifference(const TestComparison& a, const TestComparison& b) {
@@ -372,7 +433,7 @@ std::vector<double> calcSimulatedRmsDifference(const TestComparison& a, const Te
 
 std::vector<GapMetrics> calcGapMetrics(const std::vector<TestComparison>& tests) {
     std::vector<GapMetrics> out;
-    for (ChannelKind kind : {ChannelKind::Force, ChannelKind::Pressure}) {
+    for (ChannelKind kind : {ChannelKind::Force, ChannelKind::Pressure, ChannelKind::Bed}) {
         std::vector<double> d, sim;
         for (const TestComparison& t : tests)
             for (const ChannelComparison& ch : t.channels) {
@@ -380,8 +441,8 @@ std::vector<GapMetrics> calcGapMetrics(const std::vector<TestComparison>& tests)
                 d.insert(d.end(), ch.measured.begin(), ch.measured.end());
                 sim.insert(sim.end(), ch.simulated.begin(), ch.simulated.end());
             }
-        const GapMetrics g = calcPairedMetrics(getChannelName(kind), d, sim);
-        out.push_back(g);
+        if (d.empty() && kind == ChannelKind::Bed) continue;  // no bed gauge
+        out.push_back(calcPairedMetrics(getChannelName(kind), d, sim));
     }
     return out;
 }

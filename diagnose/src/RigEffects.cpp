@@ -79,6 +79,7 @@ MachineCurve calcMachineCurve(const bags::LoadCurve& curve, const RigEffects& ri
         mc.displacement.push_back(d);
         mc.force.push_back(s.force * (1.0 + rig.loadCellGain));
         mc.pressure.push_back(calcMeanPressure(s));
+        mc.bedSink.push_back(s.force * rig.bedCompliance);
         mc.loading.push_back(s.loading ? 1 : 0);
     }
     return mc;

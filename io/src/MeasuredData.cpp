@@ -224,8 +224,16 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
     const ScenarioNode tests = root.get("tests");
     const std::vector<ScenarioNode> entries = tests.getElements();
     if (entries.empty()) tests.fail("lists no test; valid: one entry per gas mass");
+    // The bed gauge's channel: every test's or none (a rig has the gauge or not).
+    int withBed = 0;
+    for (const ScenarioNode& e : entries) withBed += e.has("bed") ? 1 : 0;
     for (const ScenarioNode& e : entries) {
-        e.checkKeys({"gas_mass", "machine", "pressure", "flowmeter"}, {"gas_mass_uncertainty"});
+        e.checkKeys({"gas_mass", "machine", "pressure", "flowmeter"},
+                    {"gas_mass_uncertainty", "bed"});
+        if (withBed > 0 && !e.has("bed"))
+            e.fail("this test has no 'bed' channel while " + std::to_string(withBed) +
+                                   " other test(s) have one; valid: a bed gauge's file for "
+                                   "every test or for none (docs/measured-data.md)");
         diagnose::MeasuredTest t;
         t.gasMass = e.getQuantity("gas_mass", Dimension::Mass);
         if (!(t.gasMass > 0.0)) e.fail("gas_mass", "must be greater than zero");
@@ -270,6 +278,11 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
         t.pressure = {cols[0], cols[1]};
         cols = readChannelCsv(flow, flow, {{"time", Dimension::Time}, {"mass", Dimension::Mass}});
         t.flowmeter = {cols[0], cols[1]};
+        if (e.has("bed")) {
+            const std::string bed = channelPath("bed");
+            cols = readChannelCsv(bed, bed, {{"time", Dimension::Time}, {"sink", Dimension::Length}});
+            t.bed = {cols[0], cols[1]};
+        }
 
         // Consistency of the channels with the manifest.
         double mean = 0.0;
@@ -438,7 +451,8 @@ std::vector<std::string> writeMeasuredData(const std::string& folder,
                   : std::string())
           << "    machine: " << stem << "-machine.csv\n"
           << "    pressure: " << stem << "-pressure.csv\n"
-          << "    flowmeter: " << stem << "-flowmeter.csv\n";
+          << "    flowmeter: " << stem << "-flowmeter.csv\n"
+          << (t.bed.empty() ? std::string() : "    bed: " + stem + "-bed.csv\n");
         std::ostringstream mc, pc, fc;
         mc << "time_s,displacement_mm,force_N\n";
         for (size_t k = 0; k < t.time.size(); ++k)
@@ -455,6 +469,13 @@ std::vector<std::string> writeMeasuredData(const std::string& folder,
         write(stem + "-machine.csv", mc.str());
         write(stem + "-pressure.csv", pc.str());
         write(stem + "-flowmeter.csv", fc.str());
+        if (!t.bed.empty()) {
+            std::ostringstream bc;
+            bc << "time_s,sink_mm\n";
+            for (size_t k = 0; k < t.bed.time.size(); ++k)
+                bc << fmt("%.3f", t.bed.time[k]) << "," << fmt("%.5f", t.bed.value[k] * 1e3) << "\n";
+            write(stem + "-bed.csv", bc.str());
+        }
     }
     write(kMeasuredManifest, m.str());
     return names;

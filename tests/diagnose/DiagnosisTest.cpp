@@ -82,8 +82,10 @@ struct Stated {
     double temperature = 0.0;  ///< [K] of the room temperature
 };
 
+// `bedGauge`: the rig has a gauge under the bed board (a fourth channel, the board's sink).
 Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true,
-                          const Stated& stated = {}) {
+                          const Stated& stated = {}, bool bedGauge = false) {
+    const diagnose::Simulator simulate = simulateStandIn;
     const Rig rig;
     bags::LoadTestOptions truth = rig.options;
     truth.displacementStep *= 0.5;
@@ -93,8 +95,9 @@ Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true,
                               rigTruth, truth);
     diagnose::SynthesisOptions so;
     so.seed = 3;
+    so.bedGauge = bedGauge;
     diagnose::MeasuredData data = diagnose::synthesizeMeasurement(
-        simulateStandIn(truth).curves, rig.options.gasMasses, rigTruth, rig.protocol, so);
+        simulate(truth).curves, rig.options.gasMasses, rigTruth, rig.protocol, so);
 
     for (diagnose::MeasuredTest& t : data.tests)
         t.gasMassUncertainty = stated.gasMass, t.gasMassUncertaintyStated = stated.gasMass > 0.0;
@@ -102,7 +105,7 @@ Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true,
     data.protocol.roomTemperatureUncertaintyStated = stated.temperature > 0.0;
 
     Diagnosed d;
-    const bags::LoadTestResult base = simulateStandIn(rig.options);
+    const bags::LoadTestResult base = simulate(rig.options);
     const diagnose::RigEffects none;
     for (size_t i = 0; i < data.tests.size(); ++i)
         d.tests.push_back(diagnose::compareTest(data.tests[i], int(i), base.curves[i], none,
@@ -110,7 +113,7 @@ Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true,
     const std::vector<diagnose::InputRun> runs = diagnose::makeInputRuns(data, rig.options);
     std::vector<bags::LoadTestOptions> options;
     for (const diagnose::InputRun& r : runs) options.push_back(r.options);
-    diagnose::addInputUncertainties(data, runs, diagnose::runLoadTests(options, simulateStandIn, 2),
+    diagnose::addInputUncertainties(data, runs, diagnose::runLoadTests(options, simulate, 2),
                                     none, rig.options.loadingRate, d.tests);
     diagnose::WhereOptions wo;
     wo.loadFrom = 5.0;
@@ -120,7 +123,7 @@ Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true,
     diagnose::CalibrationOptions co;
     co.pairGate = pairGate;
     d.which = diagnose::calibrateCandidates(data, rig.options, none, base, d.tests, d.where,
-                                            simulateStandIn, co);
+                                            simulate, co);
     return d;
 }
 
@@ -483,4 +486,64 @@ TEST(InputUncertainty, NothingStatedRunsNothing) {
     EXPECT_EQ(runs[2].input, diagnose::ProtocolInput::RoomTemperature);
     EXPECT_DOUBLE_EQ(runs[2].options.gas.temperature, o.gas.temperature + 1.0);
     EXPECT_DOUBLE_EQ(runs[3].options.gas.temperature, o.gas.temperature - 1.0);
+}
+
+TEST(Diagnosis, TheBedGaugeTellsTheBedsComplianceFromTheMachines) {
+    // Without a gauge under the bed board, the bed's compliance and the machine's give the
+    // same channels: the two fit alike and are named confusable.
+    const Diagnosed blind = diagnoseStandIn(EffectValues{{"bed-compliance", {0.5e-3}}});
+    const std::pair<std::string, std::string> pair = {"machine-compliance", "bed-compliance"};
+    const std::pair<std::string, std::string> riap = {pair.second, pair.first};
+    auto named = [&](const diagnose::WhichReport& w) {
+        return std::find(w.confusable.begin(), w.confusable.end(), pair) != w.confusable.end() ||
+               std::find(w.confusable.begin(), w.confusable.end(), riap) != w.confusable.end();
+    };
+    EXPECT_TRUE(named(blind.which)) << blind.which.reason;
+    EXPECT_NEAR(findCandidate(blind.which, "machine-compliance").excessShrink,
+                findCandidate(blind.which, "bed-compliance").excessShrink, 1e-6);
+
+    // With it, the board's sink is a fourth channel: only the bed's compliance explains it.
+    for (const std::string truth : {"bed-compliance", "machine-compliance"}) {
+        const Diagnosed d = diagnoseStandIn(EffectValues{{truth, {0.5e-3}}}, true, {}, true);
+        ASSERT_EQ(d.tests[0].channels.size(), 4u);
+        EXPECT_EQ(d.tests[0].channels[3].kind, diagnose::ChannelKind::Bed);
+        ASSERT_EQ(d.where.channels.size(), 4u);
+        const diagnose::ChannelSummary& bed = d.where.channels[3];
+        EXPECT_EQ(bed.channel, "bed");
+        // Its error is judged against the crosshead's travel (a rigid bed's channel spans
+        // only its noise): 20 N at 4-5 N/mm and 0.5 mm/N, 14-15 mm.
+        EXPECT_GT(bed.range, 10e-3);
+        EXPECT_EQ(d.which.verdict, truth) << d.which.reason;
+        EXPECT_FALSE(named(d.which)) << d.which.reason;
+        EXPECT_NEAR(findCandidate(d.which, truth).parameters[0], 0.5e-3, 0.05e-3);
+        const std::string other =
+            truth == "bed-compliance" ? "machine-compliance" : "bed-compliance";
+        EXPECT_LT(findCandidate(d.which, other).excessShrink,
+                  findCandidate(d.which, truth).excessShrink - 0.2)
+            << d.which.reason;
+        if (truth == "bed-compliance") {
+            // The bed carries a share of the gap (the board sinks 10 mm at 20 N, and the
+            // model's board does not), the force most of it (its curve is 3 times as soft).
+            EXPECT_GT(bed.shareOfGap, 0.05);
+            EXPECT_GT(d.where.channels[0].shareOfGap, bed.shareOfGap);
+            // Held out, the bed's channel is a third metric beside force and pressure.
+            const diagnose::CandidateResult& c = findCandidate(d.which, truth);
+            ASSERT_EQ(c.heldoutMetricsAfter.size(), 3u);
+            EXPECT_EQ(c.heldoutMetricsAfter[2].channel, "bed");
+            EXPECT_LT(c.heldoutMetricsAfter[2].rmse, 0.1 * c.heldoutMetricsBefore[2].rmse);
+        } else {
+            EXPECT_LT(bed.rmse, 2.0 * bed.validation);  // the board stays: the gauge reads noise
+        }
+    }
+}
+
+TEST(GapScale, EachChannelKindHasItsScaleAndTheMassNone) {
+    diagnose::GapScale g;
+    g.pressure = {10.0, 5.0};
+    g.bed = {30.0, 0.002};
+    EXPECT_EQ(g.getRange(diagnose::ChannelKind::Pressure), 10.0);
+    EXPECT_EQ(g.getUncertainty(diagnose::ChannelKind::Bed), 0.002);
+    const diagnose::GapScale& c = g;
+    EXPECT_EQ(c.getRange(diagnose::ChannelKind::Mass), 0.0);
+    EXPECT_THROW(g.get(diagnose::ChannelKind::Mass), std::invalid_argument);
 }

@@ -262,6 +262,41 @@ TEST_F(MeasuredDataTest, WrittenFolderReadsBack) {
     EXPECT_NEAR(r.protocol.roomTemperature, d.protocol.roomTemperature, 1e-9);
 }
 
+TEST_F(MeasuredDataTest, TheBedGaugeIsOptionalReadsInSiAndWritesBack) {
+    EXPECT_TRUE(io::readMeasuredData(m_dir.string()).tests[0].bed.empty());
+    write("b.csv", "time_s,sink_mm\n0,0\n12,0.25\n18,0.1\n");
+    write("measured.yaml", kManifest + "    bed: b.csv\n");
+    const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
+    ASSERT_EQ(d.tests[0].bed.time.size(), 3u);
+    EXPECT_DOUBLE_EQ(d.tests[0].bed.value[1], 0.25e-3);
+    const diagnose::MeasuredData r = writeAndReadBack(d);
+    ASSERT_EQ(r.tests[0].bed.value.size(), 3u);
+    EXPECT_NEAR(r.tests[0].bed.value[1], 0.25e-3, 1e-12);
+    EXPECT_TRUE(fs::exists(m_dir / "copy" / "test1-bed.csv"));
+    // A wrong unit is named at the gauge's file.
+    write("b.csv", "time_s,sink_N\n0,0\n12,0.25\n");
+    const io::InputError unit = readError();
+    EXPECT_EQ(unit.getWhere(), file("b.csv"));
+    EXPECT_NE(unit.getMessage().find("sink"), std::string::npos) << unit.what();
+}
+
+TEST_F(MeasuredDataTest, ABedGaugeForSomeTestsOnlyIsNamed) {
+    write("b.csv", "time_s,sink_mm\n0,0\n12,0.25\n18,0.1\n");
+    write("f2.csv", "time (s),mass (g)\n0,3.001\n18,2.999\n");
+    write("measured.yaml", kManifest + "    bed: b.csv\n"
+                           "  - gas_mass: 3.0 g\n"     // 14
+                           "    machine: m.csv\n"
+                           "    pressure: p.csv\n"
+                           "    flowmeter: f2.csv\n");
+    const io::InputError e = readError();
+    EXPECT_EQ(e.getWhere(), file("measured.yaml"));
+    EXPECT_EQ(e.getLine(), 14);
+    EXPECT_NE(e.getMessage().find("no 'bed' channel while 1 other test(s) have one"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(e.getMessage().find("every test or for none"), std::string::npos) << e.what();
+}
+
 TEST_F(MeasuredDataTest, StatedInputUncertaintiesReadInSiAndAreOptional) {
     const diagnose::MeasuredData none = io::readMeasuredData(m_dir.string());
     EXPECT_FALSE(none.tests[0].gasMassUncertaintyStated);

@@ -28,12 +28,13 @@
 
 namespace diagnose {
 
-/// The channels compared (the flowmeter's is a consistency check, not part of the gap).
-enum class ChannelKind { Force, Pressure, Mass };
-std::string getChannelName(ChannelKind c);  ///< "force", "pressure", "mass"
-/// The kind of a channel named by getChannelName: "force", "pressure", else Mass.
+/// The channels compared (the flowmeter's is a consistency check, not part of the gap; the
+/// bed gauge's only when the data have it).
+enum class ChannelKind { Force, Pressure, Mass, Bed };
+std::string getChannelName(ChannelKind c);  ///< "force", "pressure", "mass", "bed"
+/// The kind of a channel named by getChannelName: "force", "pressure", "bed", else Mass.
 ChannelKind getChannelKind(const std::string& name);
-std::string getChannelUnit(ChannelKind c);  ///< "N", "kPa", "g" (how it is reported)
+std::string getChannelUnit(ChannelKind c);  ///< "N", "kPa", "g", "mm" (how it is reported)
 double getChannelUnitScale(ChannelKind c);  ///< SI per reported unit
 
 /// One channel of one test at the measured samples, measured beside simulated.
@@ -49,7 +50,7 @@ struct ChannelComparison {
 struct TestComparison {
     int test = 0;          ///< index in MeasuredData::tests
     double gasMass = 0.0;  ///< [kg] as the flowmeter read it
-    std::vector<ChannelComparison> channels;  ///< force, pressure, mass
+    std::vector<ChannelComparison> channels;  ///< force, pressure, mass[, bed]
     /// RMS of (simulated - simulated at half the step) per channel [SI], when given: the
     /// numerical uncertainty (0 if not estimated); with a finer mesh's run (diagnose
     /// --mesh-check) the root sum square of that and numericalUncertaintyMesh.
@@ -149,7 +150,10 @@ struct Signature {
 struct ChannelSummary {
     std::string channel;
     double rmse = 0.0;         ///< [SI]
-    double range = 0.0;        ///< measured max - min [SI] (normalises the gap)
+    /// Measured max - min [SI] (normalises the gap); for the bed gauge the crosshead's
+    /// travel (the bed's sink is judged against how far the block went: a rigid bed's
+    /// channel spans its noise only).
+    double range = 0.0;
     double noise = 0.0;        ///< sensor noise from the data (median second difference) [SI]
     double numerical = 0.0;    ///< numerical uncertainty [SI] (0 if not estimated)
     double numericalMesh = 0.0;  ///< the mesh's part of `numerical` [SI] (0 if not estimated)
@@ -160,14 +164,14 @@ struct ChannelSummary {
     /// ASME V&V 20 validation uncertainty [SI]: the root sum square of noise, numerical,
     /// input, inputGasMass and inputTemperature.
     double validation = 0.0;
-    double shareOfGap = 0.0;   ///< of the normalised squared error over force and pressure
+    double shareOfGap = 0.0;   ///< of the normalised squared error over force, pressure, bed
 };
 
 struct WhereReport {
     std::vector<ChannelSummary> channels;
     std::vector<RegimeStats> regimes;
     std::vector<Signature> signatures;
-    /// The gap: RMS over force and pressure of rmse / range [-].
+    /// The gap: RMS over force and pressure (and the bed gauge) of rmse / range [-].
     double gap = 0.0;
     /// True when every channel's RMSE is within twice its validation uncertainty.
     bool withinValidation = false;
@@ -193,13 +197,28 @@ struct WhereOptions {
 
 WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptions& options);
 
-/// The gap (as WhereReport::gap) over some tests only, with the given channel ranges [SI]
-/// (force, pressure) so that gaps of different subsets are comparable. With validation
-/// uncertainties [SI] (force, pressure), the gap beyond them: each channel's squared RMSE less
-/// its squared uncertainty (at least 0), what noise and numerics cannot explain.
+/// The scales gaps are measured with, per channel kind of the gap (force, pressure, bed) [SI]:
+/// the range its RMSE is divided by and its validation uncertainty (WhereReport's).
+struct GapScale {
+    struct Scale {
+        double range = 0.0, uncertainty = 0.0;
+    };
+    Scale force, pressure, bed;
+    const Scale& get(ChannelKind kind) const;  ///< the mass's is all 0
+    Scale& get(ChannelKind kind);              ///< @throws std::invalid_argument for the mass
+    double getRange(ChannelKind kind) const { return get(kind).range; }
+    double getUncertainty(ChannelKind kind) const { return get(kind).uncertainty; }
+};
+/// The ranges and validation uncertainties of a where report's channels.
+GapScale makeGapScale(const WhereReport& where);
+
+/// The gap (as WhereReport::gap) over some tests only, with the given channel ranges [SI] so
+/// that gaps of different subsets are comparable: RMS over the channel kinds the tests have.
+/// With `beyondUncertainty`, the gap beyond the validation uncertainties: each channel's
+/// squared RMSE less its squared uncertainty (at least 0), what noise and numerics cannot
+/// explain.
 double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
-               double forceRange, double pressureRange, double forceUncertainty = 0.0,
-               double pressureUncertainty = 0.0);
+               const GapScale& scale, bool beyondUncertainty = false);
 
 // ------------------------------------------------------------------------------------ which
 

@@ -1,8 +1,8 @@
 #pragma once
 /// @file Measured data of the seed's rig (one airbag, a block pressed into it, several gas
 /// masses) as the lab records it, in SI: per test (one gas mass) the testing machine's
-/// time/displacement/force, the pressure sensor's time/gauge pressure and the flowmeter's
-/// time/gas mass. The folder format and its reader are io::readMeasuredData
+/// time/displacement/force, the pressure sensor's time/gauge pressure, the flowmeter's
+/// time/gas mass and, when the rig has one, a bed gauge's time/sink. The folder format and its reader are io::readMeasuredData
 /// (docs/measured-data.md); this is the plain data the diagnosis works on.
 
 #include <string>
@@ -29,6 +29,11 @@ struct MeasuredTest {
     std::vector<double> time, displacement, force;
     Channel pressure;   ///< gauge pressure of the bag [Pa]
     Channel flowmeter;  ///< gas mass in the bag as the flowmeter reads it [kg]
+    /// The bed board's sink under the bag [m] as a gauge against the floor reads it (a dial
+    /// gauge or displacement transducer under the board), from first contact; empty when the
+    /// rig has no such gauge. It tells the bed's compliance from the machine's, which the
+    /// other channels cannot (docs/diagnosis.md#the-bed-gauge).
+    Channel bed;
 };
 
 /// The protocol the tests followed (what the simulation must repeat).

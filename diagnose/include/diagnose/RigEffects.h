@@ -60,6 +60,7 @@ struct MachineCurve {
     std::vector<double> displacement;  ///< crosshead travel [m] (block travel + F (c + c_bed))
     std::vector<double> force;         ///< as the load cell reads it [N]
     std::vector<double> pressure;      ///< true gauge pressure of the bag [Pa] (chamber mean)
+    std::vector<double> bedSink;       ///< the bed board's sink [m] (force times c_bed)
     std::vector<char> loading;         ///< 1 on the loading branch
 };
 

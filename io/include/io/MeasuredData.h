@@ -61,7 +61,8 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
 
 /// Reads a measured-data folder: its tests, and the stiffness curve k(m) when the manifest
 /// names one (`stiffness`: columns gas_mass, stiffness and an optional stage; either may be
-/// given alone). @throws InputError (missing manifest, key, channel file or
+/// given alone); a test's optional `bed` channel (time, sink: the bed gauge) must be given for
+/// every test or none. @throws InputError (missing manifest, key, channel file or
 /// column; bad units; NaN; unsorted time; a flowmeter reading or a peak force that disagrees
 /// with the manifest).
 diagnose::MeasuredData readMeasuredData(const std::string& folder);
@@ -77,7 +78,7 @@ ScenarioFile loadMeasuredScenarioFile(const diagnose::MeasuredData& data);
 
 /// Writes a measured-data folder (which must exist): measured.yaml, scenario.yaml (the
 /// scenario text given) and per test test<N>-machine.csv, test<N>-pressure.csv,
-/// test<N>-flowmeter.csv. `comment` goes at the top of the manifest. Returns the file names.
+/// test<N>-flowmeter.csv and, when the test has the bed gauge's channel, test<N>-bed.csv. `comment` goes at the top of the manifest. Returns the file names.
 std::vector<std::string> writeMeasuredData(const std::string& folder,
                                            const diagnose::MeasuredData& data,
                                            const std::string& scenarioText,
