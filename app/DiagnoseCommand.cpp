@@ -184,7 +184,7 @@ Args parseArgs(int argc, char** argv) {
 
 void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
     out << "where: gap " << fmt("%.4f", w.gap)
-        << " (RMS over force and pressure of RMSE / measured range)"
+        << " (" << diagnose::describeGap(w) << ")"
         << (w.withinValidation ? ", within the validation uncertainty" : "") << "\n";
     out << "  channel   RMSE        range       noise       numerical   input       gas mass    "
            "room temp.  validation  share of gap\n";

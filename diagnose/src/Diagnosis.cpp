@@ -395,6 +395,14 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
     return r;
 }
 
+std::string describeGap(const WhereReport& where) {
+    for (const ChannelSummary& c : where.channels)
+        if (getChannelKind(c.channel) == ChannelKind::Bed)
+            return "RMS over force, pressure and the bed gauge of RMSE / measured range (the "
+                   "bed's: the crosshead's travel)";
+    return "RMS over force and pressure of RMSE / measured range";
+}
+
 double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
                const GapScale& scale, bool beyondUncertainty) {
     const ChannelKind kinds[] = {ChannelKind::Force, ChannelKind::Pressure, ChannelKind::Bed};

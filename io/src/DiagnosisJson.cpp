@@ -230,7 +230,7 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
         return os.str();
     }
     os << "  \"where\": {\n    \"gap\": " << num(w.gap)
-       << ",\n    \"gap_definition\": \"RMS over force and pressure of RMSE / measured range\",\n"
+       << ",\n    \"gap_definition\": " << str(diagnose::describeGap(w)) << ",\n"
        << "    \"within_validation_uncertainty\": " << (w.withinValidation ? "true" : "false")
        << ",\n    \"channels\": [\n";
     for (size_t i = 0; i < w.channels.size(); ++i) {

@@ -64,8 +64,8 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
        << " simulations, " << num(info.seconds, "%.1f") << " s. See docs/diagnosis.md.</p>";
     if (which)
         os << "<h2>Verdict: " << esc(which->verdict) << "</h2><p>" << esc(which->reason) << "</p>";
-    os << "<h2>Where</h2><p>Gap " << num(w.gap) << " (RMS over force and pressure of RMSE / "
-       << "measured range)" << (w.withinValidation ? ", within the validation uncertainty" : "")
+    os << "<h2>Where</h2><p>Gap " << num(w.gap) << " (" << esc(diagnose::describeGap(w)) << ")"
+       << (w.withinValidation ? ", within the validation uncertainty" : "")
        << ".</p><table><tr><th>channel</th><th>RMSE</th><th>range</th><th>noise</th>"
        << "<th>numerical</th><th>input</th><th>gas mass</th><th>room temperature</th>"
        << "<th>validation</th><th>share of gap</th></tr>";

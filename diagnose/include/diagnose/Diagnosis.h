@@ -197,6 +197,10 @@ struct WhereOptions {
 
 WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptions& options);
 
+/// What a where report's gap is, for readers: "RMS over force and pressure of RMSE / measured
+/// range", with the bed gauge when the data have it.
+std::string describeGap(const WhereReport& where);
+
 /// The scales gaps are measured with, per channel kind of the gap (force, pressure, bed) [SI]:
 /// the range its RMSE is divided by and its validation uncertainty (WhereReport's).
 struct GapScale {
