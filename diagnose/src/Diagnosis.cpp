@@ -131,47 +131,37 @@ TestComparison compareTest(const MeasuredTest& test, int index, const bags::Load
         f.simulated.push_back(simAt(test.displacement[i], l, false));
     }
 
-    ChannelComparison p;
-    p.kind = ChannelKind::Pressure;
-    p.time = test.pressure.time;
-    p.measured = test.pressure.value;
+    // A channel on its own time base: the machine's displacement and force and the branch at
+    // its sample times.
+    auto startChannel = [&](ChannelKind kind, const Channel& c) {
+        ChannelComparison ch;
+        ch.kind = kind;
+        ch.time = c.time;
+        ch.measured = c.value;
+        for (double t : ch.time) {
+            ch.displacement.push_back(interpolateClamped(test.time, test.displacement, t));
+            ch.force.push_back(interpolateClamped(test.time, test.force, t));
+            ch.loading.push_back(t <= tTurn ? 1 : 0);
+        }
+        return ch;
+    };
+
+    ChannelComparison p = startChannel(ChannelKind::Pressure, test.pressure);
     std::vector<double> truePressure;
-    for (double t : p.time) {
-        const double d = interpolateClamped(test.time, test.displacement, t);
-        const bool l = t <= tTurn;
-        p.displacement.push_back(d);
-        p.force.push_back(interpolateClamped(test.time, test.force, t));
-        p.loading.push_back(l ? 1 : 0);
-        truePressure.push_back(simAt(d, l, true));
-    }
+    for (size_t i = 0; i < p.time.size(); ++i)
+        truePressure.push_back(simAt(p.displacement[i], p.loading[i], true));
     p.simulated = applyPressureSensor(p.time, truePressure, rig);
 
-    ChannelComparison m;
-    m.kind = ChannelKind::Mass;
-    m.time = test.flowmeter.time;
-    m.measured = test.flowmeter.value;
-    for (double t : m.time) {
-        m.displacement.push_back(interpolateClamped(test.time, test.displacement, t));
-        m.force.push_back(interpolateClamped(test.time, test.force, t));
-        m.loading.push_back(t <= tTurn ? 1 : 0);
-        m.simulated.push_back(sim.gasMass + rig.flowmeterOffset);
-    }
+    ChannelComparison m = startChannel(ChannelKind::Mass, test.flowmeter);
+    m.simulated.assign(m.time.size(), sim.gasMass + rig.flowmeterOffset);
     tc.channels = {std::move(f), std::move(p), std::move(m)};
     if (!test.bed.empty()) {
         // The bed gauge: the board sinks by the force on it (the block's, as the load cell
         // would read it without its gain) times the bed's compliance.
-        ChannelComparison b;
-        b.kind = ChannelKind::Bed;
-        b.time = test.bed.time;
-        b.measured = test.bed.value;
-        for (double t : b.time) {
-            const double d = interpolateClamped(test.time, test.displacement, t);
-            const bool l = t <= tTurn;
-            b.displacement.push_back(d);
-            b.force.push_back(interpolateClamped(test.time, test.force, t));
-            b.loading.push_back(l ? 1 : 0);
-            b.simulated.push_back(rig.bedCompliance * simAt(d, l, false) / (1.0 + rig.loadCellGain));
-        }
+        ChannelComparison b = startChannel(ChannelKind::Bed, test.bed);
+        for (size_t i = 0; i < b.time.size(); ++i)
+            b.simulated.push_back(rig.bedCompliance * simAt(b.displacement[i], b.loading[i], false) /
+                                  (1.0 + rig.loadCellGain));
         tc.channels.push_back(std::move(b));
     }
     const size_t nch = tc.channels.size();
