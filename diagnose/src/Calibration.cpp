@@ -686,7 +686,7 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                                 const CalibrationOptions& o) {
     const int n = static_cast<int>(data.tests.size());
     if (n < 2) throw std::invalid_argument("the calibration needs two tests or more (one held out)");
-    const GapScale g = makeGapScale(where);
+    const GapScale g = makeGapScale(where, baseline);
     if (!(g.force.range > 0.0) || !(g.pressure.range > 0.0))
         throw std::invalid_argument("the measured force and pressure must vary to be compared");
 

@@ -76,14 +76,42 @@ GapScale::Scale& GapScale::get(ChannelKind kind) {
     return kind == ChannelKind::Force ? force : kind == ChannelKind::Pressure ? pressure : bed;
 }
 
-GapScale makeGapScale(const WhereReport& where) {
+namespace {
+int getGapIndex(ChannelKind kind) {
+    return kind == ChannelKind::Force ? 0 : kind == ChannelKind::Pressure ? 1 : 2;
+}
+}  // namespace
+
+double GapScale::getUncertainty(ChannelKind kind, int test) const {
+    const auto it = testUncertainty.find(test);
+    if (it == testUncertainty.end() || kind == ChannelKind::Mass) return getUncertainty(kind);
+    return it->second[getGapIndex(kind)];
+}
+
+GapScale makeGapScale(const WhereReport& where, const std::vector<TestComparison>& tests) {
     GapScale g;
+    double noise[3] = {0.0, 0.0, 0.0};
     for (const ChannelSummary& c : where.channels) {
         const ChannelKind k = getChannelKind(c.channel);
         if (k == ChannelKind::Mass) continue;
         GapScale::Scale& s = g.get(k);
         s.range = c.range;
         s.uncertainty = c.validation;
+        noise[getGapIndex(k)] = c.noise;
+    }
+    for (const TestComparison& t : tests) {
+        std::array<double, 3> u = {g.force.uncertainty, g.pressure.uncertainty, g.bed.uncertainty};
+        for (size_t c = 0; c < t.channels.size(); ++c) {
+            const ChannelKind k = t.channels[c].kind;
+            if (k == ChannelKind::Mass) continue;
+            auto at = [&](const std::vector<double>& v) { return c < v.size() ? v[c] : 0.0; };
+            const double n = noise[getGapIndex(k)];
+            u[getGapIndex(k)] = std::sqrt(
+                n * n + std::pow(at(t.numericalUncertainty), 2) +
+                std::pow(at(t.inputUncertainty), 2) + std::pow(at(t.inputUncertaintyGasMass), 2) +
+                std::pow(at(t.inputUncertaintyTemperature), 2));
+        }
+        g.testUncertainty[t.test] = u;
     }
     return g;
 }
@@ -399,19 +427,21 @@ double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>&
     double sum = 0.0;
     int counted = 0;
     for (ChannelKind kind : kinds) {
-        double s = 0.0;
+        double s = 0.0, uu = 0.0;  // squared residuals; samples times squared uncertainty
         long n = 0;
         for (int w : which)
             for (const ChannelComparison& ch : tests[w].channels) {
                 if (ch.kind != kind) continue;
                 for (size_t i = 0; i < ch.measured.size(); ++i)
                     s += std::pow(ch.measured[i] - ch.simulated[i], 2), ++n;
+                if (beyondUncertainty)
+                    uu += double(ch.measured.size()) *
+                          std::pow(scale.getUncertainty(kind, tests[w].test), 2);
             }
         if (n == 0 && kind == ChannelKind::Bed) continue;  // no bed gauge
         ++counted;
-        const double u = beyondUncertainty ? scale.getUncertainty(kind) : 0.0;
         const double range = scale.getRange(kind);
-        if (n > 0 && range > 0.0) sum += std::max(0.0, s / double(n) - u * u) / (range * range);
+        if (n > 0 && range > 0.0) sum += std::max(0.0, (s - uu) / double(n)) / (range * range);
     }
     return counted ? std::sqrt(sum / double(counted)) : 0.0;
 }

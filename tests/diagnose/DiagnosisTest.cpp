@@ -547,3 +547,47 @@ TEST(GapScale, EachChannelKindHasItsScaleAndTheMassNone) {
     EXPECT_EQ(c.getRange(diagnose::ChannelKind::Mass), 0.0);
     EXPECT_THROW(g.get(diagnose::ChannelKind::Mass), std::invalid_argument);
 }
+
+TEST(GapScale, EachTestIsJudgedBeyondItsOwnUncertainty) {
+    // Two tests whose force residual is exactly their own numerical error: 0.04 N in the
+    // first (a stiff bag, a large step error), 0.01 N in the second; no noise, no pressure
+    // error. Pooled, the uncertainty is their RMS (0.0292 N), below the first's error: a
+    // floor of 0.0274 N that no model removes. Each beyond its own: nothing left.
+    std::vector<diagnose::TestComparison> tests(2);
+    const double err[2] = {0.04, 0.01};
+    for (int t = 0; t < 2; ++t) {
+        tests[t].test = t;
+        diagnose::ChannelComparison f, p;
+        f.kind = diagnose::ChannelKind::Force;
+        p.kind = diagnose::ChannelKind::Pressure;
+        for (int i = 0; i < 10; ++i) {
+            f.measured.push_back(1.0 + err[t] * (i % 2 ? 1.0 : -1.0));
+            f.simulated.push_back(1.0);
+            p.measured.push_back(1000.0);
+            p.simulated.push_back(1000.0);
+        }
+        tests[t].channels = {f, p};
+        tests[t].numericalUncertainty = {err[t], 0.0};
+        tests[t].inputUncertainty = {0.0, 0.0};
+    }
+    diagnose::WhereReport w;
+    w.channels.resize(2);
+    w.channels[0].channel = "force";
+    w.channels[0].range = 20.0;
+    w.channels[0].validation = std::sqrt(0.5 * (0.04 * 0.04 + 0.01 * 0.01));
+    w.channels[1].channel = "pressure";
+    w.channels[1].range = 1e4;
+    const diagnose::GapScale pooled = diagnose::makeGapScale(w);
+    const diagnose::GapScale own = diagnose::makeGapScale(w, tests);
+    EXPECT_NEAR(own.getUncertainty(diagnose::ChannelKind::Force, 0), 0.04, 1e-15);
+    EXPECT_NEAR(own.getUncertainty(diagnose::ChannelKind::Force, 1), 0.01, 1e-15);
+    EXPECT_EQ(own.getUncertainty(diagnose::ChannelKind::Force, 7), w.channels[0].validation);
+    // The first test alone: pooled, sqrt(0.04^2 - 0.0292^2) / 20 N over two channel kinds.
+    const double floor = std::sqrt(0.04 * 0.04 - 0.5 * (0.04 * 0.04 + 0.01 * 0.01)) / 20.0;
+    EXPECT_NEAR(diagnose::calcGap(tests, {0}, pooled, true), floor / std::sqrt(2.0), 1e-12);
+    // (the square root of a roundoff-sized difference: 1e-9 against the floor's 1e-3)
+    EXPECT_NEAR(diagnose::calcGap(tests, {0}, own, true), 0.0, 1e-9);
+    EXPECT_NEAR(diagnose::calcGap(tests, {0, 1}, own, true), 0.0, 1e-9);
+    // Without the uncertainty the gap is the same either way.
+    EXPECT_DOUBLE_EQ(diagnose::calcGap(tests, {0}, own), diagnose::calcGap(tests, {0}, pooled));
+}

@@ -22,7 +22,9 @@
 
 #include <bags/LoadTest.h>
 
+#include <array>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -202,25 +204,35 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
 std::string describeGap(const WhereReport& where);
 
 /// The scales gaps are measured with, per channel kind of the gap (force, pressure, bed) [SI]:
-/// the range its RMSE is divided by and its validation uncertainty (WhereReport's).
+/// the range its RMSE is divided by and its validation uncertainty (WhereReport's, pooled
+/// over the tests), and each test's own validation uncertainty.
 struct GapScale {
     struct Scale {
         double range = 0.0, uncertainty = 0.0;
     };
     Scale force, pressure, bed;
+    /// Per test (its index, TestComparison::test): the validation uncertainty of force,
+    /// pressure and bed [SI], the channel's noise with the test's own numerical and input
+    /// uncertainties (root sum square). A test not listed takes the pooled one.
+    std::map<int, std::array<double, 3>> testUncertainty;
     const Scale& get(ChannelKind kind) const;  ///< the mass's is all 0
     Scale& get(ChannelKind kind);              ///< @throws std::invalid_argument for the mass
     double getRange(ChannelKind kind) const { return get(kind).range; }
     double getUncertainty(ChannelKind kind) const { return get(kind).uncertainty; }
+    /// The test's own (else the pooled) validation uncertainty of a channel kind [SI].
+    double getUncertainty(ChannelKind kind, int test) const;
 };
-/// The ranges and validation uncertainties of a where report's channels.
-GapScale makeGapScale(const WhereReport& where);
+/// The ranges and validation uncertainties of a where report's channels and, with the
+/// comparisons it was made of (their numerical and input uncertainties filled), each test's
+/// own: the step's error differs between the tests (a stiffer bag's force more), and a
+/// pooled uncertainty leaves a floor in the tests where it is larger.
+GapScale makeGapScale(const WhereReport& where, const std::vector<TestComparison>& tests = {});
 
 /// The gap (as WhereReport::gap) over some tests only, with the given channel ranges [SI] so
 /// that gaps of different subsets are comparable: RMS over the channel kinds the tests have.
 /// With `beyondUncertainty`, the gap beyond the validation uncertainties: each channel's
-/// squared RMSE less its squared uncertainty (at least 0), what noise and numerics cannot
-/// explain.
+/// squared RMSE less its squared uncertainty (each test's own, GapScale::testUncertainty,
+/// weighted by its samples; at least 0), what noise and numerics cannot explain.
 double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>& which,
                const GapScale& scale, bool beyondUncertainty = false);
 
