@@ -651,6 +651,9 @@ int run(const Args& a) {
     parseNoise(a.noise, so);
     so.seed = a.seed;
     so.bedGauge = a.bedGauge;
+    for (const std::string& n : a.noise)
+        if (n.rfind("bed=", 0) == 0 && !a.bedGauge)
+            throw UsageError("--noise '" + n + "': the bed gauge's noise needs --bed-gauge");
     so.sampleInterval = parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.5 s" : a.sampleInterval);
     try {
         so.validate();

@@ -200,6 +200,10 @@ void fillResiduals(const std::vector<TestComparison>& c, const SampleSet& s, con
             if (idx.empty()) continue;
             const ChannelComparison& cc = t.channels[ch];
             const double range = g.getRange(cc.kind);
+            if (!(range > 0.0)) {  // a flat channel is not fitted (as it is not in the gap)
+                for (size_t i = 0; i < idx.size(); ++i) r[k++] = 0.0;
+                continue;
+            }
             const double w = 1.0 / (range * std::sqrt(double(idx.size())));
             for (size_t i : idx) r[k++] = w * (cc.measured[i] - cc.simulated[i]);
         }

@@ -78,6 +78,8 @@ GapScale::Scale& GapScale::get(ChannelKind kind) {
 
 namespace {
 int getGapIndex(ChannelKind kind) {
+    if (kind == ChannelKind::Mass)
+        throw std::invalid_argument("the flowmeter's mass is not a channel of the gap");
     return kind == ChannelKind::Force ? 0 : kind == ChannelKind::Pressure ? 1 : 2;
 }
 }  // namespace
@@ -307,7 +309,14 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
     WhereReport r;
     if (tests.empty()) return r;
     const size_t nch = tests[0].channels.size();
-    std::vector<double> nrmse2;
+    for (const TestComparison& t : tests)
+        for (size_t c = 0; c < nch; ++c)
+            if (t.channels.size() != nch || t.channels[c].kind != tests[0].channels[c].kind)
+                throw std::invalid_argument("the tests' channels differ (test " +
+                                            std::to_string(t.test + 1) +
+                                            "); valid: the same channels in every test");
+    std::vector<double> nrmse2(nch, 0.0);  // per channel; 0 for the mass and a flat channel
+    size_t inGap = 0;
     for (size_t c = 0; c < nch; ++c) {
         const ChannelKind kind = tests[0].channels[c].kind;
         const std::string name = getChannelName(kind);
@@ -396,17 +405,12 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
                                   cs.inputTemperature * cs.inputTemperature);
         r.channels.push_back(cs);
         if (kind != ChannelKind::Mass && cs.range > 0.0)
-            nrmse2.push_back(std::pow(cs.rmse / cs.range, 2));
+            nrmse2[c] = std::pow(cs.rmse / cs.range, 2), ++inGap;
         for (const std::string& g : order) r.regimes.push_back(calcRegimeStats(name, g, regimes[g], sumSq));
     }
     const double sum2 = std::accumulate(nrmse2.begin(), nrmse2.end(), 0.0);
-    r.gap = nrmse2.empty() ? 0.0 : std::sqrt(sum2 / double(nrmse2.size()));
-    size_t k = 0;
-    for (ChannelSummary& cs : r.channels) {
-        if (cs.channel == "mass") continue;
-        cs.shareOfGap = sum2 > 0.0 ? nrmse2[k] / sum2 : 0.0;
-        ++k;
-    }
+    r.gap = inGap ? std::sqrt(sum2 / double(inGap)) : 0.0;
+    for (size_t c = 0; c < nch; ++c) r.channels[c].shareOfGap = sum2 > 0.0 ? nrmse2[c] / sum2 : 0.0;
     r.withinValidation = true;
     for (const ChannelSummary& cs : r.channels)
         if (cs.channel != "mass" && cs.rmse > 2.0 * cs.validation) r.withinValidation = false;
@@ -438,10 +442,10 @@ double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>&
                     uu += double(ch.measured.size()) *
                           std::pow(scale.getUncertainty(kind, tests[w].test), 2);
             }
-        if (n == 0 && kind == ChannelKind::Bed) continue;  // no bed gauge
-        ++counted;
         const double range = scale.getRange(kind);
-        if (n > 0 && range > 0.0) sum += std::max(0.0, (s - uu) / double(n)) / (range * range);
+        if (n == 0 || !(range > 0.0)) continue;  // no bed gauge; a flat channel (as calcWhere)
+        ++counted;
+        sum += std::max(0.0, (s - uu) / double(n)) / (range * range);
     }
     return counted ? std::sqrt(sum / double(counted)) : 0.0;
 }

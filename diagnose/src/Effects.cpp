@@ -49,7 +49,7 @@ const std::vector<Effect>& getEffects() {
          true},
         {"bed-compliance",
          "the bed board under the bag sinks on a spring (confusable with the machine's "
-         "compliance on the rig's data)",
+         "compliance on the rig's data, unless a gauge under the board reads its sink)",
          {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxBedCompliance, 0.1e-3,
            "rig.bed_stiffness (its inverse)"}},
          false},
