@@ -591,3 +591,38 @@ TEST(GapScale, EachTestIsJudgedBeyondItsOwnUncertainty) {
     // Without the uncertainty the gap is the same either way.
     EXPECT_DOUBLE_EQ(diagnose::calcGap(tests, {0}, own), diagnose::calcGap(tests, {0}, pooled));
 }
+
+TEST(Where, AFlatChannelHasNoShareAndShiftsNoOther) {
+    // Force with an error, pressure flat (its range 0: not in the gap), a bed gauge with an
+    // error: the shares go to force and bed, in their places.
+    diagnose::TestComparison t;
+    t.test = 0;
+    for (diagnose::ChannelKind k : {diagnose::ChannelKind::Force, diagnose::ChannelKind::Pressure,
+                                    diagnose::ChannelKind::Mass, diagnose::ChannelKind::Bed}) {
+        diagnose::ChannelComparison c;
+        c.kind = k;
+        for (int i = 0; i < 5; ++i) {
+            c.time.push_back(i);
+            c.displacement.push_back(1e-3 * i);
+            c.force.push_back(i);
+            c.loading.push_back(1);
+            const bool flat = k == diagnose::ChannelKind::Pressure || k == diagnose::ChannelKind::Mass;
+            c.measured.push_back(flat ? 1.0 : 0.1 * i);
+            c.simulated.push_back(flat ? 1.0 : 0.1 * i + (k == diagnose::ChannelKind::Bed ? 1e-4 : 0.01));
+        }
+        t.channels.push_back(c);
+    }
+    const diagnose::WhereReport w = diagnose::calcWhere({t}, {});
+    ASSERT_EQ(w.channels.size(), 4u);
+    EXPECT_EQ(w.channels[1].shareOfGap, 0.0);
+    EXPECT_EQ(w.channels[2].shareOfGap, 0.0);
+    EXPECT_NEAR(w.channels[0].shareOfGap + w.channels[3].shareOfGap, 1.0, 1e-12);
+    // force: 0.01 over a range of 0.4; bed: 0.1 mm over the travel of 4 mm: the same share.
+    EXPECT_NEAR(w.channels[0].shareOfGap, 0.5, 1e-9);
+    EXPECT_NEAR(w.gap, 0.025, 1e-9);  // two channels in the gap, each 0.025
+    // Tests with other channels are refused.
+    diagnose::TestComparison u = t;
+    u.test = 1;
+    u.channels.pop_back();
+    EXPECT_THROW(diagnose::calcWhere({t, u}, {}), std::invalid_argument);
+}
