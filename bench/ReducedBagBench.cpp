@@ -28,6 +28,9 @@
 //   bench_reduced_bag fe-bag ... T0 T1 membrane R_X R_Y K_R RAMP   (mm)
 //                                                and at T1 the membrane prototype's film
 //                                                and forces (M lines)
+//   bench_reduced_bag influence SCENARIO CAL     the FE bag linearised (its tangent condensed
+//                                                onto the nodes' vertical motion) with the
+//                                                contact as an LCP, on the membrane's cases
 //   bench_reduced_bag membrane SCENARIO CAL SET...
 //                                                the membrane prototype against the FE bag
 //                                                on the calibration and validation shapes;
@@ -36,6 +39,7 @@
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
 #include <bags/Airbag.h>
+#include <bags/Solver.h>
 #include <body/Anthropometry.h>
 #include <cosim/ArrayReadings.h>
 #include <cosim/ReducedBag.h>
@@ -1595,6 +1599,162 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
     return 0;
 }
 
+// An influence-matrix footprint (prototype): the FE bag linearised about its unloaded
+// equilibrium at the case's gas mass, condensed onto its nodes' vertical motion,
+//   C_ij = downward motion of node i per newton pushed down at node j
+// (bags::solveTangent: membrane, gas, board; symmetric), and the shape's contact on the
+// nodes as a linear complementarity problem
+//   f >= 0,  C f >= d,  f . (C f - d) = 0,
+// d_i the depth of the shape's lower surface below node i's unloaded position (a vertical
+// ray). A load on one panel may lift the other (C_ij < 0), the film hangs below a shallow part
+// of a shape beside a deep contact, and the gas takes its share through the tangent's dense
+// term. Linear: the film's geometry does not change with the load.
+struct Influence {
+    Eigen::Matrix3Xd x0;            // unloaded nodes [m]
+    Eigen::VectorXd area;           // nodal areas [m^2]
+    Eigen::MatrixXd C;              // over the free nodes `free` [m/N]
+    std::vector<int> free;          // node indices with a free vertical dof
+    double P0 = 0.0;                // unloaded gauge pressure [Pa]
+};
+
+Influence buildInfluence(const bags::AirbagSpec& spec, double mass) {
+    bags::Airbag bag(spec);
+    bag.inflate(mass);
+    Influence in;
+    in.x0 = bag.getPositions();
+    in.area = bag.getMesh().calcNodalAreas();
+    in.P0 = bag.getChamberState(0).gaugePressure;
+    const int nn = int(in.x0.cols());
+    std::vector<char> fixedZ(nn, 0);
+    for (int d : bag.getModel().getFixedDofs())
+        if (d % 3 == 2) fixedZ[size_t(d / 3)] = 1;
+    for (int n = 0; n < nn; ++n)
+        if (!fixedZ[size_t(n)]) in.free.push_back(n);
+    const int m = int(in.free.size());
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3 * nn, m);
+    for (int j = 0; j < m; ++j) B(3 * in.free[size_t(j)] + 2, j) = -1.0;
+    const Eigen::MatrixXd Y = bags::solveTangent(bag.getModel(), in.x0, B);
+    in.C.resize(m, m);
+    for (int i = 0; i < m; ++i)
+        for (int j = 0; j < m; ++j) in.C(i, j) = -Y(3 * in.free[size_t(i)] + 2, j);
+    in.C = 0.5 * (in.C + in.C.transpose()).eval();
+    return in;
+}
+
+// The height of a convex shape's lower surface over (x, y), NaN if the vertical line misses it.
+double lowerSurface(const bags::RigidShape& s, double x, double y, double zlo, double zhi) {
+    auto phi = [&](double z) { return s.calcSignedDistance(Vec3(x, y, z), nullptr, nullptr); };
+    double a = zlo, b = zhi;
+    for (int k = 0; k < 80; ++k) {  // the signed distance of a convex set is convex along a line
+        const double m1 = a + (b - a) / 3, m2 = b - (b - a) / 3;
+        (phi(m1) < phi(m2) ? b : a) = (phi(m1) < phi(m2) ? m2 : m1);
+    }
+    const double zmin = 0.5 * (a + b);
+    if (phi(zmin) >= 0.0 || phi(zlo) <= 0.0) return std::nan("");
+    double lo = zlo, hi = zmin;
+    for (int k = 0; k < 60; ++k) (phi(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
+    return 0.5 * (lo + hi);
+}
+
+// The LCP by projected Gauss-Seidel over the nodes within `reach` of the shape (warm start f).
+void solveInfluence(const Influence& in, const bags::RigidShape& s, double reach,
+                    Eigen::VectorXd& f) {
+    const int m = int(in.free.size());
+    if (f.size() != m) f = Eigen::VectorXd::Zero(m);
+    std::vector<int> cand;
+    Eigen::VectorXd d = Eigen::VectorXd::Constant(m, -1.0);
+    for (int i = 0; i < m; ++i) {
+        const Vec3 x = in.x0.col(in.free[size_t(i)]);
+        const double h = lowerSurface(s, x.x(), x.y(), x.z() - 0.3, x.z() + 0.6);
+        if (std::isfinite(h) && x.z() - h > -reach) {
+            d[i] = x.z() - h;
+            cand.push_back(i);
+        } else {
+            f[i] = 0.0;
+        }
+    }
+    Eigen::VectorXd u = in.C * f;
+    for (int it = 0; it < 20000; ++it) {
+        double change = 0.0;
+        for (int i : cand) {
+            const double fi = std::max(0.0, f[i] + (d[i] - u[i]) / in.C(i, i));
+            const double df = fi - f[i];
+            if (df != 0.0) {
+                u += in.C.col(i) * df;
+                f[i] = fi;
+                change = std::max(change, std::abs(df) * in.C(i, i));
+            }
+        }
+        if (change < 1e-9) break;
+    }
+}
+
+int influence(const std::string& scenario, const std::string& calPath) {
+    const io::PatientOnArrayScenario sc = readScenario(scenario);
+    bags::AirbagSpec spec = sc.options.bag;
+    spec.solver.monitor = nullptr;
+    const auto cal = io::readReducedBagCalibration(calPath);
+    std::vector<Case> cases = calibrationCases(spec.geometry, 4.5e-3);
+    for (const Case& c : validationCases(spec.geometry))
+        if (c.mass == 4.25e-3 || c.mass == 5.25e-3) cases.push_back(c);
+    std::map<long, Influence> byMass;
+    double eRed2All = 0, eInf2All = 0, pRed2All = 0, pInf2All = 0;
+    int nAll = 0, npAll = 0;
+    for (const Case& c : cases) {
+        const long key = std::lround(c.mass * 1e6);
+        if (!byMass.count(key)) {
+            const auto t0 = std::chrono::steady_clock::now();
+            byMass[key] = buildInfluence(spec, c.mass);
+            std::printf("influence at %.2f g: %d free nodes, P0 %.2f kPa, %.1f s\n", c.mass * 1e3,
+                        int(byMass[key].free.size()), byMass[key].P0 * 1e-3,
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        }
+        const Influence& in = byMass[key];
+        std::vector<Row> rows = press(c, spec, sc.options.contact, cal);
+        std::printf("%s, %.2f g:\n  depth_mm F_FE F_red F_inf patch_FE patch_red patch_inf [kPa]\n",
+                    c.name.c_str(), c.mass * 1e3);
+        auto shape = makeShape(c);
+        Eigen::VectorXd f;
+        double eRed2 = 0, eInf2 = 0;
+        int n = 0;
+        for (const Row& r : rows) {
+            shape->setPose(pose(c, r.z));
+            solveInfluence(in, *shape, 0.02, f);
+            const double F = f.sum();
+            std::vector<Eigen::Vector2d> pts;
+            std::vector<double> fs;
+            for (int i = 0; i < f.size(); ++i)
+                if (f[i] > 0.0) {
+                    const Vec3 x = in.x0.col(in.free[size_t(i)]);
+                    pts.emplace_back(x.x(), x.y());
+                    fs.push_back(f[i]);
+                }
+            const double patch = cosim::calcPatchPeakPressure(pts, fs, cosim::kDefaultPatchArea);
+            std::printf("  %4.0f %6.1f %6.1f %6.1f %6.2f %6.2f %6.2f\n", r.depth * 1e3, r.forceFE,
+                        r.forceRed, F, r.patchFE * 1e-3, r.patchRed * 1e-3, patch * 1e-3);
+            if (r.forceFE >= 5.0 && r.forceFE <= 250.0) {
+                eRed2 += std::pow(r.forceRed / r.forceFE - 1, 2);
+                eInf2 += std::pow(F / r.forceFE - 1, 2);
+                ++n;
+                if (r.patchFE > 0.0) {
+                    pRed2All += std::pow(r.patchRed / r.patchFE - 1, 2);
+                    pInf2All += std::pow(patch / r.patchFE - 1, 2);
+                    ++npAll;
+                }
+            }
+        }
+        std::printf("  rms force error over %d steps: reduced %.1f %%, influence %.1f %%\n", n,
+                    n ? 100 * std::sqrt(eRed2 / n) : 0.0, n ? 100 * std::sqrt(eInf2 / n) : 0.0);
+        eRed2All += eRed2, eInf2All += eInf2, nAll += n;
+        std::fflush(stdout);
+    }
+    std::printf("all cases, %d steps: force rms reduced %.1f %%, influence %.1f %%; patch peak rms "
+                "reduced %.1f %%, influence %.1f %% (%d steps)\n",
+                nAll, 100 * std::sqrt(eRed2All / nAll), 100 * std::sqrt(eInf2All / nAll),
+                100 * std::sqrt(pRed2All / npAll), 100 * std::sqrt(pInf2All / npAll), npAll);
+    return 0;
+}
+
 // One bag of a finite-element run alone, FE and reduced, along the run's poses (as replay)
 // and gas masses from T0 to T1 [s]: its shapes, or only the segments listed (body::Segment
 // indices, comma separated; "all": every one). The FE bag is inflated at T0's mass with the
@@ -1843,6 +2003,7 @@ int main(int argc, char** argv) {
         if (mode == "lateral" && argc == 7)
             return lateral(argv[2], argv[3], argv[4], std::stod(argv[5]), std::stod(argv[6]));
         if (mode == "shear" && argc == 17) return shear(argv[2], argv[3], argv + 4);
+        if (mode == "influence" && argc == 4) return influence(argv[2], argv[3]);
         if (mode == "membrane" && argc >= 5)
             return membraneCases(argv[2], argv[3], argc - 4, argv + 4);
         if (mode == "fe-bag" && argc == 14 && std::string(argv[9]) == "membrane")
@@ -1861,7 +2022,7 @@ int main(int argc, char** argv) {
                      "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points | membrane "
                      "R_X R_Y K_R RAMP] | membrane SCENARIO CAL R_X,R_Y,K_R[,FORCE[,RAMP]]... | section "
                      "SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM | panels "
-                     "SCENARIO CAL_IN CAL_OUT\n";
+                     "SCENARIO CAL_IN CAL_OUT | influence SCENARIO CAL\n";
         return 2;
     } catch (const io::InputError& e) {
         std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";
