@@ -1516,6 +1516,15 @@ std::pair<double, double> fitRadii(const cosim::ReducedBagCalibration& cal, cons
 }
 
 
+// The footprint prototypes' cases: the calibration's spheres (4.5 g) and the validation's
+// taut shapes (4.25 and 5.25 g).
+std::vector<Case> footprintCases(const bags::DoubleWedgeParams& g) {
+    std::vector<Case> cases = calibrationCases(g, 4.5e-3);
+    for (const Case& c : validationCases(g))
+        if (c.mass == 4.25e-3 || c.mass == 5.25e-3) cases.push_back(c);
+    return cases;
+}
+
 // The membrane prototype (solveMembrane) on the calibration's spheres (4.5 g) and the
 // validation's taut shapes (4.25 and 5.25 g): the FE bag pressed once per case, then per
 // parameter set R_X,R_Y,K_R [mm] the membrane's vertical force at the FE's gas pressure and
@@ -1525,9 +1534,7 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
     bags::AirbagSpec spec = sc.options.bag;
     spec.solver.monitor = nullptr;
     const auto cal = io::readReducedBagCalibration(calPath);
-    std::vector<Case> cases = calibrationCases(spec.geometry, 4.5e-3);
-    for (const Case& c : validationCases(spec.geometry))
-        if (c.mass == 4.25e-3 || c.mass == 5.25e-3) cases.push_back(c);
+    const std::vector<Case> cases = footprintCases(spec.geometry);
     // A set: R_X,R_Y,K_R[,FORCE[,RAMP]] (mm; FORCE: tension, the film's K w on the contact,
     // the default; gas, P over the contact set; film, P (1 + R kappa_shape) over it with the
     // curvature from differences of the shape's lowest points; shape, with the shape's own
@@ -1694,9 +1701,7 @@ int influence(const std::string& scenario, const std::string& calPath) {
     bags::AirbagSpec spec = sc.options.bag;
     spec.solver.monitor = nullptr;
     const auto cal = io::readReducedBagCalibration(calPath);
-    std::vector<Case> cases = calibrationCases(spec.geometry, 4.5e-3);
-    for (const Case& c : validationCases(spec.geometry))
-        if (c.mass == 4.25e-3 || c.mass == 5.25e-3) cases.push_back(c);
+    const std::vector<Case> cases = footprintCases(spec.geometry);
     std::map<long, Influence> byMass;
     double eRed2All = 0, eInf2All = 0, pRed2All = 0, pInf2All = 0;
     int nAll = 0, npAll = 0;
