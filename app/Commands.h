@@ -12,5 +12,6 @@ int runSynthMeasurementCommand(int argc, char** argv);  ///< bagsim synth-measur
 int runDiagnoseCommand(int argc, char** argv);  ///< bagsim diagnose --measured DIR
 int runStudyCommand(int argc, char** argv);     ///< bagsim study STUDY.yaml [--out DIR]
 int runReportCommand(int argc, char** argv);    ///< bagsim report DIR [--out FILE]
+int runCompareCommand(int argc, char** argv);   ///< bagsim compare REFERENCE RUN
 
 }  // namespace bagsim::app

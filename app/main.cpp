@@ -23,6 +23,7 @@ const char* kUsage =
     "  diagnose --measured DIR         where simulation and measured data disagree, and why\n"
     "  study STUDY.yaml [--out DIR]    run every case of a study into one table\n"
     "  report DIR [--out FILE]         (re)write report.html of a patient-on-array run or a study\n"
+    "  compare REFERENCE RUN           a run's tilt and region peaks against a reference run\n"
     "\n"
     "  bagsim <command> --help   says what a command does and its options\n"
     "  bagsim --version          prints the version\n";
@@ -48,7 +49,8 @@ int main(int argc, char** argv) {
     if (cmd == "diagnose") return bagsim::app::runDiagnoseCommand(argc - 2, argv + 2);
     if (cmd == "study") return bagsim::app::runStudyCommand(argc - 2, argv + 2);
     if (cmd == "report") return bagsim::app::runReportCommand(argc - 2, argv + 2);
+    if (cmd == "compare") return bagsim::app::runCompareCommand(argc - 2, argv + 2);
     std::cerr << "bagsim: unknown command '" << cmd
-              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose, study, report (see bagsim --help)\n";
+              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose, study, report, compare (see bagsim --help)\n";
     return 2;
 }

@@ -1,0 +1,217 @@
+#include "io/RunComparison.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "ReportPage.h"
+#include "io/InputError.h"
+#include "io/Units.h"
+
+namespace io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kMmHg = 133.322387415;  // [Pa]
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// Output rows are written every output.every (at least 1 ms); times are matched to 0.1 ms.
+long timeKey(double t) { return std::lround(t * 1e4); }
+
+std::string fmt(const char* f, double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+const char* kHelp = "a patient-on-array results folder (bagsim run --out DIR) holds tilt.csv and "
+                    "regions.csv";
+
+// Tilt rows by time key: (pelvis, thorax) [rad].
+std::map<long, std::pair<double, double>> readTilt(const fs::path& dir) {
+    const report::CsvTable t = report::readCsvTable(
+        dir / "tilt.csv", {"time_s", "pelvis_tilt_deg", "thorax_tilt_deg"}, false, kHelp);
+    const int ct = t.find("time_s"), cp = t.find("pelvis_tilt_deg"), cq = t.find("thorax_tilt_deg");
+    std::map<long, std::pair<double, double>> out;
+    for (size_t r = 0; r < t.rows.size(); ++r)
+        out[timeKey(t.number(r, ct))] = {t.number(r, cp) * kDeg, t.number(r, cq) * kDeg};
+    return out;
+}
+
+struct RegionRow {
+    double force = 0.0, peak = 0.0;  // [N], [Pa]
+};
+
+// Region rows by time key and region name.
+std::map<long, std::map<std::string, RegionRow>> readRegions(const fs::path& dir) {
+    const report::CsvTable t = report::readCsvTable(
+        dir / "regions.csv", {"time_s", "region", "force_N", "patch_peak_mmHg"}, false, kHelp);
+    const int ct = t.find("time_s"), cr = t.find("region"), cf = t.find("force_N"),
+              cp = t.find("patch_peak_mmHg");
+    std::map<long, std::map<std::string, RegionRow>> out;
+    for (size_t r = 0; r < t.rows.size(); ++r)
+        out[timeKey(t.number(r, ct))][t.text(r, cr)] = {t.number(r, cf), t.number(r, cp) * kMmHg};
+    return out;
+}
+
+RegionPeakSummary summarise(const std::vector<const RegionPeak*>& ps, double time, double tol) {
+    RegionPeakSummary s;
+    s.time = time;
+    s.regions = int(ps.size());
+    double sum = 0.0, sum2 = 0.0;
+    for (const RegionPeak* p : ps) {
+        const double e = p->error();
+        sum += e, sum2 += e * e;
+        if (std::abs(e) <= tol) ++s.within;
+    }
+    if (s.regions > 0) s.mean = sum / s.regions, s.rms = std::sqrt(sum2 / s.regions);
+    return s;
+}
+
+}  // namespace
+
+bool RunComparison::meetsTargets() const {
+    return tiltRows > 0 && tiltRowsWithin == tiltRows && overall.within == overall.regions;
+}
+
+RunComparison compareRuns(const fs::path& reference, const fs::path& run,
+                          const RunComparisonOptions& options) {
+    RunComparison c;
+    c.reference = reference, c.run = run, c.options = options;
+    for (const fs::path& d : {reference, run}) {
+        std::error_code ec;
+        if (!fs::is_directory(d, ec))
+            throw InputError(d.string(), 0, "", std::string("is not a folder; ") + kHelp);
+    }
+    const auto tiltRef = readTilt(reference), tiltRun = readTilt(run);
+    const long from = timeKey(options.from);
+    double sp = 0.0, sq = 0.0;
+    for (const auto& [k, ref] : tiltRef) {
+        if (k < from) continue;
+        ++c.referenceTiltRows;
+        const auto it = tiltRun.find(k);
+        if (it == tiltRun.end()) continue;
+        const double t = k * 1e-4;
+        if (c.tiltRows == 0) c.firstTime = t;
+        c.lastTime = t;
+        ++c.tiltRows;
+        const double dp = it->second.first - ref.first, dq = it->second.second - ref.second;
+        sp += dp * dp, sq += dq * dq;
+        if (c.tiltRows == 1 || std::abs(dp) > std::abs(c.pelvis.largest))
+            c.pelvis.largest = dp, c.pelvis.largestTime = t;
+        if (c.tiltRows == 1 || std::abs(dq) > std::abs(c.thorax.largest))
+            c.thorax.largest = dq, c.thorax.largestTime = t;
+        if (std::abs(dp) <= options.tiltTolerance && std::abs(dq) <= options.tiltTolerance)
+            ++c.tiltRowsWithin;
+    }
+    if (c.tiltRows == 0)
+        throw InputError((run / "tilt.csv").string(), 0, "time_s",
+                         "no row at a time of " + (reference / "tilt.csv").string() +
+                             (options.from > 0 ? " from " + fmt("%g s", options.from) : "") +
+                             "; compare runs of the same scenario and output.every");
+    c.pelvis.rms = std::sqrt(sp / c.tiltRows), c.thorax.rms = std::sqrt(sq / c.tiltRows);
+
+    const auto regRef = readRegions(reference), regRun = readRegions(run);
+    std::vector<long> keys;
+    if (options.times.empty()) {
+        for (const auto& [k, rows] : regRef)
+            if (k >= from && regRun.count(k)) keys.push_back(k);
+    } else {
+        for (double t : options.times) {
+            const long k = timeKey(t);
+            if (regRef.count(k) && regRun.count(k))
+                keys.push_back(k);
+            else
+                c.missingTimes.push_back(t);
+        }
+    }
+    for (long k : keys) {
+        const auto& run_ = regRun.at(k);
+        for (const auto& [name, ref] : regRef.at(k)) {
+            if (!(ref.force >= options.minForce) || !(ref.peak > 0.0)) continue;
+            RegionPeak p;
+            p.time = k * 1e-4, p.region = name, p.referenceForce = ref.force, p.reference = ref.peak;
+            const auto it = run_.find(name);
+            p.run = it == run_.end() ? 0.0 : it->second.peak;
+            c.peaks.push_back(p);
+        }
+    }
+    std::vector<const RegionPeak*> all;
+    for (size_t i = 0; i < c.peaks.size();) {
+        std::vector<const RegionPeak*> at;
+        const double t = c.peaks[i].time;
+        for (; i < c.peaks.size() && c.peaks[i].time == t; ++i) at.push_back(&c.peaks[i]);
+        all.insert(all.end(), at.begin(), at.end());
+        c.moments.push_back(summarise(at, t, options.peakTolerance));
+    }
+    c.overall = summarise(all, std::numeric_limits<double>::quiet_NaN(), options.peakTolerance);
+    return c;
+}
+
+std::string formatRunComparison(const RunComparison& c, bool detail) {
+    std::ostringstream o;
+    const double tolDeg = c.options.tiltTolerance / kDeg;
+    const double tolPc = 100.0 * c.options.peakTolerance;
+    o << c.run.string() << " against " << c.reference.string() << "\n\n";
+    o << "tilt (run - reference), " << c.tiltRows << " rows from " << fmt("%g s", c.firstTime)
+      << " to " << fmt("%g s", c.lastTime);
+    if (c.tiltRows < c.referenceTiltRows)
+        o << " (the reference has " << c.referenceTiltRows << "; the run lacks the others)";
+    o << ":\n";
+    for (const auto& [name, d] : {std::pair<const char*, const TiltDifference&>{"pelvis", c.pelvis},
+                                  {"thorax", c.thorax}})
+        o << "  " << name << ": largest " << fmt("%+.2f deg", d.largest / kDeg) << " at "
+          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", d.rms / kDeg) << "\n";
+    o << "  within " << fmt("%g deg", tolDeg) << ": " << c.tiltRowsWithin << " of " << c.tiltRows
+      << " rows (both segments)\n\n";
+    o << "region patch peaks (20 cm^2, regions.csv), the regions carrying at least "
+      << fmt("%g N", c.options.minForce) << " in the reference; error = run / reference - 1:\n";
+    o << "  time       regions   mean      rms       within " << fmt("%g %%", tolPc) << "\n";
+    auto line = [&](const std::string& when, const RegionPeakSummary& s) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "  %-10s %7d   %+6.1f %%  %6.1f %%  %d\n", when.c_str(),
+                      s.regions, 100 * s.mean, 100 * s.rms, s.within);
+        o << buf;
+    };
+    for (const RegionPeakSummary& s : c.moments) line(fmt("%g s", s.time), s);
+    line("all", c.overall);
+    for (double t : c.missingTimes)
+        o << "  " << fmt("%g s", t) << ": not an output time of both runs' regions.csv\n";
+    if (detail && !c.peaks.empty()) {
+        o << "\n  time       region            reference  run        error\n";
+        for (const RegionPeak& p : c.peaks) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "  %-10s %-16s %6.1f mmHg %6.1f mmHg %+6.1f %%%s\n",
+                          fmt("%g s", p.time).c_str(), p.region.c_str(), p.reference / kMmHg,
+                          p.run / kMmHg, 100 * p.error(),
+                          std::abs(p.error()) <= c.options.peakTolerance ? "" : "  *");
+            o << buf;
+        }
+    }
+    o << "\n"
+      << (c.meetsTargets() ? "meets" : "misses") << " the targets (tilt within "
+      << fmt("%g deg", tolDeg) << " at every row, every region's peak within "
+      << fmt("%g %%", tolPc) << ")\n";
+    return o.str();
+}
+
+std::string formatRegionPeaksCsv(const RunComparison& c) {
+    std::ostringstream o;
+    o << "time_s,region,reference_force_N,reference_patch_peak_mmHg,run_patch_peak_mmHg,"
+         "error_percent,within\n";
+    for (const RegionPeak& p : c.peaks) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "%.4f,%s,%.3f,%.3f,%.3f,%.2f,%d\n", p.time, p.region.c_str(),
+                      p.referenceForce, p.reference / kMmHg, p.run / kMmHg, 100 * p.error(),
+                      std::abs(p.error()) <= c.options.peakTolerance ? 1 : 0);
+        o << buf;
+    }
+    return o.str();
+}
+
+}  // namespace io
