@@ -9,6 +9,7 @@
 
 #include "ReportPage.h"
 #include "io/InputError.h"
+#include "io/Results.h"
 #include "io/Units.h"
 
 namespace io {
@@ -88,6 +89,15 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
         if (!fs::is_directory(d, ec))
             throw InputError(d.string(), 0, "", std::string("is not a folder; ") + kHelp);
     }
+    // An unfinished run's folder says so (io::OutputDir's marker): its status line.
+    auto incomplete = [](const fs::path& d) -> std::string {
+        const std::string text = report::readTextIfPresent(d / OutputDir::kMarkerName);
+        if (text.empty()) return "";
+        const size_t at = text.find("status: ");
+        if (at == std::string::npos) return "incomplete";
+        return text.substr(at + 8, text.find('\n', at) - (at + 8));
+    };
+    c.referenceIncomplete = incomplete(reference), c.runIncomplete = incomplete(run);
     const auto tiltRef = readTilt(reference), tiltRun = readTilt(run);
     const long from = timeKey(options.from);
     double sp = 0.0, sq = 0.0;
@@ -157,7 +167,13 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
     std::ostringstream o;
     const double tolDeg = c.options.tiltTolerance / kDeg;
     const double tolPc = 100.0 * c.options.peakTolerance;
-    o << c.run.string() << " against " << c.reference.string() << "\n\n";
+    o << c.run.string() << " against " << c.reference.string() << "\n";
+    for (const auto& [what, status] : {std::pair<const char*, const std::string&>{"the reference", c.referenceIncomplete},
+                                       {"the run", c.runIncomplete}})
+        if (!status.empty())
+            o << "NOTE: " << what << " is an incomplete run (its INCOMPLETE marker: status " << status
+              << "); only its rows so far are compared\n";
+    o << "\n";
     o << "tilt (run - reference), " << c.tiltRows << " rows from " << fmt("%g s", c.firstTime)
       << " to " << fmt("%g s", c.lastTime);
     if (c.tiltRows < c.referenceTiltRows)

@@ -78,6 +78,15 @@ TEST(RunComparison, TiltAndRegionPeaksAreJudgedAsWorkedOutByHand) {
     EXPECT_NE(text.find("misses the targets"), std::string::npos);
     EXPECT_NE(io::formatRegionPeaksCsv(d).find("0.2000,heel_r,20.000,100.000,130.000,30.00,0\n"),
               std::string::npos);
+    EXPECT_EQ(text.find("incomplete run"), std::string::npos);
+    // An unfinished run (its INCOMPLETE marker) is compared as far as it went, and said so.
+    std::ofstream(run / "INCOMPLETE") << "This folder's results are incomplete.\nstatus: running\n";
+    const io::RunComparison e = io::compareRuns(ref, run, opt);
+    EXPECT_EQ(e.runIncomplete, "running");
+    EXPECT_EQ(e.referenceIncomplete, "");
+    EXPECT_NE(io::formatRunComparison(e, false).find(
+                  "NOTE: the run is an incomplete run (its INCOMPLETE marker: status running)"),
+              std::string::npos);
 }
 
 TEST(RunComparison, ARunAgainstItselfMeetsTheTargets) {

@@ -58,6 +58,9 @@ struct RunComparison {
     std::vector<RegionPeakSummary> moments;     ///< per moment
     RegionPeakSummary overall;                  ///< over every judged region-moment
     std::vector<double> missingTimes;           ///< asked-for moments one of the runs lacks [s]
+    /// The status line of a folder's INCOMPLETE marker ("" when the run finished), for the
+    /// reference and the run.
+    std::string referenceIncomplete, runIncomplete;
     /// Whether the run meets both tolerances at every compared row and region-moment.
     bool meetsTargets() const;
 };
