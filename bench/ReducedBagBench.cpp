@@ -1703,6 +1703,29 @@ int influence(const std::string& scenario, const std::string& calPath) {
     const auto cal = io::readReducedBagCalibration(calPath);
     const std::vector<Case> cases = footprintCases(spec.geometry);
     std::map<long, Influence> byMass;
+    // The first millimetres of the 100 mm sphere on the gentle panel (4.5 g) in steps of
+    // 0.25 mm: where the FE bag's response stops being the linearised one.
+    {
+        Case c = cases.at(3);
+        const Influence in = buildInfluence(spec, c.mass);
+        bags::Airbag bag(spec);
+        auto shape = makeShape(c);
+        shape->setPose(pose(c, 1.0));
+        const int s = bag.addShape(shape, sc.options.contact);
+        bag.inflate(c.mass);
+        const double z0 = touchHeight(c, bag);
+        std::printf("%s, %.2f g, first millimetres:\n  depth_mm F_FE F_inf\n", c.name.c_str(),
+                    c.mass * 1e3);
+        Eigen::VectorXd f;
+        for (double d = 0.00025; d <= 0.002 + 1e-9; d += 0.00025) {
+            bag.setShapePose(s, pose(c, z0 - d));
+            if (!bag.advance(1.0).converged) break;
+            bag.commit();
+            shape->setPose(pose(c, z0 - d));
+            solveInfluence(in, *shape, 0.02, f);
+            std::printf("  %5.2f %6.2f %6.2f\n", d * 1e3, bag.calcShapeWrench(s).force.z(), f.sum());
+        }
+    }
     double eRed2All = 0, eInf2All = 0, pRed2All = 0, pInf2All = 0;
     int nAll = 0, npAll = 0;
     for (const Case& c : cases) {
