@@ -11,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include <unistd.h>
+
 #include "Commands.h"
 
 namespace bagsim::app {
@@ -27,13 +29,15 @@ const char* kHelp =
     "against a fine one): the pelvis's and thorax's tilt at every output row both have (the\n"
     "largest difference, its rms, the rows within the tilt tolerance) and each body region's\n"
     "patch peak pressure (20 cm^2) at the output times, for the regions the reference loads\n"
-    "(the mean and rms of run / reference - 1, the regions within the peak tolerance). It says\n"
-    "whether the run meets both tolerances everywhere (docs/reduced-bag.md#checking-a-run-against-a-reference).\n"
+    "(the mean and rms of run / reference - 1, the regions within the peak tolerance; a region\n"
+    "the run does not load then counts as -100 %). Its last line says whether the run meets\n"
+    "both tolerances everywhere, or that the comparison is not whole (an unfinished folder,\n"
+    "rows or moments one run lacks, no region judged): docs/reduced-bag.md#checking-a-run-against-a-reference.\n"
     "\n"
     "options:\n"
     "  --from TIME            compare rows from this time on, e.g. '1.5 s' (default 0 s)\n"
     "  --times T1,T2,...      the region moments, e.g. '1.5 s,3 s,4.5 s' (default: every\n"
-    "                         output time both runs have from --from)\n"
+    "                         output time both runs have, from --from on)\n"
     "  --min-force F          judge a region where the reference carries at least F\n"
     "                         (default 10 N)\n"
     "  --tilt-tolerance A     default 2 deg\n"
@@ -90,11 +94,19 @@ int runCompareCommand(int argc, char** argv) {
                     std::string n = s;
                     const bool percent = !n.empty() && n.back() == '%';
                     if (percent) n.pop_back();
-                    opt.peakTolerance = io::parseQuantity(n, io::Dimension::Dimensionless) *
-                                        (percent ? 0.01 : 1.0);
-                    if (!(opt.peakTolerance > 0.0))
-                        return usageError("--peak-tolerance '" + s +
-                                          "' must be positive, e.g. 15% or 0.15");
+                    const std::string valid = "; valid: a percentage (15%) or a fraction "
+                                              "below 1 (0.15), more than 0";
+                    try {
+                        opt.peakTolerance = io::parseQuantity(n, io::Dimension::Dimensionless) *
+                                            (percent ? 0.01 : 1.0);
+                    } catch (const io::UnitError&) {
+                        return usageError("--peak-tolerance '" + s + "' is not a number" + valid);
+                    }
+                    if (!(opt.peakTolerance > 0.0) || (!percent && opt.peakTolerance >= 1.0))
+                        return usageError("--peak-tolerance '" + s + "'" + valid +
+                                          (!percent && opt.peakTolerance >= 1.0
+                                               ? " (did you mean " + n + "%?)"
+                                               : ""));
                 } else {
                     csv = s;
                 }
@@ -113,6 +125,13 @@ int runCompareCommand(int argc, char** argv) {
         return usageError("give two results folders, the reference first, e.g. bagsim compare "
                           "out/turn-fe out/turn-reduced");
     if (!(opt.tiltTolerance > 0.0)) return usageError("--tilt-tolerance must be positive");
+    // Times are matched to 0.1 ms: a run's output times lie between 0 and a day or so.
+    for (double t : opt.times)
+        if (!(t >= 0.0 && t <= 1e6))
+            return usageError("--times: " + std::to_string(t) + " s is not a run's output time; "
+                              "valid: 0 s to 1e6 s");
+    if (!(opt.from >= 0.0 && opt.from <= 1e6))
+        return usageError("--from must lie between 0 s and 1e6 s");
     std::error_code ec;
     if (!csv.empty() && fs::exists(csv, ec) && !force)
         return usageError(csv + ": exists; pass --force to replace it, or choose another --csv");
@@ -125,7 +144,8 @@ int runCompareCommand(int argc, char** argv) {
     }
     std::cout << io::formatRunComparison(c, detail);
     if (!csv.empty()) {
-        const fs::path tmp = csv + ".tmp";
+        // Written beside it under a name of this process's own, then renamed over it.
+        const fs::path tmp = csv + ".bagsim-" + std::to_string(::getpid()) + ".tmp";
         {
             std::ofstream o(tmp);
             o << io::formatRegionPeaksCsv(c);
@@ -138,6 +158,8 @@ int runCompareCommand(int argc, char** argv) {
         fs::rename(tmp, csv, ec);
         if (ec) {
             std::cerr << "bagsim: error: " << csv << ": cannot be written (" << ec.message() << ")\n";
+            std::error_code ignored;
+            fs::remove(tmp, ignored);
             return 1;
         }
         std::cout << "region peaks: " << csv << "\n";

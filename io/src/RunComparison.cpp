@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -76,8 +77,23 @@ RegionPeakSummary summarise(const std::vector<const RegionPeak*>& ps, double tim
 
 }  // namespace
 
+std::vector<std::string> RunComparison::whyNotJudged() const {
+    std::vector<std::string> why;
+    if (!referenceIncomplete.empty()) why.push_back("the reference is an unfinished run");
+    if (!runIncomplete.empty()) why.push_back("the run is an unfinished run");
+    if (tiltRows < referenceTiltRows)
+        why.push_back("the run lacks " + std::to_string(referenceTiltRows - tiltRows) + " of the reference's " +
+                      std::to_string(referenceTiltRows) + " tilt rows");
+    if (tiltRowsNotFinite > 0)
+        why.push_back(std::to_string(tiltRowsNotFinite) + " tilt rows are not finite numbers");
+    if (!missingTimes.empty())
+        why.push_back(std::to_string(missingTimes.size()) + " asked-for moments are not output times of both runs");
+    if (overall.regions == 0) why.push_back("no region was judged");
+    return why;
+}
+
 bool RunComparison::meetsTargets() const {
-    return tiltRows > 0 && tiltRowsWithin == tiltRows && overall.within == overall.regions;
+    return whyNotJudged().empty() && tiltRowsWithin == tiltRows && overall.within == overall.regions;
 }
 
 RunComparison compareRuns(const fs::path& reference, const fs::path& run,
@@ -98,7 +114,16 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
         return text.substr(at + 8, text.find('\n', at) - (at + 8));
     };
     c.referenceIncomplete = incomplete(reference), c.runIncomplete = incomplete(run);
-    const auto tiltRef = readTilt(reference), tiltRun = readTilt(run);
+    auto tiltRef = readTilt(reference), tiltRun = readTilt(run);
+    // An unfinished run's last output row may be half-written (its regions before its tilt):
+    // it is left out.
+    if (!c.referenceIncomplete.empty() && !tiltRef.empty()) tiltRef.erase(std::prev(tiltRef.end()));
+    if (!c.runIncomplete.empty() && !tiltRun.empty()) tiltRun.erase(std::prev(tiltRun.end()));
+    auto range = [](const std::map<long, std::pair<double, double>>& t) {
+        return t.empty() ? std::string("no rows")
+                         : fmt("rows from %g s", t.begin()->first * 1e-4) +
+                               fmt(" to %g s", t.rbegin()->first * 1e-4);
+    };
     const long from = timeKey(options.from);
     double sp = 0.0, sq = 0.0;
     for (const auto& [k, ref] : tiltRef) {
@@ -111,10 +136,14 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
         c.lastTime = t;
         ++c.tiltRows;
         const double dp = it->second.first - ref.first, dq = it->second.second - ref.second;
+        if (!std::isfinite(dp) || !std::isfinite(dq)) {
+            ++c.tiltRowsNotFinite;
+            continue;
+        }
         sp += dp * dp, sq += dq * dq;
-        if (c.tiltRows == 1 || std::abs(dp) > std::abs(c.pelvis.largest))
+        if (c.tiltRows - c.tiltRowsNotFinite == 1 || std::abs(dp) > std::abs(c.pelvis.largest))
             c.pelvis.largest = dp, c.pelvis.largestTime = t;
-        if (c.tiltRows == 1 || std::abs(dq) > std::abs(c.thorax.largest))
+        if (c.tiltRows - c.tiltRowsNotFinite == 1 || std::abs(dq) > std::abs(c.thorax.largest))
             c.thorax.largest = dq, c.thorax.largestTime = t;
         if (std::abs(dp) <= options.tiltTolerance && std::abs(dq) <= options.tiltTolerance)
             ++c.tiltRowsWithin;
@@ -123,26 +152,41 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
         throw InputError((run / "tilt.csv").string(), 0, "time_s",
                          "no row at a time of " + (reference / "tilt.csv").string() +
                              (options.from > 0 ? " from " + fmt("%g s", options.from) : "") +
-                             "; compare runs of the same scenario and output.every");
-    c.pelvis.rms = std::sqrt(sp / c.tiltRows), c.thorax.rms = std::sqrt(sq / c.tiltRows);
+                             " (the reference has " + range(tiltRef) + ", the run " +
+                             range(tiltRun) +
+                             "); compare runs of the same scenario and output.every, and a "
+                             "--from within them");
+    const int finite = c.tiltRows - c.tiltRowsNotFinite;
+    if (finite > 0) c.pelvis.rms = std::sqrt(sp / finite), c.thorax.rms = std::sqrt(sq / finite);
 
+    // The moments: output times of both runs (their tilt.csv rows: a row is written every
+    // frame, a region only while it is loaded, so a time without region rows is a frame where
+    // the run loads none of them).
     const auto regRef = readRegions(reference), regRun = readRegions(run);
     std::vector<long> keys;
     if (options.times.empty()) {
-        for (const auto& [k, rows] : regRef)
-            if (k >= from && regRun.count(k)) keys.push_back(k);
+        for (const auto& [k, row] : tiltRef)
+            if (k >= from && tiltRun.count(k)) keys.push_back(k);
     } else {
-        for (double t : options.times) {
+        std::vector<double> times = options.times;
+        std::sort(times.begin(), times.end());
+        times.erase(std::unique(times.begin(), times.end(),
+                                [](double a, double b) { return timeKey(a) == timeKey(b); }),
+                    times.end());
+        for (double t : times) {
             const long k = timeKey(t);
-            if (regRef.count(k) && regRun.count(k))
+            if (tiltRef.count(k) && tiltRun.count(k))
                 keys.push_back(k);
             else
                 c.missingTimes.push_back(t);
         }
     }
+    static const std::map<std::string, RegionRow> kNone;
     for (long k : keys) {
-        const auto& run_ = regRun.at(k);
-        for (const auto& [name, ref] : regRef.at(k)) {
+        const auto r = regRef.find(k), u = regRun.find(k);
+        if (r == regRef.end()) continue;  // the reference loads no region then
+        const auto& run_ = u == regRun.end() ? kNone : u->second;
+        for (const auto& [name, ref] : r->second) {
             if (!(ref.force >= options.minForce) || !(ref.peak > 0.0)) continue;
             RegionPeak p;
             p.time = k * 1e-4, p.region = name, p.referenceForce = ref.force, p.reference = ref.peak;
@@ -172,7 +216,7 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
                                        {"the run", c.runIncomplete}})
         if (!status.empty())
             o << "NOTE: " << what << " is an incomplete run (its INCOMPLETE marker: status " << status
-              << "); only its rows so far are compared\n";
+              << "); its rows so far are compared, but its last one (it may be half-written)\n";
     o << "\n";
     o << "tilt (run - reference), " << c.tiltRows << " rows from " << fmt("%g s", c.firstTime)
       << " to " << fmt("%g s", c.lastTime);
@@ -184,20 +228,25 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
         o << "  " << name << ": largest " << fmt("%+.2f deg", d.largest / kDeg) << " at "
           << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", d.rms / kDeg) << "\n";
     o << "  within " << fmt("%g deg", tolDeg) << ": " << c.tiltRowsWithin << " of " << c.tiltRows
-      << " rows (both segments)\n\n";
+      << " rows (both segments)";
+    if (c.tiltRowsNotFinite > 0) o << "; " << c.tiltRowsNotFinite << " rows not finite numbers";
+    o << "\n\n";
     o << "region patch peaks (20 cm^2, regions.csv), the regions carrying at least "
       << fmt("%g N", c.options.minForce) << " in the reference; error = run / reference - 1:\n";
     o << "  time       regions   mean      rms       within " << fmt("%g %%", tolPc) << "\n";
     auto line = [&](const std::string& when, const RegionPeakSummary& s) {
         char buf[160];
-        std::snprintf(buf, sizeof buf, "  %-10s %7d   %+6.1f %%  %6.1f %%  %d\n", when.c_str(),
-                      s.regions, 100 * s.mean, 100 * s.rms, s.within);
+        if (s.regions == 0)
+            std::snprintf(buf, sizeof buf, "  %-10s %7d   -         -         -\n", when.c_str(), 0);
+        else
+            std::snprintf(buf, sizeof buf, "  %-10s %7d   %+6.1f %%  %6.1f %%  %d\n", when.c_str(),
+                          s.regions, 100 * s.mean, 100 * s.rms, s.within);
         o << buf;
     };
     for (const RegionPeakSummary& s : c.moments) line(fmt("%g s", s.time), s);
     line("all", c.overall);
     for (double t : c.missingTimes)
-        o << "  " << fmt("%g s", t) << ": not an output time of both runs' regions.csv\n";
+        o << "  " << fmt("%g s", t) << ": not an output time of both runs (their tilt.csv)\n";
     if (detail && !c.peaks.empty()) {
         o << "\n  time       region            reference  run        error\n";
         for (const RegionPeak& p : c.peaks) {
@@ -209,10 +258,23 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
             o << buf;
         }
     }
-    o << "\n"
-      << (c.meetsTargets() ? "meets" : "misses") << " the targets (tilt within "
-      << fmt("%g deg", tolDeg) << " at every row, every region's peak within "
-      << fmt("%g %%", tolPc) << ")\n";
+    const std::vector<std::string> why = c.whyNotJudged();
+    const bool within = c.tiltRowsWithin == c.tiltRows && c.overall.within == c.overall.regions;
+    o << "\n";
+    if (!why.empty() && within) {
+        o << "not judged: within the targets where compared, but";
+        for (size_t i = 0; i < why.size(); ++i) o << (i ? "; " : " ") << why[i];
+        o << "\n";
+    } else {
+        o << (c.meetsTargets() ? "meets" : "misses") << " the targets (tilt within "
+          << fmt("%g deg", tolDeg) << " at every row, every region's peak within "
+          << fmt("%g %%", tolPc) << ")";
+        if (!why.empty()) {
+            o << "; also";
+            for (size_t i = 0; i < why.size(); ++i) o << (i ? "; " : " ") << why[i];
+        }
+        o << "\n";
+    }
     return o.str();
 }
 

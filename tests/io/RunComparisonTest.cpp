@@ -73,20 +73,66 @@ TEST(RunComparison, TiltAndRegionPeaksAreJudgedAsWorkedOutByHand) {
     ASSERT_EQ(d.missingTimes.size(), 1u);
     EXPECT_DOUBLE_EQ(d.missingTimes[0], 0.3);
     const std::string text = io::formatRunComparison(d, true);
-    EXPECT_NE(text.find("0.3 s: not an output time of both runs' regions.csv"), std::string::npos)
+    EXPECT_NE(text.find("0.3 s: not an output time of both runs (their tilt.csv)"),
+              std::string::npos)
         << text;
     EXPECT_NE(text.find("misses the targets"), std::string::npos);
     EXPECT_NE(io::formatRegionPeaksCsv(d).find("0.2000,heel_r,20.000,100.000,130.000,30.00,0\n"),
               std::string::npos);
     EXPECT_EQ(text.find("incomplete run"), std::string::npos);
-    // An unfinished run (its INCOMPLETE marker) is compared as far as it went, and said so.
+    // An unfinished run (its INCOMPLETE marker) is compared as far as it went but its last
+    // row (0.2 s: it may be half-written), and said so.
     std::ofstream(run / "INCOMPLETE") << "This folder's results are incomplete.\nstatus: running\n";
+    opt.times.clear();
     const io::RunComparison e = io::compareRuns(ref, run, opt);
     EXPECT_EQ(e.runIncomplete, "running");
     EXPECT_EQ(e.referenceIncomplete, "");
+    EXPECT_EQ(e.tiltRows, 1);
+    EXPECT_EQ(e.overall.regions, 2);
     EXPECT_NE(io::formatRunComparison(e, false).find(
                   "NOTE: the run is an incomplete run (its INCOMPLETE marker: status running)"),
               std::string::npos);
+}
+
+TEST(RunComparison, APartialComparisonIsNotJudgedAsMeetingTheTargets) {
+    const fs::path ref = makeRun("whole-ref", kRefTilt, kRefRegions);
+    // A run equal to the reference as far as it went, stopped after 0.1 s.
+    const fs::path cut = makeRun("cut", "0.0000,0,0\n0.1000,1.0,2.0\n",
+                                 "0.1000,heel_r,0,0,0,20.0,100.0\n0.1000,head,0,0,0,30.0,50.0\n");
+    const io::RunComparison c = io::compareRuns(ref, cut, io::RunComparisonOptions());
+    EXPECT_EQ(c.tiltRowsWithin, c.tiltRows);
+    EXPECT_EQ(c.overall.within, c.overall.regions);
+    EXPECT_FALSE(c.meetsTargets());
+    ASSERT_EQ(c.whyNotJudged().size(), 1u);
+    EXPECT_EQ(c.whyNotJudged()[0], "the run lacks 2 of the reference's 4 tilt rows");
+    EXPECT_NE(io::formatRunComparison(c, false).find("not judged: within the targets where "
+                                                     "compared, but the run lacks 2"),
+              std::string::npos);
+    // The same run unfinished: also not judged, even where its rows are whole.
+    std::ofstream(cut / "INCOMPLETE") << "status: running\n";
+    EXPECT_FALSE(io::compareRuns(ref, cut, io::RunComparisonOptions()).meetsTargets());
+    // A run that loads no region at 0.2 s (lifted off): its tilt row is there, its regions.csv
+    // has none; the reference's loaded regions count -100 % then, not skipped.
+    const fs::path lifted = makeRun("lifted", kRefTilt,
+                                    "0.1000,heel_r,0,0,0,20.0,100.0\n0.1000,head,0,0,0,30.0,50.0\n");
+    const io::RunComparison d = io::compareRuns(ref, lifted, io::RunComparisonOptions());
+    ASSERT_EQ(d.moments.size(), 2u);
+    EXPECT_EQ(d.moments[1].regions, 2);
+    EXPECT_NEAR(d.moments[1].mean, -1.0, 1e-12);
+    EXPECT_EQ(d.overall.within, 2);
+    EXPECT_FALSE(d.meetsTargets());
+    // Nothing judged (the reference loads no region of 10 N): not judged either.
+    const fs::path light = makeRun("light", kRefTilt, "0.1000,hand_l,0,0,0,5.0,80.0\n");
+    const io::RunComparison e = io::compareRuns(light, light, io::RunComparisonOptions());
+    EXPECT_FALSE(e.meetsTargets());
+    EXPECT_EQ(e.whyNotJudged().back(), "no region was judged");
+    // Repeated and unsorted moments are judged once each, in time order.
+    io::RunComparisonOptions opt;
+    opt.times = {0.2, 0.1, 0.2};
+    const io::RunComparison f = io::compareRuns(ref, ref, opt);
+    ASSERT_EQ(f.moments.size(), 2u);
+    EXPECT_DOUBLE_EQ(f.moments[0].time, 0.1);
+    EXPECT_EQ(f.overall.regions, 4);
 }
 
 TEST(RunComparison, ARunAgainstItselfMeetsTheTargets) {

@@ -51,6 +51,7 @@ struct RunComparison {
     RunComparisonOptions options;
     int tiltRows = 0;             ///< rows both runs have, from options.from
     int tiltRowsWithin = 0;       ///< both segments within the tilt tolerance
+    int tiltRowsNotFinite = 0;    ///< compared rows with a NaN or infinite tilt (not within)
     int referenceTiltRows = 0;    ///< the reference's rows from options.from
     double firstTime = 0.0, lastTime = 0.0;  ///< [s] of the compared tilt rows
     TiltDifference pelvis, thorax;
@@ -61,11 +62,19 @@ struct RunComparison {
     /// The status line of a folder's INCOMPLETE marker ("" when the run finished), for the
     /// reference and the run.
     std::string referenceIncomplete, runIncomplete;
-    /// Whether the run meets both tolerances at every compared row and region-moment.
+    /// Why the comparison cannot judge the whole run ("" reasons: it can): an unfinished
+    /// folder, tilt rows of the reference the run lacks, rows that are not finite, asked-for
+    /// moments that are not output times of both, no region judged.
+    std::vector<std::string> whyNotJudged() const;
+    /// Whether the comparison is whole (whyNotJudged() empty) and the run meets both
+    /// tolerances at every row and region-moment.
     bool meetsTargets() const;
 };
 
 /// Reads tilt.csv and regions.csv (with patch_peak_mmHg) of both result folders and compares.
+/// The moments are output times of both runs (tilt.csv rows); at a moment the run loads none
+/// of a region the reference loads (no regions.csv row) that region counts as -100 %. An
+/// unfinished folder's last row is left out.
 /// @throws InputError naming the file, line and column of a missing or malformed file or value,
 /// or a comparison with no common row.
 RunComparison compareRuns(const std::filesystem::path& reference,
