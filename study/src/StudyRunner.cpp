@@ -206,7 +206,10 @@ class CaseProcess {
     /// The record of a finished run from its wait status.
     CaseRecord finish(const io::StudyScenario& s, int waitStatus) const {
         CaseRecord r;
-        r.seconds = std::chrono::duration<double>(Clock::now() - m_start).count();
+        // Kept at the record's precision (formatRecord: 1 ms), so that the table written now
+        // and the one a rerun writes from the records round the same number.
+        r.seconds =
+            std::round(std::chrono::duration<double>(Clock::now() - m_start).count() * 1e3) / 1e3;
         if (!m_spawnError.empty()) {
             r.status = "failed";
             r.reason = m_spawnError;
