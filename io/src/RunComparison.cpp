@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "ChannelCsv.h"
 #include "ReportPage.h"
 #include "io/InputError.h"
 #include "io/Results.h"
@@ -19,17 +20,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kMmHg = 133.322387415;  // [Pa]
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
-
 // Output rows are written every output.every (at least 1 ms); times are matched to 0.1 ms.
 long timeKey(double t) { return std::lround(t * 1e4); }
 
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
+using csv::fmt;
 
 const char* kHelp = "a patient-on-array results folder (bagsim run --out DIR) holds tilt.csv and "
                     "regions.csv";
@@ -41,7 +35,7 @@ std::map<long, std::pair<double, double>> readTilt(const fs::path& dir) {
     const int ct = t.find("time_s"), cp = t.find("pelvis_tilt_deg"), cq = t.find("thorax_tilt_deg");
     std::map<long, std::pair<double, double>> out;
     for (size_t r = 0; r < t.rows.size(); ++r)
-        out[timeKey(t.number(r, ct))] = {t.number(r, cp) * kDeg, t.number(r, cq) * kDeg};
+        out[timeKey(t.number(r, ct))] = {fromUnit(t.number(r, cp), "deg"), fromUnit(t.number(r, cq), "deg")};
     return out;
 }
 
@@ -57,7 +51,7 @@ std::map<long, std::map<std::string, RegionRow>> readRegions(const fs::path& dir
               cp = t.find("patch_peak_mmHg");
     std::map<long, std::map<std::string, RegionRow>> out;
     for (size_t r = 0; r < t.rows.size(); ++r)
-        out[timeKey(t.number(r, ct))][t.text(r, cr)] = {t.number(r, cf), t.number(r, cp) * kMmHg};
+        out[timeKey(t.number(r, ct))][t.text(r, cr)] = {t.number(r, cf), fromUnit(t.number(r, cp), "mmHg")};
     return out;
 }
 
@@ -209,7 +203,7 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
 
 std::string formatRunComparison(const RunComparison& c, bool detail) {
     std::ostringstream o;
-    const double tolDeg = c.options.tiltTolerance / kDeg;
+    const double tolDeg = toUnit(c.options.tiltTolerance, "deg");
     const double tolPc = 100.0 * c.options.peakTolerance;
     o << c.run.string() << " against " << c.reference.string() << "\n";
     for (const auto& [what, status] : {std::pair<const char*, const std::string&>{"the reference", c.referenceIncomplete},
@@ -225,8 +219,8 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
     o << ":\n";
     for (const auto& [name, d] : {std::pair<const char*, const TiltDifference&>{"pelvis", c.pelvis},
                                   {"thorax", c.thorax}})
-        o << "  " << name << ": largest " << fmt("%+.2f deg", d.largest / kDeg) << " at "
-          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", d.rms / kDeg) << "\n";
+        o << "  " << name << ": largest " << fmt("%+.2f deg", toUnit(d.largest, "deg")) << " at "
+          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", toUnit(d.rms, "deg")) << "\n";
     o << "  within " << fmt("%g deg", tolDeg) << ": " << c.tiltRowsWithin << " of " << c.tiltRows
       << " rows (both segments)";
     if (c.tiltRowsNotFinite > 0) o << "; " << c.tiltRowsNotFinite << " rows not finite numbers";
@@ -252,8 +246,8 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
         for (const RegionPeak& p : c.peaks) {
             char buf[200];
             std::snprintf(buf, sizeof buf, "  %-10s %-16s %6.1f mmHg %6.1f mmHg %+6.1f %%%s\n",
-                          fmt("%g s", p.time).c_str(), p.region.c_str(), p.reference / kMmHg,
-                          p.run / kMmHg, 100 * p.error(),
+                          fmt("%g s", p.time).c_str(), p.region.c_str(), toUnit(p.reference, "mmHg"),
+                          toUnit(p.run, "mmHg"), 100 * p.error(),
                           std::abs(p.error()) <= c.options.peakTolerance ? "" : "  *");
             o << buf;
         }
@@ -285,7 +279,7 @@ std::string formatRegionPeaksCsv(const RunComparison& c) {
     for (const RegionPeak& p : c.peaks) {
         char buf[200];
         std::snprintf(buf, sizeof buf, "%.4f,%s,%.3f,%.3f,%.3f,%.2f,%d\n", p.time, p.region.c_str(),
-                      p.referenceForce, p.reference / kMmHg, p.run / kMmHg, 100 * p.error(),
+                      p.referenceForce, toUnit(p.reference, "mmHg"), toUnit(p.run, "mmHg"), 100 * p.error(),
                       std::abs(p.error()) <= c.options.peakTolerance ? 1 : 0);
         o << buf;
     }

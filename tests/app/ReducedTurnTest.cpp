@@ -75,18 +75,19 @@ TEST(ReducedTurn, AtTwentyMillimetresTheTiltFollowsTheFiniteElementTurnWithinTwo
                           "--set bag.mesh_size='20 mm' --set bag.model=reduced "
                           "--set bag.calibration=../../data/reduced-bag/literal-20mm.txt"),
               0);
+    constexpr double kDeg = 3.14159265358979323846 / 180.0;
     io::RunComparisonOptions opt;
     opt.from = 1.5;
     opt.times = {1.5, 3.0, 4.5};
-    opt.tiltTolerance = 2.25 * 3.14159265358979323846 / 180.0;
+    opt.tiltTolerance = 2.25 * kDeg;
     const io::RunComparison c = io::compareRuns(
         std::filesystem::path(BAGSIM_SOURCE_DIR) / "data/reduced-bag/fe-reference/turn-left-coarse-20mm",
         out, opt);
     std::cout << io::formatRunComparison(c, true);
     EXPECT_EQ(c.tiltRows, 31);
     EXPECT_EQ(c.tiltRowsWithin, c.tiltRows);
-    EXPECT_LT(c.pelvis.rms, 1.0 * 3.14159265358979323846 / 180.0);
-    EXPECT_LT(c.thorax.rms, 1.0 * 3.14159265358979323846 / 180.0);
+    EXPECT_LT(c.pelvis.rms, 1.0 * kDeg);
+    EXPECT_LT(c.thorax.rms, 1.0 * kDeg);
     EXPECT_EQ(c.overall.regions, 43);
     EXPECT_LT(c.overall.rms, 0.40);
     EXPECT_GE(c.overall.within, 14);
