@@ -24,10 +24,38 @@ constexpr double kGrazing = 1e-3;
 constexpr double kAxisFade = 0.005;  // [m]
 
 double smoothstep(double u, double* du);
+double calcUpFade(double nz, double* dNz);
 
 double calcAxisFade(const Eigen::Matrix3d& dndp) {
     const double k = dndp.norm();
     return k * kAxisFade < 1e-12 ? 1.0 : smoothstep(1.0 / (k * kAxisFade) - 1.0, nullptr);
+}
+
+// The share a top sample keeps where the shape's closest surface faces up (n_z the normal's
+// up component): it fades out over n_z from -0.15 to +0.15, inside the shape and outside
+// alike (continuous where the top point crosses the surface). dNz: its derivative.
+double calcUpFade(double nz, double* dNz) {
+    double du = 0.0;
+    const double f = smoothstep((0.15 - nz) / 0.3, &du);
+    if (dNz) *dNz = -du / 0.3;
+    return f;
+}
+
+// The axis fade's gradient in Ground at p (where it is neither 0 nor 1), by central
+// differences of the shape's normal derivative over 1e-6 m: the fade follows how fast the
+// normal turns, whose own derivative the shapes do not give.
+Eigen::Vector3d calcAxisFadeGradient(const bags::RigidShape& shape, const Eigen::Vector3d& p) {
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    const double f = calcAxisFade(shape.calcNormalDerivative(p));
+    if (f <= 0.0 || f >= 1.0) return g;
+    constexpr double h = 1e-6;
+    for (int i = 0; i < 3; ++i) {
+        Eigen::Vector3d dp = Eigen::Vector3d::Zero();
+        dp[i] = h;
+        g[i] = (calcAxisFade(shape.calcNormalDerivative(p + dp)) -
+                calcAxisFade(shape.calcNormalDerivative(p - dp))) / (2.0 * h);
+    }
+    return g;
 }
 
 double smoothstep(double u, double* du) {
@@ -465,9 +493,31 @@ void ReducedBag::evaluate() {
         shape.setPose(m_poses[s]);
         ShapeResult& r = m_results[s];
         r = ShapeResult{};
+        // The shape's chords first: per column the stretch of it below the top and above the
+        // board (its volume in the column, and where the film meets its underside). A column
+        // whose midpoint is further from the shape than half its height misses.
+        std::vector<int> chordAt(n, -1);
+        const Vec3 oB = X_BG * m_poses[s].translation();
+        std::vector<double> across2(n);
+        for (int i = 0; i < n; ++i) across2[i] = (xyB.col(i) - oB.head<2>()).squaredNorm();
+        const double reachColumn = shape.getLowerBoundReach(0.5 * topHeight + 1e-5);
+        for (int i = 0; i < n; ++i) {
+            if (across2[i] > reachColumn * reachColumn) continue;
+            const double hcol = heightB[i];
+            const Vec3 mid = top.col(i) - 0.5 * hcol * m_X_GB.linear().col(2);
+            if (shape.calcDistanceLowerBound(mid) > 0.5 * hcol + 1e-6) continue;
+            Chord ch;
+            if (findChord(shape, top.col(i), ch)) {
+                ch.point = i;
+                chordAt[size_t(i)] = int(r.chords.size());
+                r.chords.push_back(ch);
+            }
+        }
         // Two passes over the grid: first the points the shape may overlap (its distance
-        // bound below 0), which give the depth d_s; then the skirt's, within skirt x d_s of
-        // it. The samples are kept in the grid's order, as one pass would give them.
+        // bound below 0) and the columns it lies in below the top (sunk), which give the
+        // depth d_s; then the skirt's, within skirt x d_s of it. The samples are kept in the
+        // grid's order, as one pass would give them.
+        const Vec3 e = m_X_GB.linear().col(2);
         std::vector<Sample> found, rim;
         auto sample = [&](int i, std::vector<Sample>& out) {
             Sample smp;
@@ -479,43 +529,59 @@ void ReducedBag::evaluate() {
             smp.topDelta = smp.delta, smp.topN = smp.n;
             // Where the shape's closest surface faces sideways or up (it lies below the
             // unloaded top), the film meets its underside: down the column to where it
-            // leaves the shape, and the point that far inside along the normal there. Blended
-            // in over -n_z from 0.45 to 0.15 and over the first kColumnOnset of depth
-            // (continuous in the pose).
-            const double b = smoothstep((smp.n.z() + 0.45) / 0.3, nullptr) *
-                             smoothstep(-phi / kColumnOnset, nullptr);
-            if (b > 0.0) {
-                Sample col = smp;
-                Vec3 p = smp.t;
-                double d = phi;
-                for (int it = 0; it < 40 && d < -1e-7; ++it) {
-                    p.z() += d;
-                    d = shape.calcSignedDistance(p, nullptr, nullptr);
+            // leaves the shape (the chord's lower end), and the point that far inside along
+            // the normal there. Blended in over -n_z from 0.45 to 0.15 and over the first
+            // kColumnOnset of depth (continuous in the pose).
+            const int k = chordAt[size_t(i)];
+            const double nUp = smoothstep((smp.n.z() + 0.45) / 0.3, nullptr);
+            if (k >= 0 && nUp > 0.0 && phi < 0.0) {
+                const Chord& ch = r.chords[size_t(k)];
+                const double b = nUp * smoothstep(-phi / kColumnOnset, nullptr);
+                // The underside: the chord's lower end, or through the board (the chord stops
+                // there) down to where the column leaves the shape, for the board's penalty.
+                Vec3 lo = ch.lo;
+                if (ch.onBoard) {
+                    double d = shape.calcSignedDistance(lo, nullptr, nullptr);
+                    for (int it = 0; it < 40 && d < -1e-7; ++it) {
+                        lo += d * e;
+                        d = shape.calcSignedDistance(lo, nullptr, nullptr);
+                    }
                 }
                 Vec3 nrm, cp;
                 Eigen::Matrix3d curv;
                 double on = 0.0;
-                shape.calcContactGeometry(p, &on, &cp, &nrm, &curv);
+                shape.calcContactGeometry(lo, &on, &cp, &nrm, &curv);
                 // At most half the surface's least curvature radius there (1 / |dn/dp|): a
                 // long column through a sunk limb would otherwise put the point past its
                 // axis, where its closest surface is the upper side and the film's pressure
                 // would push the limb down.
-                const double column = smp.t.z() - p.z();
-                const double k = curv.norm();
+                const double column = e.dot(smp.t - lo);
+                const double kc = curv.norm();
                 const double inward = std::min(column * std::max(-nrm.z(), kMinSlope),
-                                               k > 1e-12 ? 0.5 / k : 1e300);
-                col.t = p - inward * nrm;
-                shape.calcContactGeometry(col.t, &phi, &col.c, &col.n, &col.dndp);
-                col.delta = col.delta0 = -phi;
-                col.blend = b * calcAxisFade(col.dndp);
+                                               kc > 1e-12 ? 0.5 / kc : 1e300);
+                Sample col = smp;
+                // The film's contact is the underside point itself, pressed along its normal
+                // by that depth. (Not the closest surface of the inward point: in a thin shape,
+                // a hand, that point passes the middle and its closest surface is the upper
+                // side, whose pressure would push the shape down.)
+                col.t = lo - inward * nrm;
+                col.column = column;
+                col.c = lo, col.n = nrm;
+                col.delta = col.delta0 = inward;
+                // The surface's curvature there, which also gives the axis fade: the point
+                // lies at most half the least curvature radius inside, so the fade is the
+                // shape's (a thin limb's), not the point's depth.
+                col.dndp = curv;
+                col.blend = b * calcAxisFade(curv);
                 if (col.blend > 0.0) out.push_back(col);
                 smp.blend = 1.0 - b;
             }
             smp.blend *= calcAxisFade(smp.dndp);
-            // A point outside the shape above it (its closest surface faces up: a shape sunk
-            // below the top) is not film wrapping the shape; it fades out over n_z from -0.15
-            // to +0.15, else the skirt would press a sunk limb down.
-            if (phi > 0.0) smp.blend *= smoothstep((0.15 - smp.n.z()) / 0.3, nullptr);
+            // Where the shape's closest surface faces up, the top point is not film wrapping
+            // the shape, and the gas there would press it down: above a sunk shape, or inside
+            // one sunk past its widest by its upper side, it fades out over n_z from -0.15
+            // to +0.15.
+            smp.blend *= calcUpFade(smp.n.z(), nullptr);
             if (smp.blend > 0.0) out.push_back(smp);
         };
         // A column further across from the shape's origin (in the bag's plane) than the
@@ -523,14 +589,10 @@ void ReducedBag::evaluate() {
         // without asking the shape (the same samples, fewer queries). kUnasked: above 0, not
         // yet asked.
         constexpr double kUnasked = std::numeric_limits<double>::infinity();
-        const Vec3 oB = X_BG * m_poses[s].translation();
-        std::vector<double> across2(n);
-        for (int i = 0; i < n; ++i) across2[i] = (xyB.col(i) - oB.head<2>()).squaredNorm();
         std::vector<double> bound(n, kUnasked);
         const double reach0 = shape.getLowerBoundReach(0.0);
         for (int i = 0; i < n; ++i) {
-            if (across2[i] > reach0 * reach0) continue;
-            bound[i] = shape.calcDistanceLowerBound(top.col(i));
+            if (across2[i] <= reach0 * reach0) bound[i] = shape.calcDistanceLowerBound(top.col(i));
             if (bound[i] <= 0.0) sample(i, found);
         }
         // The depth: the mean of delta weighted by a delta over the overlap (smooth in the
@@ -541,21 +603,6 @@ void ReducedBag::evaluate() {
                 s1 += a * smp.blend * smp.delta;
                 s2 += a * smp.blend * smp.delta * smp.delta;
             }
-        // The overlap volume: the shape's volume inside the columns below the top and above
-        // the board, column by column.
-        const double reachColumn = shape.getLowerBoundReach(0.5 * topHeight + 1e-5);
-        for (int i = 0; i < n; ++i) {
-            // (a column whose midpoint is further from the shape than half its height misses)
-            if (across2[i] > reachColumn * reachColumn) continue;
-            const double hcol = heightB[i];
-            const Vec3 mid = top.col(i) - 0.5 * hcol * m_X_GB.linear().col(2);
-            if (shape.calcDistanceLowerBound(mid) > 0.5 * hcol + 1e-6) continue;
-            Chord ch;
-            if (findChord(shape, top.col(i), ch)) {
-                ch.point = i;
-                r.chords.push_back(ch);
-            }
-        }
         r.depthSum1 = r.depth0Sum1 = s1, r.depthSum2 = r.depth0Sum2 = s2;
         r.depth = r.depth0 = s1 > 0.0 ? s2 / s1 : 0.0;
         // The skirt: points outside the shape, within skirt x depth of it, touch it too.
@@ -863,20 +910,104 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
     const double kappa = lookup(c.pressureFactor, m_cur.mass, r.depth, &dKappa);
     const double beta = lookup(c.volumeFactor, m_cur.mass, r.depth0, &dBeta);
     // The depth s2 / s1 over delta > 0 (the blend b held), of the given depths' derivatives.
+    // (the blends' derivatives, dBlend, below)
+    std::vector<Row6> dBlend(r.samples.size(), Row6::Zero());
     auto calcDepthDerivative = [&](double s1, double s2, auto deltaOf, auto dDeltaOf) {
         Row6 dDepth = Row6::Zero();
-        for (const Sample& smp : r.samples)
-            if (deltaOf(smp) > 0.0)
-                dDepth += a * smp.blend * (2.0 * deltaOf(smp) * s1 - s2) / (s1 * s1) * dDeltaOf(smp);
+        for (size_t k = 0; k < r.samples.size(); ++k) {
+            const Sample& smp = r.samples[k];
+            const double d = deltaOf(smp);
+            if (d > 0.0)
+                dDepth += a * ((2.0 * d * s1 - s2) * smp.blend * dDeltaOf(smp) +
+                               (d * d * s1 - d * s2) * dBlend[k]) / (s1 * s1);
+        }
         return dDepth;
     };
+    // How each sample moves with the pose. A top sample's point t is fixed in Ground: the
+    // material there moves by v = J(t) xi, so d delta0 = n.v, dn = theta x n - (dn/dp) v and
+    // its contact point c = t + delta0 n. A column sample sits where the fixed column leaves
+    // the shape's underside (c, the film's contact): that point slides along the column by
+    // dz = n.v / n.e (v = J(c) xi), dn = theta x n + (dn/dp) (e dz - v) there, and its depth
+    // is the column's length L times max(-n_z, kMinSlope) (dL = -dz), or half the surface's
+    // least curvature radius where that is smaller (held).
+    const Vec3 e = m_X_GB.linear().col(2);
+    struct Motion {
+        Row6 dDelta0;
+        Mat36 dn, dc;
+    };
+    std::vector<Motion> motion(r.samples.size());
+    for (size_t k = 0; k < r.samples.size(); ++k) {
+        const Sample& smp = r.samples[k];
+        Motion& m = motion[k];
+        if (smp.column > 0.0) {
+            const Mat36 J = jacobian(smp.c);
+            const double ne = smp.n.dot(e);
+            const Row6 dz = std::abs(ne) > kGrazing ? Row6(smp.n.transpose() * J / ne) : Row6::Zero();
+            m.dc = e * dz;
+            m.dn = -cross(smp.n) * Jtheta + smp.dndp * (m.dc - J);
+            const double curvature = smp.dndp.norm();
+            double slope = -smp.n.z();
+            Row6 dSlope = -m.dn.row(2);
+            if (slope < kMinSlope) slope = kMinSlope, dSlope.setZero();
+            const bool capped = curvature > 1e-12 && smp.column * slope > 0.5 / curvature;
+            m.dDelta0 = capped ? Row6::Zero() : Row6(-dz * slope + smp.column * dSlope);
+        } else {
+            const Mat36 J = jacobian(smp.t);
+            m.dDelta0 = smp.n.transpose() * J;
+            m.dn = -cross(smp.n) * Jtheta - smp.dndp * J;
+            m.dc = smp.n * m.dDelta0 + smp.delta0 * m.dn;
+        }
+    }
+    auto indexOf = [&](const Sample& smp) { return size_t(&smp - r.samples.data()); };
+    std::vector<int> chordOf(size_t(m_gridIndex.size()), -1);  // grid point -> its chord
+    for (size_t k = 0; k < r.chords.size(); ++k) chordOf[size_t(r.chords[k].point)] = int(k);
+    // A sample's blend (evaluate()): with n and phi the top point's normal and signed
+    // distance, b = up(n_z) onset(-phi) where the top point is inside; a column sample has b
+    // times its axis fade, a top sample (1 - b) times the fade of an upward normal and its
+    // own axis fade (the axis fades, of the surface's curvature, held).
+    {
+        const Eigen::Matrix3Xd top = calcTop();
+        const bags::RigidShape& body = *m_shapes.at(size_t(shape));
+        for (size_t k = 0; k < r.samples.size(); ++k) {
+            const Sample& smp = r.samples[k];
+            const Vec3 t = top.col(smp.point);
+            double phi = 0.0;
+            Vec3 cp, nTop;
+            Eigen::Matrix3d dndpTop;
+            body.calcContactGeometry(t, &phi, &cp, &nTop, &dndpTop);
+            const Mat36 J = jacobian(t);
+            const Row6 dnz = (-cross(nTop) * Jtheta - dndpTop * J).row(2);
+            const Row6 dDepthTop = nTop.transpose() * J;  // d(-phi)
+            double dUp = 0.0, dOnset = 0.0;
+            const double up = smoothstep((nTop.z() + 0.45) / 0.3, &dUp);
+            const bool column = chordOf[size_t(smp.point)] >= 0 && up > 0.0 && phi < 0.0;
+            const double onset = column ? smoothstep(-phi / kColumnOnset, &dOnset) : 0.0;
+            const double b = up * onset;
+            const Row6 db = column ? Row6(dUp / 0.3 * onset * dnz +
+                                          up * dOnset / kColumnOnset * dDepthTop)
+                                   : Row6::Zero();
+            // (the axis fade moves with the material past the point: at a fixed point by
+            // -v, at a column's underside by dc - v)
+            if (smp.column > 0.0) {
+                if (b > 0.0) {
+                    const Mat36 rel = motion[k].dc - jacobian(smp.c);
+                    const double axis = calcAxisFade(smp.dndp);
+                    dBlend[k] = axis * db + b * calcAxisFadeGradient(body, smp.c).transpose() * rel;
+                }
+            } else {
+                double dFade = 0.0;
+                const double fade = calcUpFade(nTop.z(), &dFade);
+                dBlend[k] = calcAxisFade(smp.dndp) * (-db * fade + (1.0 - b) * dFade * dnz) -
+                            (1.0 - b) * fade * calcAxisFadeGradient(body, t).transpose() * J;
+            }
+        }
+    }
     // Under the unloaded top (the displaced volume's beta reads it).
     const Row6 dDepth0 = calcDepthDerivative(
         r.depth0Sum1, r.depth0Sum2, [](const Sample& smp) { return smp.delta0; },
-        [&](const Sample& smp) -> Row6 { return smp.n.transpose() * jacobian(smp.t); });
+        [&](const Sample& smp) -> Row6 { return motion[indexOf(smp)].dDelta0; });
     // V_s = sum a (z_hi - z_lo) over the chords: a surface end moves along the fixed column by
     // dz = n.v / n.e (e up); the top point and the board stay.
-    const Vec3 e = m_X_GB.linear().col(2);
     // Where other shapes share a column, this shape's pose changes every sharer's part
     // beta_r length_r U / S: d(sum_r beta_r a length_r U / S) = a (beta w dl + B / S (dU - w
     // dl)), w = U / S, B = sum_r beta_r length_r, dU from this chord's ends that bound the
@@ -896,12 +1027,10 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
     // Under the top the other shapes' loads moved (the panel coupling): delta = delta0 - (n.e)
     // shift, the shift following the gas pressure (their poses held).
     auto dDeltaOf = [&](const Sample& smp) -> Row6 {
-        const Mat36 J = jacobian(smp.t);
-        Row6 d = smp.n.transpose() * J;
-        if (smp.shift != 0.0 || smp.dShift != 0.0) {
-            const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
-            d -= smp.shift * (e.transpose() * dn) + smp.n.dot(e) * smp.dShift * dP;
-        }
+        const Motion& m = motion[indexOf(smp)];
+        Row6 d = m.dDelta0;
+        if (smp.shift != 0.0 || smp.dShift != 0.0)
+            d -= smp.shift * (e.transpose() * m.dn) + smp.n.dot(e) * smp.dShift * dP;
         return d;
     };
     const Row6 dDepth = calcDepthDerivative(
@@ -910,11 +1039,10 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
 
     Mat6 T = Mat6::Zero();
     for (const Sample& smp : r.samples) {
-        const Mat36 J = jacobian(smp.t);
-        const Row6 dDelta0 = smp.n.transpose() * J;
+        const Motion& m = motion[indexOf(smp)];
         const Row6 dDelta = dDeltaOf(smp);
-        const Mat36 dn = -cross(smp.n) * Jtheta - smp.dndp * J;
-        const Mat36 dc = smp.n * dDelta0 + smp.delta0 * dn;
+        const Mat36& dn = m.dn;
+        const Mat36& dc = m.dc;
         double dwDelta = 0.0, dwDepth = 0.0;
         const double w = calcWeight(smp.delta, r.depth, &dwDelta, &dwDepth);
         Row6 dq = kappa * w * dP + P * w * dK + kappa * P * (dwDelta * dDelta + dwDepth * dDepth);
@@ -934,7 +1062,8 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
         const Vec3 f = ab * q / g * -smp.n;
         // (the film's share moves with this shape's depth at the top point, the others held)
         const Mat36 df = -ab * (smp.n * (dq / g - q / (g * g) * dg) + q / g * dn) -
-                         a * smp.blend * q / g * smp.n * smp.dFilm;
+                         a * smp.blend * q / g * smp.n * smp.dFilm -
+                         a * smp.film * q / g * smp.n * dBlend[indexOf(smp)];
         T.bottomRows<3>() += df;
         T.topRows<3>() += -cross(f) * (dc - Ju) + cross(smp.c - o) * df;
     }
@@ -1183,7 +1312,14 @@ void ReducedBag::loadState(bags::StateReader& r) {
     r.pod(m_displaced), r.pod(m_dPdV);
     r.pod(m_envelope);
     for (size_t s = 0; s < m_shapes.size(); ++s) m_shapes[s]->setPose(m_poses[s]);
-    buildFootprint(calcTop());
+    // A column sample's point lies off its top point; its column reaches down to c.
+    const Eigen::Matrix3Xd top = calcTop();
+    const Vec3 e = m_X_GB.linear().col(2);
+    for (ShapeResult& res : m_results)
+        for (Sample& smp : res.samples)
+            if ((smp.t - top.col(smp.point)).norm() > 1e-12)
+                smp.column = e.dot(top.col(smp.point) - smp.c);
+    buildFootprint(top);
 }
 
 }  // namespace cosim

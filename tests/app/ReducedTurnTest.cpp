@@ -56,19 +56,26 @@ TEST(ReducedTurn, TheCoarseTurnWithReducedBagsTiltsHimAsTheFiniteElementBagsDo) 
         << summary.str();
 }
 
-TEST(ReducedTurn, AtTwentyMillimetresTheTiltFollowsTheFiniteElementTurnWithinTwoDegrees) {
+TEST(ReducedTurn, AtTwentyMillimetresTheTurnFollowsTheFiniteElementTurnAndCarriesTheArms) {
     // The same coarse turn on 20 mm meshes, whole (1.5 s settle, 3 s turn), with the 20 mm
     // calibration; about 6 s on the shared machine.
     // Reference: the FE run of the same scenario at 20 mm (implicit coupling, 1446 s),
     // data/reduced-bag/fe-reference/turn-left-coarse-20mm/ (tilt.csv, regions.csv), measured
     // 2026-12-04 on commit 2fa64f2 (docs/reduced-bag.md#against-a-20-mm-finite-element-turn),
     // compared as bagsim compare does (io::compareRuns).
-    // Tilt: the target is 2 deg; measured then: within it at every one of the 31 rows
-    // from 1.5 s on (largest 1.48 / 1.99 deg, rms 0.71 / 0.87 deg). Tolerance 2.25 deg at every
-    // row, and an rms over the rows under 1 deg, so that a drift of the model shows.
-    // Region patch peaks: NOT within the 15 % (docs/reduced-bag.md: 34.5 % rms over the
-    // 43 region-moments at 1.5, 3.0 and 4.5 s, 17 within 15 %). This guards against the model
-    // getting worse, not a target met: rms under 40 %, at least 14 within 15 %.
+    // Tilt: the target is 2 deg. Measured 2026-12-05 with the gas never pressing a
+    // shape down (docs/reduced-bag.md#a-shape-sunk-past-its-widest): within 2.25 deg at 26 of
+    // the 31 rows from 1.5 s on, rms 0.76 / 1.48 deg (pelvis / thorax); the misses are the
+    // thorax from 4.1 s on, +3.57 deg at 4.5 s, where the 12 mm FE turn lies 2.1 deg above
+    // the 20 mm one. (Before, with the hands and forearms pulled into the film, every row
+    // was within 2 deg.) Guard: at least 24 rows within 2.25 deg, rms under 1.0 / 1.75 deg.
+    // Region patch peaks: NOT within the 15 % (40.6 % rms over the 43 region-moments
+    // at 1.5, 3.0 and 4.5 s, 18 within 15 %). Guard against getting worse: rms under 45 %,
+    // at least 15 within 15 %.
+    // The arms: no region's vertical force is below -0.05 N at any output row (the gas never
+    // pulls a segment into the bag; before, the left hand read -3.0 N at 4.5 s), and the right
+    // forearm carries what the FE bags give it at 4.0 and 4.5 s within 15 % (25.2 and 25.7 N;
+    // measured 23.5 and 24.5 N, before 12.4 and 18.7 N).
     const std::filesystem::path out =
         std::filesystem::path(BAGSIM_BINARY_DIR) / "tests/app/reduced-turn-20mm";
     ASSERT_EQ(runScenario("turn-left-coarse.yaml", out,
@@ -80,15 +87,31 @@ TEST(ReducedTurn, AtTwentyMillimetresTheTiltFollowsTheFiniteElementTurnWithinTwo
     opt.from = 1.5;
     opt.times = {1.5, 3.0, 4.5};
     opt.tiltTolerance = 2.25 * kDeg;
-    const io::RunComparison c = io::compareRuns(
-        std::filesystem::path(BAGSIM_SOURCE_DIR) / "data/reduced-bag/fe-reference/turn-left-coarse-20mm",
-        out, opt);
+    const std::filesystem::path reference =
+        std::filesystem::path(BAGSIM_SOURCE_DIR) / "data/reduced-bag/fe-reference/turn-left-coarse-20mm";
+    const io::RunComparison c = io::compareRuns(reference, out, opt);
     std::cout << io::formatRunComparison(c, true);
     EXPECT_EQ(c.tiltRows, 31);
-    EXPECT_EQ(c.tiltRowsWithin, c.tiltRows);
+    EXPECT_GE(c.tiltRowsWithin, 24);
     EXPECT_LT(c.pelvis.rms, 1.0 * kDeg);
-    EXPECT_LT(c.thorax.rms, 1.0 * kDeg);
+    EXPECT_LT(c.thorax.rms, 1.75 * kDeg);
     EXPECT_EQ(c.overall.regions, 43);
-    EXPECT_LT(c.overall.rms, 0.40);
-    EXPECT_GE(c.overall.within, 14);
+    EXPECT_LT(c.overall.rms, 0.45);
+    EXPECT_GE(c.overall.within, 15);
+    const Csv run = readCsv(out / "regions.csv"), fe = readCsv(reference / "regions.csv");
+    const int t = run.column("time_s"), region = run.column("region"), force = run.column("force_N");
+    for (const auto& r : run.rows)
+        EXPECT_GT(std::stod(r.at(force)), -0.05) << r.at(region) << " at " << r.at(t) << " s";
+    auto forceOf = [](const Csv& c, const std::string& name, double time) {
+        const int ct = c.column("time_s"), cr = c.column("region"), cf = c.column("force_N");
+        for (const auto& r : c.rows)
+            if (r.at(cr) == name && std::abs(std::stod(r.at(ct)) - time) < 1e-6)
+                return std::stod(r.at(cf));
+        return std::nan("");
+    };
+    for (double time : {4.0, 4.5}) {
+        const double ref = forceOf(fe, "forearm_r", time);
+        ASSERT_TRUE(std::isfinite(ref)) << time;
+        EXPECT_NEAR(forceOf(run, "forearm_r", time), ref, 0.15 * ref) << "at " << time << " s";
+    }
 }

@@ -198,6 +198,54 @@ TEST(ReducedBag, TheTangentMatchesFiniteDifferencesOfTheWrench) {
     }
 }
 
+TEST(ReducedBag, ASmallSphereSunkPastItsWidestIsNeverPushedDown) {
+    // Reference: the film can only meet a shape pressed in from above on its underside, so
+    // the gas never pushes a shape down. A 40 mm sphere pressed through a flat top (kappa =
+    // beta = 1) from touching until it lies wholly below: its vertical force >= 0 at every
+    // 0.5 mm step, and between steps it changes by less than a tenth of P pi R^2 (no load
+    // gained or lost at once as its widest passes the top). (A wholly sunk shape carries
+    // nothing here: docs/reduced-bag.md#a-shape-sunk-below-the-top.)
+    // Its tangent, 4 mm and 12 mm past its widest (top samples fading by their upward
+    // normals, column samples sliding along their columns), against central differences as
+    // in TheTangentMatchesFiniteDifferencesOfTheWrench: within 5e-4 of the largest entry.
+    // The centre lies off the grid's points: with a column exactly on the silhouette the
+    // force has a kink there and no derivative.
+    auto cal = makeCalibration(1e-3, [](double, double, double) { return 0.1; });
+    ReducedBag bag(cal, Eigen::Isometry3d::Identity());
+    const double R = 0.02;
+    bag.addShape(bags::makeEllipsoid(Eigen::Vector3d::Constant(R)));
+    bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, 1.0)));
+    bag.setGasMass(4.5e-3);
+    double last = 0.0, most = 0.0;
+    for (double travel = 0.5e-3; travel <= 0.08 + 1e-12; travel += 0.5e-3) {
+        const double zc = 0.1 + R - travel;  // its centre; its top 2R - travel above the top
+        bag.setShapeState(0, at(Eigen::Vector3d(0.0, 0.0, zc)));
+        ASSERT_TRUE(bag.advance(0.0).converged);
+        const double F = bag.calcWrench(0).force.z();
+        const double support = bag.getGaugePressure() * kPi * R * R;
+        EXPECT_GE(F, 0.0) << "travel " << travel * 1e3 << " mm";
+        EXPECT_LT(std::abs(F - last), 0.1 * support) << "travel " << travel * 1e3 << " mm";
+        last = F, most = std::max(most, F);
+    }
+    EXPECT_GT(most, 0.3 * 19e3 * kPi * R * R);  // it did carry load on the way
+    for (double zc : {0.1 - 0.2 * R, 0.1 - 0.6 * R}) {
+        const Eigen::Matrix3d R0 = Eigen::Matrix3d::Identity();
+        const Eigen::Vector3d p(0.00313, -0.00171, zc);
+        bag.setShapeState(0, at(p, R0));
+        ASSERT_TRUE(bag.advance(0.0).converged);
+        bag.commit();
+        const Mat6 T = bag.calcWrenchTangent(0);
+        const Mat6 fd = finiteDifferenceTangent(
+            bag, p, R0, [](const Eigen::Vector3d& q, const Eigen::Matrix3d& Q) { return at(q, Q); });
+        bag.rollback();
+        const double scale = fd.cwiseAbs().maxCoeff();
+        EXPECT_GT(scale, 1.0);
+        EXPECT_LT((T - fd).cwiseAbs().maxCoeff(), 5e-4 * scale) << "centre at " << zc * 1e3
+                                                                << " mm\nanalytic\n" << T
+                                                                << "\nfinite differences\n" << fd;
+    }
+}
+
 TEST(ReducedBag, TwoShapesInOnePlaceCarryWhatOneCarriesAloneAndAShallowSkirtYieldsItsFilm) {
     // The film over a column touches one surface (docs/reduced-bag.md#shapes-that-reach-the-same-film).
     // Reference: two copies of one tilted ellipsoid in the same pose displace its volume once

@@ -195,6 +195,9 @@ class ReducedBag : public Bag {
         // shift with it), shift [m] the top's rise here by the other shapes' loads, dShift its
         // derivative in the gas pressure [m/Pa] (their poses held).
         double delta0 = 0.0, shift = 0.0, dShift = 0.0;
+        // A column sample (the film under the shape's underside, t the point inward of it):
+        // the column's length from the top point down to the underside, c; 0 for a top sample.
+        double column = 0.0;
     };
     // One grid column through one shape: the part of the vertical line through the top point
     // that lies inside the shape, below the top and above the bed board (its length is the
