@@ -119,7 +119,9 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
                                fmt(" to %g s", t.rbegin()->first * 1e-4);
     };
     const long from = timeKey(options.from);
-    double sp = 0.0, sq = 0.0;
+    double sp = 0.0, sq = 0.0, sp0 = 0.0, sq0 = 0.0;
+    std::pair<double, double> firstRef{0.0, 0.0}, firstRun{0.0, 0.0};
+    int sinceFirst = 0;  // finite rows compared since the first
     for (const auto& [k, ref] : tiltRef) {
         if (k < from) continue;
         ++c.referenceTiltRows;
@@ -141,7 +143,22 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
             c.thorax.largest = dq, c.thorax.largestTime = t;
         if (std::abs(dp) <= options.tiltTolerance && std::abs(dq) <= options.tiltTolerance)
             ++c.tiltRowsWithin;
+        // The turn alone, from the first finite row on.
+        if (sinceFirst == 0) firstRef = ref, firstRun = it->second;
+        const double ep = dp - (firstRun.first - firstRef.first),
+                     eq = dq - (firstRun.second - firstRef.second);
+        ++sinceFirst;
+        sp0 += ep * ep, sq0 += eq * eq;
+        if (sinceFirst == 1 || std::abs(ep) > std::abs(c.pelvisSinceFirst.largest))
+            c.pelvisSinceFirst.largest = ep, c.pelvisSinceFirst.largestTime = t;
+        if (sinceFirst == 1 || std::abs(eq) > std::abs(c.thoraxSinceFirst.largest))
+            c.thoraxSinceFirst.largest = eq, c.thoraxSinceFirst.largestTime = t;
+        if (std::abs(ep) <= options.tiltTolerance && std::abs(eq) <= options.tiltTolerance)
+            ++c.tiltRowsWithinSinceFirst;
     }
+    if (sinceFirst > 0)
+        c.pelvisSinceFirst.rms = std::sqrt(sp0 / sinceFirst),
+        c.thoraxSinceFirst.rms = std::sqrt(sq0 / sinceFirst);
     if (c.tiltRows == 0)
         throw InputError((run / "tilt.csv").string(), 0, "time_s",
                          "no row at a time of " + (reference / "tilt.csv").string() +
@@ -224,7 +241,16 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
     o << "  within " << fmt("%g deg", tolDeg) << ": " << c.tiltRowsWithin << " of " << c.tiltRows
       << " rows (both segments)";
     if (c.tiltRowsNotFinite > 0) o << "; " << c.tiltRowsNotFinite << " rows not finite numbers";
-    o << "\n\n";
+    o << "\n";
+    o << "the turn alone (each run's tilt less its own at the first row; the side a settle picks "
+         "left out):\n";
+    for (const auto& [name, d] :
+         {std::pair<const char*, const TiltDifference&>{"pelvis", c.pelvisSinceFirst},
+          {"thorax", c.thoraxSinceFirst}})
+        o << "  " << name << ": largest " << fmt("%+.2f deg", toUnit(d.largest, "deg")) << " at "
+          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", toUnit(d.rms, "deg")) << "\n";
+    o << "  within " << fmt("%g deg", tolDeg) << ": " << c.tiltRowsWithinSinceFirst << " of "
+      << c.tiltRows - c.tiltRowsNotFinite << " rows (both segments)\n\n";
     o << "region patch peaks (20 cm^2, regions.csv), the regions carrying at least "
       << fmt("%g N", c.options.minForce) << " in the reference; error = run / reference - 1:\n";
     o << "  time       regions   mean      rms       within " << fmt("%g %%", tolPc) << "\n";

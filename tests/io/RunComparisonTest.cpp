@@ -53,6 +53,14 @@ TEST(RunComparison, TiltAndRegionPeaksAreJudgedAsWorkedOutByHand) {
     EXPECT_NEAR(c.thorax.largest, -0.5 * kDeg, 1e-12);
     EXPECT_NEAR(c.thorax.rms, std::sqrt(0.25 / 2) * kDeg, 1e-12);
     EXPECT_EQ(c.tiltRowsWithin, 1);  // 0.2 s: the pelvis 2.5 deg off
+    // The turn alone, less each run's own tilt at 0.1 s (run 2.0 / 1.5, reference 1.0 / 2.0):
+    // pelvis differences 0, +1.5 deg; thorax 0, +0.5 deg.
+    EXPECT_NEAR(c.pelvisSinceFirst.largest, 1.5 * kDeg, 1e-12);
+    EXPECT_DOUBLE_EQ(c.pelvisSinceFirst.largestTime, 0.2);
+    EXPECT_NEAR(c.pelvisSinceFirst.rms, std::sqrt(2.25 / 2) * kDeg, 1e-12);
+    EXPECT_NEAR(c.thoraxSinceFirst.largest, 0.5 * kDeg, 1e-12);
+    EXPECT_NEAR(c.thoraxSinceFirst.rms, std::sqrt(0.25 / 2) * kDeg, 1e-12);
+    EXPECT_EQ(c.tiltRowsWithinSinceFirst, 2);
     ASSERT_EQ(c.peaks.size(), 4u);
     ASSERT_EQ(c.moments.size(), 2u);
     EXPECT_EQ(c.moments[0].regions, 2);

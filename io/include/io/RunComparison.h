@@ -55,6 +55,11 @@ struct RunComparison {
     int referenceTiltRows = 0;    ///< the reference's rows from options.from
     double firstTime = 0.0, lastTime = 0.0;  ///< [s] of the compared tilt rows
     TiltDifference pelvis, thorax;
+    /// The turn alone: each run's tilt less its own at the first compared row, run - reference
+    /// (a symmetric man settling on a symmetric array picks a side by a degree or two that the
+    /// mesh moves; this leaves that pick out). Rows both segments are within the tolerance.
+    TiltDifference pelvisSinceFirst, thoraxSinceFirst;
+    int tiltRowsWithinSinceFirst = 0;
     std::vector<RegionPeak> peaks;              ///< every judged region-moment, by time
     std::vector<RegionPeakSummary> moments;     ///< per moment
     RegionPeakSummary overall;                  ///< over every judged region-moment
