@@ -124,7 +124,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
                      "contact_penalty", "body_friction", "friction_law", "slip_velocity",
                      "body_tissue", "model", "calibration", "bending_stiffness",
-                     "stick_distance"});
+                     "stick_distance", "film_damping"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -175,6 +175,11 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     // value unless set, as in the load test: it gives slack film a stiffness of its own
     // (docs/cosim.md#slack-film-and-the-films-bending).
     b.bendingStiffness = readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness);
+    // Damped steps (docs/solver.md#damped-steps-damping): each step first solved with a damper
+    // on the film that is not taut, then the damper-free equilibrium. Off by default.
+    b.damping = s.getQuantity("film_damping", D::StiffnessPerArea, 0.0);
+    checkBetween(s, "film_damping", b.damping, 0.0, 1e8, "Pa/m",
+                 "0: none; 1e5 Pa/m was measured on the seed's bag");
     b.threads = 1;  // bags run in parallel, one per thread
     readReducedBagKeys(s, sc.options, fileName);
     // The reduced bag's friction (docs/reduced-bag.md#friction): one stick spring per shape,
@@ -188,6 +193,10 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(s, "stick_distance", sc.options.reducedFriction.stickDistance, 1e-4, 0.05,
                      "mm");
     }
+    if (reduced && s.has("film_damping"))
+        s.fail("film_damping", "is the finite-element bag's (its slack film's damper); the "
+                               "reduced bag has no film to damp: leave it out, or model: "
+                               "finite-element");
     if (reduced && s.has("friction_law") && law != "stick-slip")
         s.fail("friction_law", law + " is not valid with model: reduced; valid: stick-slip "
                                      "(the reduced bag's one law)");

@@ -381,6 +381,32 @@ TEST(ArrayScenario, TheFilmsBendingStiffnessIsAMomentThePlateValueOrOff) {
     }
 }
 
+TEST(ArrayScenario, TheFilmsDamperIsOffByDefaultAStiffnessPerAreaAndTheFiniteElementBagsOwn) {
+    auto with = [](const std::string& keys) {
+        std::string t = kBase;
+        t.replace(t.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm" + keys + "}");
+        return t;
+    };
+    EXPECT_EQ(read(kBase).options.bag.damping, 0.0);
+    EXPECT_DOUBLE_EQ(read(with(", film_damping: 1e5 Pa/m")).options.bag.damping, 1e5);
+    EXPECT_DOUBLE_EQ(read(with(", film_damping: 0.1 N/mm^3")).options.bag.damping, 1e8);
+    for (const char* bad : {"soft", "-1 Pa/m", "1e9 Pa/m", "5 mm"}) {
+        const io::InputError e = readError(with(std::string(", film_damping: ") + bad));
+        EXPECT_EQ(e.getLine(), 3) << bad;
+        EXPECT_EQ(e.getKey(), "bag.film_damping") << bad;
+    }
+    // (refused with the reduced bag: ReducedBagFile.*)
+    // It reaches every coupled bag the run builds.
+    const io::PatientOnArrayScenario sc = read(with(", film_damping: 1e5 Pa/m"));
+    const cosim::PatientOnArray poa(sc.patient, sc.options);
+    ASSERT_GT(poa.getBagIndices().size(), 0u);
+    for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
+        const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa.getBag(int(b)));
+        ASSERT_NE(fe, nullptr);
+        EXPECT_EQ(fe->getAirbag().getSpec().damping, 1e5) << b;
+    }
+}
+
 TEST(ArrayScenario, TheGasInTheLinearisationIsOnByDefaultAndCanBeSwitchedOff) {
     auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
     EXPECT_TRUE(read(kBase).options.coupling.gasTangent);

@@ -204,4 +204,9 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
     });
     EXPECT_EQ(e7.getKey(), "bag.body_tissue");
     EXPECT_NE(std::string(e7.what()).find("model: reduced"), std::string::npos) << e7.what();
+    // Nor the film's damper: it has no film.
+    const io::InputError e8 = expectInputError(
+        [&] { readWith("30 mm", "reduced", shipped + ", film_damping: 1e5 Pa/m"); });
+    EXPECT_EQ(e8.getKey(), "bag.film_damping");
+    EXPECT_NE(std::string(e8.what()).find("finite-element"), std::string::npos) << e8.what();
 }
