@@ -175,7 +175,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     // value unless set, as in the load test: it gives slack film a stiffness of its own
     // (docs/cosim.md#slack-film-and-the-films-bending).
     b.bendingStiffness = readBendingStiffness(s, "bending_stiffness", *b.material, b.thickness);
-    // Damped steps (docs/solver.md#damped-steps-damping): each step first solved with a damper
+    // Damped steps (docs/solver.md#damped-steps-damping-measured-not-a-speed-up): each step first solved with a damper
     // on the film that is not taut, then the damper-free equilibrium. Off by default.
     b.damping = s.getQuantity("film_damping", D::StiffnessPerArea, 0.0);
     checkBetween(s, "film_damping", b.damping, 0.0, 1e8, "Pa/m",
