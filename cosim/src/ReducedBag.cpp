@@ -25,10 +25,24 @@ constexpr double kAxisFade = 0.005;  // [m]
 
 double smoothstep(double u, double* du);
 double calcUpFade(double nz, double* dNz);
+double calcColumnShare(double nz, double phi, double* dNz, double* dDepth);
 
 double calcAxisFade(const Eigen::Matrix3d& dndp) {
     const double k = dndp.norm();
     return k * kAxisFade < 1e-12 ? 1.0 : smoothstep(1.0 / (k * kAxisFade) - 1.0, nullptr);
+}
+
+// The column sample's share b of a top point whose column has a chord (n_z its normal's up
+// component, phi its signed distance): up(n_z) = smoothstep over n_z from -0.45 to -0.15 times
+// the onset over the first kColumnOnset of depth -phi; 0 outside the shape. dNz, dDepth: its
+// derivatives in n_z and in -phi.
+double calcColumnShare(double nz, double phi, double* dNz, double* dDepth) {
+    double dUp = 0.0, dOnset = 0.0;
+    const double up = smoothstep((nz + 0.45) / 0.3, &dUp);
+    const double onset = phi < 0.0 ? smoothstep(-phi / kColumnOnset, &dOnset) : 0.0;
+    if (dNz) *dNz = dUp / 0.3 * onset;
+    if (dDepth) *dDepth = up * dOnset / kColumnOnset;
+    return up * onset;
 }
 
 // The share a top sample keeps where the shape's closest surface faces up (n_z the normal's
@@ -533,10 +547,9 @@ void ReducedBag::evaluate() {
             // the normal there. Blended in over -n_z from 0.45 to 0.15 and over the first
             // kColumnOnset of depth (continuous in the pose).
             const int k = chordAt[size_t(i)];
-            const double nUp = smoothstep((smp.n.z() + 0.45) / 0.3, nullptr);
-            if (k >= 0 && nUp > 0.0 && phi < 0.0) {
+            const double b = k >= 0 ? calcColumnShare(smp.n.z(), phi, nullptr, nullptr) : 0.0;
+            if (b > 0.0) {
                 const Chord& ch = r.chords[size_t(k)];
-                const double b = nUp * smoothstep(-phi / kColumnOnset, nullptr);
                 // The underside: the chord's lower end, or through the board (the chord stops
                 // there) down to where the column leaves the shape, for the board's penalty.
                 Vec3 lo = ch.lo;
@@ -807,15 +820,17 @@ double ReducedBag::calcBoardPressure(const Vec3& p) const {
     return m_cal->boardPenalty * std::max(0.0, -(m_X_BG * p).z());
 }
 
-Eigen::Matrix3Xd ReducedBag::calcTop() const {
+Vec3 ReducedBag::calcTopPoint(int point) const {
     const ReducedBagCalibration& c = *m_cal;
+    const int g = m_gridIndex[point];
+    return m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
+                         interpolateTop(point, m_cur.mass));
+}
+
+Eigen::Matrix3Xd ReducedBag::calcTop() const {
     const int n = int(m_gridIndex.size());
     Eigen::Matrix3Xd top(3, n);
-    for (int i = 0; i < n; ++i) {
-        const int g = m_gridIndex[i];
-        top.col(i) = m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
-                                   interpolateTop(i, m_cur.mass));
-    }
+    for (int i = 0; i < n; ++i) top.col(i) = calcTopPoint(i);
     return top;
 }
 
@@ -854,10 +869,7 @@ std::vector<ReducedBag::SampleForce> ReducedBag::getSampleForces(int shape) cons
     for (const Sample& smp : r.samples) {
         SampleForce f;
         f.point = smp.point;
-        const int g = m_gridIndex[smp.point];
-        const Vec3 top = m_X_GB * Vec3(c.x0 + c.pitch * (g % c.nx), c.y0 + c.pitch * (g / c.nx),
-                                       interpolateTop(smp.point, m_cur.mass));
-        f.column = (smp.t - top).norm() > 1e-12;
+        f.column = smp.column > 0.0;
         f.delta = smp.delta, f.blend = smp.blend, f.film = smp.film, f.c = smp.c, f.n = smp.n;
         f.shift = smp.shift;
         f.gasPressure = kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr);
@@ -962,30 +974,32 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
     std::vector<int> chordOf(size_t(m_gridIndex.size()), -1);  // grid point -> its chord
     for (size_t k = 0; k < r.chords.size(); ++k) chordOf[size_t(r.chords[k].point)] = int(k);
     // A sample's blend (evaluate()): with n and phi the top point's normal and signed
-    // distance, b = up(n_z) onset(-phi) where the top point is inside; a column sample has b
-    // times its axis fade, a top sample (1 - b) times the fade of an upward normal and its
-    // own axis fade (the axis fades, of the surface's curvature, held).
+    // distance, b = calcColumnShare(n_z, phi) where its column has a chord; a column sample
+    // has b times its axis fade, a top sample (1 - b) times the fade of an upward normal and
+    // its own axis fade. A top sample is the top point's own geometry (phi = -n.(c - t)); a
+    // column sample asks the shape for it.
     {
-        const Eigen::Matrix3Xd top = calcTop();
         const bags::RigidShape& body = *m_shapes.at(size_t(shape));
         for (size_t k = 0; k < r.samples.size(); ++k) {
             const Sample& smp = r.samples[k];
-            const Vec3 t = top.col(smp.point);
+            const Vec3 t = smp.column > 0.0 ? calcTopPoint(smp.point) : smp.t;
             double phi = 0.0;
-            Vec3 cp, nTop;
-            Eigen::Matrix3d dndpTop;
-            body.calcContactGeometry(t, &phi, &cp, &nTop, &dndpTop);
+            Vec3 nTop = smp.n;
+            Eigen::Matrix3d dndpTop = smp.dndp;
+            if (smp.column > 0.0) {
+                Vec3 cp;
+                body.calcContactGeometry(t, &phi, &cp, &nTop, &dndpTop);
+            } else {
+                phi = -nTop.dot(smp.c - t);
+            }
             const Mat36 J = jacobian(t);
             const Row6 dnz = (-cross(nTop) * Jtheta - dndpTop * J).row(2);
             const Row6 dDepthTop = nTop.transpose() * J;  // d(-phi)
-            double dUp = 0.0, dOnset = 0.0;
-            const double up = smoothstep((nTop.z() + 0.45) / 0.3, &dUp);
-            const bool column = chordOf[size_t(smp.point)] >= 0 && up > 0.0 && phi < 0.0;
-            const double onset = column ? smoothstep(-phi / kColumnOnset, &dOnset) : 0.0;
-            const double b = up * onset;
-            const Row6 db = column ? Row6(dUp / 0.3 * onset * dnz +
-                                          up * dOnset / kColumnOnset * dDepthTop)
-                                   : Row6::Zero();
+            double dbNz = 0.0, dbDepth = 0.0;
+            const double b = chordOf[size_t(smp.point)] >= 0
+                                 ? calcColumnShare(nTop.z(), phi, &dbNz, &dbDepth)
+                                 : 0.0;
+            const Row6 db = dbNz * dnz + dbDepth * dDepthTop;
             // (the axis fade moves with the material past the point: at a fixed point by
             // -v, at a column's underside by dc - v)
             if (smp.column > 0.0) {

@@ -65,7 +65,7 @@ TEST(ReducedTurn, AtTwentyMillimetresTheTurnFollowsTheFiniteElementTurnAndCarrie
     // compared as bagsim compare does (io::compareRuns).
     // Tilt: the target is 2 deg. Measured 2026-12-05 with the gas never pressing a
     // shape down (docs/reduced-bag.md#a-shape-sunk-past-its-widest): within 2.25 deg at 26 of
-    // the 31 rows from 1.5 s on, rms 0.76 / 1.48 deg (pelvis / thorax); the misses are the
+    // the 31 rows from 1.5 s on, rms 0.76 / 1.49 deg (pelvis / thorax); the misses are the
     // thorax from 4.1 s on, +3.57 deg at 4.5 s, where the 12 mm FE turn lies 2.1 deg above
     // the 20 mm one. (Before, with the hands and forearms pulled into the film, every row
     // was within 2 deg.) Guard: at least 24 rows within 2.25 deg, rms under 1.0 / 1.75 deg.
@@ -75,7 +75,7 @@ TEST(ReducedTurn, AtTwentyMillimetresTheTurnFollowsTheFiniteElementTurnAndCarrie
     // The arms: no region's vertical force is below -0.05 N at any output row (the gas never
     // pulls a segment into the bag; before, the left hand read -3.0 N at 4.5 s), and the right
     // forearm carries what the FE bags give it at 4.0 and 4.5 s within 15 % (25.2 and 25.7 N;
-    // measured 23.5 and 24.5 N, before 12.4 and 18.7 N).
+    // measured 23.4 and 24.5 N, before 12.4 and 18.7 N).
     const std::filesystem::path out =
         std::filesystem::path(BAGSIM_BINARY_DIR) / "tests/app/reduced-turn-20mm";
     ASSERT_EQ(runScenario("turn-left-coarse.yaml", out,

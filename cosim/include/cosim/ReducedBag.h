@@ -256,6 +256,7 @@ class ReducedBag : public Bag {
     double calcWeight(double delta, double depth, double* dDelta, double* dDepth) const;
     void evaluate();  // m_cur.mass and the shapes' poses -> everything
     Eigen::Matrix3Xd calcTop() const;  // the unloaded top at m_cur.mass (Ground), per grid point
+    Vec3 calcTopPoint(int point) const;  // one grid point's of calcTop()
     double calcBoardPressure(const Vec3& p) const;  // the board's penalty pressure at p [Pa]
     void buildFootprint(const Eigen::Matrix3Xd& top);  // m_points, m_areas from the samples
     void shareFilm(const Eigen::Matrix3Xd& top);  // each sample's film share (evaluate)
