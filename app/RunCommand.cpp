@@ -275,8 +275,20 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
                       100.0 * c.stabilizationShare);
         out << line;
     }
-    out << "  (stabilised: steps accepted with the stabilisation springs, and the largest share of\n"
-           "   the block's work they held; docs/solver.md)\n";
+    if (o.stepping == bags::AirbagSpec::Stepping::Dynamic) {
+        out << "  (stabilised: none in the dynamic test; its film in time, docs/solver.md)\n";
+        out << "dynamic film (the block's pace, and the largest share of its work the film's kinetic\n"
+               "energy reached; limit "
+            << fmt("%g", 100.0 * o.dynamic.kineticShareLimit) << " %):\n";
+        for (const bags::LoadCurve& c : r.curves)
+            out << "  " << io::formatQuantity(c.gasMass, "g", 2) << ": "
+                << fmt("%g mm/s", c.blockSpeed * 1e3) << ", kinetic "
+                << fmt("%.2f %%", 100.0 * c.kineticShare)
+                << (c.quasiStatic ? "" : "  NOT QUASI-STATIC") << "\n";
+    } else {
+        out << "  (stabilised: steps accepted with the stabilisation springs, and the largest share of\n"
+               "   the block's work they held; docs/solver.md)\n";
+    }
     for (const bags::LoadCurve& c : r.curves)
         if (!c.failure.empty())
             out << "  " << io::formatQuantity(c.gasMass, "g", 2)

@@ -4,8 +4,12 @@
 //
 //   build/bin/bench_load_test [--step MM] [--bending N_M|plate] [--imperfection MM]
 //                             [--seed N] [--threads N] [--scale F] [--verbose 1] [--sparsify 0|1]
-//                             [--predictor 0|1] [--low-force-steps F] [mesh_mm=5]
-//                             [gas masses in g ... | seed]
+//                             [--predictor 0|1] [--low-force-steps F]
+//                             [--dynamic 0|1] [--block-speed MM_PER_S] [--mass-scale S]
+//                             [--film-damping PER_S] [--record-every MM] [--halvings N]
+//                             [mesh_mm=5] [gas masses in g ... | seed]
+// --dynamic 1: the film integrated in time (LoadTestOptions::stepping Dynamic) with the other
+// --block-speed ... options of LoadTestOptions::Dynamic.
 // "seed" (the default) runs the seed's sweep 3.5 g down to 1.0 g in 0.25 g steps; --step sets
 // the target block increment (default 1 mm, as the scenario).
 #include <bags/LoadTest.h>
@@ -64,6 +68,21 @@ int main(int argc, char** argv) {
             o.solver.sparsifyWideCouplings = std::atoi(val) != 0;
         } else if (std::strcmp(key, "--damping") == 0) {
             o.damping = std::atof(val);
+        } else if (std::strcmp(key, "--dynamic") == 0) {
+            o.stepping = std::atoi(val) != 0 ? bags::AirbagSpec::Stepping::Dynamic
+                                             : bags::AirbagSpec::Stepping::QuasiStatic;
+        } else if (std::strcmp(key, "--block-speed") == 0) {
+            o.dynamic.blockSpeed = std::atof(val) * 1e-3;
+        } else if (std::strcmp(key, "--mass-scale") == 0) {
+            o.dynamic.massScale = std::atof(val);
+        } else if (std::strcmp(key, "--film-damping") == 0) {
+            o.dynamic.damping = std::atof(val);
+        } else if (std::strcmp(key, "--record-every") == 0) {
+            o.dynamic.recordEvery = std::atof(val) * 1e-3;
+        } else if (std::strcmp(key, "--halvings") == 0) {
+            o.dynamic.maxHalvings = std::atoi(val);
+        } else if (std::strcmp(key, "--step-fraction") == 0) {
+            o.dynamic.stepFraction = std::atof(val);
         } else if (std::strcmp(key, "--onset") == 0) {
             o.blockContact.onsetGap = o.floorContact.onsetGap = std::atof(val) * 1e-3;
         } else if (std::strcmp(key, "--krylov-tolerance") == 0) {
@@ -126,6 +145,7 @@ int main(int argc, char** argv) {
         std::printf("fill mass %.4f g: profile scale %.6f\n", fillMass * 1e3, fs.scale);
     }
     int nodes = 0, tris = 0, steps = 0, iterations = 0, loadingSteps = 0;
+    long substeps = 0;
     const auto t0 = std::chrono::steady_clock::now();
     double tFirst = -1.0, tInflated = -1.0;
     bags::LoadTestResult r;
@@ -143,7 +163,15 @@ int main(int argc, char** argv) {
             ++steps;
             if (s.loading) ++loadingSteps;
             iterations += s.newtonIterations;
-            if (verbose)
+            substeps += s.substeps;
+            if (verbose && o.stepping == bags::AirbagSpec::Stepping::Dynamic)
+                std::printf("    curve %d step %3d %s d = %7.3f mm F = %8.3f N substeps %6d "
+                            "KE %.3e J residual %.2e N t = %.1f s\n",
+                            s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3,
+                            s.force, s.substeps, s.kineticEnergy, s.residual,
+                            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                                .count());
+            else if (verbose)
                 std::printf("    curve %d step %3d %s d = %7.3f mm F = %8.3f N iterations %4d "
                             "factorisations %3d residual %.2e N springs %.2e J t = %.1f s\n",
                             s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3,
@@ -175,8 +203,13 @@ int main(int argc, char** argv) {
                     c.stiffness * 1e-3, c.r2, forceAt(c, 5e-3), c.stage, c.reachedPeak ? "yes" : "no",
                     c.stabilizationShare,
                     c.failure.empty() ? "" : ", stopped: ", c.failure.c_str());
+        if (c.blockSpeed > 0.0)
+            std::printf("  %.2f g: dynamic, block %.2f mm/s, kinetic share %.2g%s\n",
+                        c.gasMass * 1e3, c.blockSpeed * 1e3, c.kineticShare,
+                        c.quasiStatic ? "" : " (not quasi-static)");
     }
-    std::printf("steps %d (loading %d), Newton iterations %d\n", steps, loadingSteps, iterations);
+    std::printf("steps %d (loading %d), Newton iterations %d, explicit sub-steps %ld\n", steps,
+                loadingSteps, iterations, substeps);
     if (tFirst > 0) std::printf("inflation + first curve (loading and unloading): %.2f s\n", tFirst);
     std::printf("inflation (flat panels to the first gas mass): %.2f s\n", tInflated);
     std::printf("total wall time: %.2f s\n", total);

@@ -147,6 +147,11 @@ void AirbagSpec::validate() const {
     require(forceTolerance > 0.0 && forceTolerance <= 1.0, "forceTolerance", forceTolerance,
             "use 0 < tolerance <= 1 N (e.g. 0.05 N)");
     require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
+    if (stepping == Stepping::Dynamic) {
+        dynamics.validate();
+        require(density > 0.0, "density", density,
+                "the dynamic stepping moves the film's mass: use a density > 0 kg/m^3");
+    }
     require(cluster.size() <= 64, "cluster", static_cast<double>(cluster.size()),
             "use 0 to 64 bags in one module");
     if (cluster.size() > 1) {
@@ -176,6 +181,12 @@ struct Airbag::Snapshot {
     ViscousState viscous;  // the film's internal variables (empty without Prony terms)
     std::vector<Eigen::Isometry3d> poses;
     double time = 0.0;
+    Eigen::Matrix3Xd v;    // the film's velocity (dynamic stepping; empty: at rest)
+    // The film's stable step over the root of its mass scale [s] (0: to be estimated) and the
+    // steps advanced since it was estimated: part of the state, so that a step repeated from
+    // a commit or a checkpoint is integrated with the same sub-steps.
+    double stableStep = 0.0;
+    int stableAge = 0;
 };
 
 struct Airbag::Impl {
@@ -193,6 +204,22 @@ struct Airbag::Impl {
     std::unique_ptr<RigidShape> bed;
     std::shared_ptr<RigidContact> bedContact;
     Eigen::Matrix3Xd x;
+    // The film's velocity [m/s] (dynamic stepping: at the half sub-steps; zero at rest).
+    Eigen::Matrix3Xd v;
+    // The film's inertia (dynamic stepping), built at the first dynamic step (it needs every
+    // shape's contact penalty for its stable step).
+    std::unique_ptr<FilmDynamics> film;
+    double stableStep = 0.0;  // as Snapshot::stableStep
+    int stableAge = 0;
+    // How advance() moves the bag: one of the steppers below the Impl.
+    struct Stepper {
+        virtual ~Stepper() = default;
+        /// From the committed state to the shapes' targets and the gas set, over dt.
+        virtual AdvanceSummary advance(Impl& m, double dt, int maxCuts) = 0;
+    };
+    std::unique_ptr<Stepper> stepper;
+    struct QuasiStaticStepper;
+    struct DynamicStepper;
     SolverWorkspace workspace;
     double time = 0.0;
     double meanEdge = 0.0;
@@ -406,6 +433,9 @@ struct Airbag::Impl {
         if (model->hasProny()) s->viscous = model->getViscousState();
         for (const Shape& sh : shapes) s->poses.push_back(sh.shape->getPose());
         s->time = time;
+        s->v = v;
+        s->stableStep = stableStep;
+        s->stableAge = stableAge;
         return s;
     }
     // Some contact has the regularised friction law (its history then holds a slip length).
@@ -441,6 +471,14 @@ struct Airbag::Impl {
         w.pod(std::uint64_t(s.poses.size()));
         for (const Eigen::Isometry3d& X : s.poses) w.pose(X);
         w.pod(s.time);
+        if (spec.stepping == AirbagSpec::Stepping::Dynamic) {  // only then: as before otherwise
+            w.tag("velocity");
+            Eigen::Matrix3Xd v0 = s.v;
+            if (v0.cols() != s.x.cols()) v0.setZero(3, s.x.cols());
+            w.mat(v0);
+            w.pod(s.stableStep);
+            w.pod(s.stableAge);
+        }
     }
     // A snapshot as writeSnapshot() wrote it, its sizes checked against this bag's.
     std::shared_ptr<Snapshot> readSnapshot(StateReader& r) const {
@@ -477,6 +515,12 @@ struct Airbag::Impl {
         if (np != s->poses.size()) StateReader::mismatch("shapes", np, s->poses.size());
         for (Eigen::Isometry3d& X : s->poses) X = r.pose();
         r.pod(s->time);
+        if (spec.stepping == AirbagSpec::Stepping::Dynamic) {
+            r.tag("velocity");
+            r.matOfCols(s->v, x.cols(), "nodes of the bag (velocities)");
+            r.pod(s->stableStep);
+            r.pod(s->stableAge);
+        }
         return s;
     }
     void restore(const Snapshot& s) {
@@ -486,6 +530,12 @@ struct Airbag::Impl {
         if (model->hasProny()) model->setViscousState(s.viscous);
         for (size_t i = 0; i < shapes.size(); ++i) shapes[i].shape->setPose(s.poses[i]);
         time = s.time;
+        if (s.v.cols() == x.cols())
+            v = s.v;
+        else
+            v.setZero(3, x.cols());
+        stableStep = s.stableStep;
+        stableAge = s.stableAge;
     }
 
     // Sets bag b's gas mass, shared among its gas bodies at equal pressure (a body's share
@@ -1015,6 +1065,181 @@ struct Airbag::Impl {
     }
 };
 
+// ---------------------------------------------------------------------------------------------
+// Steppers: how advance() goes from the committed state over a step of time.
+
+// An equilibrium at the step's end: Newton from the committed state, the step cut in halves
+// while a sub-step fails (each with the retry chain of Impl::solveSubstep).
+struct Airbag::Impl::QuasiStaticStepper : Airbag::Impl::Stepper {
+    AdvanceSummary advance(Impl& m, double dt, int maxCuts) override {
+        AdvanceSummary out;
+        // Start from the committed state (a repeated advance of one macro step starts over).
+        m.restore(*m.committed);
+        std::vector<Eigen::Isometry3d> from = m.currentPoses();
+        double s = 0.0, ds = 1.0;
+        int cuts = 0;
+        while (s < 1.0) {
+            const double s1 = (ds >= 1.0 - s - 1e-12) ? 1.0 : s + ds;
+            m.wholeStep = s == 0.0 && s1 == 1.0;
+            if (m.solveSubstep(from, s1, dt * (s1 - s), &out)) {
+                s = s1;
+                if (cuts > 0) ds = std::min(2.0 * ds, 1.0);
+            } else {
+                if (++cuts > maxCuts) {
+                    m.restore(*m.committed);
+                    out.converged = false;
+                    return out;
+                }
+                ds *= 0.5;
+            }
+        }
+        out.converged = true;
+        m.v.setZero(3, m.x.cols());  // an equilibrium is at rest
+        // A warm start only from an equilibrium: a state the springs hold is no start to share.
+        if (out.stabilizationEnergy > 0.0)
+            m.lastAdvanced.resize(3, 0);
+        else
+            m.lastAdvanced = m.x;
+        return out;
+    }
+};
+
+// The film in time (bags/Dynamics.h): explicit damped central differences in sub-steps of a
+// fraction of the stable step, the shapes' poses interpolated across the step, the gas flows,
+// leakage, orifice transfer and heat exchange integrated per sub-step, the friction history
+// and the film's viscous branches advanced per sub-step. A step of no time is a quasi-static
+// change. A bag nothing touches, whose gas and film are still and which is at rest, sleeps
+// (nothing is integrated) and wakes when a shape touches it or its gas moves.
+struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
+    static constexpr int kStableRefresh = 8;
+    QuasiStaticStepper quasiStatic;
+    EnergyAccumulator acc;
+
+    // [Pa/m] the stiffest penalty per area that may press a node.
+    static double maxContactPenalty(const Impl& m) {
+        auto stiffest = [](const RigidContact::Options& o) {
+            return o.pressurePenalty * std::max(1.0, o.friction > 0.0 ? o.stickStiffnessRatio : 0.0);
+        };
+        double k = m.bedContact ? stiffest(m.spec.bedContact) : 0.0;
+        for (const Shape& sh : m.shapes) k = std::max(k, stiffest(sh.contact->getOptions()));
+        // A node against a facet: the facet's nodes share the node's force, a node may
+        // meet more than one facet.
+        if (m.self) k = std::max(k, 2.0 * m.spec.selfContactPenalty);
+        return k;
+    }
+
+    AdvanceSummary advance(Impl& m, double dt, int maxCuts) override {
+        if (dt == 0.0) return quasiStatic.advance(m, dt, maxCuts);
+        m.restore(*m.committed);
+        if (!m.film)
+            m.film = std::make_unique<FilmDynamics>(*m.model, m.spec.density, m.spec.dynamics,
+                                                    maxContactPenalty(m), m.spec.material);
+        const std::vector<Eigen::Isometry3d> from = m.currentPoses();
+        AdvanceSummary out;
+        // Asleep: at rest, untouched before and after, gas and film still.
+        const bool still = m.isGasStill(dt) && m.model->isViscouslyRelaxed();
+        auto untouched = [&] {
+            for (const Shape& sh : m.shapes)
+                if (sh.contact->getNumActive(m.x) > 0) return false;
+            return true;
+        };
+        if (still && m.v.isZero(0.0) && untouched()) {
+            for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].shape->setPose(m.shapes[i].target);
+            if (untouched()) {
+                m.time += dt;
+                out.converged = true;
+                out.residual = m.calcFreeResidual(m.x);
+                return out;
+            }
+            for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].shape->setPose(from[i]);
+        }
+        // The stable step, estimated again every kStableRefresh steps (a tangent assembly
+        // costs tens of sub-steps); it scales with the root of the mass scale.
+        const double root = std::sqrt(m.spec.dynamics.massScale);
+        double perRoot = m.stableStep;
+        int age = m.stableAge;
+        if (!(perRoot > 0.0) || age >= kStableRefresh) {
+            perRoot = m.film->calcStableStep(m.x) / root;
+            age = 0;
+        }
+        const double stable = perRoot * root;
+        for (int cut = 0; cut <= maxCuts; ++cut) {
+            const double hMax = stable * m.spec.dynamics.stepFraction * std::pow(0.5, cut);
+            const long n = std::max(1L, static_cast<long>(std::ceil(dt / hMax - 1e-9)));
+            const double h = dt / static_cast<double>(n);
+            if (integrate(m, from, dt, n, h, &out)) {
+                m.stableStep = perRoot;
+                m.stableAge = age + 1;
+                out.converged = true;
+                out.substeps = static_cast<int>(std::min<long>(n, std::numeric_limits<int>::max()));
+                out.substep = h;
+                out.kineticEnergy = m.film->calcKineticEnergy(m.v);
+                out.residual = m.calcFreeResidual(m.x);
+                // Falls asleep: untouched, still, and moving less than 0.1 um over such a step.
+                double vmax = 0.0;
+                for (int i = 0; i < m.v.cols(); ++i) vmax = std::max(vmax, m.v.col(i).norm());
+                if (still && untouched() && vmax * dt < 1e-7 &&
+                    out.residual <= m.spec.forceTolerance)
+                    m.v.setZero();
+                return out;
+            }
+            m.restore(*m.committed);
+        }
+        out.converged = false;
+        return out;
+    }
+
+    // n sub-steps of h from the current state; false (state unspecified) on a blow-up.
+    bool integrate(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt, long n,
+                   double h, AdvanceSummary* out) {
+        (void)out;
+        const bool orifice = m.spec.connection == AirbagSpec::Connection::Orifice &&
+                             m.model->getNumGases() >= 2;
+        const bool heat = m.spec.gas.heatTimeConstant > 0.0;
+        const int ng = m.model->getNumGases();
+        std::vector<GasChamber> heatStart;
+        std::vector<double> heatV0;
+        try {
+            for (long k = 0; k < n; ++k) {
+                const double s1 = k + 1 == n ? 1.0 : static_cast<double>(k + 1) / static_cast<double>(n);
+                for (size_t i = 0; i < m.shapes.size(); ++i)
+                    m.shapes[i].shape->setPose(interpolatePose(from[i], m.shapes[i].target, s1));
+                // Gas over the sub-step at the volumes of its start.
+                for (int b = 0; b < m.numBags; ++b) m.addBagGasMass(b, m.calcGasInflow(b, h));
+                m.leak(h);
+                if (orifice) {
+                    const std::vector<GasChamber> start = m.copyGases();
+                    m.moveGas(start, m.calcTransfer(start, h));
+                }
+                if (heat) {
+                    heatStart = m.copyGases();
+                    heatV0 = m.calcAllGasVolumes();
+                }
+                m.model->beginViscousStep(h);
+                m.model->beginContactStep(m.x, h);
+                if (m.self && !m.self->isCandidateListValid(m.x)) m.self->updateCandidates(m.x);
+                m.film->step(m.x, m.v, h, acc);
+                m.model->commitStep(m.x);
+                m.model->endViscousStep(m.x);
+                if (heat) {
+                    const std::vector<double> V1 = m.calcAllGasVolumes();
+                    for (int g = 0; g < ng; ++g) {
+                        const double T0 = heatStart[g].calcTemperature(heatV0[g]);
+                        m.model->updGas(g).setTemperature(
+                            heatStart[g].calcHeatStepTemperature(heatV0[g], T0, V1[g], h), V1[g]);
+                    }
+                }
+                if ((k & 63) == 63 && !m.x.allFinite()) return false;
+            }
+        } catch (const NumericalError&) {
+            return false;
+        }
+        if (!m.x.allFinite() || !m.v.allFinite()) return false;
+        m.time += dt;
+        return true;
+    }
+};
+
 Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     spec.validate();
     Impl& m = *m_impl;
@@ -1074,8 +1299,13 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
         m.model->setSelfContact(m.self);
     }
     m.x = mesh.X;
+    m.v.setZero(3, mesh.getNumNodes());
     m.committed = m.snapshot();
     m.lastAdvanced.resize(3, 0);
+    if (spec.stepping == AirbagSpec::Stepping::Dynamic)
+        m.stepper = std::make_unique<Impl::DynamicStepper>();
+    else
+        m.stepper = std::make_unique<Impl::QuasiStaticStepper>();
 }
 
 Airbag::~Airbag() = default;
@@ -1105,6 +1335,8 @@ int Airbag::addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Opti
     m.model->addRigidContact(s.contact);
     m.shapes.push_back(std::move(s));
     m.workspace.reset();
+    m.film.reset();  // its stable step counts every shape's penalty
+    m.stableStep = 0.0;
     m.committed = m.snapshot();
     return static_cast<int>(m.shapes.size()) - 1;
 }
@@ -1200,6 +1432,7 @@ void Airbag::changeGasMass(const std::vector<double>& masses) {
     m.rampGasMasses(masses);
     if (m.spec.gas.heatTimeConstant > 0.0) m.settleAtRoomTemperature();
     m.model->resetViscousState(m.x);
+    m.v.setZero(3, m.x.cols());  // a quasi-static change ends at rest
     m.committed = m.snapshot();
     m.forgetIncrement();
 }
@@ -1281,35 +1514,7 @@ AdvanceSummary Airbag::advance(double dt, int maxCuts) {
     if (!m.inflated) throw std::logic_error("Airbag::advance before inflate");
     if (!(dt >= 0.0) || !std::isfinite(dt))
         throw std::invalid_argument("Airbag::advance: use a time step >= 0 s");
-    AdvanceSummary out;
-    // Start from the committed state (a repeated advance of one macro step starts over).
-    m.restore(*m.committed);
-    std::vector<Eigen::Isometry3d> from;
-    for (const Impl::Shape& s : m.shapes) from.push_back(s.shape->getPose());
-    double s = 0.0, ds = 1.0;
-    int cuts = 0;
-    while (s < 1.0) {
-        const double s1 = (ds >= 1.0 - s - 1e-12) ? 1.0 : s + ds;
-        m.wholeStep = s == 0.0 && s1 == 1.0;
-        if (m.solveSubstep(from, s1, dt * (s1 - s), &out)) {
-            s = s1;
-            if (cuts > 0) ds = std::min(2.0 * ds, 1.0);
-        } else {
-            if (++cuts > maxCuts) {
-                m.restore(*m.committed);
-                out.converged = false;
-                return out;
-            }
-            ds *= 0.5;
-        }
-    }
-    out.converged = true;
-    // A warm start only from an equilibrium: a state the springs hold is no start to share.
-    if (out.stabilizationEnergy > 0.0)
-        m.lastAdvanced.resize(3, 0);
-    else
-        m.lastAdvanced = m.x;
-    return out;
+    return m.stepper->advance(m, dt, maxCuts);
 }
 
 void Airbag::commit() {
@@ -1339,6 +1544,21 @@ void Airbag::setSnapshot(const std::shared_ptr<const Snapshot>& snapshot) {
 }
 
 double Airbag::getTime() const { return m_impl->time; }
+
+void Airbag::setDynamicOptions(const DynamicOptions& options) {
+    Impl& m = *m_impl;
+    if (m.spec.stepping != AirbagSpec::Stepping::Dynamic)
+        throw std::logic_error("Airbag::setDynamicOptions on a quasi-statically stepped bag");
+    options.validate();
+    m.spec.dynamics = options;
+    m.film.reset();  // rebuilt with the new masses at the next step
+}
+
+double Airbag::calcKineticEnergy() const {
+    const Impl& m = *m_impl;
+    if (m.spec.stepping != AirbagSpec::Stepping::Dynamic) return 0.0;
+    return FilmDynamics(*m.model, m.spec.density, m.spec.dynamics, 0.0).calcKineticEnergy(m.v);
+}
 
 void Airbag::saveState(StateWriter& w) const {
     const Impl& m = *m_impl;

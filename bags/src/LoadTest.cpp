@@ -88,7 +88,19 @@ AirbagSpec makeAirbagSpec(const LoadTestOptions& o) {
     spec.predictor = o.predictor;
     spec.cluster = calcNeighbourPoses(o);
     spec.sharedAir = o.neighbourSharedAir && !spec.cluster.empty();
+    spec.stepping = o.stepping;
+    if (o.stepping == AirbagSpec::Stepping::Dynamic)
+        spec.dynamics = calcLoadTestDynamics(o, o.dynamic.blockSpeed);
     return spec;
+}
+
+DynamicOptions calcLoadTestDynamics(const LoadTestOptions& o, double blockSpeed) {
+    const double r = blockSpeed / o.loadingRate;  // film seconds are r test seconds
+    DynamicOptions d;
+    d.massScale = o.dynamic.massScale * r * r;
+    d.damping = o.dynamic.damping / r;
+    d.stepFraction = o.dynamic.stepFraction;
+    return d;
 }
 
 std::vector<Eigen::Isometry3d> calcNeighbourPoses(const LoadTestOptions& o) {
@@ -217,6 +229,29 @@ void LoadTestOptions::validate() const {
                 "load test option 'neighbours' does not run with an ensemble (ensemble = " +
                 std::to_string(ensemble) + "); use ensemble 1");
     }
+    if (stepping == AirbagSpec::Stepping::Dynamic) {
+        const Dynamic& d = dynamic;
+        require(d.blockSpeed >= loadingRate && d.blockSpeed <= 1.0, "dynamic.blockSpeed",
+                d.blockSpeed, "use a speed from the loading rate to 1 m/s (e.g. 20 mm/s)");
+        require(d.massScale >= 1.0 && d.massScale <= 1e6, "dynamic.massScale", d.massScale,
+                "use 1 (the real film) to 1e6 (e.g. 1000)");
+        require(d.damping >= 0.0 && d.damping <= 1e4, "dynamic.damping", d.damping,
+                "use 0 to 1e4 per second (e.g. 20 /s)");
+        require(d.stepFraction > 0.0 && d.stepFraction <= 1.0, "dynamic.stepFraction",
+                d.stepFraction, "use 0 < fraction <= 1 of the stable step (e.g. 0.5)");
+        require(d.recordEvery > 0.0 && d.recordEvery <= displacementStep * 4.0,
+                "dynamic.recordEvery", d.recordEvery,
+                "use 0 < travel <= 4 displacement steps (e.g. 0.25 mm)");
+        require(d.kineticShareLimit > 0.0 && d.kineticShareLimit < 1.0,
+                "dynamic.kineticShareLimit", d.kineticShareLimit,
+                "use a fraction 0 < share < 1 of the block's work (e.g. 0.01)");
+        require(d.maxHalvings >= 0 && d.maxHalvings <= 6, "dynamic.maxHalvings", d.maxHalvings,
+                "use 0 to 6 halvings of the block speed");
+        require(d.rampTravel >= 0.0 && d.rampTravel <= 0.02, "dynamic.rampTravel", d.rampTravel,
+                "use 0 (full speed at once) to 20 mm (e.g. 2 mm)");
+        require(density > 0.0, "density", density,
+                "the dynamic test moves the film's mass: use a density > 0 kg/m^3");
+    }
     blockContact.validate();
     floorContact.validate();
     solver.validate();
@@ -335,6 +370,11 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         const auto unloaded = bag.getSnapshot();
         lastUnloaded = unloaded;
 
+        // A dynamic curve's loading may be run again at half the block speed: its steps are
+        // held back from the observer until it is kept.
+        const bool dynamic = o.stepping == AirbagSpec::Stepping::Dynamic;
+        bool holding = dynamic && o.dynamic.maxHalvings > 0;
+        std::vector<std::pair<LoadStep, Eigen::Matrix3Xd>> held;
         auto record = [&](double disp, bool loading, const AdvanceSummary& sum) {
             LoadStep st;
             st.curve = static_cast<int>(k);
@@ -355,8 +395,13 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             st.factorizations = sum.factorizations;
             st.residual = sum.residual;
             st.stabilizationEnergy = sum.stabilizationEnergy;
+            st.kineticEnergy = sum.kineticEnergy;
+            st.substeps = sum.substeps;
             curve.steps.push_back(st);
-            if (observer) observer(st, mesh, bag.getPositions());
+            if (holding)
+                held.emplace_back(st, bag.getPositions());
+            else if (observer)
+                observer(st, mesh, bag.getPositions());
             return st.force;
         };
 
@@ -390,78 +435,186 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             curve.failure = s.str();
             curve.failed = true;
         };
-        // Loading: displacement control, adaptive, aiming the last step at the peak force.
-        double disp = 0.0, ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;
-        const double minStep = 5e-5;  // [m] smaller steps rarely rescue a slack curve
-        const double maxDisp = top - 0.002;  // the block stops 2 mm above the bed board
-        while (force < o.peakForce * (1.0 - 1e-3)) {
-            // Far below the stiffness range (a slack bag folding in under almost no force) the
-            // step may grow to lowForceStepFactor times the target, as long as the force it
-            // predicts stays below half the range's start.
-            const bool low = force < 0.25 * o.stiffnessFrom;
-            double step = std::min(ds, low ? o.lowForceStepFactor * o.displacementStep
-                                           : o.displacementStep);
-            if (low && stiffnessEstimate > 0.0)
-                step = std::min(step, std::max(o.displacementStep,
-                                               (0.5 * o.stiffnessFrom - force) / stiffnessEstimate));
-            if (stiffnessEstimate > 0.0)
-                step = std::min(step, 1.05 * (o.peakForce - force) / stiffnessEstimate);
-            step = std::max(step, minStep);
-            step = std::min(step, maxDisp - disp);  // the last step ends on the stop
-            if (step < minStep) {
-                // The slack bag is pressed flat under the block: with penalty contact (1 mm
-                // of penetration per 10 kPa by default) the last 2 mm cannot be resolved.
-                std::ostringstream r;
-                r << "bottomed out: the block is within 2 mm of the bed board at block travel "
-                  << disp * 1e3 << " mm (" << force << " N)";
-                curve.failure = r.str();
-                break;
-            }
-            AdvanceSummary sum;
-            if (!advance(disp + step, &sum)) {
-                ds = 0.5 * step;
-                if (ds >= minStep) continue;
-                const double to = snapOver(disp, step, +1.0, maxDisp, &sum);
-                if (to < 0.0) {
-                    fail("loading", disp);
+        double disp = 0.0;
+        if (dynamic) {
+            // The block moves on without stopping; the bag sub-cycles its film through each
+            // recorded stretch of travel. A curve whose film's kinetic energy is more than
+            // its limit of the block's work is run again at half the block speed.
+            const LoadTestOptions::Dynamic& dy = o.dynamic;
+            double speed = dy.blockSpeed;
+            // The block's pace over a stretch of travel ending `travel` past the last turn:
+            // up to speed over rampTravel.
+            double pace = 0.0;
+            auto setPace = [&](double travel) {
+                const double f = dy.rampTravel > 0.0 ? std::clamp(travel / dy.rampTravel, 1.0 / 16.0, 1.0) : 1.0;
+                if (f * speed != pace) bag.setDynamicOptions(calcLoadTestDynamics(o, f * speed));
+                pace = f * speed;
+            };
+            for (int halving = 0;; ++halving) {
+                curve.blockSpeed = speed;
+                pace = 0.0;
+                // The block brought down to the film from where it was parked at once (no
+                // time: a quasi-static change), not swept down through the step.
+                bag.setShapePose(block, makeBlockPose(blockCentreXY, top));
+                if (!bag.advance(0.0, 12).converged) {
+                    fail("loading", 0.0);
                     break;
                 }
-                step = to - disp;
-                ds = o.displacementStep;
+                bag.commit();
+                disp = 0.0;
+                double force = 0.0, stiffnessEstimate = 0.0;
+                const double maxDisp = top - 0.002;  // the block stops 2 mm above the bed board
+                while (force < o.peakForce * (1.0 - 1e-3)) {
+                    double step = dy.recordEvery;
+                    if (stiffnessEstimate > 0.0 && force >= 0.5 * o.stiffnessFrom)
+                        step = std::min(step, std::max(0.2 * dy.recordEvery,
+                                                       1.05 * (o.peakForce - force) / stiffnessEstimate));
+                    step = std::min(step, maxDisp - disp);
+                    if (step < 1e-6) {
+                        std::ostringstream r;
+                        r << "bottomed out: the block is within 2 mm of the bed board at block travel "
+                          << disp * 1e3 << " mm (" << force << " N)";
+                        curve.failure = r.str();
+                        break;
+                    }
+                    AdvanceSummary sum;
+                    setPace(disp + step);
+                    if (!advance(disp + step, &sum)) {
+                        fail("loading", disp);
+                        break;
+                    }
+                    const double prevForce = force;
+                    disp += step;
+                    force = record(disp, true, sum);
+                    const double kk = (force - prevForce) / step;
+                    if (kk > 0.0 && force >= 0.25 * o.stiffnessFrom) stiffnessEstimate = kk;
+                }
+                curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
+                // The kinetic energy's share of the block's work so far, along the loading.
+                double work = 0.0, share = 0.0, lastShare = 0.0;
+                bool inRange = false;
+                for (size_t i = 1; i < curve.steps.size() && curve.steps[i].loading; ++i) {
+                    const LoadStep& st = curve.steps[i];
+                    const LoadStep& prev = curve.steps[i - 1];
+                    work += 0.5 * (st.force + prev.force) * (st.displacement - prev.displacement);
+                    lastShare = work > 0.0 ? st.kineticEnergy / work : 0.0;
+                    inRange = inRange || st.force >= o.stiffnessFrom;
+                    if (inRange) share = std::max(share, lastShare);
+                }
+                curve.kineticShare = inRange ? share : lastShare;
+                if (curve.kineticShare <= dy.kineticShareLimit || halving >= dy.maxHalvings ||
+                    curve.failed)
+                    break;
+                // Again at half the speed, from the unloaded state.
+                bag.setSnapshot(unloaded);
+                held.clear();
+                curve.steps.clear();
+                curve.failure.clear();
+                record(0.0, true, AdvanceSummary());
+                speed *= 0.5;
             }
-            const double prevForce = force;
-            disp += step;
-            force = record(disp, true, sum);
-            const double kk = (force - prevForce) / step;
-            if (kk > 0.0) stiffnessEstimate = kk;
-            if (sum.newtonIterations < 6)
-                ds = std::min(2.0 * step, (force < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
-                                              o.displacementStep);
-        }
-        curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
-        // Unloading: back up the same way until the block leaves the bag.
-        ds = o.displacementStep;
-        double unloadForce = force;
-        while (o.unload && disp > 0.0) {
-            const double cap = (unloadForce < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
-                               o.displacementStep;
-            double step = std::min({ds, cap, disp});
-            AdvanceSummary sum;
-            if (!advance(disp - step, &sum)) {
-                ds = 0.5 * step;
-                if (ds >= minStep) continue;
-                const double to = snapOver(disp, step, -1.0, 0.0, &sum);
-                if (to < 0.0) {
+            // The loading kept: its steps to the observer.
+            holding = false;
+            if (observer)
+                for (const auto& [st, x] : held) observer(st, mesh, x);
+            held.clear();
+            // Unloading: back up until the block leaves the bag.
+            const double turn = disp;
+            while (o.unload && !curve.failed && disp > 0.0) {
+                const double step = std::min(dy.recordEvery, disp);
+                AdvanceSummary sum;
+                setPace(turn - disp + step);
+                if (!advance(disp - step, &sum)) {
                     fail("unloading", disp);
                     break;
                 }
-                step = disp - to;
-                ds = o.displacementStep;
+                disp = std::max(disp - step, 0.0);
+                if (record(disp, false, sum) <= 0.0) break;  // block has left
             }
-            disp = std::max(disp - step, 0.0);
-            unloadForce = record(disp, false, sum);
-            if (unloadForce <= 0.0) break;  // block has left
-            if (sum.newtonIterations < 6) ds = 2.0 * step;
+            if (curve.kineticShare > dy.kineticShareLimit) {
+                curve.quasiStatic = false;
+                std::ostringstream r;
+                if (!curve.failure.empty()) r << curve.failure << "; ";
+                r << "not quasi-static: the film's kinetic energy reached "
+                  << curve.kineticShare * 100.0 << " % of the block's work (limit "
+                  << dy.kineticShareLimit * 100.0 << " %) at a block speed of "
+                  << curve.blockSpeed * 1e3 << " mm/s";
+                curve.failure = r.str();
+            }
+        } else {
+            // Loading: displacement control, adaptive, aiming the last step at the peak force.
+            double ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;
+            const double minStep = 5e-5;  // [m] smaller steps rarely rescue a slack curve
+            const double maxDisp = top - 0.002;  // the block stops 2 mm above the bed board
+            while (force < o.peakForce * (1.0 - 1e-3)) {
+                // Far below the stiffness range (a slack bag folding in under almost no force) the
+                // step may grow to lowForceStepFactor times the target, as long as the force it
+                // predicts stays below half the range's start.
+                const bool low = force < 0.25 * o.stiffnessFrom;
+                double step = std::min(ds, low ? o.lowForceStepFactor * o.displacementStep
+                                               : o.displacementStep);
+                if (low && stiffnessEstimate > 0.0)
+                    step = std::min(step, std::max(o.displacementStep,
+                                                   (0.5 * o.stiffnessFrom - force) / stiffnessEstimate));
+                if (stiffnessEstimate > 0.0)
+                    step = std::min(step, 1.05 * (o.peakForce - force) / stiffnessEstimate);
+                step = std::max(step, minStep);
+                step = std::min(step, maxDisp - disp);  // the last step ends on the stop
+                if (step < minStep) {
+                    // The slack bag is pressed flat under the block: with penalty contact (1 mm
+                    // of penetration per 10 kPa by default) the last 2 mm cannot be resolved.
+                    std::ostringstream r;
+                    r << "bottomed out: the block is within 2 mm of the bed board at block travel "
+                      << disp * 1e3 << " mm (" << force << " N)";
+                    curve.failure = r.str();
+                    break;
+                }
+                AdvanceSummary sum;
+                if (!advance(disp + step, &sum)) {
+                    ds = 0.5 * step;
+                    if (ds >= minStep) continue;
+                    const double to = snapOver(disp, step, +1.0, maxDisp, &sum);
+                    if (to < 0.0) {
+                        fail("loading", disp);
+                        break;
+                    }
+                    step = to - disp;
+                    ds = o.displacementStep;
+                }
+                const double prevForce = force;
+                disp += step;
+                force = record(disp, true, sum);
+                const double kk = (force - prevForce) / step;
+                if (kk > 0.0) stiffnessEstimate = kk;
+                if (sum.newtonIterations < 6)
+                    ds = std::min(2.0 * step, (force < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
+                                                  o.displacementStep);
+            }
+            curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
+            // Unloading: back up the same way until the block leaves the bag.
+            ds = o.displacementStep;
+            double unloadForce = force;
+            while (o.unload && disp > 0.0) {
+                const double cap = (unloadForce < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
+                                   o.displacementStep;
+                double step = std::min({ds, cap, disp});
+                AdvanceSummary sum;
+                if (!advance(disp - step, &sum)) {
+                    ds = 0.5 * step;
+                    if (ds >= minStep) continue;
+                    const double to = snapOver(disp, step, -1.0, 0.0, &sum);
+                    if (to < 0.0) {
+                        fail("unloading", disp);
+                        break;
+                    }
+                    step = disp - to;
+                    ds = o.displacementStep;
+                }
+                disp = std::max(disp - step, 0.0);
+                unloadForce = record(disp, false, sum);
+                if (unloadForce <= 0.0) break;  // block has left
+                if (sum.newtonIterations < 6) ds = 2.0 * step;
+            }
         }
         if (disp > 0.0) {
             // Lift the block clear so the next gas mass starts from a free bag, in steps the

@@ -669,11 +669,50 @@ void readContact(const ScenarioNode& s, bags::LoadTestOptions& o) {
 
 // ----------------------------------------------------------------------------------- solver
 
-void readSolver(const ScenarioNode& s, bags::SolverOptions& o, double& stabilization,
-                double& damping, double& residualTolerance) {
+// solver.dynamic: the dynamic test's pace, mass scale, damping and checks
+// (bags::LoadTestOptions::Dynamic).
+void readDynamic(const ScenarioNode& s, bags::LoadTestOptions::Dynamic& d) {
+    s.checkKeys({}, {"block_speed", "mass_scale", "damping", "step_fraction", "record_every",
+                     "ramp", "kinetic_share_limit", "max_halvings"});
+    d.blockSpeed = s.getQuantity("block_speed", D::Velocity, d.blockSpeed);
+    checkRange(s, "block_speed", d.blockSpeed, 0, false, 1.0, true, "m/s",
+               "the pace the film is integrated at, e.g. 20 mm/s");
+    d.massScale = s.getNumber("mass_scale", d.massScale);
+    checkRange(s, "mass_scale", d.massScale, 1, true, 1e6, true, "", "e.g. 1000");
+    d.damping = s.getQuantity("damping", D::Rate, d.damping);
+    checkRange(s, "damping", d.damping, 0, true, 1e4, true, "1/s", "e.g. 20 1/s");
+    d.stepFraction = s.getNumber("step_fraction", d.stepFraction);
+    checkRange(s, "step_fraction", d.stepFraction, 0, false, 1, true, "",
+               "a fraction of the stable step, e.g. 0.5");
+    d.recordEvery = s.getQuantity("record_every", D::Length, d.recordEvery);
+    checkRange(s, "record_every", d.recordEvery, 0, false, 0.02, true, "m", "e.g. 0.25 mm");
+    d.rampTravel = s.getQuantity("ramp", D::Length, d.rampTravel);
+    checkRange(s, "ramp", d.rampTravel, 0, true, 0.02, true, "m",
+               "the travel over which the block comes up to speed, e.g. 2 mm");
+    d.kineticShareLimit = s.getNumber("kinetic_share_limit", d.kineticShareLimit);
+    checkRange(s, "kinetic_share_limit", d.kineticShareLimit, 0, false, 1, false, "",
+               "a fraction of the block's work, e.g. 0.01");
+    d.maxHalvings = s.getInteger("max_halvings", d.maxHalvings);
+    checkRange(s, "max_halvings", d.maxHalvings, 0, true, 6, true, "");
+}
+
+void readSolver(const ScenarioNode& s, bags::LoadTestOptions& lo) {
+    bags::SolverOptions& o = lo.solver;
+    double& stabilization = lo.stabilization;
+    double& damping = lo.damping;
+    double& residualTolerance = lo.residualTolerance;
     s.checkKeys({}, {"relative_tolerance", "absolute_tolerance", "max_iterations",
                      "pseudo_transient_shift", "stabilization", "damping",
-                     "residual_tolerance"});
+                     "residual_tolerance", "stepping", "dynamic"});
+    if (s.has("stepping"))
+        lo.stepping = s.getChoice("stepping", {"quasi-static", "dynamic"}) == "dynamic"
+                          ? bags::AirbagSpec::Stepping::Dynamic
+                          : bags::AirbagSpec::Stepping::QuasiStatic;
+    if (s.has("dynamic")) {
+        if (lo.stepping != bags::AirbagSpec::Stepping::Dynamic)
+            s.fail("dynamic", "the dynamic test's settings need 'stepping: dynamic' beside them");
+        readDynamic(s.getSection("dynamic"), lo.dynamic);
+    }
     o.relativeTolerance = s.getNumber("relative_tolerance", o.relativeTolerance);
     o.absoluteTolerance = s.getQuantity("absolute_tolerance", D::Force, o.absoluteTolerance);
     o.maxIterations = s.getInteger("max_iterations", o.maxIterations);
@@ -911,8 +950,7 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     readFillMass(root.getSection("airbag"), sc);
     readTest(root.getSection("test"), o);
     readContact(root.getSection("contact", false), o);
-    readSolver(root.getSection("solver", false), o.solver, o.stabilization, o.damping,
-               o.residualTolerance);
+    readSolver(root.getSection("solver", false), o);
     readOutput(root.getSection("output", false), sc.output);
     readRig(root.getSection("rig", false), sc.rig);
     if (sc.rig.flowmeterOffset != 0.0) {

@@ -128,10 +128,12 @@ bool isCurveFailed(const bags::LoadCurve& c) {
     // The load test's one physical early end is "bottomed out: ..."; every other reason is a
     // step that could not be solved (a bottomed-out curve whose unloading then fails is
     // flagged by `failed`).
-    return c.failed || (!c.failure.empty() && c.failure.rfind("bottomed out", 0) != 0);
+    return c.failed || !c.quasiStatic ||
+           (!c.failure.empty() && c.failure.rfind("bottomed out", 0) != 0);
 }
 
 std::string getCurveEnd(const bags::LoadCurve& c) {
+    if (!c.quasiStatic && !c.failed) return "not-quasi-static";
     if (isCurveFailed(c)) return "failed";
     if (c.reachedPeak) return "peak";
     if (c.failure.rfind("bottomed out", 0) == 0) return "bottomed-out";
@@ -143,7 +145,7 @@ namespace {
 struct CurveData {
     h5::Handle group;
     h5::GrowingDataset step, loading, time, displacement, force, iterations, pressure, volume,
-        gasMass, stabilization, residual;
+        gasMass, stabilization, residual, kineticEnergy;
     size_t chambers = 0;  ///< columns of pressure and volume
 };
 
@@ -299,6 +301,8 @@ CurveData& LoadTestWriter::Impl::getCurve(const bags::LoadStep& s) {
         c.stabilization =
             h5::GrowingDataset(g, "stabilization_energy", H5T_NATIVE_DOUBLE, {}, 256, "J");
         c.residual = h5::GrowingDataset(g, "residual", H5T_NATIVE_DOUBLE, {}, 256, "N");
+        c.kineticEnergy =
+            h5::GrowingDataset(g, "kinetic_energy", H5T_NATIVE_DOUBLE, {}, 256, "J");
         c.pressure =
             h5::GrowingDataset(g, "gauge_pressure", H5T_NATIVE_DOUBLE, {chambers}, 256, "Pa");
         c.volume = h5::GrowingDataset(g, "volume", H5T_NATIVE_DOUBLE, {chambers}, 256, "m^3");
@@ -481,6 +485,7 @@ void LoadTestWriter::addStep(const bags::LoadStep& s, const bags::Mesh& mesh,
     c.iterations.append(&s.newtonIterations);
     c.stabilization.append(&s.stabilizationEnergy);
     c.residual.append(&s.residual);
+    c.kineticEnergy.append(&s.kineticEnergy);
     std::vector<double> p = s.gaugePressure, v = s.volume, m = s.gasMass;
     p.resize(c.chambers, 0.0);
     v.resize(c.chambers, 0.0);
@@ -558,6 +563,9 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
         h5::setAttribute(g.get(), "stabilization_share", c.stabilizationShare);
         h5::setAttribute(g.get(), "snaps", c.snaps);
         h5::setAttribute(g.get(), "snap_travel", c.snapTravel);
+        h5::setAttribute(g.get(), "block_speed", c.blockSpeed);
+        h5::setAttribute(g.get(), "kinetic_share", c.kineticShare);
+        h5::setAttribute(g.get(), "quasi_static", c.quasiStatic ? 1 : 0);
     }
     h5::Handle sum = h5::createGroup(d.file.get(), "summary");
     const hsize_t hn = n;

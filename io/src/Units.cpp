@@ -55,6 +55,7 @@ const std::vector<UnitInfo>& getUnitTable() {
 
         {"s", D::Time, 1.0},
         {"ms", D::Time, 1e-3},
+        {"us", D::Time, 1e-6},
         {"min", D::Time, 60.0},
         {"h", D::Time, 3600.0},
 
@@ -86,6 +87,9 @@ const std::vector<UnitInfo>& getUnitTable() {
         {"mg/s/kPa", D::LeakConductance, 1e-9},
         {"g/(s kPa)", D::LeakConductance, 1e-6},
         {"kg/(s Pa)", D::LeakConductance, 1.0},
+        {"1/s", D::Rate, 1.0},
+        {"/s", D::Rate, 1.0},
+        {"1/min", D::Rate, 1.0 / 60.0},
 
         {"mL", D::Volume, 1e-6},
         {"L", D::Volume, 1e-3},
@@ -164,6 +168,8 @@ std::string getDimensionName(Dimension d) {
             return "a moment (force times length)";
         case Dimension::MassFlow:
             return "a mass flow";
+        case Dimension::Rate:
+            return "a rate (per time)";
         case Dimension::Volume:
             return "a volume";
         case Dimension::Area:
@@ -208,6 +214,8 @@ std::string getSiUnit(Dimension d) {
             return "N m";
         case Dimension::MassFlow:
             return "kg/s";
+        case Dimension::Rate:
+            return "1/s";
         case Dimension::Volume:
             return "m^3";
         case Dimension::Area:
@@ -252,6 +260,8 @@ std::string getExample(Dimension d) {
             return "1.7e-4 N m";
         case Dimension::MassFlow:
             return "0.05 g/s";
+        case Dimension::Rate:
+            return "20 1/s";
         case Dimension::Volume:
             return "20 mL";
         case Dimension::Area:

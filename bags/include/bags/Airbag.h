@@ -32,6 +32,7 @@
 /// Units SI; frames: Ground (G); the mesh is built in the bag frame B and placed by X_GB.
 
 #include <bags/Contact.h>
+#include <bags/Dynamics.h>
 #include <bags/Gas.h>
 #include <bags/Geometry.h>
 #include <bags/Material.h>
@@ -129,6 +130,16 @@ struct AirbagSpec {
     /// Threads for the bag's element loops: 0 the OpenMP default, 1 single-threaded (for many
     /// bags in parallel). The result is bit-identical for any value.
     int threads = 0;
+    /// How advance() takes the bag over a step of time (docs/solver.md#the-film-in-time).
+    /// QuasiStatic: an equilibrium at the step's end (Newton, cutting the step, the
+    /// stabilisation springs and damper above). Dynamic: the film carries its velocity and is
+    /// integrated through the step in stable explicit sub-steps (bags/Dynamics.h, `dynamics`),
+    /// the shapes' poses interpolated across it; no equilibrium is asked for, so a fold that
+    /// snaps through is a short dynamic event. A step of no time (advance(0)), inflate() and
+    /// changeGasMass() stay quasi-static in both and end at rest.
+    enum class Stepping { QuasiStatic, Dynamic };
+    Stepping stepping = Stepping::QuasiStatic;
+    DynamicOptions dynamics;             ///< mass scale, damping, sub-step (Dynamic only)
     void validate() const;               ///< throws std::invalid_argument naming the option
 };
 
@@ -155,6 +166,10 @@ struct AdvanceSummary {
     /// [J] held by the stabilisation springs at the accepted state, or the damper's work over
     /// the step
     double stabilizationEnergy = 0.0;
+    /// Dynamic stepping: [J] the film's kinetic energy at the step's end (scaled masses), and
+    /// the sub-step [s] it was integrated with (0: none, the bag slept or the step had no time).
+    double kineticEnergy = 0.0;
+    double substep = 0.0;
 };
 
 class Airbag {
@@ -230,6 +245,11 @@ public:
     /// Makes a snapshot current (and the commit point).
     void setSnapshot(const std::shared_ptr<const Snapshot>& snapshot);
     double getTime() const;               ///< [s] accumulated by advance()
+    /// Dynamic stepping: the film's mass scale, damping and sub-step from the next advance()
+    /// on (the velocity kept). @throws std::logic_error for a quasi-statically stepped bag.
+    void setDynamicOptions(const DynamicOptions& options);
+    /// [J] the film's kinetic energy now (scaled masses; 0 for a quasi-static bag).
+    double calcKineticEnergy() const;
 
     // --- checkpoints (bags/StateStream.h)
     /// Writes everything that decides what the bag does next into a checkpoint: the current

@@ -112,6 +112,34 @@ struct LoadTestOptions {
     /// tolerances. The cap keeps a large load from loosening the solve. The residual that lingers longest sits in the slack
     /// folds of the internal wall, away from the block (docs/solver.md).
     double residualTolerance = 1.0e-3;
+    /// How the bag is taken through the test (AirbagSpec::Stepping). QuasiStatic: an
+    /// equilibrium at every block step (Newton, the step cutting and snap-over above).
+    /// Dynamic: the block moves on without stopping and the film is integrated in time, its
+    /// inertia scaled (`dynamic`); quasi-static answers from slow loading, checked by the
+    /// kinetic energy's share of the block's work (docs/solver.md#the-film-in-time).
+    AirbagSpec::Stepping stepping = AirbagSpec::Stepping::QuasiStatic;
+    /// The dynamic test. The film is integrated as if the block moved at `blockSpeed` with
+    /// the film's masses times `massScale` and damping `damping`: in the test's own time
+    /// (travel / loadingRate, which the gas and the film's viscous branches keep) that is
+    /// the mass scale massScale r^2 and damping damping / r, r = blockSpeed / loadingRate.
+    struct Dynamic {
+        double blockSpeed = 0.02;        ///< [m/s] the pace the film is integrated at
+        double massScale = 1000.0;       ///< film mass scale at that pace (>= 1)
+        double damping = 20.0;           ///< [1/s] mass-proportional damping at that pace
+        double stepFraction = 0.5;       ///< sub-step as a fraction of the stable step
+        double recordEvery = 0.25e-3;    ///< [m] block travel between recorded states
+        /// [m] at the start of the loading and of the unloading the block comes up to speed
+        /// over this much travel (from a sixteenth of it, in proportion to the travel), so
+        /// that the film at rest is not struck (0: at full speed at once).
+        double rampTravel = 2.0e-3;
+        /// Largest share of the film's kinetic energy in the block's work so far, over the
+        /// loading branch from stiffnessFrom on: above it the curve is not quasi-static.
+        double kineticShareLimit = 0.01;
+        /// A curve over the limit is run again at half the block speed, up to this many
+        /// times; still over: kept and marked (LoadCurve::kineticShare, failure text).
+        int maxHalvings = 2;
+    };
+    Dynamic dynamic;
     /// Throws std::invalid_argument naming the option and what would be valid.
     void validate() const;
 };
@@ -135,6 +163,10 @@ struct LoadStep {
     /// [N] force residual at the accepted state, without the springs (for a state accepted
     /// with springs this is the springs' force)
     double residual = 0.0;
+    /// Dynamic test: [J] the film's kinetic energy at the state (scaled masses), and the
+    /// explicit sub-steps integrated since the last state (newtonIterations stays 0).
+    double kineticEnergy = 0.0;
+    int substeps = 0;
 };
 
 struct LoadCurve {
@@ -168,6 +200,14 @@ struct LoadCurve {
     double stiffnessMin = 0.0;
     double stiffnessMax = 0.0;
     int ensembleSize = 1;
+    /// Dynamic test: the block speed [m/s] the curve was integrated at (after any halvings;
+    /// 0: quasi-static), and the largest share of the film's kinetic energy in the block's
+    /// work so far over the loading branch from stiffnessFrom on [-] (or at its end if it
+    /// never gets there). Above LoadTestOptions::Dynamic::kineticShareLimit the curve is not
+    /// quasi-static: `quasiStatic` false and `failure` says so.
+    double blockSpeed = 0.0;
+    double kineticShare = 0.0;
+    bool quasiStatic = true;
 };
 
 struct LoadTestResult {
@@ -199,6 +239,9 @@ double calcLoadTestForceTolerance(const LoadTestOptions& options);
 /// The airbag the load test drives (geometry, material, gas, contact, solver of the options);
 /// with neighbours, a cluster whose bag 0 is the pressed one.
 AirbagSpec makeAirbagSpec(const LoadTestOptions& options);
+/// The bag's dynamic options for the dynamic test at block speed `blockSpeed` [m/s]: the
+/// options' massScale and damping carried into the test's time (LoadTestOptions::Dynamic).
+DynamicOptions calcLoadTestDynamics(const LoadTestOptions& options, double blockSpeed);
 /// Poses of the bags of the module (bag 0, the pressed one, at the identity) for the options'
 /// neighbours layout; empty for Neighbours::None (one bag, no cluster).
 std::vector<Eigen::Isometry3d> calcNeighbourPoses(const LoadTestOptions& options);

@@ -204,6 +204,8 @@ public:
     /// panel's normal (docs/materials.md#fabric-anisotropy). No effect on an isotropic film.
     /// @throws std::invalid_argument for a zero direction or two within 30 degrees.
     void setWarpAxes(const Vec3& axis, const Vec3& fallback);
+    const Vec3& getWarpAxis() const { return m_warpAxis; }        ///< as set (setWarpAxes)
+    const Vec3& getWarpFallback() const { return m_warpFallback; }  ///< as set (setWarpAxes)
     /// Unit warp direction per triangle in the reference configuration (the rule above).
     std::vector<Vec3> calcWarpDirections() const;
 

@@ -67,13 +67,15 @@ inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 inline constexpr const char* kRestStateFile = "rest-state.bin";
 
 /// True if a curve stopped on a numerical failure (LoadCurve::failure says "no convergence
-/// ..."): its branch ends early and the run's status is "partial". A curve that bottomed out
+/// ..."), or a dynamic test's curve was not quasi-static (its film's kinetic energy over the
+/// limit of the block's work): the run's status is then "partial". A curve that bottomed out
 /// (the block reached its stop 2 mm above the bed board before the peak force) ended on a
 /// physical outcome and is not a failure.
 bool isCurveFailed(const bags::LoadCurve& curve);
 
-/// How a curve ended, as written in stiffness.csv's column "end": "failed" (isCurveFailed()),
-/// "peak" (reached the peak force), "bottomed-out" or "stopped" (any other early end).
+/// How a curve ended, as written in stiffness.csv's column "end": "not-quasi-static" (a
+/// dynamic test's curve over its kinetic-energy limit), "failed" (isCurveFailed()), "peak"
+/// (reached the peak force), "bottomed-out" or "stopped" (any other early end).
 std::string getCurveEnd(const bags::LoadCurve& curve);
 
 /// Where a run came from, stored in results.h5 /meta.

@@ -32,6 +32,7 @@ enum class Dimension {
     Area,              ///< [m^2]
     SonicConductance,  ///< ISO 6358 sonic conductance C [m^3/(s Pa)]
     LeakConductance,   ///< mass flow per gauge pressure, e.g. a bag's seams [kg/(s Pa)]
+    Rate,              ///< per time, e.g. a damping coefficient [1/s]
 };
 
 /// A unit the parser knows: value_SI = factor * value + offset.
