@@ -1274,6 +1274,10 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     if (spec.bendingStiffness > 0.0) m.model->setBendingStiffness(spec.bendingStiffness);
     if (spec.prony.isOn()) m.model->setProny(spec.prony);
     m.model->setNumThreads(spec.threads);
+    // A bag stepped in time evaluates its forces every sub-step: its elements in chunks that
+    // threads can share (the same bits on any number of threads; roundoff unlike one chunk's).
+    if (spec.stepping == AirbagSpec::Stepping::Dynamic && mesh.getNumTris() >= 256)
+        m.model->setElementChunks(8);
     std::vector<char> isSupport(mesh.getNumNodes(), 0);
     for (int n : mesh.supportNodes) isSupport[n] = 1;
     for (int n = 0; n < mesh.getNumNodes(); ++n)

@@ -9,6 +9,10 @@
 #include <stdexcept>
 #include <tuple>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace bags {
 
 namespace {
@@ -254,37 +258,62 @@ double DiscreteBending::calcEnergy(const Eigen::Matrix3Xd& x) const {
 }
 
 void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
+    addEnergy(x, acc, 1);
+}
+
+void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc,
+                                int threads) const {
     if (m_options.stiffness == 0.0 || m_hinges.empty()) return;
     const bool wantG = acc.wantGradient, wantH = acc.wantHessian, wantD = wantG || wantH;
     const int nh = getNumHinges();
 
-    // Pass 1, hinges: angle change from rest and its gradient.
-    std::vector<double> dtheta(nh);
-    std::vector<Vec12> grad(wantD ? nh : 0);
+    // Pass 1, hinges: angle change from rest and its gradient, each hinge on its own (any
+    // thread, the same bits); a collapsed wing is recorded, the lowest hinge reported. The
+    // scratch is kept per thread from call to call (an explicit step calls this every
+    // sub-step).
+    thread_local std::vector<double> dtheta, moment;
+    thread_local std::vector<Vec12> grad;
+    dtheta.resize(nh);
+    grad.resize(wantD ? nh : 0);
+    int collapsed = nh;
+#ifdef _OPENMP
+    const int nthreads = threads > 0 ? threads : omp_get_max_threads();
+#else
+    const int nthreads = 1;
+    (void)threads;
+#endif
+    double* dth = dtheta.data();
+    Vec12* gr = grad.data();
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nh > 512) reduction(min : collapsed)
     for (int h = 0; h < nh; ++h) {
         const std::array<int, 4>& n = m_hinges[h].nodes;
         const Vec3 x0 = x.col(n[0]), x1 = x.col(n[1]), x2 = x.col(n[2]), x3 = x.col(n[3]);
         const double wingA = (x1 - x0).cross(x2 - x0).squaredNorm();
         const double wingB = (x3 - x0).cross(x1 - x0).squaredNorm();
         if (!(wingA > 0.0 && wingB > 0.0 && std::isfinite(wingA + wingB))) {
-            acc.energy = std::numeric_limits<double>::infinity();
-            if (wantD)
-                throw NumericalError("bending hinge " + std::to_string(h) +
-                                     " has a collapsed triangle");
-            return;
+            collapsed = std::min(collapsed, h);
+            dth[h] = 0.0;
+            continue;
         }
         // The change from rest, on the branch nearest to it: a seam with a large rest angle
         // (the gentle side meets the base at 2.5 rad) may fold through +-pi continuously.
-        double d = calcHingeAngle(x0, x1, x2, x3, wantD ? &grad[h] : nullptr) -
+        double d = calcHingeAngle(x0, x1, x2, x3, wantD ? &gr[h] : nullptr) -
                    m_hinges[h].restAngle;
         if (d > M_PI) d -= 2.0 * M_PI;
         if (d <= -M_PI) d += 2.0 * M_PI;
-        dtheta[h] = d;
+        dth[h] = d;
+    }
+    if (collapsed < nh) {
+        acc.energy = std::numeric_limits<double>::infinity();
+        if (wantD)
+            throw NumericalError("bending hinge " + std::to_string(collapsed) +
+                                 " has a collapsed triangle");
+        return;
     }
 
     // Pass 2, plates: energy and the moment dE/dtheta of each hinge.
     double energy = 0.0;
-    std::vector<double> moment(wantD ? nh : 0, 0.0);
+    moment.assign(wantD ? nh : 0, 0.0);
     for (const Plate& p : m_plates) {
         Vec3 d;
         for (int i = 0; i < 3; ++i) d(i) = p.hinges[i] >= 0 ? dtheta[p.hinges[i]] : 0.0;

@@ -438,21 +438,30 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         double disp = 0.0;
         if (dynamic) {
             // The block moves on without stopping; the bag sub-cycles its film through each
-            // recorded stretch of travel. A curve whose film's kinetic energy is more than
-            // its limit of the block's work is run again at half the block speed.
+            // recorded stretch of travel. Along the loading the block slows down (halving its
+            // pace, at most maxHalvings times) while the film's kinetic energy is more than
+            // half its limit of the block's work so far, and speeds up again while it is below
+            // an eighth of it. A curve whose share still broke the limit is run again at half
+            // the block speed.
             const LoadTestOptions::Dynamic& dy = o.dynamic;
             double speed = dy.blockSpeed;
+            int slower = 0;     // halvings of the pace now
+            int calm = 0;       // records in a row with the share below an eighth of its limit
+            double pace = 0.0;  // the pace the bag is set to
             // The block's pace over a stretch of travel ending `travel` past the last turn:
-            // up to speed over rampTravel.
-            double pace = 0.0;
+            // up to speed over rampTravel, halved `slower` times.
             auto setPace = [&](double travel) {
                 const double f = dy.rampTravel > 0.0 ? std::clamp(travel / dy.rampTravel, 1.0 / 16.0, 1.0) : 1.0;
-                if (f * speed != pace) bag.setDynamicOptions(calcLoadTestDynamics(o, f * speed));
-                pace = f * speed;
+                const double want = f * speed * std::ldexp(1.0, -slower);
+                if (want != pace) bag.setDynamicOptions(calcLoadTestDynamics(o, want));
+                pace = want;
+                curve.blockSpeed = std::min(curve.blockSpeed, pace / f);
             };
             for (int halving = 0;; ++halving) {
                 curve.blockSpeed = speed;
                 pace = 0.0;
+                slower = calm = 0;
+                double work = 0.0;
                 // The block brought down to the film from where it was parked at once (no
                 // time: a quasi-static change), not swept down through the step.
                 bag.setShapePose(block, makeBlockPose(blockCentreXY, top));
@@ -488,11 +497,29 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                     force = record(disp, true, sum);
                     const double kk = (force - prevForce) / step;
                     if (kk > 0.0 && force >= 0.25 * o.stiffnessFrom) stiffnessEstimate = kk;
+                    // The pace. While a slack bag folds in under next to no force the block's
+                    // work is next to nothing: the share is taken of at least the work of half
+                    // the stiffness range's start over a millimetre (there the folds the
+                    // stiffness range will see are laid).
+                    work += 0.5 * (force + prevForce) * step;
+                    {
+                        const double share =
+                            sum.kineticEnergy / std::max(work, 0.5 * o.stiffnessFrom * 1e-3);
+                        if (share > 0.5 * dy.kineticShareLimit && slower < dy.maxHalvings) {
+                            ++slower;
+                            calm = 0;
+                        } else if (share < 0.125 * dy.kineticShareLimit && slower > 0) {
+                            if (++calm >= 8) --slower, calm = 0;
+                        } else {
+                            calm = 0;
+                        }
+                    }
                 }
                 curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
                 // The kinetic energy's share of the block's work so far, along the loading.
-                double work = 0.0, share = 0.0, lastShare = 0.0;
+                double share = 0.0, lastShare = 0.0;
                 bool inRange = false;
+                work = 0.0;
                 for (size_t i = 1; i < curve.steps.size() && curve.steps[i].loading; ++i) {
                     const LoadStep& st = curve.steps[i];
                     const LoadStep& prev = curve.steps[i - 1];

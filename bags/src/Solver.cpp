@@ -287,7 +287,8 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
     // merged in chunk order, so the roundoff is the same for any number of threads. Every
     // element writes its 81 Hessian triplets at a fixed place: the triplet sequence is the
     // same on every call (the solver reuses its scatter map).
-    const int nchunks = nt > 4000 ? 16 : 1;
+    const int nchunks = m_elementChunks > 0 ? std::min(m_elementChunks, std::max(1, nt))
+                                            : (nt > 4000 ? 16 : 1);
     std::vector<double> chunkEnergy(nchunks, 0.0);
     std::vector<Eigen::VectorXd> chunkGrad(nchunks > 1 && wantG ? nchunks : 0);
     const size_t hessBase = acc.hess.size();
@@ -387,7 +388,7 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
     acc.energy += energy;
     if (m_bending) {
         acc.wideBegin = acc.hess.size();
-        m_bending->addEnergy(x, acc);
+        m_bending->addEnergy(x, acc, m_threads);
         acc.wideEnd = acc.hess.size();
     }
 }

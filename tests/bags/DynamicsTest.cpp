@@ -292,3 +292,82 @@ TEST(AirbagDynamics, PressedAndHeldTheBagComesToTheQuasiStaticForce) {
 
 }  // namespace
 }  // namespace bags
+
+// --- the dynamic load test
+
+namespace bags {
+namespace {
+
+// The coarse rig (literal sizes, 25 mm mesh) at a taut 4.5 g, pressed to 20 N.
+LoadTestOptions coarseTautRig() {
+    LoadTestOptions o;
+    o.geometry.meshSize = 0.025;
+    o.material = makeYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.gasMasses = {4.5e-3};
+    o.peakForce = 20.0;
+    o.displacementStep = 0.25e-3;  // the quasi-static test: several steps in the range too
+    o.stiffnessFrom = 5.0;
+    o.stiffnessTo = 15.0;
+    o.polynomialOrder = 1;
+    o.unload = false;
+    return o;
+}
+
+TEST(LoadTestDynamics, TautCurveAgreesWithTheQuasiStaticOne) {
+    // Reference: the quasi-static test's stiffness over 5-15 N on the taut coarse rig;
+    // tolerance 3 % (the agreement target where the quasi-static solver converges).
+    LoadTestOptions o = coarseTautRig();
+    const LoadTestResult qs = runLoadTest(o);
+    o.stepping = AirbagSpec::Stepping::Dynamic;
+    const LoadTestResult dyn = runLoadTest(o);
+    ASSERT_TRUE(qs.curves[0].reachedPeak);
+    ASSERT_TRUE(dyn.curves[0].reachedPeak);
+    const LoadCurve& c = dyn.curves[0];
+    RecordProperty("k_quasi_static", std::to_string(qs.curves[0].stiffness));
+    RecordProperty("k_dynamic", std::to_string(c.stiffness));
+    EXPECT_NEAR(c.stiffness, qs.curves[0].stiffness, 0.03 * qs.curves[0].stiffness);
+    EXPECT_TRUE(c.quasiStatic);
+    EXPECT_LE(c.kineticShare, o.dynamic.kineticShareLimit);
+    EXPECT_GT(c.blockSpeed, 0.0);
+    EXPECT_TRUE(c.failure.empty()) << c.failure;
+    int substeps = 0;
+    for (const LoadStep& s : c.steps) substeps += s.substeps;
+    EXPECT_GT(substeps, 0);
+    EXPECT_EQ(c.steps.front().displacement, 0.0);
+}
+
+TEST(LoadTestDynamics, AHurriedBlockIsMarkedNotQuasiStatic) {
+    // 1 m/s with the film's real mass scaled 1000 times and no slowing down allowed: the film's
+    // kinetic energy is far more than 1 % of the block's work, and the curve says so.
+    LoadTestOptions o = coarseTautRig();
+    o.stepping = AirbagSpec::Stepping::Dynamic;
+    o.dynamic.blockSpeed = 1.0;
+    o.dynamic.damping = 0.0;
+    o.dynamic.maxHalvings = 0;
+    o.dynamic.rampTravel = 0.0;
+    const LoadTestResult r = runLoadTest(o);
+    const LoadCurve& c = r.curves[0];
+    EXPECT_FALSE(c.quasiStatic);
+    EXPECT_GT(c.kineticShare, o.dynamic.kineticShareLimit);
+    EXPECT_NE(c.failure.find("not quasi-static"), std::string::npos) << c.failure;
+}
+
+TEST(LoadTestDynamics, TheObserverSeesOnlyTheLoadingThatWasKept) {
+    // A loading run again at half the speed (a share limit the first pace breaks) reaches the
+    // observer once, its steps numbered from 0 in order.
+    LoadTestOptions o = coarseTautRig();
+    o.stepping = AirbagSpec::Stepping::Dynamic;
+    o.dynamic.blockSpeed = 0.2;
+    o.dynamic.kineticShareLimit = 0.02;
+    o.dynamic.maxHalvings = 3;
+    std::vector<int> seen;
+    const LoadTestResult r = runLoadTest(o, [&](const LoadStep& s, const Mesh&, const Eigen::Matrix3Xd&) {
+        seen.push_back(s.step);
+    });
+    ASSERT_EQ(seen.size(), r.curves[0].steps.size());
+    for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], static_cast<int>(i));
+    EXPECT_LT(r.curves[0].blockSpeed, 0.2);  // it slowed down
+}
+
+}  // namespace
+}  // namespace bags

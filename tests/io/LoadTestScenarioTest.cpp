@@ -646,3 +646,55 @@ TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
                     "  neighbours: {layout: pair}"));
     EXPECT_EQ(e5.getKey(), "airbag.connection");
 }
+
+TEST(LoadTestScenario, DynamicSteppingKeysMapToTheDynamicTest) {
+    const std::string text = kBase +
+                             "solver:\n"                        // 16
+                             "  stepping: dynamic\n"            // 17
+                             "  dynamic:\n"                     // 18
+                             "    block_speed: 10 mm/s\n"       // 19
+                             "    mass_scale: 500\n"            // 20
+                             "    damping: 30 1/s\n"            // 21
+                             "    record_every: 0.5 mm\n"       // 22
+                             "    ramp: 1 mm\n"                 // 23
+                             "    kinetic_share_limit: 0.02\n"  // 24
+                             "    max_halvings: 1\n";           // 25
+    const bags::LoadTestOptions o =
+        io::readLoadTestScenario(ScenarioFile::parse(text, "d.yaml")).options;
+    EXPECT_EQ(o.stepping, bags::AirbagSpec::Stepping::Dynamic);
+    EXPECT_DOUBLE_EQ(o.dynamic.blockSpeed, 0.01);
+    EXPECT_DOUBLE_EQ(o.dynamic.massScale, 500.0);
+    EXPECT_DOUBLE_EQ(o.dynamic.damping, 30.0);
+    EXPECT_DOUBLE_EQ(o.dynamic.recordEvery, 0.5e-3);
+    EXPECT_DOUBLE_EQ(o.dynamic.rampTravel, 1e-3);
+    EXPECT_DOUBLE_EQ(o.dynamic.kineticShareLimit, 0.02);
+    EXPECT_EQ(o.dynamic.maxHalvings, 1);
+    // The bag's own options: the pace carried into the test's time (10 mm/min).
+    const bags::DynamicOptions d = bags::calcLoadTestDynamics(o, 0.01);
+    const double r = 0.01 / (10e-3 / 60.0);
+    EXPECT_NEAR(d.massScale, 500.0 * r * r, 1e-9 * d.massScale);
+    EXPECT_NEAR(d.damping, 30.0 / r, 1e-12);
+    // The default stays quasi-static.
+    EXPECT_EQ(io::readLoadTestScenario(ScenarioFile::parse(kBase, "q.yaml")).options.stepping,
+              bags::AirbagSpec::Stepping::QuasiStatic);
+}
+
+TEST(LoadTestScenario, DynamicKeysAreCheckedAndLocated) {
+    // Settings of the dynamic test without the dynamic stepping: refused where they stand.
+    const InputError e = errorFor(kBase + "solver:\n  dynamic: {block_speed: 10 mm/s}\n");
+    EXPECT_EQ(e.getLine(), 17);
+    EXPECT_NE(std::string(e.what()).find("stepping: dynamic"), std::string::npos) << e.what();
+    // An unknown stepping names the valid ones.
+    const InputError e2 = errorFor(kBase + "solver:\n  stepping: explicit\n");
+    EXPECT_EQ(e2.getLine(), 17);
+    EXPECT_NE(std::string(e2.what()).find("quasi-static"), std::string::npos) << e2.what();
+    // A damping is a rate: a unit of time alone is refused.
+    const InputError e3 =
+        errorFor(kBase + "solver:\n  stepping: dynamic\n  dynamic: {damping: 20 s}\n");
+    EXPECT_EQ(e3.getKey(), "solver.dynamic.damping");
+    EXPECT_NE(std::string(e3.what()).find("1/s"), std::string::npos) << e3.what();
+    // A mass scale below 1 would make the film lighter than it is.
+    const InputError e4 =
+        errorFor(kBase + "solver:\n  stepping: dynamic\n  dynamic: {mass_scale: 0.5}\n");
+    EXPECT_EQ(e4.getKey(), "solver.dynamic.mass_scale");
+}

@@ -90,6 +90,9 @@ public:
     /// say). @throws NumericalError if a hinge triangle collapsed (when derivatives are wanted;
     /// energy only: acc.energy becomes +inf).
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+    /// As above, the hinges' angles and gradients on up to `threads` threads (0: the OpenMP
+    /// default); bit-identical for any number.
+    void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc, int threads) const;
     /// Bending energy [J] at x alone.
     double calcEnergy(const Eigen::Matrix3Xd& x) const;
 

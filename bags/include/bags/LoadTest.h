@@ -135,9 +135,12 @@ struct LoadTestOptions {
         /// Largest share of the film's kinetic energy in the block's work so far, over the
         /// loading branch from stiffnessFrom on: above it the curve is not quasi-static.
         double kineticShareLimit = 0.01;
-        /// A curve over the limit is run again at half the block speed, up to this many
-        /// times; still over: kept and marked (LoadCurve::kineticShare, failure text).
-        int maxHalvings = 2;
+        /// Along the loading the block's pace halves (up to this many times) while the film's
+        /// kinetic energy is over half the limit of the block's work so far, and doubles back
+        /// after 8 records below an eighth of it; a curve whose share still broke the limit is
+        /// run again at half the block speed, up to this many times; still over: kept and
+        /// marked (LoadCurve::kineticShare, quasiStatic, failure text).
+        int maxHalvings = 3;
     };
     Dynamic dynamic;
     /// Throws std::invalid_argument naming the option and what would be valid.
@@ -200,8 +203,8 @@ struct LoadCurve {
     double stiffnessMin = 0.0;
     double stiffnessMax = 0.0;
     int ensembleSize = 1;
-    /// Dynamic test: the block speed [m/s] the curve was integrated at (after any halvings;
-    /// 0: quasi-static), and the largest share of the film's kinetic energy in the block's
+    /// Dynamic test: the slowest block speed [m/s] the curve's loading went at (its pace after
+    /// any halvings, the start's ramp left out; 0: quasi-static), and the largest share of the film's kinetic energy in the block's
     /// work so far over the loading branch from stiffnessFrom on [-] (or at its end if it
     /// never gets there). Above LoadTestOptions::Dynamic::kineticShareLimit the curve is not
     /// quasi-static: `quasiStatic` false and `failure` says so.

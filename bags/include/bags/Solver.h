@@ -149,6 +149,12 @@ public:
     /// bit-identical for any value (fixed chunks merged in a fixed order).
     void setNumThreads(int threads) { m_threads = threads; }
     int getNumThreads() const { return m_threads; }
+    /// The elements' fixed chunks (0: one below 4000 triangles, 16 above): each chunk sums on
+    /// its own and the chunks merge in order, so the bits depend on the chunks, never on the
+    /// threads. More chunks let a small bag's step use several threads (the dynamic stepping
+    /// of a bag alone) at the price of other roundoff.
+    void setElementChunks(int chunks) { m_elementChunks = chunks; }
+    int getElementChunks() const { return m_elementChunks; }
 
     /// Viscoelastic film (bags/Viscoelastic.h): the material is the long-term law, and every
     /// element carries a Maxwell branch per Prony term. An empty series (or all g = 0)
@@ -239,6 +245,7 @@ private:
     Vec3 m_warpAxis = Vec3::UnitX();      ///< an anisotropic film's warp reference (setWarpAxes)
     Vec3 m_warpFallback = Vec3::UnitZ();
     int m_threads = 0;                    ///< 0: OpenMP default
+    int m_elementChunks = 0;              ///< setElementChunks (0: by size)
     double m_stabilization = 0.0;         ///< [Pa/m]
     Eigen::Matrix3Xd m_anchor;
     std::vector<double> m_stabilizationWeight;  ///< per node; empty: all 1
