@@ -124,7 +124,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
                      "contact_penalty", "body_friction", "friction_law", "slip_velocity",
                      "body_tissue", "model", "calibration", "bending_stiffness",
-                     "stick_distance", "film_damping"});
+                     "stick_distance", "film_damping", "stepping", "dynamic"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -181,6 +181,29 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     checkBetween(s, "film_damping", b.damping, 0.0, 1e8, "Pa/m",
                  "0: none; 1e5 Pa/m was measured on the seed's bag");
     b.threads = 1;  // bags run in parallel, one per thread
+    // The film in time (docs/solver.md#the-film-in-time): its mass scale, damping and
+    // sub-step; quasi-static (an equilibrium each step) by default.
+    if (s.has("stepping"))
+        b.stepping = s.getChoice("stepping", {"quasi-static", "dynamic"}) == "dynamic"
+                         ? bags::AirbagSpec::Stepping::Dynamic
+                         : bags::AirbagSpec::Stepping::QuasiStatic;
+    if (s.has("dynamic")) {
+        if (b.stepping != bags::AirbagSpec::Stepping::Dynamic)
+            s.fail("dynamic", "the film's dynamic settings need 'stepping: dynamic' beside them");
+        const ScenarioNode d = s.getSection("dynamic");
+        d.checkKeys({}, {"mass_scale", "damping", "step_fraction"});
+        b.dynamics.massScale = d.getNumber("mass_scale", 1000.0);
+        checkBetween(d, "mass_scale", b.dynamics.massScale, 1.0, 1e6, "",
+                     "the film's masses times this, e.g. 1000");
+        b.dynamics.damping = d.getQuantity("damping", D::Rate, 20.0);
+        checkBetween(d, "damping", b.dynamics.damping, 0.0, 1e4, "1/s", "e.g. 20 1/s");
+        b.dynamics.stepFraction = d.getNumber("step_fraction", 0.5);
+        checkBetween(d, "step_fraction", b.dynamics.stepFraction, 1e-3, 1.0, "",
+                     "a fraction of the stable step, e.g. 0.5");
+    } else if (b.stepping == bags::AirbagSpec::Stepping::Dynamic) {
+        b.dynamics.massScale = 1000.0;
+        b.dynamics.damping = 20.0;
+    }
     readReducedBagKeys(s, sc.options, fileName);
     // The reduced bag's friction (docs/reduced-bag.md#friction): one stick spring per shape,
     // capped at mu times its contact force; the travel over which it takes hold.
@@ -193,6 +216,10 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(s, "stick_distance", sc.options.reducedFriction.stickDistance, 1e-4, 0.05,
                      "mm");
     }
+    if (reduced && (s.has("stepping") || s.has("dynamic")))
+        s.fail(s.has("stepping") ? "stepping" : "dynamic",
+               "is the finite-element bag's (how its film is stepped); the reduced bag has no "
+               "film: leave it out, or model: finite-element");
     if (reduced && s.has("film_damping"))
         s.fail("film_damping", "is the finite-element bag's (its slack film's damper); the "
                                "reduced bag has no film to damp: leave it out, or model: "

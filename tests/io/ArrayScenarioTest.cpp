@@ -454,3 +454,37 @@ TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreL
         EXPECT_NE(e.getMessage().find(bad.valid), std::string::npos) << e.what();
     }
 }
+
+TEST(ArrayScenario, TheFilmsSteppingIsQuasiStaticByDefaultAndDynamicWithItsSettings) {
+    auto with = [](const std::string& keys) {
+        std::string t = kBase;
+        t.replace(t.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm" + keys + "}");
+        return t;
+    };
+    EXPECT_EQ(read(kBase).options.bag.stepping, bags::AirbagSpec::Stepping::QuasiStatic);
+    const bags::AirbagSpec dflt = read(with(", stepping: dynamic")).options.bag;
+    EXPECT_EQ(dflt.stepping, bags::AirbagSpec::Stepping::Dynamic);
+    EXPECT_EQ(dflt.dynamics.massScale, 1000.0);
+    EXPECT_EQ(dflt.dynamics.damping, 20.0);
+    const bags::AirbagSpec set =
+        read(with(", stepping: dynamic, dynamic: {mass_scale: 100, damping: 5 1/s, "
+                  "step_fraction: 0.25}"))
+            .options.bag;
+    EXPECT_EQ(set.dynamics.massScale, 100.0);
+    EXPECT_EQ(set.dynamics.damping, 5.0);
+    EXPECT_EQ(set.dynamics.stepFraction, 0.25);
+    // The settings without the stepping, a damping without its rate unit, a stepping unknown.
+    for (const char* bad : {", dynamic: {mass_scale: 100}", ", stepping: dynamic, dynamic: {damping: 5 s}",
+                            ", stepping: implicit"}) {
+        const io::InputError e = readError(with(bad));
+        EXPECT_EQ(e.getLine(), 3) << bad;
+    }
+    // It reaches every coupled bag the run builds.
+    const io::PatientOnArrayScenario sc = read(with(", stepping: dynamic"));
+    const cosim::PatientOnArray poa(sc.patient, sc.options);
+    for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
+        const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa.getBag(int(b)));
+        ASSERT_NE(fe, nullptr);
+        EXPECT_EQ(fe->getAirbag().getSpec().stepping, bags::AirbagSpec::Stepping::Dynamic) << b;
+    }
+}

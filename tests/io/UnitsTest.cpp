@@ -45,6 +45,10 @@ TEST(Units, ConvertsTheBriefsExamplesToSi) {
     expectSi("29 g/mol", Dimension::MolarMass, 0.029);
     expectSi("1e7 Pa/m", Dimension::StiffnessPerArea, 1e7);
     expectSi("30 deg", Dimension::Angle, M_PI / 6.0);
+    expectSi("20 1/s", Dimension::Rate, 20.0);
+    expectSi("20/s", Dimension::Rate, 20.0);
+    expectSi("60 1/min", Dimension::Rate, 1.0);
+    expectSi("0.15 us", Dimension::Time, 0.15e-6);
 }
 
 TEST(Units, ConvertsEveryListedUnitByItsFactor) {
