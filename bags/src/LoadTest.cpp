@@ -36,6 +36,14 @@ double calcTopUnderBlock(const Eigen::Matrix3Xd& x, const Vec3& centre, double h
     return std::isfinite(top) ? top : calcTop(x);
 }
 
+// The load test's one physical early end (io::isCurveFailed() reads its first words).
+std::string describeBottomedOut(double disp, double force) {
+    std::ostringstream r;
+    r << "bottomed out: the block is within 2 mm of the bed board at block travel "
+      << disp * 1e3 << " mm (" << force << " N)";
+    return r.str();
+}
+
 Eigen::Isometry3d makeBlockPose(const Vec3& centreXY, double zBottom) {
     Eigen::Isometry3d X_GS = Eigen::Isometry3d::Identity();
     X_GS.translation() = Vec3(centreXY.x(), centreXY.y(), zBottom + kBlockHalfHeight);
@@ -480,10 +488,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                                                        1.05 * (o.peakForce - force) / stiffnessEstimate));
                     step = std::min(step, maxDisp - disp);
                     if (step < 1e-6) {
-                        std::ostringstream r;
-                        r << "bottomed out: the block is within 2 mm of the bed board at block travel "
-                          << disp * 1e3 << " mm (" << force << " N)";
-                        curve.failure = r.str();
+                        curve.failure = describeBottomedOut(disp, force);
                         break;
                     }
                     AdvanceSummary sum;
@@ -590,10 +595,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 if (step < minStep) {
                     // The slack bag is pressed flat under the block: with penalty contact (1 mm
                     // of penetration per 10 kPa by default) the last 2 mm cannot be resolved.
-                    std::ostringstream r;
-                    r << "bottomed out: the block is within 2 mm of the bed board at block travel "
-                      << disp * 1e3 << " mm (" << force << " N)";
-                    curve.failure = r.str();
+                    curve.failure = describeBottomedOut(disp, force);
                     break;
                 }
                 AdvanceSummary sum;

@@ -183,13 +183,8 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     b.threads = 1;  // bags run in parallel, one per thread
     // The film in time (docs/solver.md#the-film-in-time): its mass scale, damping and
     // sub-step; quasi-static (an equilibrium each step) by default.
-    if (s.has("stepping"))
-        b.stepping = s.getChoice("stepping", {"quasi-static", "dynamic"}) == "dynamic"
-                         ? bags::AirbagSpec::Stepping::Dynamic
-                         : bags::AirbagSpec::Stepping::QuasiStatic;
+    b.stepping = readStepping(s, b.stepping);
     if (s.has("dynamic")) {
-        if (b.stepping != bags::AirbagSpec::Stepping::Dynamic)
-            s.fail("dynamic", "the film's dynamic settings need 'stepping: dynamic' beside them");
         const ScenarioNode d = s.getSection("dynamic");
         d.checkKeys({}, {"mass_scale", "damping", "step_fraction"});
         b.dynamics.massScale = d.getNumber("mass_scale", 1000.0);

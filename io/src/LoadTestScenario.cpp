@@ -704,15 +704,8 @@ void readSolver(const ScenarioNode& s, bags::LoadTestOptions& lo) {
     s.checkKeys({}, {"relative_tolerance", "absolute_tolerance", "max_iterations",
                      "pseudo_transient_shift", "stabilization", "damping",
                      "residual_tolerance", "stepping", "dynamic"});
-    if (s.has("stepping"))
-        lo.stepping = s.getChoice("stepping", {"quasi-static", "dynamic"}) == "dynamic"
-                          ? bags::AirbagSpec::Stepping::Dynamic
-                          : bags::AirbagSpec::Stepping::QuasiStatic;
-    if (s.has("dynamic")) {
-        if (lo.stepping != bags::AirbagSpec::Stepping::Dynamic)
-            s.fail("dynamic", "the dynamic test's settings need 'stepping: dynamic' beside them");
-        readDynamic(s.getSection("dynamic"), lo.dynamic);
-    }
+    lo.stepping = readStepping(s, lo.stepping);
+    if (s.has("dynamic")) readDynamic(s.getSection("dynamic"), lo.dynamic);
     o.relativeTolerance = s.getNumber("relative_tolerance", o.relativeTolerance);
     o.absoluteTolerance = s.getQuantity("absolute_tolerance", D::Force, o.absoluteTolerance);
     o.maxIterations = s.getInteger("max_iterations", o.maxIterations);
@@ -975,6 +968,17 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
     }
     checkLimits(root, o);
     return sc;
+}
+
+bags::AirbagSpec::Stepping readStepping(const ScenarioNode& s, bags::AirbagSpec::Stepping current) {
+    using S = bags::AirbagSpec::Stepping;
+    if (s.has("stepping"))
+        current = s.getChoice("stepping", {"quasi-static", "dynamic"}) == "dynamic"
+                      ? S::Dynamic
+                      : S::QuasiStatic;
+    if (s.has("dynamic") && current != S::Dynamic)
+        s.fail("dynamic", "these dynamic settings need 'stepping: dynamic' beside them");
+    return current;
 }
 
 }  // namespace io

@@ -313,6 +313,15 @@ LoadTestOptions coarseTautRig() {
     return o;
 }
 
+// The same rig, dynamic, at `speed` [m/s] with up to `halvings` halvings of the pace.
+LoadTestOptions coarseDynamicRig(double speed, int halvings) {
+    LoadTestOptions o = coarseTautRig();
+    o.stepping = AirbagSpec::Stepping::Dynamic;
+    o.dynamic.blockSpeed = speed;
+    o.dynamic.maxHalvings = halvings;
+    return o;
+}
+
 TEST(LoadTestDynamics, TautCurveAgreesWithTheQuasiStaticOne) {
     // Reference: the quasi-static test's stiffness over 5-15 N on the taut coarse rig;
     // tolerance 3 % (the agreement target where the quasi-static solver converges).
@@ -339,11 +348,8 @@ TEST(LoadTestDynamics, TautCurveAgreesWithTheQuasiStaticOne) {
 TEST(LoadTestDynamics, AHurriedBlockIsMarkedNotQuasiStatic) {
     // 1 m/s with the film's real mass scaled 1000 times and no slowing down allowed: the film's
     // kinetic energy is far more than 1 % of the block's work, and the curve says so.
-    LoadTestOptions o = coarseTautRig();
-    o.stepping = AirbagSpec::Stepping::Dynamic;
-    o.dynamic.blockSpeed = 1.0;
+    LoadTestOptions o = coarseDynamicRig(1.0, 0);
     o.dynamic.damping = 0.0;
-    o.dynamic.maxHalvings = 0;
     o.dynamic.rampTravel = 0.0;
     const LoadTestResult r = runLoadTest(o);
     const LoadCurve& c = r.curves[0];
@@ -355,11 +361,8 @@ TEST(LoadTestDynamics, AHurriedBlockIsMarkedNotQuasiStatic) {
 TEST(LoadTestDynamics, TheObserverSeesOnlyTheLoadingThatWasKept) {
     // A loading run again at half the speed (a share limit the first pace breaks) reaches the
     // observer once, its steps numbered from 0 in order.
-    LoadTestOptions o = coarseTautRig();
-    o.stepping = AirbagSpec::Stepping::Dynamic;
-    o.dynamic.blockSpeed = 0.2;
+    LoadTestOptions o = coarseDynamicRig(0.2, 3);
     o.dynamic.kineticShareLimit = 0.02;
-    o.dynamic.maxHalvings = 3;
     std::vector<int> seen;
     const LoadTestResult r = runLoadTest(o, [&](const LoadStep& s, const Mesh&, const Eigen::Matrix3Xd&) {
         seen.push_back(s.step);

@@ -111,4 +111,9 @@ inline constexpr double kMaxTissueModulus = 100e6;     ///< [Pa]
 double readBendingStiffness(const ScenarioNode& s, const std::string& key,
                             const bags::MembraneMaterial& material, double thickness);
 
+/// Reads how a bag is stepped, `stepping: quasi-static | dynamic` (default `current`), and
+/// refuses a `dynamic` section of settings beside a stepping that is not dynamic. Used by the
+/// load test's `solver` and the patient's `bag` section. @throws InputError naming the key.
+bags::AirbagSpec::Stepping readStepping(const ScenarioNode& s, bags::AirbagSpec::Stepping current);
+
 }  // namespace io
