@@ -388,7 +388,11 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
     acc.energy += energy;
     if (m_bending) {
         acc.wideBegin = acc.hess.size();
-        m_bending->addEnergy(x, acc, m_threads);
+        // The hinges share the elements' threads: none below the size at which the elements
+        // are chunked (a small bag's parallel region costs more than it saves, and where other
+        // processes hold the cores its threads wait on each other many times over: the taut
+        // tiny rig's load test 0.5 -> 2.4 s on two loaded cores).
+        m_bending->addEnergy(x, acc, nthreads);
         acc.wideEnd = acc.hess.size();
     }
 }
