@@ -147,10 +147,15 @@ void AirbagSpec::validate() const {
     require(forceTolerance > 0.0 && forceTolerance <= 1.0, "forceTolerance", forceTolerance,
             "use 0 < tolerance <= 1 N (e.g. 0.05 N)");
     require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
-    if (stepping == Stepping::Dynamic) {
+    if (stepping != Stepping::QuasiStatic) {
         dynamics.validate();
         require(density > 0.0, "density", density,
                 "the dynamic stepping moves the film's mass: use a density > 0 kg/m^3");
+        if (stepping == Stepping::Relaxed && gas.heatTimeConstant > 0.0)
+            throw std::invalid_argument(
+                "airbag option 'stepping' = relaxed does not take the gas's heat exchange "
+                "(gas.heatTimeConstant = " + std::to_string(gas.heatTimeConstant) +
+                " s); valid: quasi-static or dynamic stepping with it, or no heat exchange");
     }
     require(cluster.size() <= 64, "cluster", static_cast<double>(cluster.size()),
             "use 0 to 64 bags in one module");
@@ -220,6 +225,7 @@ struct Airbag::Impl {
     std::unique_ptr<Stepper> stepper;
     struct QuasiStaticStepper;
     struct DynamicStepper;
+    struct RelaxedStepper;
     SolverWorkspace workspace;
     double time = 0.0;
     double meanEdge = 0.0;
@@ -471,7 +477,7 @@ struct Airbag::Impl {
         w.pod(std::uint64_t(s.poses.size()));
         for (const Eigen::Isometry3d& X : s.poses) w.pose(X);
         w.pod(s.time);
-        if (spec.stepping == AirbagSpec::Stepping::Dynamic) {  // only then: as before otherwise
+        if (spec.stepping != AirbagSpec::Stepping::QuasiStatic) {  // only then: as before otherwise
             w.tag("velocity");
             Eigen::Matrix3Xd v0 = s.v;
             if (v0.cols() != s.x.cols()) v0.setZero(3, s.x.cols());
@@ -515,7 +521,7 @@ struct Airbag::Impl {
         if (np != s->poses.size()) StateReader::mismatch("shapes", np, s->poses.size());
         for (Eigen::Isometry3d& X : s->poses) X = r.pose();
         r.pod(s->time);
-        if (spec.stepping == AirbagSpec::Stepping::Dynamic) {
+        if (spec.stepping != AirbagSpec::Stepping::QuasiStatic) {
             r.tag("velocity");
             r.matOfCols(s->v, x.cols(), "nodes of the bag (velocities)");
             r.pod(s->stableStep);
@@ -1128,41 +1134,58 @@ struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
         return k;
     }
 
-    AdvanceSummary advance(Impl& m, double dt, int maxCuts) override {
-        if (dt == 0.0) return quasiStatic.advance(m, dt, maxCuts);
-        m.restore(*m.committed);
+    // The film's inertia, built at the first step that moves it.
+    static void ensureFilm(Impl& m) {
         if (!m.film)
             m.film = std::make_unique<FilmDynamics>(*m.model, m.spec.density, m.spec.dynamics,
                                                     maxContactPenalty(m), m.spec.material);
-        const std::vector<Eigen::Isometry3d> from = m.currentPoses();
-        AdvanceSummary out;
-        // Asleep: at rest, untouched before and after, gas and film still.
-        const bool still = m.isGasStill(dt) && m.model->isViscouslyRelaxed();
-        auto untouched = [&] {
-            for (const Shape& sh : m.shapes)
-                if (sh.contact->getNumActive(m.x) > 0) return false;
+    }
+    static bool isUntouched(const Impl& m) {
+        for (const Shape& sh : m.shapes)
+            if (sh.contact->getNumActive(m.x) > 0) return false;
+        return true;
+    }
+    // Asleep over dt: at rest, gas and film still (`still`), untouched before and after. Then
+    // the shapes are at their targets, the time moved on and true returned; otherwise nothing
+    // has changed.
+    static bool trySleep(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt,
+                         bool still, AdvanceSummary* out) {
+        if (!(still && m.v.isZero(0.0) && isUntouched(m))) return false;
+        for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].shape->setPose(m.shapes[i].target);
+        if (isUntouched(m)) {
+            m.time += dt;
+            out->converged = true;
+            out->residual = m.calcFreeResidual(m.x);
             return true;
-        };
-        if (still && m.v.isZero(0.0) && untouched()) {
-            for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].shape->setPose(m.shapes[i].target);
-            if (untouched()) {
-                m.time += dt;
-                out.converged = true;
-                out.residual = m.calcFreeResidual(m.x);
-                return out;
-            }
-            for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].shape->setPose(from[i]);
         }
-        // The stable step, estimated again every kStableRefresh steps (a tangent assembly
-        // costs tens of sub-steps); it scales with the root of the mass scale.
+        for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].shape->setPose(from[i]);
+        return false;
+    }
+    // The stable step over the root of the mass scale, estimated again every kStableRefresh
+    // steps (a tangent assembly costs tens of sub-steps); *age its steps since. Kept in the
+    // state (m.stableStep, m.stableAge) by the caller once the step is accepted.
+    static double calcStablePerRoot(Impl& m, int* age) {
         const double root = std::sqrt(m.spec.dynamics.massScale);
         double perRoot = m.stableStep;
-        int age = m.stableAge;
-        if (!(perRoot > 0.0) || age >= kStableRefresh) {
+        *age = m.stableAge;
+        if (!(perRoot > 0.0) || *age >= kStableRefresh) {
             perRoot = m.film->calcStableStep(m.x) / root;
-            age = 0;
+            *age = 0;
         }
-        const double stable = perRoot * root;
+        return perRoot;
+    }
+
+    AdvanceSummary advance(Impl& m, double dt, int maxCuts) override {
+        if (dt == 0.0) return quasiStatic.advance(m, dt, maxCuts);
+        m.restore(*m.committed);
+        ensureFilm(m);
+        const std::vector<Eigen::Isometry3d> from = m.currentPoses();
+        AdvanceSummary out;
+        const bool still = m.isGasStill(dt) && m.model->isViscouslyRelaxed();
+        if (trySleep(m, from, dt, still, &out)) return out;
+        int age = 0;
+        const double perRoot = calcStablePerRoot(m, &age);
+        const double stable = perRoot * std::sqrt(m.spec.dynamics.massScale);
         for (int cut = 0; cut <= maxCuts; ++cut) {
             const double hMax = stable * m.spec.dynamics.stepFraction * std::pow(0.5, cut);
             const long n = std::max(1L, static_cast<long>(std::ceil(dt / hMax - 1e-9)));
@@ -1178,7 +1201,7 @@ struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
                 // Falls asleep: untouched, still, and moving less than 0.1 um over such a step.
                 double vmax = 0.0;
                 for (int i = 0; i < m.v.cols(); ++i) vmax = std::max(vmax, m.v.col(i).norm());
-                if (still && untouched() && vmax * dt < 1e-7 &&
+                if (still && isUntouched(m) && vmax * dt < 1e-7 &&
                     out.residual <= m.spec.forceTolerance)
                     m.v.setZero();
                 return out;
@@ -1240,6 +1263,134 @@ struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
     }
 };
 
+// The quasi-static step's equilibrium by dynamic relaxation (AirbagSpec::Stepping::Relaxed,
+// docs/solver.md#relaxed-stepping). The step's time passes at its start as in the quasi-static
+// stepping: gas flows and leakage, the orifice's transfer (explicit, at the start's
+// pressures), the friction's slip and the viscous branches' step potential. Then the film's
+// damped explicit dynamics run in pseudo-time: the shapes moved to their poses at the
+// relaxation pace, then held there while the film relaxes, its velocity zeroed at every peak
+// of its kinetic energy (kinetic damping), until the force residual is within the tolerance.
+// What touches the bag feels the equilibrium's forces, never the film's (scaled) inertia. A
+// relaxed step ends at rest; one whose sub-steps ran out keeps its pseudo-velocity (the next
+// step goes on from there).
+struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
+    double reach = -1.0;  // [m] half the bag's reference diagonal: a turn's lever
+
+    AdvanceSummary advance(Impl& m, double dt, int maxCuts) override {
+        if (dt == 0.0) return quasiStatic.advance(m, dt, maxCuts);
+        m.restore(*m.committed);
+        ensureFilm(m);
+        if (reach < 0.0) {
+            const Eigen::Matrix3Xd& X = m.model->getMesh().X;
+            reach = 0.5 * (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+        }
+        const std::vector<Eigen::Isometry3d> from = m.currentPoses();
+        AdvanceSummary out;
+        const bool still = m.isGasStill(dt) && m.model->isViscouslyRelaxed();
+        if (trySleep(m, from, dt, still, &out)) return out;
+        const DynamicOptions& o = m.spec.dynamics;
+        int age = 0;
+        const double perRoot = calcStablePerRoot(m, &age);
+        // The pace holds the film's response the same at any mass scale.
+        const double pace = o.relaxPace * std::sqrt(1000.0 / o.massScale);
+        double travel = 0.0;
+        for (size_t i = 0; i < m.shapes.size(); ++i) {
+            const Eigen::AngleAxisd turn(Eigen::Matrix3d(m.shapes[i].target.linear() *
+                                                         from[i].linear().transpose()));
+            travel = std::max(travel, (m.shapes[i].target.translation() - from[i].translation()).norm() +
+                                          std::abs(turn.angle()) * reach);
+        }
+        // The way to a first touch is free: the ramp starts at the last fraction of the
+        // travel at which no shape touches the film (bisection), so that a shape brought from
+        // afar is not swept in at the pace all the way, nor faster than the pace into the film.
+        double s0 = 0.0;
+        if (travel > 0.0 && isUntouched(m)) {
+            double lo = 0.0, hi = 1.0;
+            for (int i = 0; i < 24 && (hi - lo) * travel > pace * perRoot * std::sqrt(o.massScale) * o.stepFraction; ++i) {
+                const double mid = 0.5 * (lo + hi);
+                for (size_t j = 0; j < m.shapes.size(); ++j)
+                    m.shapes[j].shape->setPose(interpolatePose(from[j], m.shapes[j].target, mid));
+                (isUntouched(m) ? lo : hi) = mid;
+            }
+            for (size_t j = 0; j < m.shapes.size(); ++j) m.shapes[j].shape->setPose(from[j]);
+            s0 = lo;
+        }
+        for (int cut = 0; cut <= maxCuts; ++cut) {
+            const double h = perRoot * std::sqrt(o.massScale) * o.stepFraction * std::pow(0.5, cut);
+            if (relax(m, from, dt, h, s0, (1.0 - s0) * travel / (pace * h), &out)) {
+                m.stableStep = perRoot;
+                m.stableAge = age + 1;
+                return out;
+            }
+            m.restore(*m.committed);
+            out = AdvanceSummary();
+        }
+        out.converged = false;
+        return out;
+    }
+
+    // The step of dt relaxed in sub-steps of h, the shapes moved from fraction s0 of the way
+    // to their poses in `ramp` sub-steps (at least one); then up to relaxSubsteps more. False
+    // (state unspecified) if the film could not be evaluated.
+    bool relax(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt, double h,
+               double s0, double ramp, AdvanceSummary* out) {
+        const DynamicOptions& o = m.spec.dynamics;
+        const long nRamp = std::max(1L, static_cast<long>(std::ceil(ramp - 1e-9)));
+        const double tol2 = m.spec.forceTolerance * m.spec.forceTolerance;
+        try {
+            for (int b = 0; b < m.numBags; ++b) m.addBagGasMass(b, m.calcGasInflow(b, dt));
+            m.leak(dt);
+            if (m.spec.connection == AirbagSpec::Connection::Orifice && m.model->getNumGases() >= 2) {
+                const std::vector<GasChamber> start = m.copyGases();
+                m.moveGas(start, m.calcTransfer(start, dt));
+            }
+            m.model->beginViscousStep(dt);
+            m.model->beginContactStep(m.x, dt);
+            double r2 = 0.0, kePrev = 0.0;
+            long k = 0;
+            bool relaxed = false;
+            for (;; ++k) {
+                if (k <= nRamp) {
+                    const double s1 = k >= nRamp ? 1.0
+                                                 : s0 + (1.0 - s0) * static_cast<double>(k) /
+                                                            static_cast<double>(nRamp);
+                    for (size_t i = 0; i < m.shapes.size(); ++i)
+                        m.shapes[i].shape->setPose(interpolatePose(from[i], m.shapes[i].target, s1));
+                }
+                if (m.self && !m.self->isCandidateListValid(m.x)) m.self->updateCandidates(m.x);
+                r2 = m.film->calcForce(m.x, acc);
+                if (!std::isfinite(r2)) return false;
+                if (k >= nRamp && r2 <= tol2) {
+                    relaxed = true;
+                    break;
+                }
+                if (k >= nRamp + o.relaxSubsteps) break;
+                m.film->update(m.x, m.v, h, acc);
+                const double ke = m.film->calcKineticEnergy(m.v);
+                if (ke < kePrev) {
+                    m.v.setZero();  // past a peak of the kinetic energy: start again at rest
+                    kePrev = 0.0;
+                } else {
+                    kePrev = ke;
+                }
+            }
+            m.model->commitStep(m.x);
+            m.model->endViscousStep(m.x);
+            if (relaxed) m.v.setZero();  // an equilibrium, at rest
+            m.time += dt;
+            out->converged = true;
+            out->unrelaxed = !relaxed;
+            out->substeps = static_cast<int>(std::min<long>(k, std::numeric_limits<int>::max()));
+            out->substep = h;
+            out->residual = std::sqrt(r2);
+            out->kineticEnergy = m.film->calcKineticEnergy(m.v);
+            return m.x.allFinite();
+        } catch (const NumericalError&) {
+            return false;
+        }
+    }
+};
+
 Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     spec.validate();
     Impl& m = *m_impl;
@@ -1276,7 +1427,7 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     m.model->setNumThreads(spec.threads);
     // A bag stepped in time evaluates its forces every sub-step: its elements in chunks that
     // threads can share (the same bits on any number of threads; roundoff unlike one chunk's).
-    if (spec.stepping == AirbagSpec::Stepping::Dynamic && mesh.getNumTris() >= 256)
+    if (spec.stepping != AirbagSpec::Stepping::QuasiStatic && mesh.getNumTris() >= 256)
         m.model->setElementChunks(8);
     std::vector<char> isSupport(mesh.getNumNodes(), 0);
     for (int n : mesh.supportNodes) isSupport[n] = 1;
@@ -1308,6 +1459,8 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     m.lastAdvanced.resize(3, 0);
     if (spec.stepping == AirbagSpec::Stepping::Dynamic)
         m.stepper = std::make_unique<Impl::DynamicStepper>();
+    else if (spec.stepping == AirbagSpec::Stepping::Relaxed)
+        m.stepper = std::make_unique<Impl::RelaxedStepper>();
     else
         m.stepper = std::make_unique<Impl::QuasiStaticStepper>();
 }
@@ -1551,7 +1704,7 @@ double Airbag::getTime() const { return m_impl->time; }
 
 void Airbag::setDynamicOptions(const DynamicOptions& options) {
     Impl& m = *m_impl;
-    if (m.spec.stepping != AirbagSpec::Stepping::Dynamic)
+    if (m.spec.stepping == AirbagSpec::Stepping::QuasiStatic)
         throw std::logic_error("Airbag::setDynamicOptions on a quasi-statically stepped bag");
     options.validate();
     m.spec.dynamics = options;
@@ -1560,7 +1713,7 @@ void Airbag::setDynamicOptions(const DynamicOptions& options) {
 
 double Airbag::calcKineticEnergy() const {
     const Impl& m = *m_impl;
-    if (m.spec.stepping != AirbagSpec::Stepping::Dynamic) return 0.0;
+    if (m.spec.stepping == AirbagSpec::Stepping::QuasiStatic) return 0.0;
     return FilmDynamics(*m.model, m.spec.density, m.spec.dynamics, 0.0).calcKineticEnergy(m.v);
 }
 

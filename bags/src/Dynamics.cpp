@@ -21,6 +21,10 @@ void DynamicOptions::validate() const {
         fail("damping", damping, "use a rate >= 0 per second (e.g. 20 /s)");
     if (!(stepFraction > 0.0 && stepFraction <= 1.0))
         fail("stepFraction", stepFraction, "use 0 < fraction <= 1 of the stable step (e.g. 0.5)");
+    if (!(relaxSubsteps >= 1 && relaxSubsteps <= 10000000))
+        fail("relaxSubsteps", relaxSubsteps, "use 1 to 1e7 sub-steps a step (e.g. 4000)");
+    if (!(relaxPace > 0.0 && relaxPace <= 10.0))
+        fail("relaxPace", relaxPace, "use a pace > 0 up to 10 m/s (e.g. 0.02 m/s)");
 }
 
 FilmDynamics::FilmDynamics(const MembraneModel& model, double density,
@@ -89,12 +93,28 @@ double FilmDynamics::calcStableStep(const Eigen::Matrix3Xd& x) const {
     return 2.0 / std::sqrt(lambda);
 }
 
-void FilmDynamics::step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h,
-                        EnergyAccumulator& acc) const {
-    const int nn = static_cast<int>(x.cols());
+double FilmDynamics::step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h,
+                          EnergyAccumulator& acc) const {
+    const double r2 = calcForce(x, acc);
+    update(x, v, h, acc);
+    return r2;
+}
+
+double FilmDynamics::calcForce(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
     acc.wantHessian = false;
-    acc.resize(nn);
+    acc.resize(static_cast<int>(x.cols()));
     m_model->addEnergy(x, acc);
+    const double* g = acc.grad.data();
+    const double* im = m_invMass.data();
+    double r2 = 0.0;
+    for (Eigen::Index d = 0; d < acc.grad.size(); ++d)
+        if (im[d] > 0.0) r2 += g[d] * g[d];
+    return r2;
+}
+
+void FilmDynamics::update(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h,
+                          const EnergyAccumulator& acc) const {
+    const int nn = static_cast<int>(x.cols());
     const double a = 0.5 * m_options.damping * h;
     const double keep = (1.0 - a) / (1.0 + a), push = h / (1.0 + a);
     double* vv = v.data();

@@ -186,7 +186,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     b.stepping = readStepping(s, b.stepping);
     if (s.has("dynamic")) {
         const ScenarioNode d = s.getSection("dynamic");
-        d.checkKeys({}, {"mass_scale", "damping", "step_fraction"});
+        d.checkKeys({}, {"mass_scale", "damping", "step_fraction", "relax_substeps", "relax_pace"});
         b.dynamics.massScale = d.getNumber("mass_scale", 1000.0);
         checkBetween(d, "mass_scale", b.dynamics.massScale, 1.0, 1e6, "",
                      "the film's masses times this, e.g. 1000");
@@ -195,7 +195,17 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         b.dynamics.stepFraction = d.getNumber("step_fraction", 0.5);
         checkBetween(d, "step_fraction", b.dynamics.stepFraction, 1e-3, 1.0, "",
                      "a fraction of the stable step, e.g. 0.5");
-    } else if (b.stepping == bags::AirbagSpec::Stepping::Dynamic) {
+        if (b.stepping != bags::AirbagSpec::Stepping::Relaxed)
+            for (const char* key : {"relax_substeps", "relax_pace"})
+                if (d.has(key))
+                    d.fail(key, "is the relaxed stepping's: leave it out, or 'stepping: relaxed'");
+        b.dynamics.relaxSubsteps = d.getInteger("relax_substeps", b.dynamics.relaxSubsteps);
+        checkBetween(d, "relax_substeps", b.dynamics.relaxSubsteps, 1, 1e7, "",
+                     "the most sub-steps a step may relax with, e.g. 4000");
+        b.dynamics.relaxPace = d.getQuantity("relax_pace", D::Velocity, b.dynamics.relaxPace);
+        checkBetween(d, "relax_pace", b.dynamics.relaxPace, 1e-5, 10.0, "mm/s",
+                     "e.g. 20 mm/s (at mass scale 1000)");
+    } else if (b.stepping != bags::AirbagSpec::Stepping::QuasiStatic) {
         b.dynamics.massScale = 1000.0;
         b.dynamics.damping = 20.0;
     }

@@ -972,12 +972,13 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
 
 bags::AirbagSpec::Stepping readStepping(const ScenarioNode& s, bags::AirbagSpec::Stepping current) {
     using S = bags::AirbagSpec::Stepping;
-    if (s.has("stepping"))
-        current = s.getChoice("stepping", {"quasi-static", "dynamic"}) == "dynamic"
-                      ? S::Dynamic
-                      : S::QuasiStatic;
-    if (s.has("dynamic") && current != S::Dynamic)
-        s.fail("dynamic", "these dynamic settings need 'stepping: dynamic' beside them");
+    if (s.has("stepping")) {
+        const std::string c = s.getChoice("stepping", {"quasi-static", "dynamic", "relaxed"});
+        current = c == "dynamic" ? S::Dynamic : c == "relaxed" ? S::Relaxed : S::QuasiStatic;
+    }
+    if (s.has("dynamic") && current == S::QuasiStatic)
+        s.fail("dynamic", "these settings of the film in time need 'stepping: dynamic' or "
+                          "'stepping: relaxed' beside them");
     return current;
 }
 

@@ -135,11 +135,19 @@ struct AirbagSpec {
     /// stabilisation springs and damper above). Dynamic: the film carries its velocity and is
     /// integrated through the step in stable explicit sub-steps (bags/Dynamics.h, `dynamics`),
     /// the shapes' poses interpolated across it; no equilibrium is asked for, so a fold that
-    /// snaps through is a short dynamic event. A step of no time (advance(0)), inflate() and
-    /// changeGasMass() stay quasi-static in both and end at rest.
-    enum class Stepping { QuasiStatic, Dynamic };
+    /// snaps through is a short dynamic event; what touches the bag feels the film's
+    /// (scaled) inertia. Relaxed: the quasi-static step's equilibrium (what touches the bag
+    /// feels no inertia of the film), found by the film's damped explicit dynamics in
+    /// pseudo-time (dynamic relaxation with kinetic damping, `dynamics`): the shapes are moved
+    /// to their poses at DynamicOptions::relaxPace, then the film relaxes there until the force
+    /// residual is within forceTolerance or DynamicOptions::relaxSubsteps run out (the state is
+    /// then kept as it stands, AdvanceSummary::unrelaxed); a step never fails for want of an
+    /// equilibrium. The gas, leakage, orifice transfer, friction and viscous branches see the
+    /// step's time as in the quasi-static stepping. A step of no time (advance(0)), inflate()
+    /// and changeGasMass() stay quasi-static in all three and end at rest.
+    enum class Stepping { QuasiStatic, Dynamic, Relaxed };
     Stepping stepping = Stepping::QuasiStatic;
-    DynamicOptions dynamics;             ///< mass scale, damping, sub-step (Dynamic only)
+    DynamicOptions dynamics;             ///< mass scale, damping, sub-step (Dynamic, Relaxed)
     void validate() const;               ///< throws std::invalid_argument naming the option
 };
 
@@ -170,6 +178,9 @@ struct AdvanceSummary {
     /// the sub-step [s] it was integrated with (0: none, the bag slept or the step had no time).
     double kineticEnergy = 0.0;
     double substep = 0.0;
+    /// Relaxed stepping: the sub-steps ran out before the residual was within the force
+    /// tolerance (the state was kept as it stood; `residual` says how far it was).
+    bool unrelaxed = false;
 };
 
 class Airbag {

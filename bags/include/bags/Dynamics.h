@@ -32,6 +32,16 @@ struct DynamicOptions {
     double damping = 0.0;
     /// The sub-step as a fraction of the stable-step estimate, (0, 1].
     double stepFraction = 0.5;
+    /// Relaxed stepping only (AirbagSpec::Stepping::Relaxed): the film is relaxed to the
+    /// equilibrium of each step in pseudo-time, so these sub-steps are not the step's time.
+    /// The most sub-steps one step may take; a step that has not reached the force tolerance
+    /// by then is accepted as it stands, its residual reported (AdvanceSummary::relaxed false).
+    int relaxSubsteps = 4000;
+    /// [m/s of pseudo-time at mass scale 1000] how fast the shapes are moved to their step's
+    /// poses before the film is relaxed there (at another mass scale the pace scales as one
+    /// over its root, so that the film's response is the same): the pace at which the load test
+    /// answers quasi-statically.
+    double relaxPace = 0.02;
     /// Throws std::invalid_argument naming the option and what would be valid.
     void validate() const;
 };
@@ -65,7 +75,15 @@ public:
     /// One damped central-difference step of h [s]: v (at the half steps) and x updated, from
     /// the forces of the model at x. `acc` is scratch (its gradient is the force at the old x
     /// on return). @throws NumericalError if the model cannot evaluate x (collapsed element).
-    void step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h, EnergyAccumulator& acc) const;
+    /// Returns the squared norm [N^2] of the force on the free dofs at the old x (the
+    /// quasi-static solver's residual there). calcForce() then update().
+    double step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h, EnergyAccumulator& acc) const;
+    /// The model's energy gradient at x into acc (no tangent); returns the squared norm [N^2]
+    /// of the force on the free dofs.
+    double calcForce(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+    /// The damped central-difference update over h from the gradient calcForce() left in acc.
+    void update(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h,
+                const EnergyAccumulator& acc) const;
 
     /// [J] 1/2 v^T M v with the scaled masses.
     double calcKineticEnergy(const Eigen::Matrix3Xd& v) const;
