@@ -92,9 +92,10 @@ double FilmDynamics::calcStableStep(const Eigen::Matrix3Xd& x) const {
 void FilmDynamics::step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h,
                         EnergyAccumulator& acc) const {
     const int nn = static_cast<int>(x.cols());
+    if (!m_force) m_force = std::make_unique<FilmForce>(*m_model);
     acc.wantHessian = false;
     acc.resize(nn);
-    m_model->addEnergy(x, acc);
+    m_force->addGradient(x, acc);
     const double a = 0.5 * m_options.damping * h;
     const double keep = (1.0 - a) / (1.0 + a), push = h / (1.0 + a);
     double* vv = v.data();

@@ -13,6 +13,7 @@
 /// second order, explicit, and (undamped) symplectic: it keeps the energy of a free bag within
 /// an oscillation of order h^2. Fixed dofs (support nodes) do not move.
 
+#include <bags/FilmForce.h>
 #include <bags/Solver.h>
 #include <bags/Types.h>
 
@@ -63,8 +64,10 @@ public:
     double calcStableStep(const Eigen::Matrix3Xd& x) const;
 
     /// One damped central-difference step of h [s]: v (at the half steps) and x updated, from
-    /// the forces of the model at x. `acc` is scratch (its gradient is the force at the old x
-    /// on return). @throws NumericalError if the model cannot evaluate x (collapsed element).
+    /// the forces of the model at x (FilmForce: the gradient alone, the model's kernel built
+    /// at the first step). `acc` is scratch: on return its gradient is dE/dx at the old x and
+    /// its energy NaN (MembraneModel::addEnergy gives the energy).
+    /// @throws NumericalError if the model cannot evaluate x (collapsed element).
     void step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h, EnergyAccumulator& acc) const;
 
     /// [J] 1/2 v^T M v with the scaled masses.
@@ -78,6 +81,7 @@ private:
     double m_areaDensity;        // [kg/m^2] scaled: density x thickness x massScale
     Eigen::VectorXd m_mass;      // per dof, 0 on fixed dofs
     Eigen::VectorXd m_invMass;   // per dof, 0 on fixed dofs
+    mutable std::unique_ptr<FilmForce> m_force;  // built at the first step
 };
 
 }  // namespace bags

@@ -1,0 +1,102 @@
+#pragma once
+/// @file The film's forces for the explicit step (bags/Dynamics.h): the gradient of a
+/// MembraneModel's total potential, what MembraneModel::addEnergy gives without its Hessian,
+/// in a few fused passes over the mesh, with the per-element and per-hinge constants kept and
+/// no heap allocation per call. docs/performance.md#the-film-in-time.
+///
+/// Order of calls: construct from the model once its mesh, material, element frames, bending
+/// stiffness and Prony series are set; then addGradient(x, acc) every sub-step. What changes
+/// from step to step (gases, prescribed pressures, the viscous step and state, contacts,
+/// gravity, stabilisation) is read from the model on every call.
+///
+/// The passes, each over elements, hinges or nodes:
+///  1. elements: deformation, stress and nodal forces into the element's own slots, and the
+///     triangle's volume term; hinges: the angle's change from rest (rotated by the rest
+///     angle, one atan2) and its gradient into the hinge's slots.
+///  2. the chambers' volumes, summed in their fixed order, and their pressures.
+///  3. elements: the pressures' forces added into their slots; hinges: the moments from the
+///     constant hinge stiffness (DiscreteBending::calcHingeStiffness).
+///  4. nodes: each gathers its elements' and its hinges' slots in one fixed order.
+/// Every slot is computed on its own and every sum runs in one fixed order, so the result is
+/// the same bits for any number of threads. Then gravity, stabilisation and rigid and self
+/// contact add theirs through the model's own terms.
+///
+/// The film's law runs inline where it is an InvariantPolynomial (neo-Hooke, Mooney-Rivlin,
+/// Yeoh), alone or under its tension field (WrinklingMaterial, with or without its own residual
+/// law), with or without fabric yarns (FabricMaterial) and Prony branches; any other law
+/// (Ogden, St. Venant-Kirchhoff) goes through its virtual calcEnergy, stress only.
+///
+/// Not thread-safe: one call at a time per object (its scratch is its own).
+
+#include <bags/Solver.h>
+#include <bags/Types.h>
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <vector>
+
+namespace bags {
+
+class FilmForce {
+public:
+    /// Keeps a reference to `model` (which must outlive this object) and its constants.
+    /// @throws std::invalid_argument if the model's element frames are not set.
+    explicit FilmForce(const MembraneModel& model);
+
+    /// Adds dE/dx [N] at x (3 x N, [m]) into acc.grad (resized to 3N if it is empty); acc.hess
+    /// is left alone. With `withEnergy` adds E [J] into acc.energy; without, acc.energy becomes
+    /// NaN (the contacts' energy alone would mislead).
+    /// @throws NumericalError for a collapsed element (det C <= 1e-12 or a viscous branch
+    /// likewise), a collapsed hinge wing or a non-positive gas volume.
+    void addGradient(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc,
+                     bool withEnergy = false) const;
+
+    /// True if the film's law runs inline (see the file comment); false: virtual calls.
+    bool isLawInline() const;
+    /// Threads the passes run on: the model's (0: the OpenMP default) where its elements are
+    /// chunked (MembraneModel::setElementChunks, or more than 4000 triangles), else one.
+    int getNumThreads() const;
+
+    /// The film's law as the kernel evaluates it (public for the source's helpers only).
+    struct Law;
+
+private:
+    template <bool withEnergy>
+    void addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
+
+    struct Element {
+        int n[3];
+        double d1x, d1y, d2x, d2y;  ///< shape-function gradients of nodes 1 and 2 [1/m]
+        double vol;                 ///< reference volume [m^3]
+    };
+    struct HingeData {
+        int n[4];
+        double cosRest, sinRest;  ///< of the rest angle
+    };
+    const MembraneModel* m_model;
+    std::shared_ptr<const Law> m_law;
+    std::vector<Element> m_elements;
+    /// Per element, CSR: its chambers and signs (+1: its normal points out of the chamber).
+    std::vector<int> m_triChamberStart, m_triChamber;
+    std::vector<double> m_triChamberSign;
+    std::vector<char> m_inChamber;   ///< per element: bounds some chamber
+    std::vector<HingeData> m_hinges;
+    std::vector<int> m_couplingStart, m_couplingHinge;  ///< CSR rows of the hinge stiffness
+    std::vector<double> m_coupling;                     ///< [N m]
+    /// Per node, CSR: its element slots (9 e + 3 a) in element order, then its hinge slots
+    /// (12 h + 3 k) and hinges, in hinge order.
+    std::vector<int> m_nodeElemStart, m_nodeElemSlot;
+    std::vector<int> m_nodeHingeStart, m_nodeHingeSlot, m_nodeHinge;
+
+    // Scratch, sized once.
+    mutable std::vector<double> m_elemForce;   ///< 9 per element [N]
+    mutable std::vector<double> m_elemEnergy;  ///< per element [J] (energy wanted)
+    mutable std::vector<double> m_volume6;     ///< per element: x0 . (x1 x x2) [m^3]
+    mutable std::vector<double> m_hingeGrad;   ///< 12 per hinge: d theta / dx [1/m]
+    mutable std::vector<double> m_dtheta;      ///< per hinge [rad]
+    mutable std::vector<double> m_moment;      ///< per hinge [N m]
+    mutable std::vector<double> m_chamberCoef; ///< per chamber: -p / 6 [Pa]
+};
+
+}  // namespace bags
