@@ -8,6 +8,7 @@
 #include <bags/Material.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -18,6 +19,37 @@
 #endif
 
 namespace bags {
+
+namespace {
+
+// atan(x) for 0 <= x <= 0.66: Moshier's rational approximation (Methods and Programs for
+// Mathematical Functions, 1989), within about 1 ulp.
+inline double calcAtanReduced(double x) {
+    const double z = x * x;
+    const double p = ((((-8.750608600031904122785e-01 * z - 1.615753718733365076637e+01) * z -
+                        7.500855792314704667340e+01) * z - 1.228866684490136173410e+02) * z -
+                      6.485021904942025371773e+01);
+    const double q = (((((z + 2.485846490142306297962e+01) * z + 1.650270098316988542046e+02) * z +
+                        4.328810604912902668951e+02) * z + 4.853903996359136964868e+02) * z +
+                      1.945506571482613964425e+02);
+    return x * (z * p / q) + x;
+}
+
+}  // namespace
+
+double calcAtan2(double y, double x) {
+    // Reduced to t = min / max of |y|, |x| in [0, 1], then to [0, 0.66] by
+    // atan t = pi/4 + atan((t - 1) / (t + 1)); pi/2 and pi carry their low bits.
+    constexpr double kPi2Low = 6.123233995736765886130e-17;  // pi/2 - double(pi/2)
+    const double ay = std::abs(y), ax = std::abs(x);
+    const bool swap = ay > ax;
+    const double t = swap ? ax / ay : ay / ax;
+    double a = t > 0.66 ? 0.25 * M_PI + (calcAtanReduced((t - 1.0) / (t + 1.0)) + 0.5 * kPi2Low)
+                        : calcAtanReduced(t);
+    if (swap) a = 0.5 * M_PI - a + kPi2Low;
+    if (x < 0.0) a = M_PI - a + 2.0 * kPi2Low;
+    return std::copysign(a, y);
+}
 
 namespace {
 
@@ -224,17 +256,62 @@ FilmForce::FilmForce(const MembraneModel& model) : m_model(&model) {
     }
     m_triChamberStart[nt] = static_cast<int>(m_triChamber.size());
 
-    // Hinges and their stiffness rows (summed in triplet order, sorted by column).
+    // Hinges: nodes, rest angle, wing triangles with their normals' signs, and each
+    // triangle's view of the hinges on its edges.
     int nh = 0;
+    m_triHinges.assign(nt, TriHinges());
     if (model.m_bending) {
         const DiscreteBending& b = *model.m_bending;
         nh = b.getNumHinges();
         m_hinges.resize(nh);
+        std::vector<std::vector<int>> trisOf(nn);
+        for (int e = 0; e < nt; ++e)
+            for (int a = 0; a < 3; ++a) trisOf[mesh.tris(a, e)].push_back(e);
+        auto findTri = [&](int p, int q, int r) {  // the triangle of nodes p, q, r
+            for (int t : trisOf[p]) {
+                int found = 0;
+                for (int a = 0; a < 3; ++a)
+                    found += mesh.tris(a, t) == p || mesh.tris(a, t) == q || mesh.tris(a, t) == r;
+                if (found == 3) return t;
+            }
+            throw std::logic_error("FilmForce: a hinge's wing is no triangle of the mesh");
+        };
+        auto normal = [&](int t) {
+            const Vec3 X0 = mesh.X.col(mesh.tris(0, t));
+            return Vec3((Vec3(mesh.X.col(mesh.tris(1, t))) - X0)
+                            .cross(Vec3(mesh.X.col(mesh.tris(2, t))) - X0));
+        };
         for (int h = 0; h < nh; ++h) {
-            for (int k = 0; k < 4; ++k) m_hinges[h].n[k] = b.getHingeNodes(h)[k];
-            m_hinges[h].cosRest = std::cos(b.getRestAngle(h));
-            m_hinges[h].sinRest = std::sin(b.getRestAngle(h));
+            HingeData& hd = m_hinges[h];
+            const std::array<int, 4>& n = b.getHingeNodes(h);
+            for (int k = 0; k < 4; ++k) hd.n[k] = n[k];
+            hd.cosRest = std::cos(b.getRestAngle(h));
+            hd.sinRest = std::sin(b.getRestAngle(h));
+            // The hinge's wing normals NA = e x a and NB = b x e (calcHingeAngle) are the
+            // wing triangles' own normals, or their opposites.
+            const Vec3 X0 = mesh.X.col(n[0]), E = Vec3(mesh.X.col(n[1])) - X0;
+            const Vec3 NA = E.cross(Vec3(mesh.X.col(n[2])) - X0);
+            const Vec3 NB = (Vec3(mesh.X.col(n[3])) - X0).cross(E);
+            for (int w = 0; w < 2; ++w) {
+                const int t = findTri(n[0], n[1], n[2 + w]);
+                const double sign = normal(t).dot(w == 0 ? NA : NB) > 0.0 ? 1.0 : -1.0;
+                hd.tri[w] = t;
+                hd.sign[w] = sign;
+                int opposite = 0;
+                while (mesh.tris(opposite, t) != n[2 + w]) ++opposite;
+                TriHinges& th = m_triHinges[t];
+                if (th.hinge[opposite] >= 0)
+                    throw std::logic_error("FilmForce: a triangle's edge in two hinges");
+                th.hinge[opposite] = h;
+                th.sign[opposite] = sign;
+                th.wing[opposite] = static_cast<unsigned char>(w);
+                for (int a = 0; a < 3; ++a) {
+                    if (mesh.tris(a, t) == n[0]) th.edge0[opposite] = static_cast<unsigned char>(a);
+                    if (mesh.tris(a, t) == n[1]) th.edge1[opposite] = static_cast<unsigned char>(a);
+                }
+            }
         }
+        // The stiffness rows, summed in triplet order, sorted by column.
         std::vector<std::vector<std::pair<int, double>>> rows(nh);
         for (const Triplet& t : b.calcHingeStiffness()) {
             auto& row = rows[t.row()];
@@ -256,7 +333,7 @@ FilmForce::FilmForce(const MembraneModel& model) : m_model(&model) {
         }
     }
 
-    // The nodes' slots, in element order, then hinge order.
+    // The nodes' element slots, in element order.
     m_nodeElemStart.assign(nn + 1, 0);
     for (int e = 0; e < nt; ++e)
         for (int a = 0; a < 3; ++a) ++m_nodeElemStart[m_elements[e].n[a] + 1];
@@ -267,28 +344,15 @@ FilmForce::FilmForce(const MembraneModel& model) : m_model(&model) {
         for (int e = 0; e < nt; ++e)
             for (int a = 0; a < 3; ++a) m_nodeElemSlot[fill[m_elements[e].n[a]]++] = 9 * e + 3 * a;
     }
-    m_nodeHingeStart.assign(nn + 1, 0);
-    for (int h = 0; h < nh; ++h)
-        for (int k = 0; k < 4; ++k) ++m_nodeHingeStart[m_hinges[h].n[k] + 1];
-    for (int i = 0; i < nn; ++i) m_nodeHingeStart[i + 1] += m_nodeHingeStart[i];
-    m_nodeHingeSlot.resize(4 * nh);
-    m_nodeHinge.resize(4 * nh);
-    {
-        std::vector<int> fill(m_nodeHingeStart.begin(), m_nodeHingeStart.end() - 1);
-        for (int h = 0; h < nh; ++h)
-            for (int k = 0; k < 4; ++k) {
-                const int s = fill[m_hinges[h].n[k]]++;
-                m_nodeHingeSlot[s] = 12 * h + 3 * k;
-                m_nodeHinge[s] = h;
-            }
-    }
 
     m_elemForce.assign(9 * static_cast<size_t>(nt), 0.0);
     m_elemEnergy.assign(nt, 0.0);
     m_volume6.assign(nt, 0.0);
-    m_hingeGrad.assign(12 * static_cast<size_t>(nh), 0.0);
+    m_triNormal.assign(3 * static_cast<size_t>(nt), 0.0);
+    m_hingeShape.assign(3 * static_cast<size_t>(nh), 0.0);
     m_dtheta.assign(nh, 0.0);
     m_moment.assign(nh, 0.0);
+    m_wingScale.assign(nh, 0.0);
     m_chamberCoef.assign(mesh.chambers.size(), 0.0);
 }
 
@@ -340,45 +404,60 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
     const double* X = x.data();
     const Element* elements = m_elements.data();
     const HingeData* hinges = m_hinges.data();
+    const TriHinges* triHinges = m_triHinges.data();
     double* elemForce = m_elemForce.data();
     double* elemEnergy = m_elemEnergy.data();
     double* volume6 = m_volume6.data();
-    double* hingeGrad = m_hingeGrad.data();
+    double* triNormal = m_triNormal.data();
+    double* hingeShape = m_hingeShape.data();
     double* dtheta = m_dtheta.data();
     double* moment = m_moment.data();
+    double* wingScale = m_wingScale.data();
     double* chamberCoef = m_chamberCoef.data();
     double* grad = acc.grad.data();
 
-    int badElement = nt, badHinge = nh;
+    int badElement = nt;
     bool badGas = false;
     double gasEnergy = 0.0;
     const int nthreads = getNumThreads();
+    // One thread adds each element's slots to the nodes as it finishes them, in element
+    // order: the order in which the nodes gather them on several threads (the same bits).
+    const bool gather = nthreads > 1;
 #pragma omp parallel num_threads(nthreads) if (nthreads > 1)
     {
-        // 1. Elements: stress and nodal forces, volume terms.
-#pragma omp for schedule(static) nowait reduction(min : badElement)
+        // 1. Elements: stress and nodal forces, volume terms, normals.
+#pragma omp for schedule(static) reduction(min : badElement)
         for (int e = 0; e < nt; ++e) {
             const Element& el = elements[e];
             const double* x0 = X + 3 * el.n[0];
             const double* x1 = X + 3 * el.n[1];
             const double* x2 = X + 3 * el.n[2];
-            double f1[3], f2[3];  // the columns of F = sum_a x_a dN_a^T
+            double a[3], b[3], f1[3], f2[3];  // edges; the columns of F = sum_a x_a dN_a^T
             for (int i = 0; i < 3; ++i) {
-                const double a = x1[i] - x0[i], b = x2[i] - x0[i];
-                f1[i] = a * el.d1x + b * el.d2x;
-                f2[i] = a * el.d1y + b * el.d2y;
+                a[i] = x1[i] - x0[i], b[i] = x2[i] - x0[i];
+                f1[i] = a[i] * el.d1x + b[i] * el.d2x;
+                f2[i] = a[i] * el.d1y + b[i] * el.d2y;
             }
-            const double c1 = f1[0] * f1[0] + f1[1] * f1[1] + f1[2] * f1[2];
-            const double c2 = f2[0] * f2[0] + f2[1] * f2[1] + f2[2] * f2[2];
-            const double c3 = f1[0] * f2[0] + f1[1] * f2[1] + f1[2] * f2[2];
             double* out = elemForce + 9 * static_cast<size_t>(e);
+            double* u = triNormal + 3 * static_cast<size_t>(e);
             if (m_inChamber[e]) {
                 const Vec3 y0(x0[0], x0[1], x0[2]), y1(x1[0], x1[1], x1[2]), y2(x2[0], x2[1], x2[2]);
                 volume6[e] = y0.dot(y1.cross(y2));
             }
+            if (nh > 0) {
+                // N / |N|^2, N = (x1 - x0) x (x2 - x0): the hinges' wing terms.
+                const double N0 = a[1] * b[2] - a[2] * b[1], N1 = a[2] * b[0] - a[0] * b[2],
+                             N2 = a[0] * b[1] - a[1] * b[0];
+                const double iN = 1.0 / (N0 * N0 + N1 * N1 + N2 * N2);
+                u[0] = N0 * iN, u[1] = N1 * iN, u[2] = N2 * iN;
+            }
+            const double c1 = f1[0] * f1[0] + f1[1] * f1[1] + f1[2] * f1[2];
+            const double c2 = f2[0] * f2[0] + f2[1] * f2[1] + f2[2] * f2[2];
+            const double c3 = f1[0] * f2[0] + f1[1] * f2[1] + f1[2] * f2[2];
             if (!(c1 * c2 - c3 * c3 > 1e-12)) {
                 badElement = std::min(badElement, e);
                 for (int i = 0; i < 9; ++i) out[i] = 0.0;
+                u[0] = u[1] = u[2] = 0.0;
                 continue;
             }
             double S[3], W = 0.0;
@@ -423,40 +502,38 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
             }
         }
 
-        // 1. Hinges: the angle's change from rest and its gradient (calcHingeAngle).
-#pragma omp for schedule(static) reduction(min : badHinge)
+        // 2. Hinges: the angle's change from rest (calcHingeAngle with the wing normals
+        // NA = sign N / |N|^2 |NA|^2: atan2 is blind to their positive scales).
+#pragma omp for schedule(static) nowait
         for (int h = 0; h < nh; ++h) {
             const HingeData& hd = hinges[h];
-            const Vec3 x0 = x.col(hd.n[0]);
-            const Vec3 e = x.col(hd.n[1]) - x0, a = x.col(hd.n[2]) - x0, b = x.col(hd.n[3]) - x0;
-            const Vec3 NA = e.cross(a), NB = b.cross(e);
-            const double NA2 = NA.squaredNorm(), NB2 = NB.squaredNorm();
-            double* g = hingeGrad + 12 * static_cast<size_t>(h);
-            if (!(NA2 > 0.0 && NB2 > 0.0 && std::isfinite(NA2 + NB2))) {
-                badHinge = std::min(badHinge, h);
-                dtheta[h] = 0.0;
-                for (int i = 0; i < 12; ++i) g[i] = 0.0;
-                continue;
-            }
-            const double L2 = e.squaredNorm(), L = std::sqrt(L2);
-            // theta = atan2(s, c) with s = (NA x NB) . e and c = L NA . NB (both |NA| |NB| L
-            // times sin and cos); its change from rest by the rest angle's rotation, on the
-            // branch nearest to rest.
-            const double s = NA.cross(NB).dot(e), c = L * NA.dot(NB);
-            dtheta[h] = std::atan2(s * hd.cosRest - c * hd.sinRest, c * hd.cosRest + s * hd.sinRest);
-            const Vec3 g2 = (-L / NA2) * NA, g3 = (-L / NB2) * NB;
-            const double iL2 = 1.0 / L2;
-            const double alpha2 = a.dot(e) * iL2, alpha3 = b.dot(e) * iL2;
+            const double* x0 = X + 3 * hd.n[0];
+            const double* x1 = X + 3 * hd.n[1];
+            const double* x2 = X + 3 * hd.n[2];
+            const double* x3 = X + 3 * hd.n[3];
+            const double* uA0 = triNormal + 3 * static_cast<size_t>(hd.tri[0]);
+            const double* uB0 = triNormal + 3 * static_cast<size_t>(hd.tri[1]);
+            double e[3], uA[3], uB[3];
             for (int i = 0; i < 3; ++i) {
-                g[i] = -(1.0 - alpha2) * g2(i) - (1.0 - alpha3) * g3(i);
-                g[3 + i] = -alpha2 * g2(i) - alpha3 * g3(i);
-                g[6 + i] = g2(i);
-                g[9 + i] = g3(i);
+                e[i] = x1[i] - x0[i];
+                uA[i] = hd.sign[0] * uA0[i];
+                uB[i] = hd.sign[1] * uB0[i];
             }
+            const double L2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2], L = std::sqrt(L2);
+            const double s = (uA[1] * uB[2] - uA[2] * uB[1]) * e[0] +
+                             (uA[2] * uB[0] - uA[0] * uB[2]) * e[1] +
+                             (uA[0] * uB[1] - uA[1] * uB[0]) * e[2];
+            const double c = L * (uA[0] * uB[0] + uA[1] * uB[1] + uA[2] * uB[2]);
+            // The change from rest by the rest angle's rotation: on the branch nearest rest.
+            dtheta[h] = calcAtan2(s * hd.cosRest - c * hd.sinRest, c * hd.cosRest + s * hd.sinRest);
+            const double iL2 = 1.0 / L2;
+            double* shape = hingeShape + 3 * static_cast<size_t>(h);
+            shape[0] = L;
+            shape[1] = ((x2[0] - x0[0]) * e[0] + (x2[1] - x0[1]) * e[1] + (x2[2] - x0[2]) * e[2]) * iL2;
+            shape[2] = ((x3[0] - x0[0]) * e[0] + (x3[1] - x0[1]) * e[1] + (x3[2] - x0[2]) * e[2]) * iL2;
         }
-        // (the hinge loop's barrier: every element and hinge is done)
 
-        // 2. The chambers' volumes in their fixed order, and their pressures.
+        // 3. The chambers' volumes in their fixed order, and their pressures.
 #pragma omp single
         if (pressed) {
             for (int c = 0; c < nc; ++c) chamberCoef[c] = 0.0;
@@ -483,58 +560,81 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
                 for (int c : gb.chambers) chamberCoef[c] = -pg / 6.0;
             }
         }
+        // (the single's barrier: every hinge angle is done)
 
-        // 3. Elements: the pressures' forces (calcChamberVolume's gradient).
-        if (pressed) {
-#pragma omp for schedule(static) nowait
-            for (int e = 0; e < nt; ++e) {
-                if (!m_inChamber[e]) continue;
-                const Element& el = elements[e];
-                double f = 0.0;
-                for (int k = m_triChamberStart[e]; k < m_triChamberStart[e + 1]; ++k)
-                    f += m_triChamberSign[k] * chamberCoef[m_triChamber[k]];
-                const Vec3 y0 = x.col(el.n[0]), y1 = x.col(el.n[1]), y2 = x.col(el.n[2]);
-                const Vec3 c0 = y1.cross(y2), c1 = y2.cross(y0), c2 = y0.cross(y1);
-                double* out = elemForce + 9 * static_cast<size_t>(e);
-                for (int i = 0; i < 3; ++i) {
-                    out[i] += f * c0(i);
-                    out[3 + i] += f * c1(i);
-                    out[6 + i] += f * c2(i);
-                }
-            }
-        }
-        // 3. Hinges: the moments.
+        // 3. Hinges: the moments, and the wings' scale -moment L.
 #pragma omp for schedule(static)
         for (int h = 0; h < nh; ++h) {
             double m = 0.0;
             for (int k = m_couplingStart[h]; k < m_couplingStart[h + 1]; ++k)
                 m += m_coupling[k] * dtheta[m_couplingHinge[k]];
             moment[h] = m;
+            wingScale[h] = -m * hingeShape[3 * static_cast<size_t>(h)];
         }
 
-        // 4. Nodes: their slots in order.
+        // 4. Elements: the pressures' forces (calcChamberVolume's gradient) and the hinges'
+        // on their wings: the wing of hinge h in triangle T takes f = -moment L dtheta/dx_far
+        // = (-moment L) sign N / |N|^2 at its far node, -(1 - alpha) f and -alpha f at the
+        // hinge's x0 and x1.
 #pragma omp for schedule(static)
-        for (int i = 0; i < nn; ++i) {
-            double g0 = grad[3 * i], g1 = grad[3 * i + 1], g2 = grad[3 * i + 2];
-            for (int k = m_nodeElemStart[i]; k < m_nodeElemStart[i + 1]; ++k) {
-                const double* f = elemForce + m_nodeElemSlot[k];
-                g0 += f[0], g1 += f[1], g2 += f[2];
+        for (int e = 0; e < nt; ++e) {
+            const Element& el = elements[e];
+            double* out = elemForce + 9 * static_cast<size_t>(e);
+            if (pressed && m_inChamber[e]) {
+                double f = 0.0;
+                for (int k = m_triChamberStart[e]; k < m_triChamberStart[e + 1]; ++k)
+                    f += m_triChamberSign[k] * chamberCoef[m_triChamber[k]];
+                const Vec3 y0 = x.col(el.n[0]), y1 = x.col(el.n[1]), y2 = x.col(el.n[2]);
+                const Vec3 c0 = y1.cross(y2), c1 = y2.cross(y0), c2 = y0.cross(y1);
+                for (int i = 0; i < 3; ++i) {
+                    out[i] += f * c0(i);
+                    out[3 + i] += f * c1(i);
+                    out[6 + i] += f * c2(i);
+                }
             }
-            for (int k = m_nodeHingeStart[i]; k < m_nodeHingeStart[i + 1]; ++k) {
-                const double* g = hingeGrad + m_nodeHingeSlot[k];
-                const double m = moment[m_nodeHinge[k]];
-                g0 += m * g[0], g1 += m * g[1], g2 += m * g[2];
+            if (nh > 0) {
+                const TriHinges& th = triHinges[e];
+                const double* u = triNormal + 3 * static_cast<size_t>(e);
+                for (int k = 0; k < 3; ++k) {
+                    const int h = th.hinge[k];
+                    if (h < 0) continue;
+                    const double w = wingScale[h] * th.sign[k];
+                    const double alpha = hingeShape[3 * static_cast<size_t>(h) + 1 + th.wing[k]];
+                    double* far = out + 3 * k;
+                    double* n0 = out + 3 * th.edge0[k];
+                    double* n1 = out + 3 * th.edge1[k];
+                    for (int i = 0; i < 3; ++i) {
+                        const double f = w * u[i];
+                        far[i] += f;
+                        n0[i] -= (1.0 - alpha) * f;
+                        n1[i] -= alpha * f;
+                    }
+                }
             }
-            grad[3 * i] = g0, grad[3 * i + 1] = g1, grad[3 * i + 2] = g2;
+            if (!gather)
+                for (int a = 0; a < 3; ++a) {
+                    double* g = grad + 3 * el.n[a];
+                    g[0] += out[3 * a], g[1] += out[3 * a + 1], g[2] += out[3 * a + 2];
+                }
+        }
+
+        // 5. Nodes: their slots in element order.
+        if (gather) {
+#pragma omp for schedule(static)
+            for (int i = 0; i < nn; ++i) {
+                double g0 = grad[3 * i], g1 = grad[3 * i + 1], g2 = grad[3 * i + 2];
+                for (int k = m_nodeElemStart[i]; k < m_nodeElemStart[i + 1]; ++k) {
+                    const double* f = elemForce + m_nodeElemSlot[k];
+                    g0 += f[0], g1 += f[1], g2 += f[2];
+                }
+                grad[3 * i] = g0, grad[3 * i + 1] = g1, grad[3 * i + 2] = g2;
+            }
         }
     }
     if (badElement < nt)
         throw NumericalError("membrane element " + std::to_string(badElement) +
                                  " collapsed (det C <= 0)",
                              -1, -1, badElement);
-    if (badHinge < nh)
-        throw NumericalError("bending hinge " + std::to_string(badHinge) +
-                             " has a collapsed triangle");
     if (badGas) throw NumericalError("gas volume became non-positive");
 
     double energy = std::numeric_limits<double>::quiet_NaN();

@@ -38,6 +38,10 @@
 
 namespace bags {
 
+/// atan2(y, x) [rad] in [-pi, pi] within 2 ulp of std::atan2 for finite arguments (0 for
+/// y = x = 0), at a third of its cost: the kernel's hinge angles.
+double calcAtan2(double y, double x);
+
 class FilmForce {
 public:
     /// Keeps a reference to `model` (which must outlive this object) and its constants.
@@ -71,8 +75,17 @@ private:
         double vol;                 ///< reference volume [m^3]
     };
     struct HingeData {
-        int n[4];
+        int n[4];                 ///< x0, x1 (the edge), x2, x3 (the wings' far nodes)
+        int tri[2];               ///< the wing triangles (of x2, of x3)
+        double sign[2];           ///< NA (NB) = sign x the wing triangle's normal
         double cosRest, sinRest;  ///< of the rest angle
+    };
+    struct TriHinges {            ///< a triangle's view of the hinges on its edges
+        int hinge[3] = {-1, -1, -1};          ///< of the edge opposite vertex i, -1: none
+        double sign[3] = {0.0, 0.0, 0.0};     ///< HingeData::sign of this wing
+        unsigned char wing[3] = {0, 0, 0};    ///< 0: the hinge's wing A (x2), 1: B (x3)
+        unsigned char edge0[3] = {0, 0, 0};   ///< local vertex that is the hinge's x0
+        unsigned char edge1[3] = {0, 0, 0};   ///< local vertex that is the hinge's x1
     };
     const MembraneModel* m_model;
     std::shared_ptr<const Law> m_law;
@@ -82,20 +95,21 @@ private:
     std::vector<double> m_triChamberSign;
     std::vector<char> m_inChamber;   ///< per element: bounds some chamber
     std::vector<HingeData> m_hinges;
+    std::vector<TriHinges> m_triHinges;
     std::vector<int> m_couplingStart, m_couplingHinge;  ///< CSR rows of the hinge stiffness
     std::vector<double> m_coupling;                     ///< [N m]
-    /// Per node, CSR: its element slots (9 e + 3 a) in element order, then its hinge slots
-    /// (12 h + 3 k) and hinges, in hinge order.
+    /// Per node, CSR: its element slots (9 e + 3 a), in element order.
     std::vector<int> m_nodeElemStart, m_nodeElemSlot;
-    std::vector<int> m_nodeHingeStart, m_nodeHingeSlot, m_nodeHinge;
 
     // Scratch, sized once.
     mutable std::vector<double> m_elemForce;   ///< 9 per element [N]
     mutable std::vector<double> m_elemEnergy;  ///< per element [J] (energy wanted)
     mutable std::vector<double> m_volume6;     ///< per element: x0 . (x1 x x2) [m^3]
-    mutable std::vector<double> m_hingeGrad;   ///< 12 per hinge: d theta / dx [1/m]
+    mutable std::vector<double> m_triNormal;   ///< 3 per element: N / |N|^2 [1/m^2]
+    mutable std::vector<double> m_hingeShape;  ///< 3 per hinge: L [m], alpha_A, alpha_B [-]
     mutable std::vector<double> m_dtheta;      ///< per hinge [rad]
     mutable std::vector<double> m_moment;      ///< per hinge [N m]
+    mutable std::vector<double> m_wingScale;   ///< per hinge: -moment L [N m^2]
     mutable std::vector<double> m_chamberCoef; ///< per chamber: -p / 6 [Pa]
 };
 
