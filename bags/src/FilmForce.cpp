@@ -42,6 +42,7 @@ double calcAtan2(double y, double x) {
     // atan t = pi/4 + atan((t - 1) / (t + 1)); pi/2 and pi carry their low bits.
     constexpr double kPi2Low = 6.123233995736765886130e-17;  // pi/2 - double(pi/2)
     const double ay = std::abs(y), ax = std::abs(x);
+    if (ay == 0.0 && ax == 0.0) return 0.0;
     const bool swap = ay > ax;
     const double t = swap ? ax / ay : ay / ax;
     double a = t > 0.66 ? 0.25 * M_PI + (calcAtanReduced((t - 1.0) / (t + 1.0)) + 0.5 * kPi2Low)
