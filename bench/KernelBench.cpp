@@ -158,10 +158,11 @@ int main(int argc, char** argv) {
         };
         auto kernelStep = [&] { film.step(xs, vs, h, sacc); };
         kernelStep();  // builds the kernel
-        double tGeneral = 1e300, tKernel = 1e300;  // the best of 5 rounds each, in turns
-        for (int round = 0; round < 5; ++round) {
-            tGeneral = std::min(tGeneral, millisecondsPerCall(200, generalStep));
-            tKernel = std::min(tKernel, millisecondsPerCall(200, kernelStep));
+        // The best of 20 rounds each, in turns (other processes on the cores slow some).
+        double tGeneral = 1e300, tKernel = 1e300;
+        for (int round = 0; round < 20; ++round) {
+            tGeneral = std::min(tGeneral, millisecondsPerCall(100, generalStep));
+            tKernel = std::min(tKernel, millisecondsPerCall(100, kernelStep));
         }
         std::printf("explicit step, %s general %8.3f ms %6.0f ns/tri-step; kernel %8.3f ms %6.0f "
                     "ns/tri-step; ratio %.2f\n",

@@ -175,8 +175,9 @@ struct FilmForce::Law {
         const double r = std::sqrt(std::max(h * h + c3 * c3, 0.0));
         const double e1 = m + r, e2 = m - r;
         const bool slack = e1 <= 1.0;
-        const double n = slack ? 0.0 : 1.0 / std::sqrt(e1);  // the natural width
-        const bool wrinkled = !slack && e2 < n;
+        // Wrinkled: e2 below the natural width e1^-1/2, i.e. e2^2 e1 < 1 (e2 > 0: C is
+        // positive definite).
+        const bool wrinkled = !slack && e2 * e2 * e1 < 1.0;
         if (!ownResidual && !wrinkled) {
             const double f = (slack ? 0.0 : 1.0) + residual;
             if (f == 0.0) {
@@ -193,6 +194,7 @@ struct FilmForce::Law {
         if (E) *W = 0.0;
         if (wrinkled) {
             // w(e1) = W_base(diag(e1, n(e1))); S = w'(e1) T de1/dc.
+            const double n = 1.0 / std::sqrt(e1);  // the natural width
             double Su[3], Wu = 0.0;
             base.stress<E>(e1, n, 0.0, Su, &Wu);
             const double n1 = -0.5 * n / e1;
@@ -594,23 +596,22 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
                 }
             }
             if (nh > 0) {
+                // Every wing force of the triangle is along its N / |N|^2: sum the vertices'
+                // factors first.
                 const TriHinges& th = triHinges[e];
-                const double* u = triNormal + 3 * static_cast<size_t>(e);
+                double beta[3] = {0.0, 0.0, 0.0};
                 for (int k = 0; k < 3; ++k) {
                     const int h = th.hinge[k];
                     if (h < 0) continue;
                     const double w = wingScale[h] * th.sign[k];
                     const double alpha = hingeShape[3 * static_cast<size_t>(h) + 1 + th.wing[k]];
-                    double* far = out + 3 * k;
-                    double* n0 = out + 3 * th.edge0[k];
-                    double* n1 = out + 3 * th.edge1[k];
-                    for (int i = 0; i < 3; ++i) {
-                        const double f = w * u[i];
-                        far[i] += f;
-                        n0[i] -= (1.0 - alpha) * f;
-                        n1[i] -= alpha * f;
-                    }
+                    beta[k] += w;
+                    beta[th.edge0[k]] -= (1.0 - alpha) * w;
+                    beta[th.edge1[k]] -= alpha * w;
                 }
+                const double* u = triNormal + 3 * static_cast<size_t>(e);
+                for (int a = 0; a < 3; ++a)
+                    for (int i = 0; i < 3; ++i) out[3 * a + i] += beta[a] * u[i];
             }
             if (!gather)
                 for (int a = 0; a < 3; ++a) {
