@@ -1,8 +1,9 @@
 #pragma once
 /// @file The film's forces for the explicit step (bags/Dynamics.h): the gradient of a
 /// MembraneModel's total potential, what MembraneModel::addEnergy gives without its Hessian,
-/// in a few fused passes over the mesh, with the per-element and per-hinge constants kept and
-/// no heap allocation per call. docs/performance.md#the-film-in-time.
+/// in a few fused passes over the mesh with the per-element and per-hinge constants kept and
+/// no heap allocation in its own passes (the contacts' terms are the model's own).
+/// docs/solver.md#the-film-in-time, docs/performance.md#the-film-in-time-2026-12-06.
 ///
 /// Order of calls: construct from the model once its mesh, material, element frames, bending
 /// stiffness and Prony series are set; then addGradient(x, acc) every sub-step. What changes
@@ -10,13 +11,16 @@
 /// gravity, stabilisation) is read from the model on every call.
 ///
 /// The passes, each over elements, hinges or nodes:
-///  1. elements: deformation, stress and nodal forces into the element's own slots, and the
-///     triangle's volume term; hinges: the angle's change from rest (rotated by the rest
-///     angle, one atan2) and its gradient into the hinge's slots.
-///  2. the chambers' volumes, summed in their fixed order, and their pressures.
-///  3. elements: the pressures' forces added into their slots; hinges: the moments from the
-///     constant hinge stiffness (DiscreteBending::calcHingeStiffness).
-///  4. nodes: each gathers its elements' and its hinges' slots in one fixed order.
+///  1. elements: deformation, stress and nodal forces into the element's own slots, the
+///     triangle's volume term and its normal N / |N|^2;
+///  2. hinges: the angle's change from rest from the wing triangles' normals (one atan2 of
+///     the angle rotated by the rest angle), the hinge's length and its wings' alphas;
+///  3. the chambers' volumes, summed in their fixed order, and their pressures; the hinges'
+///     moments from the constant hinge stiffness (DiscreteBending::calcHingeStiffness);
+///  4. elements: the pressures' forces and the bending forces of the hinges on their edges
+///     (each along the triangle's normal) added into their slots;
+///  5. nodes: each gathers its elements' slots in element order (on one thread each element
+///     is added as it is finished, which is the same order).
 /// Every slot is computed on its own and every sum runs in one fixed order, so the result is
 /// the same bits for any number of threads. Then gravity, stabilisation and rigid and self
 /// contact add theirs through the model's own terms.
@@ -26,6 +30,7 @@
 /// law), with or without fabric yarns (FabricMaterial) and Prony branches; any other law
 /// (Ogden, St. Venant-Kirchhoff) goes through its virtual calcEnergy, stress only.
 ///
+/// A collapsed hinge wing is a collapsed element (det C <= 1e-12), reported as one.
 /// Not thread-safe: one call at a time per object (its scratch is its own).
 
 #include <bags/Solver.h>
@@ -51,8 +56,8 @@ public:
     /// Adds dE/dx [N] at x (3 x N, [m]) into acc.grad (resized to 3N if it is empty); acc.hess
     /// is left alone. With `withEnergy` adds E [J] into acc.energy; without, acc.energy becomes
     /// NaN (the contacts' energy alone would mislead).
-    /// @throws NumericalError for a collapsed element (det C <= 1e-12 or a viscous branch
-    /// likewise), a collapsed hinge wing or a non-positive gas volume.
+    /// @throws NumericalError for a collapsed element (det C <= 1e-12, or a viscous branch
+    /// likewise; the lowest one named) or a non-positive gas volume.
     void addGradient(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc,
                      bool withEnergy = false) const;
 
