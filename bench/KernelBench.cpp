@@ -13,6 +13,7 @@
 #include <bags/MaterialFit.h>
 #include <bags/Solver.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -127,7 +128,9 @@ int main(int argc, char** argv) {
                 static_cast<long>(K.nonZeros()));
     // The dynamic film's explicit step (bags/Dynamics.h: the forces above and the damped
     // central-difference update), on one core and on the machine's default threads with the
-    // elements in 8 chunks (as a dynamically stepped bag has them): ns per triangle-step.
+    // elements in 8 chunks (as a dynamically stepped bag has them): ns per triangle-step,
+    // through the general path (MembraneModel::addEnergy without its Hessian, as the step was
+    // before the force kernel) and through the force kernel (bags/FilmForce.h), in turns.
     bags::DynamicOptions dyn;
     dyn.massScale = 1000.0;
     dyn.damping = 20.0;
@@ -135,13 +138,37 @@ int main(int argc, char** argv) {
         model.setNumThreads(threads);
         model.setElementChunks(threads == 1 ? 0 : 8);
         const bags::FilmDynamics film(model, o.density, dyn, 0.0);
+        const Eigen::VectorXd& mass = film.getDofMass();
+        Eigen::VectorXd invMass = Eigen::VectorXd::Zero(3 * nn);
+        for (int d = 0; d < 3 * nn; ++d)
+            if (mass(d) > 0.0) invMass(d) = 1.0 / mass(d);
         Eigen::Matrix3Xd xs = x, vs = Eigen::Matrix3Xd::Zero(3, nn);
         const double h = 1e-9;  // the state hardly moves: the cost of the state above
         bags::EnergyAccumulator sacc(nn);
-        const double tStep = millisecondsPerCall(400, [&] { film.step(xs, vs, h, sacc); });
-        std::printf("explicit step, %s      %8.3f ms  %6.0f ns per triangle-step\n",
-                    threads == 1 ? "1 thread " : "threads 0", tStep,
-                    1e6 * tStep / mesh.getNumTris());
+        auto generalStep = [&] {
+            sacc.wantHessian = false;
+            sacc.resize(nn);
+            model.addEnergy(xs, sacc);
+            const double a = 0.5 * dyn.damping * h;
+            const double keep = (1.0 - a) / (1.0 + a), push = h / (1.0 + a);
+            for (int d = 0; d < 3 * nn; ++d) {
+                vs.data()[d] = invMass(d) > 0.0 ? keep * vs.data()[d] - push * invMass(d) * sacc.grad(d) : 0.0;
+                xs.data()[d] += h * vs.data()[d];
+            }
+        };
+        auto kernelStep = [&] { film.step(xs, vs, h, sacc); };
+        kernelStep();  // builds the kernel
+        // The best of 20 rounds each, in turns (other processes on the cores slow some).
+        double tGeneral = 1e300, tKernel = 1e300;
+        for (int round = 0; round < 20; ++round) {
+            tGeneral = std::min(tGeneral, millisecondsPerCall(100, generalStep));
+            tKernel = std::min(tKernel, millisecondsPerCall(100, kernelStep));
+        }
+        std::printf("explicit step, %s general %8.3f ms %6.0f ns/tri-step; kernel %8.3f ms %6.0f "
+                    "ns/tri-step; ratio %.2f\n",
+                    threads == 1 ? "1 thread " : "threads 0", tGeneral,
+                    1e6 * tGeneral / mesh.getNumTris(), tKernel, 1e6 * tKernel / mesh.getNumTris(),
+                    tGeneral / tKernel);
     }
     return 0;
 }

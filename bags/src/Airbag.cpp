@@ -1425,8 +1425,10 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     if (spec.bendingStiffness > 0.0) m.model->setBendingStiffness(spec.bendingStiffness);
     if (spec.prony.isOn()) m.model->setProny(spec.prony);
     m.model->setNumThreads(spec.threads);
-    // A bag stepped in time evaluates its forces every sub-step: its elements in chunks that
-    // threads can share (the same bits on any number of threads; roundoff unlike one chunk's).
+    // A bag stepped in time evaluates its forces every sub-step: its elements in chunks, which
+    // lets the force kernel (bags/FilmForce.h) and the general path's element loop share the
+    // threads (the same bits on any number of threads; the general path's roundoff unlike one
+    // chunk's, the kernel's the same).
     if (spec.stepping != AirbagSpec::Stepping::QuasiStatic && mesh.getNumTris() >= 256)
         m.model->setElementChunks(8);
     std::vector<char> isSupport(mesh.getNumNodes(), 0);

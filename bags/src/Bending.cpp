@@ -261,6 +261,16 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
     addEnergy(x, acc, 1);
 }
 
+std::vector<Triplet> DiscreteBending::calcHingeStiffness() const {
+    std::vector<Triplet> K;
+    for (const Plate& p : m_plates)
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                if (p.hinges[i] >= 0 && p.hinges[j] >= 0)
+                    K.emplace_back(p.hinges[i], p.hinges[j], p.M(i, j));
+    return K;
+}
+
 void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc,
                                 int threads) const {
     if (m_options.stiffness == 0.0 || m_hinges.empty()) return;

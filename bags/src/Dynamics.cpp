@@ -101,9 +101,10 @@ double FilmDynamics::step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h,
 }
 
 double FilmDynamics::calcForce(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const {
+    if (!m_force) m_force = std::make_unique<FilmForce>(*m_model);
     acc.wantHessian = false;
     acc.resize(static_cast<int>(x.cols()));
-    m_model->addEnergy(x, acc);
+    m_force->addGradient(x, acc);
     const double* g = acc.grad.data();
     const double* im = m_invMass.data();
     double r2 = 0.0;

@@ -111,6 +111,11 @@ class NeoHookean : public InvariantMaterial {
     }
     double getInitialShearModulus() const override { return 2.0 * m_C10; }
     std::string getName() const override { return "neo-hookean"; }
+    bool getInvariantPolynomial(InvariantPolynomial* law) const override {
+        *law = InvariantPolynomial();
+        law->C10 = m_C10;
+        return true;
+    }
     std::unique_ptr<MembraneMaterial> clone() const override {
         return std::make_unique<NeoHookean>(*this);
     }
@@ -136,6 +141,12 @@ class MooneyRivlin : public InvariantMaterial {
     }
     double getInitialShearModulus() const override { return 2.0 * (m_C10 + m_C01); }
     std::string getName() const override { return "mooney-rivlin"; }
+    bool getInvariantPolynomial(InvariantPolynomial* law) const override {
+        *law = InvariantPolynomial();
+        law->C10 = m_C10;
+        law->C01 = m_C01;
+        return true;
+    }
     std::unique_ptr<MembraneMaterial> clone() const override {
         return std::make_unique<MooneyRivlin>(*this);
     }
@@ -174,6 +185,14 @@ class Yeoh : public InvariantMaterial {
     }
     double getInitialShearModulus() const override { return 2.0 * m_C10; }
     std::string getName() const override { return "yeoh"; }
+    bool getInvariantPolynomial(InvariantPolynomial* law) const override {
+        law->C10 = m_C10;
+        law->C01 = 0.0;
+        law->C20 = m_C20;
+        law->C30 = m_C30;
+        law->continuationLimit = m_limit;
+        return true;
+    }
     std::unique_ptr<MembraneMaterial> clone() const override {
         return std::make_unique<Yeoh>(*this);
     }

@@ -35,7 +35,7 @@ MembraneModel makeFreeSphere(double overPressure, int refinements = 2) {
 
 double totalEnergy(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
     EnergyAccumulator acc(static_cast<int>(x.cols()));
-    acc.wantHessian = false;
+    acc.wantGradient = acc.wantHessian = false;
     model.addEnergy(x, acc);
     return acc.energy;
 }
@@ -57,6 +57,7 @@ double energyDrift(const MembraneModel& model, double fraction, int steps, bool*
     *blewUp = false;
     for (int n = 0; n < steps; ++n) {
         const Eigen::Matrix3Xd vOld = v;
+        const double potential = totalEnergy(model, x);  // at x_n, before the step moves it
         try {
             film.step(x, v, h, acc);
         } catch (const NumericalError&) {
@@ -65,7 +66,7 @@ double energyDrift(const MembraneModel& model, double fraction, int steps, bool*
         }
         const double ke = film.calcKineticEnergy(0.5 * (vOld + v));
         keMax = std::max(keMax, ke);
-        const double E = acc.energy + ke;  // acc.energy: the potential at x_n
+        const double E = potential + ke;
         if (!std::isfinite(E) || !x.allFinite() || std::abs(E - E0) > 10.0 * keMax + 1.0) {
             *blewUp = true;
             return drift / keMax;

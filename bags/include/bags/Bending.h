@@ -95,6 +95,10 @@ public:
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc, int threads) const;
     /// Bending energy [J] at x alone.
     double calcEnergy(const Eigen::Matrix3Xd& x) const;
+    /// The constant matrix K [N m] of the energy as a quadratic form in the hinges' changes
+    /// from rest, E = 1/2 d^T K d: triplets (h, k, K_hk), one per pair of hinges of each
+    /// plate, duplicates to be summed.
+    std::vector<Triplet> calcHingeStiffness() const;
 
 private:
     struct Hinge {

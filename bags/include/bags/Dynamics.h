@@ -13,6 +13,7 @@
 /// second order, explicit, and (undamped) symplectic: it keeps the energy of a free bag within
 /// an oscillation of order h^2. Fixed dofs (support nodes) do not move.
 
+#include <bags/FilmForce.h>
 #include <bags/Solver.h>
 #include <bags/Types.h>
 
@@ -73,13 +74,15 @@ public:
     double calcStableStep(const Eigen::Matrix3Xd& x) const;
 
     /// One damped central-difference step of h [s]: v (at the half steps) and x updated, from
-    /// the forces of the model at x. `acc` is scratch (its gradient is the force at the old x
-    /// on return). @throws NumericalError if the model cannot evaluate x (collapsed element).
+    /// the forces of the model at x (FilmForce: the gradient alone, the model's kernel built
+    /// at the first step). `acc` is scratch: on return its gradient is dE/dx at the old x and
+    /// its energy NaN (MembraneModel::addEnergy gives the energy).
+    /// @throws NumericalError if the model cannot evaluate x (collapsed element).
     /// Returns the squared norm [N^2] of the force on the free dofs at the old x (the
     /// quasi-static solver's residual there). calcForce() then update().
     double step(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h, EnergyAccumulator& acc) const;
-    /// The model's energy gradient at x into acc (no tangent); returns the squared norm [N^2]
-    /// of the force on the free dofs.
+    /// The model's energy gradient at x into acc (FilmForce; no tangent, energy NaN); returns
+    /// the squared norm [N^2] of the force on the free dofs.
     double calcForce(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
     /// The damped central-difference update over h from the gradient calcForce() left in acc.
     void update(Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v, double h,
@@ -96,6 +99,7 @@ private:
     double m_areaDensity;        // [kg/m^2] scaled: density x thickness x massScale
     Eigen::VectorXd m_mass;      // per dof, 0 on fixed dofs
     Eigen::VectorXd m_invMass;   // per dof, 0 on fixed dofs
+    mutable std::unique_ptr<FilmForce> m_force;  // built at the first step
 };
 
 }  // namespace bags

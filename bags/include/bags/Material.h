@@ -22,6 +22,16 @@
 
 namespace bags {
 
+/// A law written as a polynomial in the plane-stress incompressible invariants,
+///   W = C10 x + C20 x^2 + C30 x^3 + C01 (I2 - 3),   x = I1 - 3,
+/// its I1 part continued beyond x = continuationLimit with its value, slope and the
+/// non-negative part of its curvature there (makeYeoh). Neo-Hooke, Mooney-Rivlin and Yeoh are
+/// of this form; the explicit step's force kernel (bags/FilmForce.h) evaluates it inline.
+struct InvariantPolynomial {
+    double C10 = 0.0, C01 = 0.0, C20 = 0.0, C30 = 0.0;  ///< [Pa]
+    double continuationLimit = std::numeric_limits<double>::infinity();  ///< in I1 - 3 [-]
+};
+
 class MembraneMaterial {
 public:
     virtual ~MembraneMaterial() = default;
@@ -50,6 +60,13 @@ public:
     /// False for a material with directions in the sheet (FabricMaterial): its C must be
     /// given in the element frame whose first axis is the warp (MembraneModel builds it so).
     virtual bool isIsotropic() const { return true; }
+
+    /// True (and *law set) if this material is an InvariantPolynomial with the default
+    /// natural width; false for any other law.
+    virtual bool getInvariantPolynomial(InvariantPolynomial* law) const {
+        (void)law;
+        return false;
+    }
 
     virtual std::unique_ptr<MembraneMaterial> clone() const = 0;
 };

@@ -223,6 +223,7 @@ public:
 
 private:
     friend class EquilibriumSolver;
+    friend class FilmForce;  // the explicit step's kernel reads the element data and state
     struct GasBody {
         GasChamber gas;
         std::vector<int> chambers;
