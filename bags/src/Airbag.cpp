@@ -248,6 +248,8 @@ struct Airbag::Impl {
     // advance of the same step starts from it (AirbagSpec::warmStart).
     Eigen::Matrix3Xd lastAdvanced;
     bool wholeStep = false;  // the sub-step being solved is the whole of advance()'s step
+    // Newton alone (no damper, no stabilisation springs): the relaxed stepping's first try.
+    bool plainNewton = false;
 
     Eigen::VectorXd shapeTranslations(const std::vector<Eigen::Isometry3d>& poses) const {
         Eigen::VectorXd t(3 * poses.size());
@@ -789,10 +791,11 @@ struct Airbag::Impl {
             return true;
         };
         Eigen::Matrix3Xd xs = x;
-        if (spec.damping > 0.0 && solveDamped(xs, sum, stabEnergy, so)) return accept(xs, *stabEnergy);
+        if (!plainNewton && spec.damping > 0.0 && solveDamped(xs, sum, stabEnergy, so))
+            return accept(xs, *stabEnergy);
         xs = x;
         if (runNewton(xs, sum, so)) return accept(xs, 0.0);
-        if (spec.stabilization <= 0.0) return false;
+        if (plainNewton || spec.stabilization <= 0.0) return false;
         for (int level = 0; level < levels; ++level) {
             const double k = spec.stabilization * std::pow(10.0, level);
             xs = x;
@@ -1278,6 +1281,30 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
 
     AdvanceSummary advance(Impl& m, double dt, int maxCuts) override {
         if (dt == 0.0) return quasiStatic.advance(m, dt, maxCuts);
+        int newton = 0, factorizations = 0;
+        if (m.spec.dynamics.newtonFirst) {
+            // Where the film has an equilibrium near the last, Newton finds it in a few
+            // iterations (a taut bag): tried first, alone, in one piece.
+            m.plainNewton = true;
+            AdvanceSummary q;
+            try {
+                q = quasiStatic.advance(m, dt, 0);
+            } catch (...) {
+                m.plainNewton = false;
+                throw;
+            }
+            m.plainNewton = false;
+            if (q.converged) return q;
+            newton = q.newtonIterations;
+            factorizations = q.factorizations;
+        }
+        AdvanceSummary out = relaxStep(m, dt, maxCuts);
+        out.newtonIterations += newton;
+        out.factorizations += factorizations;
+        return out;
+    }
+
+    AdvanceSummary relaxStep(Impl& m, double dt, int maxCuts) {
         m.restore(*m.committed);
         ensureFilm(m);
         if (reach < 0.0) {

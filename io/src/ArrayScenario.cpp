@@ -24,7 +24,10 @@ using D = Dimension;
 
 std::string fmtUnit(double si, const std::string& unit) {
     char buf[48];
-    std::snprintf(buf, sizeof buf, "%g %s", toUnit(si, unit), unit.c_str());
+    if (unit.empty())  // a plain number
+        std::snprintf(buf, sizeof buf, "%g", si);
+    else
+        std::snprintf(buf, sizeof buf, "%g %s", toUnit(si, unit), unit.c_str());
     return buf;
 }
 

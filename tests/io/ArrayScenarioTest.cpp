@@ -488,3 +488,35 @@ TEST(ArrayScenario, TheFilmsSteppingIsQuasiStaticByDefaultAndDynamicWithItsSetti
         EXPECT_EQ(fe->getAirbag().getSpec().stepping, bags::AirbagSpec::Stepping::Dynamic) << b;
     }
 }
+
+TEST(ArrayScenario, TheRelaxedSteppingTakesItsSubstepsAndPaceAndOnlyIt) {
+    auto with = [](const std::string& keys) {
+        std::string t = kBase;
+        t.replace(t.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm" + keys + "}");
+        return t;
+    };
+    const bags::AirbagSpec dflt = read(with(", stepping: relaxed")).options.bag;
+    EXPECT_EQ(dflt.stepping, bags::AirbagSpec::Stepping::Relaxed);
+    EXPECT_EQ(dflt.dynamics.massScale, 1000.0);
+    EXPECT_EQ(dflt.dynamics.relaxSubsteps, 4000);
+    EXPECT_TRUE(dflt.dynamics.newtonFirst);
+    const bags::AirbagSpec set =
+        read(with(", stepping: relaxed, dynamic: {relax_substeps: 500, relax_pace: 5 mm/s}"))
+            .options.bag;
+    EXPECT_EQ(set.dynamics.relaxSubsteps, 500);
+    EXPECT_DOUBLE_EQ(set.dynamics.relaxPace, 0.005);
+    // The relaxation's keys with the dynamic stepping; a pace without its unit; no sub-step.
+    const io::InputError e =
+        readError(with(", stepping: dynamic, dynamic: {relax_substeps: 500}"));
+    EXPECT_EQ(e.getLine(), 3);
+    EXPECT_NE(std::string(e.what()).find("relax_substeps"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("stepping: relaxed"), std::string::npos) << e.what();
+    for (const auto& [bad, key] : std::vector<std::pair<std::string, std::string>>{
+             {", stepping: relaxed, dynamic: {relax_pace: 5}", "relax_pace': \"5\" has no unit"},
+             {", stepping: relaxed, dynamic: {relax_substeps: 0}", "relax_substeps': 0 is not valid; valid: in [1, 1e+07]"},
+             {", stepping: relaxed, dynamic: {mass_scale: 0.5}", "mass_scale': 0.5 is not valid; valid: in [1, 1e+06]"}}) {
+        const io::InputError b = readError(with(bad));
+        EXPECT_EQ(b.getLine(), 3) << bad;
+        EXPECT_NE(std::string(b.what()).find(key), std::string::npos) << b.what();
+    }
+}
