@@ -1284,11 +1284,12 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
         int newton = 0, factorizations = 0;
         if (m.spec.dynamics.newtonFirst) {
             // Where the film has an equilibrium near the last, Newton finds it in a few
-            // iterations (a taut bag): tried first, alone, in one piece.
+            // iterations (a taut bag): tried first, alone (the step cut as the quasi-static
+            // stepping cuts it, but no damper and no springs).
             m.plainNewton = true;
             AdvanceSummary q;
             try {
-                q = quasiStatic.advance(m, dt, 0);
+                q = quasiStatic.advance(m, dt, maxCuts);
             } catch (...) {
                 m.plainNewton = false;
                 throw;

@@ -137,7 +137,9 @@ struct AirbagSpec {
     /// the shapes' poses interpolated across it; no equilibrium is asked for, so a fold that
     /// snaps through is a short dynamic event; what touches the bag feels the film's
     /// (scaled) inertia. Relaxed: the quasi-static step's equilibrium (what touches the bag
-    /// feels no inertia of the film), found by the film's damped explicit dynamics in
+    /// feels no inertia of the film): Newton alone first (DynamicOptions::newtonFirst; the
+    /// step cut as in the quasi-static stepping, no damper, no springs), and where it fails
+    /// the film's damped explicit dynamics in
     /// pseudo-time (dynamic relaxation with kinetic damping, `dynamics`): the shapes are moved
     /// to their poses at DynamicOptions::relaxPace, then the film relaxes there until the force
     /// residual is within forceTolerance or DynamicOptions::relaxSubsteps run out (the state is

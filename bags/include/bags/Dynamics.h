@@ -43,7 +43,7 @@ struct DynamicOptions {
     /// over its root, so that the film's response is the same): the pace at which the load test
     /// answers quasi-statically.
     double relaxPace = 0.02;
-    /// Relaxed stepping: Newton alone (no damper, no stabilisation springs, no cut) is tried
+    /// Relaxed stepping: Newton alone (no damper, no stabilisation springs; cut as usual) is tried
     /// first, the relaxation only where it fails: where the film has an equilibrium near the
     /// last one (a taut bag) Newton's few iterations cost far less than a relaxation.
     bool newtonFirst = true;
