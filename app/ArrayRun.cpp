@@ -614,6 +614,25 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                                   : "each bag solved alone")
                   << ")\n";
     }
+    {  // relaxed bags: the steps kept before their film reached its force tolerance
+        long unrelaxed = 0;
+        double largest = 0.0;
+        int worstBag = -1;
+        for (size_t b = 0; b < poa->getBagIndices().size(); ++b)
+            if (const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa->getBag(int(b)))) {
+                unrelaxed += fe->getNumUnrelaxedSteps();
+                if (fe->getNumUnrelaxedSteps() > 0 && fe->getLargestUnrelaxedResidual() >= largest) {
+                    largest = fe->getLargestUnrelaxedResidual();
+                    worstBag = poa->getBagIndices()[b];
+                }
+            }
+        if (unrelaxed > 0)
+            table << "relaxed bags: " << unrelaxed
+                  << " bag steps were kept unrelaxed (the film's sub-steps ran out before its "
+                     "force tolerance), the largest residual "
+                  << fmt("%.3g N", largest) << " (bag " << worstBag
+                  << "; docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags)\n";
+    }
     {  // how deep a segment lies inside a film between its nodes, which the contact does not see
         const std::vector<cosim::PassThrough> pass = cosim::calcPassThroughs(*poa);
         const auto worst = std::max_element(

@@ -1,5 +1,6 @@
 #include "cosim/BagParticipant.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -27,7 +28,14 @@ ParticipantStep BagParticipant::advance(double dt) {
     return s;
 }
 
-void BagParticipant::commit() { m_bag->commit(); }
+void BagParticipant::commit() {
+    if (m_last.unrelaxed) {  // counted once: a commit without a new advance does not count it
+        ++m_unrelaxedSteps;
+        m_largestUnrelaxed = std::max(m_largestUnrelaxed, m_last.residual);
+        m_last.unrelaxed = false;
+    }
+    m_bag->commit();
+}
 void BagParticipant::rollback() { m_bag->rollback(); }
 
 ShapeWrench BagParticipant::calcWrench(int shape) const {

@@ -189,7 +189,8 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     b.stepping = readStepping(s, b.stepping);
     if (s.has("dynamic")) {
         const ScenarioNode d = s.getSection("dynamic");
-        d.checkKeys({}, {"mass_scale", "damping", "step_fraction", "relax_substeps", "relax_pace"});
+        d.checkKeys({}, {"mass_scale", "damping", "step_fraction", "relax_substeps", "relax_pace",
+                         "newton_first"});
         b.dynamics.massScale = d.getNumber("mass_scale", 1000.0);
         checkBetween(d, "mass_scale", b.dynamics.massScale, 1.0, 1e6, "",
                      "the film's masses times this, e.g. 1000");
@@ -199,7 +200,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(d, "step_fraction", b.dynamics.stepFraction, 1e-3, 1.0, "",
                      "a fraction of the stable step, e.g. 0.5");
         if (b.stepping != bags::AirbagSpec::Stepping::Relaxed)
-            for (const char* key : {"relax_substeps", "relax_pace"})
+            for (const char* key : {"relax_substeps", "relax_pace", "newton_first"})
                 if (d.has(key))
                     d.fail(key, "is the relaxed stepping's: leave it out, or 'stepping: relaxed'");
         b.dynamics.relaxSubsteps = d.getInteger("relax_substeps", b.dynamics.relaxSubsteps);
@@ -208,6 +209,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         b.dynamics.relaxPace = d.getQuantity("relax_pace", D::Velocity, b.dynamics.relaxPace);
         checkBetween(d, "relax_pace", b.dynamics.relaxPace, 1e-5, 10.0, "mm/s",
                      "e.g. 20 mm/s (at mass scale 1000)");
+        b.dynamics.newtonFirst = d.getBool("newton_first", b.dynamics.newtonFirst);
     } else if (b.stepping != bags::AirbagSpec::Stepping::QuasiStatic) {
         b.dynamics.massScale = 1000.0;
         b.dynamics.damping = 20.0;

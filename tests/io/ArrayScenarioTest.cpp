@@ -501,8 +501,10 @@ TEST(ArrayScenario, TheRelaxedSteppingTakesItsSubstepsAndPaceAndOnlyIt) {
     EXPECT_EQ(dflt.dynamics.relaxSubsteps, 4000);
     EXPECT_TRUE(dflt.dynamics.newtonFirst);
     const bags::AirbagSpec set =
-        read(with(", stepping: relaxed, dynamic: {relax_substeps: 500, relax_pace: 5 mm/s}"))
+        read(with(", stepping: relaxed, dynamic: {relax_substeps: 500, relax_pace: 5 mm/s, "
+                  "newton_first: false}"))
             .options.bag;
+    EXPECT_FALSE(set.dynamics.newtonFirst);
     EXPECT_EQ(set.dynamics.relaxSubsteps, 500);
     EXPECT_DOUBLE_EQ(set.dynamics.relaxPace, 0.005);
     // The relaxation's keys with the dynamic stepping; a pace without its unit; no sub-step.

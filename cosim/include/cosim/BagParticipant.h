@@ -37,6 +37,12 @@ class BagParticipant : public Bag {
     /// How many calcWrenchTangents() and calcWrenchLinearisation() calls gave film-held
     /// tangents (not saved in checkpoints).
     int getNumFilmHeldTangents() const;
+    /// Relaxed stepping (bags::AirbagSpec::Stepping::Relaxed): how many committed steps were
+    /// kept unrelaxed (the film's sub-steps ran out before its force tolerance), and the
+    /// largest force residual [N] one of them was kept with, since the participant was made
+    /// (not saved in checkpoints).
+    long getNumUnrelaxedSteps() const { return m_unrelaxedSteps; }
+    double getLargestUnrelaxedResidual() const { return m_largestUnrelaxed; }
     /// With on, calcWrenchTangents() and calcWrenchLinearisation() give the linearisation of
     /// the same state with the shapes' contacts taken frictionless (bags::Airbag's
     /// withoutFriction): the body's linearised load carries no stick springs, and the
@@ -74,6 +80,8 @@ class BagParticipant : public Bag {
     bags::AdvanceSummary m_last;
     mutable Eigen::VectorXd m_areas;  // the mesh's nodal areas, made on first use
     mutable int m_filmHeldTangents = 0;
+    long m_unrelaxedSteps = 0;
+    double m_largestUnrelaxed = 0.0;
     bool m_withoutFriction = false;
 };
 
