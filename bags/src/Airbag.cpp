@@ -1286,15 +1286,16 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
             // Where the film has an equilibrium near the last, Newton finds it in a few
             // iterations (a taut bag): tried first, alone (the step cut as the quasi-static
             // stepping cuts it, but no damper and no springs).
-            m.plainNewton = true;
+            struct PlainNewton {  // on for this try only, whatever leaves it
+                bool& on;
+                explicit PlainNewton(bool& f) : on(f) { on = true; }
+                ~PlainNewton() { on = false; }
+            };
             AdvanceSummary q;
-            try {
+            {
+                const PlainNewton plain(m.plainNewton);
                 q = quasiStatic.advance(m, dt, maxCuts);
-            } catch (...) {
-                m.plainNewton = false;
-                throw;
             }
-            m.plainNewton = false;
             if (q.converged) return q;
             newton = q.newtonIterations;
             factorizations = q.factorizations;
