@@ -293,11 +293,33 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                 : turn->getTurnedTilt(),
                             turn->getPhase() == cosim::TurnController::Phase::Done);
     };
+    // The relaxed bags' steps kept unrelaxed, summed over the bags, the largest residual and
+    // its bag; into the verdict.
+    struct UnrelaxedTally {
+        long steps = 0;
+        double largest = 0.0;
+        int bag = -1;
+    };
+    auto tallyUnrelaxed = [&] {
+        UnrelaxedTally t;
+        for (size_t b = 0; b < poa->getBagIndices().size(); ++b)
+            if (const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa->getBag(int(b)))) {
+                t.steps += fe->getNumUnrelaxedSteps();
+                if (fe->getNumUnrelaxedSteps() > 0 && fe->getLargestUnrelaxedResidual() >= t.largest) {
+                    t.largest = fe->getLargestUnrelaxedResidual();
+                    t.bag = poa->getBagIndices()[b];
+                }
+            }
+        verdict.setFilmSteps(sc.options.reduced ? bags::AirbagSpec::Stepping::QuasiStatic
+                                                : sc.options.bag.stepping,
+                             t.steps, t.largest, t.bag, sc.options.bag.forceTolerance);
+        return t;
+    };
     // The checkpoint (docs/output-layout.md#checkpoint): header, the writers' positions, the
     // loop's own state, the verdict so far, then the model: body, bags, coupling, pneumatics,
     // controller. A resumed run reads it in that order.
     auto saveRunState = [&](bags::StateWriter& w) {
-        w.tag("run-2");
+        w.tag("run-3");
         w.pod(nextOutput), w.pod(settled), w.pod(nextCheckpoint);
         w.pod(std::uint64_t(events.size()));
         for (const cosim::ControlEvent& e : events) w.pod(e.time), w.str(e.text);
@@ -305,10 +327,18 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         w.pod(totals), w.pod(massMismatch), w.pod(envelope);
         w.vec(airVolume), w.vec(airRate);
         verdict.saveState(w);
+        // The relaxed bags' tally of steps kept unrelaxed, bag by bag (not in the bags' state).
+        std::vector<double> tally;
+        for (int b = 0; b < int(poa->getBagIndices().size()); ++b)
+            if (const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa->getBag(b)))
+                tally.push_back(double(fe->getNumUnrelaxedSteps())),
+                    tally.push_back(fe->getLargestUnrelaxedResidual());
+        w.vec(tally);
     };
+    std::vector<double> resumedTally;  // until the bags are built
     std::vector<double> resumedAirVolume, resumedAirRate;  // until the network is built
     auto loadRunState = [&](bags::StateReader& r) {
-        r.tag("run-2");
+        r.tag("run-3");
         r.pod(nextOutput), r.pod(settled), r.pod(nextCheckpoint);
         events.resize(r.pod<std::uint64_t>());
         for (cosim::ControlEvent& e : events) r.pod(e.time), e.text = r.str();
@@ -316,6 +346,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         r.pod(totals), r.pod(massMismatch), r.pod(envelope);
         r.vec(resumedAirVolume), r.vec(resumedAirRate);
         verdict.loadState(r);
+        r.vec(resumedTally);
     };
     // A checkpoint's or rest state's header (readCheckpointHeader() reads it), and the file:
     // magic, length and hash of the data, the data.
@@ -364,6 +395,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         try {  // the verdict on what was run (the folder stays marked INCOMPLETE)
             writeEvents();
             setTurn();
+            if (poa) tallyUnrelaxed();
             writer->writeVerdict(verdict.makeRows());
         } catch (...) {
         }
@@ -457,6 +489,15 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                                 resumedAirVolume.size(), airVolume.size());
                 airVolume = resumedAirVolume;
                 airRate = resumedAirRate;
+                std::vector<cosim::BagParticipant*> fe;
+                for (int b = 0; b < int(poa->getBagIndices().size()); ++b)
+                    if (auto* p = dynamic_cast<cosim::BagParticipant*>(&poa->updBag(b)))
+                        fe.push_back(p);
+                if (resumedTally.size() != 2 * fe.size())
+                    bags::StateReader::mismatch("finite-element bags' tallies",
+                                                resumedTally.size() / 2, fe.size());
+                for (size_t k = 0; k < fe.size(); ++k)
+                    fe[k]->setUnrelaxedTally(long(resumedTally[2 * k]), resumedTally[2 * k + 1]);
                 poa->loadState(*resume);
                 if (air) air->loadState(*resume);
                 if (sc.controller) sc.controller->loadState(*resume);
@@ -614,25 +655,14 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                                   : "each bag solved alone")
                   << ")\n";
     }
-    {  // relaxed bags: the steps kept before their film reached its force tolerance
-        long unrelaxed = 0;
-        double largest = 0.0;
-        int worstBag = -1;
-        for (size_t b = 0; b < poa->getBagIndices().size(); ++b)
-            if (const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa->getBag(int(b)))) {
-                unrelaxed += fe->getNumUnrelaxedSteps();
-                if (fe->getNumUnrelaxedSteps() > 0 && fe->getLargestUnrelaxedResidual() >= largest) {
-                    largest = fe->getLargestUnrelaxedResidual();
-                    worstBag = poa->getBagIndices()[b];
-                }
-            }
-        if (unrelaxed > 0)
-            table << "relaxed bags: " << unrelaxed
-                  << " bag steps were kept unrelaxed (the film's sub-steps ran out before its "
-                     "force tolerance), the largest residual "
-                  << fmt("%.3g N", largest) << " (bag " << worstBag
-                  << "; docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags)\n";
-    }
+    const UnrelaxedTally unrelaxed = tallyUnrelaxed();
+    if (unrelaxed.steps > 0)  // relaxed bags: steps kept before their film reached its tolerance
+        table << "relaxed bags: " << unrelaxed.steps
+              << " bag steps were kept unrelaxed (the film's sub-steps ran out before its "
+                 "force tolerance), the largest residual "
+              << fmt("%.3g N", unrelaxed.largest) << " (bag " << unrelaxed.bag
+              << "; docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags)"
+                 ": the run is partial\n";
     {  // how deep a segment lies inside a film between its nodes, which the contact does not see
         const std::vector<cosim::PassThrough> pass = cosim::calcPassThroughs(*poa);
         const auto worst = std::max_element(
@@ -716,7 +746,12 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         s << "support verdict (verdict.csv):\n" << verdictText;
         s.close();
         if (!s) throw std::runtime_error("cannot write summary.txt in " + outPath.string());
-        writer->finish(fmt("%.4f s simulated", poa->getTime()));
+        if (unrelaxed.steps > 0)
+            writer->finish(fmt("%.4f s simulated", poa->getTime()),
+                           fmt("%ld", unrelaxed.steps) +
+                               " bag steps were kept unrelaxed (verdict.csv, 'bag films relaxed')");
+        else
+            writer->finish(fmt("%.4f s simulated", poa->getTime()));
         // Finished: nothing left to resume.
         std::filesystem::remove(outDir->getFile(io::kCheckpointFile));
     } catch (const std::exception& e) {
@@ -736,6 +771,14 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
               << "  " << io::kResultsH5 << "    pressure-mat frames (/mat), " << io::kResultsXdmf
               << " to open them in ParaView\n"
               << "  summary.txt, report.html (open it in a browser)\n";
+    if (unrelaxed.steps > 0) {
+        std::cerr << "bagsim: run partial: " << unrelaxed.steps
+                  << " bag steps were kept unrelaxed (largest residual "
+                  << fmt("%.3g N", unrelaxed.largest) << ", bag " << unrelaxed.bag
+                  << "); raise bag.dynamic.relax_substeps; results in " << outPath.string()
+                  << "/ (marked INCOMPLETE, status partial)\n";
+        return 3;
+    }
     return 0;
 }
 

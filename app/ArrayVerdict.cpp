@@ -109,6 +109,15 @@ void ArrayVerdict::setTurn(double reachedTime, double turnedTilt, bool backToSup
     m_turnKnown = true;
 }
 
+void ArrayVerdict::setFilmSteps(bags::AirbagSpec::Stepping stepping, long unrelaxed,
+                                double largest, int worstBag, double tolerance) {
+    m_stepping = stepping;
+    m_unrelaxed = unrelaxed;
+    m_largestUnrelaxed = largest;
+    m_unrelaxedBag = worstBag;
+    m_forceTolerance = tolerance;
+}
+
 std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
     std::vector<io::VerdictRow> rows;
     const double span = m_lastTime - m_firstTime;
@@ -181,6 +190,27 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
                         "board) " + window + ": bag " + std::to_string(m_minHeightBag) +
                             fmt(" at %.2f s", m_minHeightTime) +
                             "; fail below 25 mm (the hand check: an inch of air)"});
+    // The films at their equilibrium (the relaxed stepping keeps a step whose sub-steps ran
+    // out; the quasi-static one cuts it, the dynamic one has no equilibrium to reach).
+    using Stepping = bags::AirbagSpec::Stepping;
+    if (m_stepping != Stepping::Relaxed)
+        rows.push_back({"bag films relaxed", "n/a", kNaN, "steps",
+                        m_stepping == Stepping::Dynamic
+                            ? "the films are stepped in time (bag.stepping: dynamic), not to an "
+                              "equilibrium"
+                            : "quasi-static bags (bag.stepping): every step is an equilibrium to "
+                              "the force tolerance or is cut"});
+    else if (m_unrelaxed == 0)
+        rows.push_back({"bag films relaxed", "ok", 0.0, "steps",
+                        "every committed bag step reached the film's force tolerance (" +
+                            fmt("%.3g N", m_forceTolerance) + ")"});
+    else
+        rows.push_back({"bag films relaxed", "fail", double(m_unrelaxed), "steps",
+                        "bag steps kept unrelaxed (the film's sub-steps, "
+                        "bag.dynamic.relax_substeps, ran out before its force tolerance, " +
+                            fmt("%.3g N", m_forceTolerance) + "); the largest residual kept " +
+                            fmt("%.3g N", m_largestUnrelaxed) + " (bag " +
+                            std::to_string(m_unrelaxedBag) + "); the run is partial"});
     // Regions.
     for (const std::string& name : m_regionOrder) {
         const Region& g = m_regions.at(name);

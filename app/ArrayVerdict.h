@@ -2,9 +2,10 @@
 /// @file The support verdict of a patient-on-array run (verdict.csv, summary.txt), gathered
 /// at every output frame: target tilt reached and when; slid or rolled toward the edge (the
 /// centre of mass's lateral travel, an outer bag that carried him and lost him as he moved
-/// further out); a bag bottomed out (the inner height left under a pressed node); per region the peak
-/// pressure and the time above 32 mmHg. Criteria and thresholds: docs/output-layout.md.
+/// further out); a bag bottomed out (the inner height left under a pressed node); the relaxed
+/// bags' films at their equilibrium; per region the peak pressure and the time above 32 mmHg. Criteria and thresholds: docs/output-layout.md.
 
+#include <bags/Airbag.h>
 #include <cosim/ArrayLayout.h>
 #include <io/ArrayResults.h>
 
@@ -26,6 +27,13 @@ class ArrayVerdict {
     /// The turn's outcome: when the target tilt was reached (NaN: never), the pelvis tilt
     /// when the turn ended [rad] (NaN: it had not) and whether it went back to supine.
     void setTurn(double reachedTime, double turnedTilt, bool backToSupine);
+    /// How the bags' films were stepped (bags::AirbagSpec::Stepping) and, for the relaxed
+    /// stepping, how many committed bag steps were kept unrelaxed (their film's sub-steps ran
+    /// out before its force tolerance), the largest force residual kept [N], its bag.
+    void setFilmSteps(bags::AirbagSpec::Stepping stepping, long unrelaxed, double largest,
+                      int worstBag, double tolerance);
+    /// True when setFilmSteps() was given unrelaxed steps: the run is then partial.
+    bool hasUnrelaxedSteps() const { return m_unrelaxed > 0; }
     std::vector<io::VerdictRow> makeRows() const;
     /// What the frames so far left (a checkpoint), and back into a verdict made the same way.
     void saveState(bags::StateWriter& w) const;
@@ -38,6 +46,10 @@ class ArrayVerdict {
     double m_settle = 0.0, m_duration = 0.0, m_targetTilt = 0.0;
     double m_reached = 0.0, m_turnedTilt = 0.0;
     bool m_back = false, m_turnKnown = false;
+    bags::AirbagSpec::Stepping m_stepping = bags::AirbagSpec::Stepping::QuasiStatic;
+    long m_unrelaxed = 0;
+    double m_largestUnrelaxed = 0.0, m_forceTolerance = 0.0;
+    int m_unrelaxedBag = -1;
     // the judged window
     bool m_haveRef = false;
     double m_lastTime = 0.0, m_firstTime = 0.0;

@@ -278,13 +278,17 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
         d.flush();
 }
 
-void ArrayResultsWriter::finish(const std::string& message) {
+void ArrayResultsWriter::finish(const std::string& message, const std::string& partial) {
     Impl& d = *m_impl;
-    setRunStatus(d.meta.get(), "complete", message);
+    setRunStatus(d.meta.get(), partial.empty() ? "complete" : "partial",
+                 partial.empty() ? message : message + "; " + partial);
     d.flush();
     d.close();
     d.writeXdmf();
-    d.dir.markComplete();
+    if (partial.empty())
+        d.dir.markComplete();
+    else
+        d.dir.setStatus("partial", message + "; " + partial);
 }
 
 void ArrayResultsWriter::fail(const std::string& status, const std::string& message) noexcept {

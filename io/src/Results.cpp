@@ -96,8 +96,9 @@ OutputDir OutputDir::resume(const fs::path& path) {
 void OutputDir::setStatus(const std::string& status, const std::string& detail) const {
     std::ofstream out(getFile(kMarkerName), std::ios::trunc);
     if (status == "partial")
-        out << "This folder's results are incomplete: the run finished, but curves stopped on a "
-               "numerical failure.\n";
+        out << "This folder's results are incomplete: the run finished, but part of it did not "
+               "hold (a curve stopped on a numerical failure, or bag steps were kept unrelaxed; "
+               "the line below says which).\n";
     else if (status == "running")
         out << "This folder's results are incomplete: the run that writes them has not finished "
                "(or was killed).\n";

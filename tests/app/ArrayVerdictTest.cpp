@@ -113,3 +113,27 @@ TEST(ArrayVerdict, EachCheckFollowsItsCriterion) {
     EXPECT_EQ(row(rows, "target tilt reached").status, "n/a");
     EXPECT_EQ(row(rows, "back to supine").status, "n/a");
 }
+
+// The films at their equilibrium: n/a for quasi-static and dynamic bags (their steps are
+// equilibria or are cut; or have none to reach), ok for relaxed bags that kept no step
+// unrelaxed, fail with the count, the largest residual and its bag when they did.
+TEST(ArrayVerdict, RelaxedBagsWithUnrelaxedStepsFail) {
+    using Stepping = bags::AirbagSpec::Stepping;
+    const cosim::ArrayLayout layout = makeLayout();
+    bagsim::app::ArrayVerdict v(layout, bags::DoubleWedgeParams(), 1.0, 3.0, 0.0);
+    v.addFrame(frame(1.0, 0.0, 0.2, 10.0, 10.0), {0.1});
+    EXPECT_EQ(row(v.makeRows(), "bag films relaxed").status, "n/a");  // quasi-static by default
+    v.setFilmSteps(Stepping::Dynamic, 0, 0.0, -1, 0.05);
+    EXPECT_EQ(row(v.makeRows(), "bag films relaxed").status, "n/a");
+    EXPECT_FALSE(v.hasUnrelaxedSteps());
+    v.setFilmSteps(Stepping::Relaxed, 0, 0.0, -1, 0.05);
+    EXPECT_EQ(row(v.makeRows(), "bag films relaxed").status, "ok");
+    EXPECT_FALSE(v.hasUnrelaxedSteps());
+    v.setFilmSteps(Stepping::Relaxed, 12, 0.31, 17, 0.05);
+    const io::VerdictRow r = row(v.makeRows(), "bag films relaxed");
+    EXPECT_EQ(r.status, "fail");
+    EXPECT_EQ(r.value, 12.0);
+    EXPECT_NE(r.detail.find("the largest residual kept 0.31 N (bag 17)"), std::string::npos)
+        << r.detail;
+    EXPECT_TRUE(v.hasUnrelaxedSteps());
+}

@@ -40,9 +40,14 @@ class BagParticipant : public Bag {
     /// Relaxed stepping (bags::AirbagSpec::Stepping::Relaxed): how many committed steps were
     /// kept unrelaxed (the film's sub-steps ran out before its force tolerance), and the
     /// largest force residual [N] one of them was kept with, since the participant was made
-    /// (not saved in checkpoints).
+    /// or setUnrelaxedTally() (not in saveState(): a run's checkpoint carries them itself).
     long getNumUnrelaxedSteps() const { return m_unrelaxedSteps; }
     double getLargestUnrelaxedResidual() const { return m_largestUnrelaxed; }
+    /// Restores the tally above (a resumed run's checkpoint).
+    void setUnrelaxedTally(long steps, double largest) {
+        m_unrelaxedSteps = steps;
+        m_largestUnrelaxed = largest;
+    }
     /// With on, calcWrenchTangents() and calcWrenchLinearisation() give the linearisation of
     /// the same state with the shapes' contacts taken frictionless (bags::Airbag's
     /// withoutFriction): the body's linearised load carries no stick springs, and the

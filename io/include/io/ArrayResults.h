@@ -7,8 +7,8 @@
 /// its unit); mmHg, cm^2, N, g, kPa, L, deg in the CSV files, as their column names say.
 ///
 /// Order: OutputDir (claims the folder, writes the INCOMPLETE marker), ArrayResultsWriter on
-/// it, addFrame() at every output time, then finish() (status "complete", marker removed) or
-/// fail() (status "failed" or "interrupted", marker kept).
+/// it, addFrame() at every output time, then finish() (status "complete", marker removed; or
+/// "partial", marker kept) or fail() (status "failed" or "interrupted", marker kept).
 
 #include <bags/StateStream.h>
 #include <cosim/ArrayReadings.h>
@@ -91,8 +91,10 @@ class ArrayResultsWriter {
     void addEvent(double time, const std::string& event);
     /// Writes verdict.csv (replacing one written before) and returns its text as a table.
     std::string writeVerdict(const std::vector<VerdictRow>& rows);
-    /// Status "complete": closes the files, writes results.xdmf and removes the marker.
-    void finish(const std::string& message);
+    /// Status "complete": closes the files, writes results.xdmf and removes the marker. With
+    /// a `partial` reason (the run reached its end, but something in it did not hold, e.g.
+    /// bag steps kept unrelaxed), status "partial": the marker is kept and says why.
+    void finish(const std::string& message, const std::string& partial = {});
     /// Saves what was written, sets the status ("failed", "interrupted") and the message,
     /// closes the files and keeps the INCOMPLETE marker. Never throws.
     void fail(const std::string& status, const std::string& message) noexcept;
