@@ -1403,11 +1403,33 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
                     kePrev = ke;
                 }
             }
+            int polish = 0;
+            if (!relaxed && o.newtonPolish > 0) {
+                // Relaxation converges slowly in a crumpled film's soft modes; Newton, from
+                // where it got to, may converge at once.
+                SolverOptions so = m.spec.solver;
+                so.maxIterations = std::min(so.maxIterations, o.newtonPolish);
+                Eigen::Matrix3Xd xs = m.x;
+                SolveSummary ns;
+                bool ok = m.runNewton(xs, &ns, so);
+                for (int r = 0; ok && m.self && !m.self->isCandidateListValid(xs) && r < Impl::kRechecks; ++r) {
+                    m.self->updateCandidates(xs);
+                    ok = m.runNewton(xs, &ns, so);
+                }
+                polish = ns.iterations;
+                out->factorizations += ns.factorizations;
+                if (ok) {
+                    m.x = xs;
+                    relaxed = true;
+                    r2 = ns.residualNorm * ns.residualNorm;
+                }
+            }
             m.model->commitStep(m.x);
             m.model->endViscousStep(m.x);
             if (relaxed) m.v.setZero();  // an equilibrium, at rest
             m.time += dt;
             out->converged = true;
+            out->newtonIterations += polish;
             out->unrelaxed = !relaxed;
             out->substeps = static_cast<int>(std::min<long>(k, std::numeric_limits<int>::max()));
             out->substep = h;

@@ -25,6 +25,8 @@ void DynamicOptions::validate() const {
         fail("relaxSubsteps", relaxSubsteps, "use 1 to 1e7 sub-steps a step (e.g. 4000)");
     if (!(relaxPace > 0.0 && relaxPace <= 10.0))
         fail("relaxPace", relaxPace, "use a pace > 0 up to 10 m/s (e.g. 0.02 m/s)");
+    if (!(newtonPolish >= 0 && newtonPolish <= 1000))
+        fail("newtonPolish", newtonPolish, "use 0 (none) to 1000 Newton iterations (e.g. 30)");
 }
 
 FilmDynamics::FilmDynamics(const MembraneModel& model, double density,

@@ -190,7 +190,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     if (s.has("dynamic")) {
         const ScenarioNode d = s.getSection("dynamic");
         d.checkKeys({}, {"mass_scale", "damping", "step_fraction", "relax_substeps", "relax_pace",
-                         "newton_first"});
+                         "newton_first", "newton_polish"});
         b.dynamics.massScale = d.getNumber("mass_scale", 1000.0);
         checkBetween(d, "mass_scale", b.dynamics.massScale, 1.0, 1e6, "",
                      "the film's masses times this, e.g. 1000");
@@ -200,7 +200,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(d, "step_fraction", b.dynamics.stepFraction, 1e-3, 1.0, "",
                      "a fraction of the stable step, e.g. 0.5");
         if (b.stepping != bags::AirbagSpec::Stepping::Relaxed)
-            for (const char* key : {"relax_substeps", "relax_pace", "newton_first"})
+            for (const char* key : {"relax_substeps", "relax_pace", "newton_first", "newton_polish"})
                 if (d.has(key))
                     d.fail(key, "is the relaxed stepping's: leave it out, or 'stepping: relaxed'");
         b.dynamics.relaxSubsteps = d.getInteger("relax_substeps", b.dynamics.relaxSubsteps);
@@ -210,6 +210,9 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(d, "relax_pace", b.dynamics.relaxPace, 1e-5, 10.0, "mm/s",
                      "e.g. 20 mm/s (at mass scale 1000)");
         b.dynamics.newtonFirst = d.getBool("newton_first", b.dynamics.newtonFirst);
+        b.dynamics.newtonPolish = d.getInteger("newton_polish", b.dynamics.newtonPolish);
+        checkBetween(d, "newton_polish", b.dynamics.newtonPolish, 0, 1000, "",
+                     "0 (no Newton after the relaxation) to 1000 iterations, e.g. 30");
     } else if (b.stepping != bags::AirbagSpec::Stepping::QuasiStatic) {
         b.dynamics.massScale = 1000.0;
         b.dynamics.damping = 20.0;

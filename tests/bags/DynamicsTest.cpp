@@ -382,6 +382,7 @@ TEST(AirbagRelaxed, AStepWhoseSubstepsRanOutIsKeptMarkedAndRepeatsExactly) {
     // next steps go on relaxing from there until the force tolerance is met.
     AirbagSpec spec = makeRelaxedSpec();
     spec.dynamics.relaxSubsteps = 20;
+    spec.dynamics.newtonPolish = 0;  // no Newton from where the sub-steps ran out
     PressedBag p(spec);
     const AdvanceSummary s = p.press(0.005, 0.01, false);
     ASSERT_TRUE(s.converged);
@@ -396,6 +397,34 @@ TEST(AirbagRelaxed, AStepWhoseSubstepsRanOutIsKeptMarkedAndRepeatsExactly) {
     bool relaxed = false;
     for (int k = 0; k < 400 && !relaxed; ++k) relaxed = !p.press(0.005, 0.01, true).unrelaxed;
     EXPECT_TRUE(relaxed);
+}
+
+TEST(AirbagRelaxed, NewtonPolishesARelaxationThatRanOut) {
+    // The 5 mm press above, its 20 sub-steps run out, polished by Newton from where they
+    // stopped (the default, at most 30 iterations): the step is relaxed, at rest, within the
+    // force tolerance, and its block force is the relaxation's own equilibrium (reference: the
+    // same press relaxed to the tolerance without Newton, 4000 sub-steps; tolerance 0.5 % of
+    // the force, both within 1 mN of their equilibria).
+    AirbagSpec polished = makeRelaxedSpec(), slow = makeRelaxedSpec();
+    polished.dynamics.relaxSubsteps = 20;
+    slow.dynamics.newtonPolish = 0;
+    PressedBag p(polished), r(slow);
+    const AdvanceSummary s = p.press(0.005, 0.01, true);
+    const AdvanceSummary t = r.press(0.005, 0.01, true);
+    ASSERT_TRUE(s.converged);
+    ASSERT_TRUE(t.converged);
+    ASSERT_FALSE(t.unrelaxed);
+    EXPECT_FALSE(s.unrelaxed);
+    EXPECT_LE(s.residual, polished.forceTolerance);
+    EXPECT_GT(s.newtonIterations, 0);
+    EXPECT_LT(s.substeps, t.substeps);
+    EXPECT_EQ(p.bag.calcKineticEnergy(), 0.0);
+    const double F = r.bag.calcShapeWrench(r.block).force.z();
+    ASSERT_GT(F, 0.5);
+    EXPECT_NEAR(p.bag.calcShapeWrench(p.block).force.z(), F, 0.005 * F);
+    RecordProperty("substeps", std::to_string(s.substeps) + " + " +
+                                   std::to_string(s.newtonIterations) + " Newton vs " +
+                                   std::to_string(t.substeps));
 }
 
 TEST(AirbagRelaxed, ASlackBagPressedDeepNeverStopsTheRun) {

@@ -502,9 +502,11 @@ TEST(ArrayScenario, TheRelaxedSteppingTakesItsSubstepsAndPaceAndOnlyIt) {
     EXPECT_TRUE(dflt.dynamics.newtonFirst);
     const bags::AirbagSpec set =
         read(with(", stepping: relaxed, dynamic: {relax_substeps: 500, relax_pace: 5 mm/s, "
-                  "newton_first: false}"))
+                  "newton_first: false, newton_polish: 0}"))
             .options.bag;
     EXPECT_FALSE(set.dynamics.newtonFirst);
+    EXPECT_EQ(dflt.dynamics.newtonPolish, 30);
+    EXPECT_EQ(set.dynamics.newtonPolish, 0);
     EXPECT_EQ(set.dynamics.relaxSubsteps, 500);
     EXPECT_DOUBLE_EQ(set.dynamics.relaxPace, 0.005);
     // The relaxation's keys with the dynamic stepping; a pace without its unit; no sub-step.
@@ -516,7 +518,9 @@ TEST(ArrayScenario, TheRelaxedSteppingTakesItsSubstepsAndPaceAndOnlyIt) {
     for (const auto& [bad, key] : std::vector<std::pair<std::string, std::string>>{
              {", stepping: relaxed, dynamic: {relax_pace: 5}", "relax_pace': \"5\" has no unit"},
              {", stepping: relaxed, dynamic: {relax_substeps: 0}", "relax_substeps': 0 is not valid; valid: in [1, 1e+07]"},
-             {", stepping: relaxed, dynamic: {mass_scale: 0.5}", "mass_scale': 0.5 is not valid; valid: in [1, 1e+06]"}}) {
+             {", stepping: relaxed, dynamic: {mass_scale: 0.5}", "mass_scale': 0.5 is not valid; valid: in [1, 1e+06]"},
+             {", stepping: relaxed, dynamic: {newton_polish: -1}", "newton_polish': -1 is not valid; valid: in [0, 1000]"},
+             {", stepping: dynamic, dynamic: {newton_polish: 5}", "newton_polish': is the relaxed stepping's"}}) {
         const io::InputError b = readError(with(bad));
         EXPECT_EQ(b.getLine(), 3) << bad;
         EXPECT_NE(std::string(b.what()).find(key), std::string::npos) << b.what();

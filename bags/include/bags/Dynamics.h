@@ -47,6 +47,10 @@ struct DynamicOptions {
     /// first, the relaxation only where it fails: where the film has an equilibrium near the
     /// last one (a taut bag) Newton's few iterations cost far less than a relaxation.
     bool newtonFirst = true;
+    /// Relaxed stepping: where the sub-steps ran out short of the force tolerance, Newton
+    /// alone (at most newtonPolish iterations, the self-contact candidates rechecked) is
+    /// tried from the relaxed state; its equilibrium is kept if it finds one. 0: no polish.
+    int newtonPolish = 30;
     /// Throws std::invalid_argument naming the option and what would be valid.
     void validate() const;
 };
