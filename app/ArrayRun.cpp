@@ -337,8 +337,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     };
     std::vector<double> resumedTally;  // until the bags are built
     std::vector<double> resumedAirVolume, resumedAirRate;  // until the network is built
+    bool resumedTallyKnown = true;  // a checkpoint written before the tally (run-2) has none
     auto loadRunState = [&](bags::StateReader& r) {
-        r.tag("run-3");
+        const std::string part = r.str();
+        if (part != "run-3" && part != "run-2")
+            throw bags::StateError("checkpoint: expected the part 'run-3', found '" +
+                                   part.substr(0, 60) + "' (the checkpoint is of another model)");
+        resumedTallyKnown = part == "run-3";
         r.pod(nextOutput), r.pod(settled), r.pod(nextCheckpoint);
         events.resize(r.pod<std::uint64_t>());
         for (cosim::ControlEvent& e : events) r.pod(e.time), e.text = r.str();
@@ -346,7 +351,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         r.pod(totals), r.pod(massMismatch), r.pod(envelope);
         r.vec(resumedAirVolume), r.vec(resumedAirRate);
         verdict.loadState(r);
-        r.vec(resumedTally);
+        if (resumedTallyKnown) r.vec(resumedTally);
     };
     // A checkpoint's or rest state's header (readCheckpointHeader() reads it), and the file:
     // magic, length and hash of the data, the data.
@@ -493,6 +498,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                 for (int b = 0; b < int(poa->getBagIndices().size()); ++b)
                     if (auto* p = dynamic_cast<cosim::BagParticipant*>(&poa->updBag(b)))
                         fe.push_back(p);
+                if (!resumedTallyKnown) resumedTally.assign(2 * fe.size(), 0.0);
                 if (resumedTally.size() != 2 * fe.size())
                     bags::StateReader::mismatch("finite-element bags' tallies",
                                                 resumedTally.size() / 2, fe.size());

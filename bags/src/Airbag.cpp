@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -1378,6 +1377,27 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
             double r2 = 0.0, kePrev = 0.0;
             long k = 0;
             bool relaxed = false;
+            int polish = 0;
+            // Newton alone from the relaxed state, at most maxIt iterations (the self-contact
+            // candidates rechecked): relaxation converges slowly in a crumpled film's softest
+            // modes, Newton fast once in its basin. True (x at its equilibrium) if it converged.
+            auto tryPolish = [&](int maxIt) {
+                SolverOptions so = m.spec.solver;
+                so.maxIterations = std::min(so.maxIterations, maxIt);
+                Eigen::Matrix3Xd xs = m.x;
+                SolveSummary ns;
+                bool ok = m.runNewton(xs, &ns, so);
+                for (int r = 0; ok && m.self && !m.self->isCandidateListValid(xs) && r < Impl::kRechecks; ++r) {
+                    m.self->updateCandidates(xs);
+                    ok = m.runNewton(xs, &ns, so);
+                }
+                polish += ns.iterations;
+                out->factorizations += ns.factorizations;
+                if (!ok) return false;
+                m.x = xs;
+                r2 = ns.residualNorm * ns.residualNorm;
+                return true;
+            };
             for (;; ++k) {
                 if (k <= nRamp) {
                     const double s1 = k >= nRamp ? 1.0
@@ -1403,27 +1423,8 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
                     kePrev = ke;
                 }
             }
-            int polish = 0;
-            if (!relaxed && o.newtonPolish > 0) {
-                // Relaxation converges slowly in a crumpled film's soft modes; Newton, from
-                // where it got to, may converge at once.
-                SolverOptions so = m.spec.solver;
-                so.maxIterations = std::min(so.maxIterations, o.newtonPolish);
-                Eigen::Matrix3Xd xs = m.x;
-                SolveSummary ns;
-                bool ok = m.runNewton(xs, &ns, so);
-                for (int r = 0; ok && m.self && !m.self->isCandidateListValid(xs) && r < Impl::kRechecks; ++r) {
-                    m.self->updateCandidates(xs);
-                    ok = m.runNewton(xs, &ns, so);
-                }
-                polish = ns.iterations;
-                out->factorizations += ns.factorizations;
-                if (ok) {
-                    m.x = xs;
-                    relaxed = true;
-                    r2 = ns.residualNorm * ns.residualNorm;
-                }
-            }
+            // The sub-steps ran out: Newton from where they left the film.
+            if (!relaxed && o.newtonPolish > 0) relaxed = tryPolish(o.newtonPolish);
             m.model->commitStep(m.x);
             m.model->endViscousStep(m.x);
             if (relaxed) m.v.setZero();  // an equilibrium, at rest

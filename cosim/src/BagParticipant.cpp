@@ -25,6 +25,7 @@ ParticipantStep BagParticipant::advance(double dt) {
     ParticipantStep s;
     s.converged = m_last.converged;
     s.solverIterations = m_last.newtonIterations;
+    s.unresolvedForce = m_last.unrelaxed ? m_last.residual : 0.0;
     return s;
 }
 

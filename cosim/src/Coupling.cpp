@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -130,6 +131,9 @@ struct Coupling::Impl {
     int steps = 0;
     bool initialized = false;
     CouplingProfile profile;
+    // [N] per participant, the force its last advance was kept short of its equilibrium by
+    // (ParticipantStep::unresolvedForce; a skipped participant keeps its last).
+    std::vector<double> unresolved;
 
     Impl(BodyParticipant& b, std::vector<Participant*> p, std::vector<Link> l,
          const CouplingOptions& o)
@@ -208,6 +212,7 @@ struct Coupling::Impl {
         const int np = int(participants.size());
         std::vector<std::exception_ptr> errors(np);
         std::vector<int> failed(np, 0), iterations(np, 0);
+        unresolved.resize(np, 0.0);
         std::vector<double> busy(np, 0.0);
         w.assign(links.size(), ShapeWrench());
         const auto start = std::chrono::steady_clock::now();
@@ -223,6 +228,7 @@ struct Coupling::Impl {
                 for (int i : linksOf[p]) part.setShapeState(links[i].shape, states[i]);
                 const ParticipantStep s = part.advance(dt);
                 iterations[p] = s.solverIterations;
+                unresolved[p] = s.unresolvedForce;
                 if (s.converged)
                     for (int i : linksOf[p]) w[i] = part.calcWrench(links[i].shape);
                 else
@@ -544,7 +550,13 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
             sum.firstWorstLink = sum.lastWorstLink;
             sum.firstWorstMiss = sum.lastWorstMiss;
         }
-        const double tolerance = o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance;
+        // The wrenches of a participant kept short of its equilibrium are resolved only to
+        // the force it was kept with: the fixed point is sought to that too.
+        const double unresolved =
+            std::accumulate(m.unresolved.begin(), m.unresolved.end(), 0.0);
+        sum.unresolvedForce = std::max(sum.unresolvedForce, unresolved);
+        const double tolerance =
+            o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance + unresolved;
         if (k == 0) {
             sum.firstResidual = sum.residual;
             sum.tolerance = tolerance;

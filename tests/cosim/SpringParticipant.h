@@ -4,7 +4,9 @@
 // the exact tangent K (or K scaled by tangentScale, a stand-in for a bag whose tangent is off).
 // It counts its advances and tangents, can be told to fail one, and to say it is steady; a
 // one-sided spring pushes only while its shape lies below X_ref (contact: no pull, no tangent
-// above it).
+// above it). With `unresolved` > 0 it stands in for a bag kept short of its equilibrium: its
+// force along z is off by that much, with a sign that alternates advance by advance (not a
+// function of the pose), and, if `reportUnresolved`, it says so (ParticipantStep).
 #include <cosim/Participant.h>
 
 #include <vector>
@@ -31,6 +33,8 @@ class SpringParticipant : public Participant {
         ParticipantStep s;
         s.converged = advances != failAt;
         m_pose = s.converged ? m_next : m_committed;
+        m_error = advances % 2 == 0 ? unresolved : -unresolved;
+        if (reportUnresolved) s.unresolvedForce = unresolved;
         return s;
     }
     void commit() override { m_committed = m_pose; }
@@ -42,7 +46,9 @@ class SpringParticipant : public Participant {
         Vec6 d;
         d << aa.angle() * aa.axis(), X.translation() - s.X_ref.translation();
         if (oneSided && d(5) >= 0.0) return ShapeWrench();
-        return ShapeWrench::fromVector(s.W_ref + s.K * d);
+        Vec6 W = s.W_ref + s.K * d;
+        W(5) += m_error;
+        return ShapeWrench::fromVector(W);
     }
     Mat6 calcWrenchTangent(int shape) const override {
         ++tangents;
@@ -59,10 +65,13 @@ class SpringParticipant : public Participant {
     double tangentScale = 1.0;  // the tangent reported, as a multiple of the true one
     bool steady = false;        // isSteady()
     bool oneSided = false;      // pushes only below X_ref (z)
+    double unresolved = 0.0;    // [N] the force error of a step kept short of equilibrium
+    bool reportUnresolved = false;
 
   private:
     std::vector<Spring> m_springs;
     std::vector<Eigen::Isometry3d> m_pose, m_committed, m_next;
+    double m_error = 0.0;
 };
 
 }  // namespace cosim::test

@@ -62,7 +62,10 @@ struct CouplingOptions {
     double macroStep = 1e-3;          ///< [s]
     double relativeTolerance = 1e-5;  ///< [-] of |H(x)|
     /// [N] must lie above the bags' own solve tolerance (bags::AirbagSpec::forceTolerance,
-    /// 0.05 N by default): the wrench a bag returns is no more exact than that.
+    /// 0.05 N by default): the wrench a bag returns is no more exact than that. A pass in
+    /// which participants were kept short of their equilibrium (ParticipantStep::
+    /// unresolvedForce) adds the sum of their forces to the tolerance: their wrenches are no
+    /// more exact than that either (StepSummary::unresolvedForce).
     double absoluteTolerance = 0.1;
     double torqueLength = 0.1;       ///< [m] torques count as torque / torqueLength [N]
     int maxIterations = 50;          ///< implicit iterations per macro step
@@ -159,6 +162,10 @@ struct StepSummary {
     /// links), and that link's share [N] (scaled as above): where a step's passes go.
     int firstWorstLink = -1, lastWorstLink = -1;
     double firstWorstMiss = 0.0, lastWorstMiss = 0.0;
+    /// [N] the largest sum over a pass of the participants' ParticipantStep::unresolvedForce:
+    /// the implicit tolerance was widened by it (0 when every participant reached its
+    /// equilibrium).
+    double unresolvedForce = 0.0;
 };
 
 /// Where a coupling's wall time went, summed over the steps since the last resetProfile()

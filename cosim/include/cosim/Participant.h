@@ -63,6 +63,9 @@ struct ShapeWrench {
 struct ParticipantStep {
     bool converged = false;    ///< false: the participant stands at its checkpoint
     int solverIterations = 0;  ///< Newton iterations (0 for a state that stood)
+    /// [N] a step kept short of its equilibrium (a relaxed bag's unrelaxed step): the force
+    /// residual it was kept with, to which its wrenches are resolved; 0 for an equilibrium.
+    double unresolvedForce = 0.0;
 };
 
 /// One bag (or a stand-in) as the coupling loop sees it. Not thread safe.
