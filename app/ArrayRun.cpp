@@ -300,16 +300,23 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         double largest = 0.0;
         int bag = -1;
     };
+    // The finite-element bags, with their index in the array (the reduced ones are left out).
+    auto feBags = [&] {
+        std::vector<std::pair<cosim::BagParticipant*, int>> fe;
+        for (size_t b = 0; b < poa->getBagIndices().size(); ++b)
+            if (auto* p = dynamic_cast<cosim::BagParticipant*>(&poa->updBag(int(b))))
+                fe.emplace_back(p, poa->getBagIndices()[b]);
+        return fe;
+    };
     auto tallyUnrelaxed = [&] {
         UnrelaxedTally t;
-        for (size_t b = 0; b < poa->getBagIndices().size(); ++b)
-            if (const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa->getBag(int(b)))) {
-                t.steps += fe->getNumUnrelaxedSteps();
-                if (fe->getNumUnrelaxedSteps() > 0 && fe->getLargestUnrelaxedResidual() >= t.largest) {
-                    t.largest = fe->getLargestUnrelaxedResidual();
-                    t.bag = poa->getBagIndices()[b];
-                }
+        for (const auto& [fe, bag] : feBags()) {
+            t.steps += fe->getNumUnrelaxedSteps();
+            if (fe->getNumUnrelaxedSteps() > 0 && fe->getLargestUnrelaxedResidual() >= t.largest) {
+                t.largest = fe->getLargestUnrelaxedResidual();
+                t.bag = bag;
             }
+        }
         verdict.setFilmSteps(sc.options.reduced ? bags::AirbagSpec::Stepping::QuasiStatic
                                                 : sc.options.bag.stepping,
                              t.steps, t.largest, t.bag, sc.options.bag.forceTolerance);
@@ -329,10 +336,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         verdict.saveState(w);
         // The relaxed bags' tally of steps kept unrelaxed, bag by bag (not in the bags' state).
         std::vector<double> tally;
-        for (int b = 0; b < int(poa->getBagIndices().size()); ++b)
-            if (const auto* fe = dynamic_cast<const cosim::BagParticipant*>(&poa->getBag(b)))
-                tally.push_back(double(fe->getNumUnrelaxedSteps())),
-                    tally.push_back(fe->getLargestUnrelaxedResidual());
+        for (const auto& [fe, bag] : feBags())
+            tally.push_back(double(fe->getNumUnrelaxedSteps())),
+                tally.push_back(fe->getLargestUnrelaxedResidual());
         w.vec(tally);
     };
     std::vector<double> resumedTally;  // until the bags are built
@@ -494,16 +500,14 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                                 resumedAirVolume.size(), airVolume.size());
                 airVolume = resumedAirVolume;
                 airRate = resumedAirRate;
-                std::vector<cosim::BagParticipant*> fe;
-                for (int b = 0; b < int(poa->getBagIndices().size()); ++b)
-                    if (auto* p = dynamic_cast<cosim::BagParticipant*>(&poa->updBag(b)))
-                        fe.push_back(p);
+                const auto fe = feBags();
                 if (!resumedTallyKnown) resumedTally.assign(2 * fe.size(), 0.0);
                 if (resumedTally.size() != 2 * fe.size())
                     bags::StateReader::mismatch("finite-element bags' tallies",
                                                 resumedTally.size() / 2, fe.size());
                 for (size_t k = 0; k < fe.size(); ++k)
-                    fe[k]->setUnrelaxedTally(long(resumedTally[2 * k]), resumedTally[2 * k + 1]);
+                    fe[k].first->setUnrelaxedTally(long(resumedTally[2 * k]),
+                                                   resumedTally[2 * k + 1]);
                 poa->loadState(*resume);
                 if (air) air->loadState(*resume);
                 if (sc.controller) sc.controller->loadState(*resume);

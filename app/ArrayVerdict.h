@@ -3,7 +3,8 @@
 /// at every output frame: target tilt reached and when; slid or rolled toward the edge (the
 /// centre of mass's lateral travel, an outer bag that carried him and lost him as he moved
 /// further out); a bag bottomed out (the inner height left under a pressed node); the relaxed
-/// bags' films at their equilibrium; per region the peak pressure and the time above 32 mmHg. Criteria and thresholds: docs/output-layout.md.
+/// bags' films at their equilibrium; per region the peak pressure and the time above 32 mmHg.
+/// Criteria and thresholds: docs/output-layout.md.
 
 #include <bags/Airbag.h>
 #include <cosim/ArrayLayout.h>

@@ -1378,16 +1378,18 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
             long k = 0;
             bool relaxed = false;
             int polish = 0;
-            // Newton alone from the relaxed state, at most maxIt iterations (the self-contact
-            // candidates rechecked): relaxation converges slowly in a crumpled film's softest
-            // modes, Newton fast once in its basin. True (x at its equilibrium) if it converged.
-            auto tryPolish = [&](int maxIt) {
+            // Newton alone from the relaxed state, at most newtonPolish iterations (the
+            // self-contact candidates rechecked): relaxation converges slowly in a crumpled
+            // film's softest modes, Newton fast once in its basin. True (x at its equilibrium)
+            // if it converged.
+            auto tryPolish = [&] {
                 SolverOptions so = m.spec.solver;
-                so.maxIterations = std::min(so.maxIterations, maxIt);
+                so.maxIterations = std::min(so.maxIterations, o.newtonPolish);
                 Eigen::Matrix3Xd xs = m.x;
                 SolveSummary ns;
                 bool ok = m.runNewton(xs, &ns, so);
-                for (int r = 0; ok && m.self && !m.self->isCandidateListValid(xs) && r < Impl::kRechecks; ++r) {
+                for (int r = 0;
+                     ok && m.self && !m.self->isCandidateListValid(xs) && r < Impl::kRechecks; ++r) {
                     m.self->updateCandidates(xs);
                     ok = m.runNewton(xs, &ns, so);
                 }
@@ -1424,7 +1426,7 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
                 }
             }
             // The sub-steps ran out: Newton from where they left the film.
-            if (!relaxed && o.newtonPolish > 0) relaxed = tryPolish(o.newtonPolish);
+            if (!relaxed && o.newtonPolish > 0) relaxed = tryPolish();
             m.model->commitStep(m.x);
             m.model->endViscousStep(m.x);
             if (relaxed) m.v.setZero();  // an equilibrium, at rest
