@@ -185,8 +185,11 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
                  "0: none; 1e5 Pa/m was measured on the seed's bag");
     b.threads = 1;  // bags run in parallel, one per thread
     // The film in time (docs/solver.md#the-film-in-time): its mass scale, damping and
-    // sub-step; quasi-static (an equilibrium each step) by default.
-    b.stepping = readStepping(s, b.stepping);
+    // sub-step. Relaxed by default under the patient: Newton alone first, the film relaxed in
+    // pseudo-time where Newton finds no equilibrium, so a slack bag never stops the run
+    // (docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags;
+    // measured against the quasi-static stepping in docs/performance.md).
+    b.stepping = readStepping(s, bags::AirbagSpec::Stepping::Relaxed);
     if (s.has("dynamic")) {
         const ScenarioNode d = s.getSection("dynamic");
         d.checkKeys({}, {"mass_scale", "damping", "step_fraction", "relax_substeps", "relax_pace",
@@ -229,6 +232,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(s, "stick_distance", sc.options.reducedFriction.stickDistance, 1e-4, 0.05,
                      "mm");
     }
+    if (reduced) b.stepping = bags::AirbagSpec::Stepping::QuasiStatic;  // no film to step
     if (reduced && (s.has("stepping") || s.has("dynamic")))
         s.fail(s.has("stepping") ? "stepping" : "dynamic",
                "is the finite-element bag's (how its film is stepped); the reduced bag has no "
@@ -237,6 +241,13 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         s.fail("film_damping", "is the finite-element bag's (its slack film's damper); the "
                                "reduced bag has no film to damp: leave it out, or model: "
                                "finite-element");
+    if (!reduced && b.stepping != bags::AirbagSpec::Stepping::QuasiStatic && b.damping > 0.0)
+        s.fail("film_damping",
+               "is the quasi-static stepping's damped steps; the " +
+                   std::string(b.stepping == bags::AirbagSpec::Stepping::Relaxed ? "relaxed"
+                                                                                : "dynamic") +
+                   " stepping (the default is relaxed) takes no damper: leave it out, or "
+                   "'stepping: quasi-static' beside it");
     if (reduced && s.has("friction_law") && law != "stick-slip")
         s.fail("friction_law", law + " is not valid with model: reduced; valid: stick-slip "
                                      "(the reduced bag's one law)");

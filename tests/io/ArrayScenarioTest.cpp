@@ -388,16 +388,26 @@ TEST(ArrayScenario, TheFilmsDamperIsOffByDefaultAStiffnessPerAreaAndTheFiniteEle
         return t;
     };
     EXPECT_EQ(read(kBase).options.bag.damping, 0.0);
-    EXPECT_DOUBLE_EQ(read(with(", film_damping: 1e5 Pa/m")).options.bag.damping, 1e5);
-    EXPECT_DOUBLE_EQ(read(with(", film_damping: 0.1 N/mm^3")).options.bag.damping, 1e8);
+    const std::string qs = ", stepping: quasi-static";
+    EXPECT_DOUBLE_EQ(read(with(qs + ", film_damping: 1e5 Pa/m")).options.bag.damping, 1e5);
+    EXPECT_DOUBLE_EQ(read(with(qs + ", film_damping: 0.1 N/mm^3")).options.bag.damping, 1e8);
     for (const char* bad : {"soft", "-1 Pa/m", "1e9 Pa/m", "5 mm"}) {
-        const io::InputError e = readError(with(std::string(", film_damping: ") + bad));
+        const io::InputError e = readError(with(qs + ", film_damping: " + bad));
         EXPECT_EQ(e.getLine(), 3) << bad;
         EXPECT_EQ(e.getKey(), "bag.film_damping") << bad;
     }
+    // The damped steps are the quasi-static stepping's: with the relaxed one (the default)
+    // or the dynamic one the damper would do nothing, so it is refused, saying why.
+    for (const char* stepping : {"", ", stepping: relaxed", ", stepping: dynamic"}) {
+        const io::InputError e =
+            readError(with(std::string(stepping) + ", film_damping: 1e5 Pa/m"));
+        EXPECT_EQ(e.getKey(), "bag.film_damping") << stepping;
+        EXPECT_NE(std::string(e.what()).find("stepping: quasi-static"), std::string::npos)
+            << e.what();
+    }
     // (refused with the reduced bag: ReducedBagFile.*)
     // It reaches every coupled bag the run builds.
-    const io::PatientOnArrayScenario sc = read(with(", film_damping: 1e5 Pa/m"));
+    const io::PatientOnArrayScenario sc = read(with(qs + ", film_damping: 1e5 Pa/m"));
     const cosim::PatientOnArray poa(sc.patient, sc.options);
     ASSERT_GT(poa.getBagIndices().size(), 0u);
     for (size_t b = 0; b < poa.getBagIndices().size(); ++b) {
@@ -455,13 +465,15 @@ TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreL
     }
 }
 
-TEST(ArrayScenario, TheFilmsSteppingIsQuasiStaticByDefaultAndDynamicWithItsSettings) {
+TEST(ArrayScenario, TheFilmsSteppingIsRelaxedByDefaultAndDynamicWithItsSettings) {
     auto with = [](const std::string& keys) {
         std::string t = kBase;
         t.replace(t.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm" + keys + "}");
         return t;
     };
-    EXPECT_EQ(read(kBase).options.bag.stepping, bags::AirbagSpec::Stepping::QuasiStatic);
+    EXPECT_EQ(read(kBase).options.bag.stepping, bags::AirbagSpec::Stepping::Relaxed);
+    EXPECT_EQ(read(with(", stepping: quasi-static")).options.bag.stepping,
+              bags::AirbagSpec::Stepping::QuasiStatic);
     const bags::AirbagSpec dflt = read(with(", stepping: dynamic")).options.bag;
     EXPECT_EQ(dflt.stepping, bags::AirbagSpec::Stepping::Dynamic);
     EXPECT_EQ(dflt.dynamics.massScale, 1000.0);
@@ -474,7 +486,8 @@ TEST(ArrayScenario, TheFilmsSteppingIsQuasiStaticByDefaultAndDynamicWithItsSetti
     EXPECT_EQ(set.dynamics.damping, 5.0);
     EXPECT_EQ(set.dynamics.stepFraction, 0.25);
     // The settings without the stepping, a damping without its rate unit, a stepping unknown.
-    for (const char* bad : {", dynamic: {mass_scale: 100}", ", stepping: dynamic, dynamic: {damping: 5 s}",
+    for (const char* bad : {", stepping: quasi-static, dynamic: {mass_scale: 100}",
+                            ", stepping: dynamic, dynamic: {damping: 5 s}",
                             ", stepping: implicit"}) {
         const io::InputError e = readError(with(bad));
         EXPECT_EQ(e.getLine(), 3) << bad;
