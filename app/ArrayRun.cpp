@@ -260,6 +260,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         f.time = poa->getTime();
         f.regions = cosim::calcRegionLoads(*poa);
         f.bags = cosim::calcBagReadings(*poa);
+        const std::vector<double> pressedHeights =
+            cosim::calcPressedNodeHeights(*poa, kPressedThreshold);
+        for (size_t i = 0; i < f.bags.size(); ++i) f.bags[i].innerHeight = pressedHeights[i];
         f.pelvisTilt = cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk);
         f.thoraxTilt = cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk);
         f.centreOfMass = cosim::calcCentreOfMass(*poa);
@@ -278,7 +281,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             f.bodyNodes = &bodyNodes;
         }
         writer->addFrame(f);
-        verdict.addFrame(f, cosim::calcPressedNodeHeights(*poa, kPressedThreshold));
+        verdict.addFrame(f, pressedHeights);
         return f;
     };
     auto where = [&] {
@@ -695,13 +698,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     table << "tilt: pelvis " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk) * kDeg)
           << ", thorax " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk) * kDeg)
           << " (positive: turned onto his left side)\n"
-          << "  region           PPI [mmHg]  mean [mmHg]  area [cm^2]  force [N]\n";
+          << "  region           PPI [mmHg]  mean [mmHg]  area [cm^2]  force [N]  immersion [mm]\n";
     for (const cosim::RegionLoad& r : regions) {
         if (!(r.peakPressure > 0.0)) continue;
         char line[160];
-        std::snprintf(line, sizeof line, "  %-15s %11.1f %12.1f %12.1f %10.2f\n", r.name.c_str(),
-                      r.peakPressure / 133.322387415, r.meanPressure / 133.322387415,
-                      r.area * 1e4, r.force);
+        std::snprintf(line, sizeof line, "  %-15s %11.1f %12.1f %12.1f %10.2f %15.1f\n",
+                      r.name.c_str(), r.peakPressure / 133.322387415,
+                      r.meanPressure / 133.322387415, r.area * 1e4, r.force, 1e3 * r.immersion);
         table << line;
     }
     if (air) {
@@ -770,8 +773,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     }
     writeReportAfterRun(outPath, quiet);
     std::cout << table.str() << "support verdict:\n" << verdictText << "results in " << outPath.string() << "/:\n"
-              << "  " << io::kRegionsCsv << "   time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg\n"
-              << "  " << io::kBagsCsv << "      time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm\n"
+              << "  " << io::kRegionsCsv << "   " << io::kRegionsHeader << "\n"
+              << "  " << io::kBagsCsv << "      " << io::kBagsHeader << "\n"
               << "  " << io::kTiltCsv << "      time_s,pelvis_tilt_deg,thorax_tilt_deg\n"
               << "  " << io::kBodyCsv << "      time_s,com_x_mm,com_y_mm,com_z_mm\n"
               << "  " << io::kEventsCsv << "    time_s,event\n"

@@ -1302,6 +1302,22 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
         AdvanceSummary out = relaxStep(m, dt, maxCuts);
         out.newtonIterations += newton;
         out.factorizations += factorizations;
+        if (out.converged && out.unrelaxed && m.spec.dynamics.quasiStaticFallback) {
+            // Neither the relaxation nor the polish got there: the quasi-static stepping's
+            // retries (damped steps, springs, cuts) may, from the committed state. Its answer
+            // is kept if it finds one; else the relaxed state, marked.
+            const std::shared_ptr<Snapshot> relaxed = m.snapshot();  // velocity, time, poses too
+            AdvanceSummary q = quasiStatic.advance(m, dt, maxCuts);
+            q.newtonIterations += out.newtonIterations;
+            q.factorizations += out.factorizations;
+            if (q.converged) {
+                q.substeps += out.substeps;
+                return q;
+            }
+            m.restore(*relaxed);
+            out.newtonIterations = q.newtonIterations;
+            out.factorizations = q.factorizations;
+        }
         return out;
     }
 
@@ -1574,21 +1590,41 @@ void Airbag::inflate(const std::vector<double>& masses) {
     Impl& m = *m_impl;
     checkMasses(masses, m.numBags, "Airbag::inflate");
     if (m.inflated) throw std::logic_error("Airbag::inflate called twice");
-    const Mesh& mesh = m.mesh;
-    for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].target = m.shapes[i].shape->getPose();
     // A prescribed pressure ramp shapes the flat panels, then the gas takes over. Each bag
     // goes to the pressure its gas would have in its flat panels; with several bags the ramp's
     // parameter is the highest of these, the others following in proportion.
     std::vector<double> pTarget(m.numBags);
-    double pMax = 0.0;
     for (int b = 0; b < m.numBags; ++b) {
         double Vflat = 0.0;
-        for (int c : m.bagChambers[b]) Vflat += calcChamberVolume(mesh, c, m.x);
+        for (int c : m.bagChambers[b]) Vflat += calcChamberVolume(m.mesh, c, m.x);
         GasChamber probe(m.spec.gas, masses[b]);
         probe.seal(Vflat);
         pTarget[b] = std::clamp(probe.calcGaugePressure(Vflat), 200.0, 5000.0);
-        pMax = std::max(pMax, pTarget[b]);
     }
+    rampAndSeal(pTarget);
+    changeGasMass(masses);
+}
+
+void Airbag::inflateToPressure(double gaugePressure) {
+    Impl& m = *m_impl;
+    if (!(gaugePressure > 0.0 && gaugePressure <= 1e6))
+        throw std::invalid_argument("Airbag::inflateToPressure: use a gauge pressure > 0 and "
+                                    "<= 1 MPa (e.g. 4 kPa)");
+    if (m.inflated) throw std::logic_error("Airbag::inflateToPressure after the bag was inflated");
+    rampAndSeal(std::vector<double>(m.numBags, gaugePressure));
+    // The gas sealed at the ramp's end holds the film where the prescribed pressure did: the
+    // same state, now solved and committed with the gas as the bag's own load.
+    std::vector<double> masses(m.numBags);
+    for (int b = 0; b < m.numBags; ++b) masses[b] = getGasMass(b);
+    changeGasMass(masses);
+}
+
+void Airbag::rampAndSeal(std::vector<double> pTarget) {
+    Impl& m = *m_impl;
+    const Mesh& mesh = m.mesh;
+    for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].target = m.shapes[i].shape->getPose();
+    double pMax = 0.0;
+    for (double p : pTarget) pMax = std::max(pMax, p);
     if (m.spec.sharedAir) pTarget.assign(m.numBags, pMax);  // one air: one pressure
     m.solveRamp(0.0, pMax,
                 [&](double p) {
@@ -1629,7 +1665,6 @@ void Airbag::inflate(const std::vector<double>& masses) {
         }
     }
     m.inflated = true;
-    changeGasMass(masses);
 }
 
 void Airbag::changeGasMass(double mass) {

@@ -712,9 +712,13 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         const bool hasPatch = run.regions.find("patch_peak_mmHg") >= 0;
         const Curves patch =
             hasPatch ? collect(run.regions, "region", "patch_peak_mmHg") : Curves{};
+        // The immersion (likewise absent from older runs' regions.csv).
+        const bool hasImmersion = run.regions.find("immersion_mm") >= 0;
+        const Curves immersion =
+            hasImmersion ? collect(run.regions, "region", "immersion_mm") : Curves{};
         struct R {
             std::string name;
-            double max, at, area, force, patch;
+            double max, at, area, force, patch, immersion;
         };
         std::vector<R> rs;
         double top = kThresholdMmHg;
@@ -723,11 +727,13 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
             const size_t i = size_t(std::max_element(s.y.begin(), s.y.end()) - s.y.begin());
             const auto& a = area.byKey.at(k).y;
             const auto& f = force.byKey.at(k).y;
-            double pp = 0.0;
+            double pp = 0.0, deepest = 0.0;
             if (hasPatch)
                 for (double v : patch.byKey.at(k).y) pp = std::max(pp, v);
+            if (hasImmersion)
+                for (double v : immersion.byKey.at(k).y) deepest = std::max(deepest, v);
             rs.push_back({k, s.y[i], s.x[i], *std::max_element(a.begin(), a.end()),
-                          *std::max_element(f.begin(), f.end()), pp});
+                          *std::max_element(f.begin(), f.end()), pp, deepest});
             top = std::max(top, s.y[i]);
         }
         std::sort(rs.begin(), rs.end(), [](const R& a, const R& b) { return a.max > b.max; });
@@ -741,15 +747,21 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
                               "20 cm&#178; of the region: unlike the nodal PPI it does not "
                               "depend on the bags' mesh."
                             : "")
+               << (hasImmersion ? " The immersion is how far below the bags' top as inflated "
+                                  "at the start the region's deepest point in contact lay."
+                                : "")
                << "</p><table><tr><th>region</th><th>highest PPI</th><th>at</th>"
                << (hasPatch ? "<th>highest patch peak</th>" : "")
-               << "<th>largest contact area</th><th>largest force</th></tr>";
+               << "<th>largest contact area</th><th>largest force</th>"
+               << (hasImmersion ? "<th>deepest immersion</th>" : "") << "</tr>";
             for (const R& r : rs) {
                 os << "<tr><td>" << escape(r.name) << "</td><td class='n'>" << num(r.max, "%.1f")
                    << " mmHg</td><td class='n'>" << formatTime(r.at) << "</td><td class='n'>";
                 if (hasPatch) os << num(r.patch, "%.1f") << " mmHg</td><td class='n'>";
                 os << num(r.area, "%.1f") << " cm&#178;</td><td class='n'>"
-                   << num(r.force, "%.1f") << " N</td></tr>";
+                   << num(r.force, "%.1f") << " N</td>";
+                if (hasImmersion) os << "<td class='n'>" << num(r.immersion, "%.1f") << " mm</td>";
+                os << "</tr>";
             }
             os << "</table><div class='plots'>";
             const double yMax = svg::calcRoundUp(top * 1.05);

@@ -174,8 +174,8 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info
         f << header << "\n";
         if (!f) throw std::runtime_error("cannot write " + dir.getFile(name).string());
     };
-    open(d.regions, kRegionsCsv, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg");
-    open(d.bags, kBagsCsv, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm");
+    open(d.regions, kRegionsCsv, kRegionsHeader);
+    open(d.bags, kBagsCsv, kBagsHeader);
     open(d.tilt, kTiltCsv, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
     open(d.body, kBodyCsv, "time_s,com_x_mm,com_y_mm,com_z_mm");
     open(d.events, kEventsCsv, "time_s,event");
@@ -251,12 +251,13 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
         d.regions << t << "," << r.name << "," << fmt("%.3f", r.peakPressure / kMmHg) << ","
                   << fmt("%.3f", r.meanPressure / kMmHg) << "," << fmt("%.4f", r.area * 1e4)
                   << "," << fmt("%.5f", r.force) << "," << fmt("%.3f", r.patchPeakPressure / kMmHg)
-                  << "\n";
+                  << "," << fmt("%.2f", r.immersion * 1e3) << "\n";
     }
     for (const cosim::BagReading& b : f.bags)
         d.bags << t << "," << b.bag << "," << fmt("%.6f", b.gasMass * 1e3) << ","
                << fmt("%.5f", b.gaugePressure * 1e-3) << "," << fmt("%.6f", b.volume * 1e3)
-               << "," << fmt("%.5f", b.force) << "," << fmt("%.3f", b.overlap * 1e3) << "\n";
+               << "," << fmt("%.5f", b.force) << "," << fmt("%.3f", b.overlap * 1e3) << ","
+               << (std::isfinite(b.innerHeight) ? fmt("%.2f", b.innerHeight * 1e3) : "") << "\n";
     d.tilt << t << "," << fmt("%.4f", f.pelvisTilt * 180.0 / kPi) << ","
            << fmt("%.4f", f.thoraxTilt * 180.0 / kPi) << "\n";
     d.body << t << "," << fmt("%.3f", 1e3 * f.centreOfMass.x()) << ","
@@ -401,6 +402,18 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const cosim::Pressu
             throw std::runtime_error(path.string() + " is " +
                                      (ec ? std::string("missing") : "shorter than at the checkpoint") +
                                      "; the run cannot be resumed from this folder");
+    }
+    // A folder written by a bagsim whose files had other columns cannot take this one's rows.
+    for (const auto& [name, header] : {std::pair{kRegionsCsv, kRegionsHeader},
+                                       std::pair{kBagsCsv, kBagsHeader}}) {
+        std::ifstream in(dir.getFile(name));
+        std::string line;
+        std::getline(in, line);
+        if (line != header)
+            throw std::runtime_error(dir.getFile(name).string() + " has the columns '" + line +
+                                     "', this bagsim writes '" + header +
+                                     "' (the folder was written by an earlier version); the run "
+                                     "cannot be resumed from this folder: run it again");
     }
     std::ofstream* files[] = {&d.regions, &d.bags, &d.tilt, &d.body, &d.events, &d.pneumatics};
     for (int k = 0; k < 6; ++k) {

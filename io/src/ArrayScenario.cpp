@@ -1,4 +1,5 @@
 // Reading the patient-on-array scenario kind.
+#include <bags/Airbag.h>
 #include <bags/MaterialFit.h>
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayScenario.h>
@@ -193,7 +194,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     if (s.has("dynamic")) {
         const ScenarioNode d = s.getSection("dynamic");
         d.checkKeys({}, {"mass_scale", "damping", "step_fraction", "relax_substeps", "relax_pace",
-                         "newton_first", "newton_polish"});
+                         "newton_first", "newton_polish", "quasi_static_fallback"});
         b.dynamics.massScale = d.getNumber("mass_scale", 1000.0);
         checkBetween(d, "mass_scale", b.dynamics.massScale, 1.0, 1e6, "",
                      "the film's masses times this, e.g. 1000");
@@ -203,7 +204,8 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(d, "step_fraction", b.dynamics.stepFraction, 1e-3, 1.0, "",
                      "a fraction of the stable step, e.g. 0.5");
         if (b.stepping != bags::AirbagSpec::Stepping::Relaxed)
-            for (const char* key : {"relax_substeps", "relax_pace", "newton_first", "newton_polish"})
+            for (const char* key : {"relax_substeps", "relax_pace", "newton_first", "newton_polish",
+                                    "quasi_static_fallback"})
                 if (d.has(key))
                     d.fail(key, "is the relaxed stepping's: leave it out, or 'stepping: relaxed'");
         b.dynamics.relaxSubsteps = d.getInteger("relax_substeps", b.dynamics.relaxSubsteps);
@@ -213,6 +215,8 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(d, "relax_pace", b.dynamics.relaxPace, 1e-5, 10.0, "mm/s",
                      "e.g. 20 mm/s (at mass scale 1000)");
         b.dynamics.newtonFirst = d.getBool("newton_first", b.dynamics.newtonFirst);
+        b.dynamics.quasiStaticFallback =
+            d.getBool("quasi_static_fallback", b.dynamics.quasiStaticFallback);
         b.dynamics.newtonPolish = d.getInteger("newton_polish", b.dynamics.newtonPolish);
         checkBetween(d, "newton_polish", b.dynamics.newtonPolish, 0, 1000, "",
                      "0 (no Newton after the relaxation) to 1000 iterations, e.g. 30");
@@ -261,9 +265,38 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
 
 // -------------------------------------------------------------------------------------- array
 
+// The gas mass that fills the scenario's bag to a gauge pressure p [Pa], unloaded and at rest:
+// a regulated supply filling the cell to its setpoint, then sealed (Airbag::inflateToPressure()
+// on one bag of the array's geometry and mesh; the same for every bag, whatever its place).
+// One inflation per distinct pressure of the file.
+double readMassAtPressure(const ScenarioNode& s, const std::string& key, const bags::AirbagSpec& bag,
+                          std::vector<std::pair<double, double>>& known) {
+    const double p = s.getQuantity(key, D::Pressure);
+    checkBetween(s, key, p, 200.0, 1e5, "kPa",
+                 "clinical cells run at about 1.5-8 kPa; the seed's wedge is at about 20 kPa with "
+                 "4.5 g");
+    for (const auto& [pk, mass] : known)
+        if (pk == p) return mass;
+    bags::AirbagSpec spec = bag;
+    spec.selfContact = false;  // the unloaded cell's walls stand apart
+    spec.stepping = bags::AirbagSpec::Stepping::QuasiStatic;
+    spec.damping = 0.0;
+    double mass = 0.0;
+    try {
+        bags::Airbag probe(spec);
+        probe.inflateToPressure(p);
+        mass = probe.getGasMass(0);
+    } catch (const std::exception& e) {
+        s.fail(key, fmtUnit(p, "kPa") + ": the bag could not be inflated to it (" + e.what() +
+                        "); valid: a pressure the bag holds, e.g. 4 kPa");
+    }
+    known.emplace_back(p, mass);
+    return mass;
+}
+
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
-    s.checkKeys({"rows", "columns", "gas_mass"},
-                {"row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
+    s.checkKeys({"rows", "columns"},
+                {"gas_mass", "pressure", "row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
                  "groups", "board_contact", "board_friction_law", "board_stick_distance",
                  "board_slip_velocity", "neighbour_contact",
                  "neighbour_margin"});
@@ -333,21 +366,39 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
         s.fail("neighbour_contact",
                "true needs the finite-element bags (the reduced model has no film to touch); "
                "valid: false with bag.model reduced");
-    a.gasMass = s.getQuantity("gas_mass", D::Mass);
-    checkPositive(s, "gas_mass", a.gasMass, "g");
+    // The bags' fill: a gas mass, or a gauge pressure the bag is filled to at rest (then
+    // sealed, or held by the pneumatics' controller), as a clinical mattress is set.
+    if (s.has("gas_mass") == s.has("pressure"))
+        s.fail(s.has("gas_mass") ? "pressure" : "gas_mass",
+               s.has("gas_mass") ? "and gas_mass both set the bags' fill; valid: one of them"
+                                 : "missing: the bags' fill, a gas mass (gas_mass: 4.5 g) or the "
+                                   "gauge pressure they are filled to at rest (pressure: 4 kPa)");
+    std::vector<std::pair<double, double>> known;  // pressure, mass: inflated once each
+    if (s.has("pressure")) {
+        a.gasMass = readMassAtPressure(s, "pressure", sc.options.bag, known);
+    } else {
+        a.gasMass = s.getQuantity("gas_mass", D::Mass);
+        checkPositive(s, "gas_mass", a.gasMass, "g");
+    }
     if (s.has("groups")) {
         const ScenarioNode gs = s.get("groups");
         if (!gs.isSequence())
             s.fail("groups", "must be a list of groups, e.g. - {name: left, columns: [0], "
                              "gas_mass: 4.5 g}");
         for (const ScenarioNode& e : gs.getElements()) {
-            e.checkKeys({"name"}, {"rows", "columns", "gas_mass"});
+            e.checkKeys({"name"}, {"rows", "columns", "gas_mass", "pressure"});
             cosim::BagGroup g;
             g.name = e.getString("name");
             g.rows = readIndices(e, "rows", a.rows, "row");
             g.columns = readIndices(e, "columns", a.columns, "column");
-            g.gasMass = e.getQuantity("gas_mass", D::Mass, a.gasMass);
-            checkPositive(e, "gas_mass", g.gasMass, "g");
+            if (e.has("gas_mass") && e.has("pressure"))
+                e.fail("pressure", "and gas_mass both set the group's fill; valid: one of them");
+            if (e.has("pressure")) {
+                g.gasMass = readMassAtPressure(e, "pressure", sc.options.bag, known);
+            } else {
+                g.gasMass = e.getQuantity("gas_mass", D::Mass, a.gasMass);
+                checkPositive(e, "gas_mass", g.gasMass, "g");
+            }
             a.groups.push_back(g);
         }
     }

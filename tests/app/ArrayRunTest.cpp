@@ -22,8 +22,10 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     const Csv regions = readCsv(out / "regions.csv");
     const Csv bags = readCsv(out / "bags.csv");
     const Csv tilt = readCsv(out / "tilt.csv");
-    EXPECT_EQ(regions.header, "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg");
-    EXPECT_EQ(bags.header, "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm");
+    EXPECT_EQ(regions.header,
+              "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg,immersion_mm");
+    EXPECT_EQ(bags.header,
+              "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm,inner_height_mm");
     EXPECT_EQ(tilt.header, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
     EXPECT_EQ(tilt.rows.size(), 11u);  // every 10 ms from 0 to 0.1 s
     const auto regionSum = sumPerTime(regions, "force_N");
@@ -39,6 +41,33 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     const int ppi = regions.column("ppi_mmHg"), patch = regions.column("patch_peak_mmHg");
     for (const auto& r : regions.rows)
         if (std::stod(r.at(ppi)) > 0.0) EXPECT_GT(std::stod(r.at(patch)), 0.0) << r.at(1);
+    // How deep he lies in the surface: a region with contact above 5 mmHg (its area) lies
+    // below the bags' top as inflated, by less than the 150 mm wedge; a bag he presses has
+    // the air left under him (inner height) between the board and its top, an untouched bag
+    // none (empty).
+    const int area = regions.column("area_cm2"), immersion = regions.column("immersion_mm");
+    const int inner = bags.column("inner_height_mm"), bagForce = bags.column("force_N");
+    int immersed = 0, pressed = 0, untouched = 0;
+    for (const auto& r : regions.rows) {
+        const double depth = std::stod(r.at(immersion));
+        EXPECT_GE(depth, 0.0) << r.at(1);
+        EXPECT_LT(depth, 150.0) << r.at(1);
+        if (std::stod(r.at(area)) > 0.0 && r.at(0) == "0.1000") immersed += depth > 1.0;
+    }
+    for (const auto& r : bags.rows) {
+        if (r.size() <= size_t(inner) || r.at(inner).empty()) {  // (the split drops a last empty cell)
+            EXPECT_LT(std::stod(r.at(bagForce)), 1.0) << "bag " << r.at(1) << " at " << r.at(0);
+            ++untouched;
+            continue;
+        }
+        const double h = std::stod(r.at(inner));
+        EXPECT_GT(h, 0.0);
+        EXPECT_LT(h, 160.0);
+        ++pressed;
+    }
+    EXPECT_GT(immersed, 3);  // he has sunk into the bags under his trunk, thighs, head by 0.1 s
+    EXPECT_GT(pressed, 0);
+    EXPECT_GT(untouched, 0);  // at the release nothing presses
     // Every bag holds the scenario's 4.5 g (no gas command).
     const int mass = bags.column("mass_g");
     for (const auto& r : bags.rows) EXPECT_NEAR(std::stod(r.at(mass)), 4.5, 1e-6);
@@ -57,6 +86,7 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     EXPECT_NE(page.str().find("<h1>supine-on-array-coarse</h1>"), std::string::npos);
     EXPECT_EQ(page.str().find("INCOMPLETE RESULTS"), std::string::npos);
     EXPECT_NE(page.str().find("<th>highest patch peak</th>"), std::string::npos);
+    EXPECT_NE(page.str().find("<th>deepest immersion</th>"), std::string::npos);
     const std::string bagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\" report ";
     auto run = [&](const std::string& args) {
         const int rc = std::system((bagsim + args + " > \"" + out.string() + ".report.log\" 2>&1").c_str());

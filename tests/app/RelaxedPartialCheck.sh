@@ -13,6 +13,7 @@ bagsim=$1 dir=$2 scenario=$3
 rm -rf "$dir" && mkdir -p "$dir" || exit 1
 set -- --quiet --set bag.stepping=relaxed --set bag.dynamic.newton_first=false \
     --set bag.dynamic.relax_substeps=3 --set bag.dynamic.newton_polish=0 \
+    --set bag.dynamic.quasi_static_fallback=false \
     --set run.settle_time=0.05s --set coupling.threads=2 \
     --set output.checkpoint_every=0.02s
 fail() { echo "RelaxedPartialCheck: $*"; exit 1; }

@@ -1,6 +1,8 @@
 // The patient lying on an array of airbags through the co-simulation: a light patient on a
 // coarse array is lowered onto it, settles, and at rest the bags carry his weight while the
 // mechanical energy does not grow.
+#include <cosim/ArrayReadings.h>
+
 #include "PatientAtRest.h"
 
 using namespace cosim;
@@ -80,4 +82,40 @@ TEST(PatientOnArray, WithBodyFrictionTheBagsHandTheBodyTheirLinearisationWithout
     o.contact.friction = 0.4;
     o.coupling.scheme = Scheme::Tangent;
     EXPECT_THROW(o.validate(), std::invalid_argument);
+}
+
+TEST(PatientOnArray, ImmersionIsMeasuredFromTheBagsTopAsInflatedBeforeHeLayOnThem) {
+    // The rest tops: one per coupled bag, the highest of its pressure points once inflated
+    // (before any step), a wedge's inflated height (the seed's bag rises to 150 mm; at 4.5 g
+    // on 30 mm meshes 100-160 mm). After he has landed (0.1 s), reference: the bags' own
+    // nodes. Every region's immersion lies between 0 and its bag's top, and the deepest
+    // region's is the deepest pressed node's depth below its top over the bags
+    // (calcPressedNodeHeights(): the same 5 mmHg threshold on each shape's pressure, read per
+    // bag, not per region), to 1e-12 m.
+    PatientOnArray poa(lightPatient(), coarseOptions());
+    const std::vector<double>& top = poa.getRestTopHeights();
+    ASSERT_EQ(top.size(), poa.getBagIndices().size());
+    for (size_t b = 0; b < top.size(); ++b) {
+        EXPECT_EQ(top[b], poa.getBag(int(b)).getPressurePoints().row(2).maxCoeff()) << b;
+        EXPECT_GT(top[b], 0.100) << b;
+        EXPECT_LT(top[b], 0.160) << b;
+    }
+    while (poa.getTime() < 0.1 - 1e-9) poa.step();
+    const double threshold = 5.0 * 133.322387415;
+    const std::vector<RegionLoad> regions = calcRegionLoads(poa, threshold);
+    const std::vector<double> inner = calcPressedNodeHeights(poa, threshold);
+    double deepestRegion = 0.0, deepestBag = 0.0;
+    int immersed = 0;
+    for (const RegionLoad& r : regions) {
+        EXPECT_GE(r.immersion, 0.0) << r.name;
+        EXPECT_LT(r.immersion, 0.160) << r.name;
+        if (r.area == 0.0) EXPECT_EQ(r.immersion, 0.0) << r.name;
+        immersed += r.immersion > 1e-3;
+        deepestRegion = std::max(deepestRegion, r.immersion);
+    }
+    for (size_t b = 0; b < inner.size(); ++b)
+        if (std::isfinite(inner[b])) deepestBag = std::max(deepestBag, top[b] - inner[b]);
+    EXPECT_GT(immersed, 3);
+    EXPECT_GT(deepestRegion, 0.005);  // he has sunk into the bags by more than 5 mm somewhere
+    EXPECT_NEAR(deepestRegion, deepestBag, 1e-12);
 }

@@ -539,3 +539,50 @@ TEST(ArrayScenario, TheRelaxedSteppingTakesItsSubstepsAndPaceAndOnlyIt) {
         EXPECT_NE(std::string(b.what()).find(key), std::string::npos) << b.what();
     }
 }
+
+TEST(ArrayScenario, ThePressureAtRestSetsTheFillAsAClinicalMattressIsSet) {
+    // `pressure` in place of `gas_mass`: the gas mass that fills the bag to that gauge pressure
+    // unloaded, at rest. Reference: a bag of the same spec inflated with that mass by the other
+    // path (Airbag::inflate(mass): the flat panels' ramp, then the gas mass ramp) reads the
+    // pressure back within 0.5 %; a group's own pressure likewise; a higher pressure, more gas.
+    auto with = [](const std::string& array, const std::string& right) {
+        std::string t = kBase;
+        const std::string fill = "  gas_mass: 4.5 g\n";
+        const std::string right5 = "{name: right, columns: [1], gas_mass: 5 g}";
+        t.replace(t.find(fill), fill.size(), array);
+        t.replace(t.find(right5), right5.size(),
+                  "{name: right, columns: [1]" + right + "}");
+        return t;
+    };
+    const io::PatientOnArrayScenario sc = read(with("  pressure: 4 kPa\n", ", pressure: 8 kPa"));
+    const double m4 = sc.options.layout.gasMass, m8 = sc.options.layout.groups.at(1).gasMass;
+    EXPECT_EQ(sc.options.layout.groups.at(0).gasMass, m4);
+    EXPECT_GT(m8, m4);
+    for (const auto& [mass, pressure] : {std::pair{m4, 4e3}, std::pair{m8, 8e3}}) {
+        bags::AirbagSpec spec = sc.options.bag;
+        spec.selfContact = false;
+        bags::Airbag bag(spec);
+        bag.inflate(mass);
+        EXPECT_NEAR(bag.getChamberState(0).gaugePressure, pressure, 5e-3 * pressure) << mass;
+    }
+    // The seed's bag at 4.5 g is at about 20 kPa: 4 kPa needs less gas.
+    EXPECT_LT(m4, 4.5e-3);
+    EXPECT_GT(m4, 3.0e-3);
+    // Refused: both or neither, a pressure out of range or without its unit, both in a group.
+    auto refused = [](const std::string& text, int line, const std::string& key,
+                      const std::string& what) {
+        const io::InputError e = readError(text);
+        EXPECT_EQ(e.getLine(), line) << e.what();
+        EXPECT_EQ(e.getKey(), key) << e.what();
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    };
+    refused((with("  gas_mass: 4 g\n  pressure: 4 kPa\n", "")), 12,
+                     "array.pressure", "and gas_mass both set the bags' fill; valid: one of them");
+    refused((with("", "")), 4, "array.gas_mass",
+                     "missing: the bags' fill, a gas mass (gas_mass: 4.5 g) or the gauge pressure");
+    refused((with("  pressure: 50 Pa\n", "")), 11, "array.pressure",
+                     "0.05 kPa is not valid; valid: in [0.2 kPa, 100 kPa]");
+    refused((with("  pressure: 4\n", "")), 11, "array.pressure", "has no unit");
+    refused((with("  pressure: 4 kPa\n", ", gas_mass: 4 g, pressure: 4 kPa")), 14,
+                     "array.groups[1].pressure", "and gas_mass both set the group's fill");
+}

@@ -209,6 +209,11 @@ public:
     void inflate(double mass);
     /// As inflate(mass), bag b of the module to masses[b] [kg].
     void inflate(const std::vector<double>& masses);
+    /// Inflates the flat bag to a gauge pressure [Pa], as a regulated supply fills a cell to
+    /// its setpoint, and seals the gas that is then in it (every bag of a cluster alike):
+    /// getGasMass() then says how much that is; commits.
+    /// @throws NumericalError if it cannot be solved.
+    void inflateToPressure(double gaugePressure);
     /// Takes the gas mass of the bag (of every bag of a cluster) to `mass` [kg] now,
     /// quasi-statically (shapes held), in steps it cuts as needed; commits.
     /// @throws NumericalError if it cannot be solved.
@@ -342,6 +347,9 @@ public:
 
 private:
     int checkBag(int bag) const;  ///< bag, or std::out_of_range
+    /// The inflation's pressure ramp to pTarget[b] [Pa] per bag (bags ramp together, the
+    /// highest's pressure the parameter), then each bag's gas sealed at that state.
+    void rampAndSeal(std::vector<double> pTarget);
     struct Impl;
     std::unique_ptr<Impl> m_impl;
 };

@@ -51,6 +51,11 @@ struct DynamicOptions {
     /// alone (at most newtonPolish iterations, the self-contact candidates rechecked) is
     /// tried from the relaxed state; its equilibrium is kept if it finds one. 0: no polish.
     int newtonPolish = 30;
+    /// Relaxed stepping: where neither the relaxation nor the polish reached the force
+    /// tolerance, the step is taken once more by the quasi-static stepping (its retries:
+    /// damped steps, stabilisation springs, cuts) from the committed state, and its answer kept
+    /// if it finds one; else the relaxed state is kept, marked unrelaxed. false: no fallback.
+    bool quasiStaticFallback = true;
     /// Throws std::invalid_argument naming the option and what would be valid.
     void validate() const;
 };

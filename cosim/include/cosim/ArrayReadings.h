@@ -16,12 +16,17 @@
 /// nodes' contact forces (pressure times area along the shape's outward normal), so that the
 /// regions' forces add up to PatientOnArray::calcBagForce() (without friction).
 ///
+/// The immersion: how far below the array's top as inflated at the start
+/// (PatientOnArray::getRestTopHeights(), per bag) the region's deepest node with a pressure
+/// above the area threshold lies: the depth to which he sinks into the surface there.
+///
 /// The patch peak: the highest normal force of the region's nodes inside any disc of area
 /// `patchArea` (in the bed's plane, centred on one of its loaded nodes), divided by that area.
 /// Unlike the nodal peak it does not depend on the mesh once the disc holds several nodes:
 /// a node's pressure is its force over its lumped area, which at the contact's rim and along
 /// the seams changes with the mesh (docs/reduced-bag.md, "Which peak").
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -38,6 +43,9 @@ struct RegionLoad {
     double meanPressure = 0.0;  ///< [Pa] normal force over the area (0 with no area)
     double area = 0.0;          ///< [m^2] nodes' areas where the pressure exceeds the threshold
     double force = 0.0;         ///< [N] vertical (Ground +z) part of the contact force
+    /// [m] depth of its deepest node above the area threshold below its bag's top as
+    /// inflated at the start (file comment); 0 with no such node
+    double immersion = 0.0;
 };
 
 /// The names loads are reported under: the model's regions in order, then the 16 segments
@@ -73,6 +81,10 @@ struct BagReading {
     /// [m] largest depth by which its film and a neighbour's overlap (pass through each
     /// other): PatientOnArray::calcNeighbourOverlaps(); 0 for bags without a film.
     double overlap = 0.0;
+    /// [m] the least height above the bed board of a node the body presses
+    /// (calcPressedNodeHeights(): the air left under him, the bottoming-out margin's measure);
+    /// infinity where none is pressed. Not filled by calcBagReadings().
+    double innerHeight = std::numeric_limits<double>::infinity();
 };
 
 /// One reading per participant (PatientOnArray::getBagIndices() order).
