@@ -58,7 +58,6 @@ std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaTh
     std::vector<std::shared_ptr<bags::RigidShape>> probes(body::kSegmentCount);
     const std::vector<ShapeBagPair>& pairs = poa.getPairs();
     const std::vector<Link>& links = poa.getLinks();
-    const std::vector<double>& restTop = poa.getRestTopHeights();
     for (size_t i = 0; i < pairs.size(); ++i) {
         const Link& link = links[i];
         const auto seg = static_cast<body::Segment>(pairs[i].shape);
@@ -86,7 +85,8 @@ std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaTh
             patchPoints[&r - loads.data()].emplace_back(x(0, n), x(1, n));
             patchForces[&r - loads.data()].push_back(p[n] * area[n]);
             if (p[n] > areaThreshold) {
-                r.immersion = std::max(r.immersion, restTop[size_t(link.participant)] - x(2, n));
+                r.immersion = std::max(r.immersion,
+                                       poa.getRestHeights(link.participant)[n] - x(2, n));
                 r.area += area[n];
                 normalForce[&r - loads.data()] += p[n] * area[n];
             }

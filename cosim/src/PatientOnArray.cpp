@@ -75,7 +75,7 @@ struct PatientOnArray::Impl {
     const body::PlaneSupport* board = nullptr;  // the body's bed board (owned by the model)
     double clearance = 0.0;
     double gravity = 0.0;
-    std::vector<double> restTop;        // per coupled bag [m]: getRestTopHeights()
+    std::vector<Eigen::VectorXd> restHeights;  // per coupled bag [m]: getRestHeights()
 };
 
 namespace {
@@ -239,10 +239,7 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         for (size_t i = 0; i < masses.size(); ++i) m.reducedBags[i]->setGasMass(masses[i]);
     else
         m.fe.inflate(masses);
-    for (const Bag* bag : m.bags) {
-        const Eigen::Matrix3Xd& x = bag->getPressurePoints();
-        m.restTop.push_back(x.cols() > 0 ? x.row(2).maxCoeff() : 0.0);
-    }
+    for (const Bag* bag : m.bags) m.restHeights.push_back(bag->getPressurePoints().row(2).transpose());
 
     // The lowest clearance at which no node of a paired bag lies inside a shape (bisection to
     // 1e-6 m over [0, parked]).
@@ -342,7 +339,9 @@ EnvelopeCounts PatientOnArray::getEnvelopeCounts() const {
 
 const std::vector<ShapeBagPair>& PatientOnArray::getPairs() const { return m_impl->pairs; }
 const std::vector<int>& PatientOnArray::getBagIndices() const { return m_impl->bagIndices; }
-const std::vector<double>& PatientOnArray::getRestTopHeights() const { return m_impl->restTop; }
+const Eigen::VectorXd& PatientOnArray::getRestHeights(int bag) const {
+    return m_impl->restHeights.at(size_t(bag));
+}
 const body::BodyModel& PatientOnArray::getModel() const { return *m_impl->model; }
 const BodyParticipant& PatientOnArray::getBody() const { return *m_impl->body; }
 const Bag& PatientOnArray::getBag(int bag) const { return *m_impl->bags.at(size_t(bag)); }

@@ -747,8 +747,8 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
                               "20 cm&#178; of the region: unlike the nodal PPI it does not "
                               "depend on the bags' mesh."
                             : "")
-               << (hasImmersion ? " The immersion is how far below the bags' top as inflated "
-                                  "at the start the region's deepest point in contact lay."
+               << (hasImmersion ? " The immersion is the most the region pushed a point of "
+                                  "the films down from where it stood before he lay on them."
                                 : "")
                << "</p><table><tr><th>region</th><th>highest PPI</th><th>at</th>"
                << (hasPatch ? "<th>highest patch peak</th>" : "")

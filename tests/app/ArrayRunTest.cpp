@@ -41,8 +41,8 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     const int ppi = regions.column("ppi_mmHg"), patch = regions.column("patch_peak_mmHg");
     for (const auto& r : regions.rows)
         if (std::stod(r.at(ppi)) > 0.0) EXPECT_GT(std::stod(r.at(patch)), 0.0) << r.at(1);
-    // How deep he lies in the surface: a region with contact above 5 mmHg (its area) lies
-    // below the bags' top as inflated, by less than the 150 mm wedge; a bag he presses has
+    // How deep he lies in the surface: a region with contact above 5 mmHg (its area) has
+    // pushed the films down from their rest, by less than the 150 mm wedge; a bag he presses has
     // the air left under him (inner height) between the board and its top, an untouched bag
     // none (empty).
     const int area = regions.column("area_cm2"), immersion = regions.column("immersion_mm");

@@ -16,9 +16,10 @@
 /// nodes' contact forces (pressure times area along the shape's outward normal), so that the
 /// regions' forces add up to PatientOnArray::calcBagForce() (without friction).
 ///
-/// The immersion: how far below the array's top as inflated at the start
-/// (PatientOnArray::getRestTopHeights(), per bag) the region's deepest node with a pressure
-/// above the area threshold lies: the depth to which he sinks into the surface there.
+/// The immersion: the most that a node of the region with a pressure above the area threshold
+/// lies below its own height as the bags were inflated at the start
+/// (PatientOnArray::getRestHeights()): how far he has pushed the surface down there (on a
+/// wedge's slope as on its crest, each point from where it stood).
 ///
 /// The patch peak: the highest normal force of the region's nodes inside any disc of area
 /// `patchArea` (in the bed's plane, centred on one of its loaded nodes), divided by that area.
@@ -43,8 +44,8 @@ struct RegionLoad {
     double meanPressure = 0.0;  ///< [Pa] normal force over the area (0 with no area)
     double area = 0.0;          ///< [m^2] nodes' areas where the pressure exceeds the threshold
     double force = 0.0;         ///< [N] vertical (Ground +z) part of the contact force
-    /// [m] depth of its deepest node above the area threshold below its bag's top as
-    /// inflated at the start (file comment); 0 with no such node
+    /// [m] the most a node above the area threshold lies below its height at the start
+    /// (file comment); 0 with no such node
     double immersion = 0.0;
 };
 

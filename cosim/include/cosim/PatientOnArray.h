@@ -165,11 +165,11 @@ class PatientOnArray {
     /// coupled bag, per coupled bag, at the current state (calcFilmOverlap() with every bag
     /// whose nodes' bounding box meets its own); 0 for bags without a film.
     std::vector<double> calcNeighbourOverlaps() const;
-    /// Per coupled bag (getBagIndices() order): the height [m] above the bed board of its top
-    /// as inflated at the start, before he lay on it (the highest of its pressure points once
-    /// the bags were inflated to their masses, the patient parked above them): the surface
-    /// from which his immersion is measured (RegionLoad::immersion).
-    const std::vector<double>& getRestTopHeights() const;
+    /// Coupled bag i's pressure points' heights [m] above the bed board as inflated at the
+    /// start, before he lay on it (getPressurePoints()' z once the bags were inflated to their
+    /// masses, the patient parked above them): the surface from which his immersion is
+    /// measured (RegionLoad::immersion).
+    const Eigen::VectorXd& getRestHeights(int bag) const;
     /// Pair i's shape (getPairs()) posed where the body's segment is at the committed state:
     /// a new shape for measurements (calcPassThroughs()); the bags' own are the coupling's.
     std::shared_ptr<bags::RigidShape> makePairShape(int pair) const;
