@@ -702,9 +702,10 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     for (const cosim::RegionLoad& r : regions) {
         if (!(r.peakPressure > 0.0)) continue;
         char line[160];
-        std::snprintf(line, sizeof line, "  %-15s %11.1f %12.1f %12.1f %10.2f %15.1f\n",
+        const std::string depth = std::isnan(r.immersion) ? "-" : fmt("%.1f", 1e3 * r.immersion);
+        std::snprintf(line, sizeof line, "  %-15s %11.1f %12.1f %12.1f %10.2f %15s\n",
                       r.name.c_str(), r.peakPressure / 133.322387415,
-                      r.meanPressure / 133.322387415, r.area * 1e4, r.force, 1e3 * r.immersion);
+                      r.meanPressure / 133.322387415, r.area * 1e4, r.force, depth.c_str());
         table << line;
     }
     if (air) {

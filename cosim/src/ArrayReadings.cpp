@@ -84,9 +84,14 @@ std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa, double areaTh
             r.peakPressure = std::max(r.peakPressure, p[n]);
             patchPoints[&r - loads.data()].emplace_back(x(0, n), x(1, n));
             patchForces[&r - loads.data()].push_back(p[n] * area[n]);
+            if (p[n] > kRiskPressure) r.areaAtRisk += area[n];
+            // A film's node has a rest height; a reduced bag's contact samples (no film) have
+            // none: a region it touches has its immersion not measured (NaN).
+            const Eigen::VectorXd& rest = poa.getRestHeights(link.participant);
+            if (n >= rest.size()) r.immersion = std::numeric_limits<double>::quiet_NaN();
             if (p[n] > areaThreshold) {
-                r.immersion = std::max(r.immersion,
-                                       poa.getRestHeights(link.participant)[n] - x(2, n));
+                if (!std::isnan(r.immersion))
+                    r.immersion = std::max(r.immersion, rest[n] - x(2, n));
                 r.area += area[n];
                 normalForce[&r - loads.data()] += p[n] * area[n];
             }

@@ -712,13 +712,19 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         const bool hasPatch = run.regions.find("patch_peak_mmHg") >= 0;
         const Curves patch =
             hasPatch ? collect(run.regions, "region", "patch_peak_mmHg") : Curves{};
-        // The immersion (likewise absent from older runs' regions.csv).
-        const bool hasImmersion = run.regions.find("immersion_mm") >= 0;
+        // The immersion (likewise absent from older runs' regions.csv; empty with reduced
+        // bags, which have no film to measure it on).
+        const int immersionColumn = run.regions.find("immersion_mm");
+        bool hasImmersion = immersionColumn >= 0;
+        for (size_t r = 0; hasImmersion && r < run.regions.rows.size(); ++r)
+            hasImmersion = !run.regions.text(r, immersionColumn).empty();
         const Curves immersion =
             hasImmersion ? collect(run.regions, "region", "immersion_mm") : Curves{};
+        const bool hasRisk = run.regions.find("area_above_32_cm2") >= 0;
+        const Curves risk = hasRisk ? collect(run.regions, "region", "area_above_32_cm2") : Curves{};
         struct R {
             std::string name;
-            double max, at, area, force, patch, immersion;
+            double max, at, area, force, patch, immersion, risk;
         };
         std::vector<R> rs;
         double top = kThresholdMmHg;
@@ -727,13 +733,15 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
             const size_t i = size_t(std::max_element(s.y.begin(), s.y.end()) - s.y.begin());
             const auto& a = area.byKey.at(k).y;
             const auto& f = force.byKey.at(k).y;
-            double pp = 0.0, deepest = 0.0;
+            double pp = 0.0, deepest = 0.0, atRisk = 0.0;
             if (hasPatch)
                 for (double v : patch.byKey.at(k).y) pp = std::max(pp, v);
             if (hasImmersion)
                 for (double v : immersion.byKey.at(k).y) deepest = std::max(deepest, v);
+            if (hasRisk)
+                for (double v : risk.byKey.at(k).y) atRisk = std::max(atRisk, v);
             rs.push_back({k, s.y[i], s.x[i], *std::max_element(a.begin(), a.end()),
-                          *std::max_element(f.begin(), f.end()), pp, deepest});
+                          *std::max_element(f.begin(), f.end()), pp, deepest, atRisk});
             top = std::max(top, s.y[i]);
         }
         std::sort(rs.begin(), rs.end(), [](const R& a, const R& b) { return a.max > b.max; });
@@ -753,6 +761,7 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
                << "</p><table><tr><th>region</th><th>highest PPI</th><th>at</th>"
                << (hasPatch ? "<th>highest patch peak</th>" : "")
                << "<th>largest contact area</th><th>largest force</th>"
+               << (hasRisk ? "<th>largest area above 32 mmHg</th>" : "")
                << (hasImmersion ? "<th>deepest immersion</th>" : "") << "</tr>";
             for (const R& r : rs) {
                 os << "<tr><td>" << escape(r.name) << "</td><td class='n'>" << num(r.max, "%.1f")
@@ -760,6 +769,7 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
                 if (hasPatch) os << num(r.patch, "%.1f") << " mmHg</td><td class='n'>";
                 os << num(r.area, "%.1f") << " cm&#178;</td><td class='n'>"
                    << num(r.force, "%.1f") << " N</td>";
+                if (hasRisk) os << "<td class='n'>" << num(r.risk, "%.1f") << " cm&#178;</td>";
                 if (hasImmersion) os << "<td class='n'>" << num(r.immersion, "%.1f") << " mm</td>";
                 os << "</tr>";
             }

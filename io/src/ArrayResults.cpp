@@ -251,7 +251,8 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
         d.regions << t << "," << r.name << "," << fmt("%.3f", r.peakPressure / kMmHg) << ","
                   << fmt("%.3f", r.meanPressure / kMmHg) << "," << fmt("%.4f", r.area * 1e4)
                   << "," << fmt("%.5f", r.force) << "," << fmt("%.3f", r.patchPeakPressure / kMmHg)
-                  << "," << fmt("%.2f", r.immersion * 1e3) << "\n";
+                  << "," << (std::isnan(r.immersion) ? "" : fmt("%.2f", r.immersion * 1e3)) << ","
+                  << fmt("%.4f", r.areaAtRisk * 1e4) << "\n";
     }
     for (const cosim::BagReading& b : f.bags)
         d.bags << t << "," << b.bag << "," << fmt("%.6f", b.gasMass * 1e3) << ","

@@ -23,7 +23,8 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     const Csv bags = readCsv(out / "bags.csv");
     const Csv tilt = readCsv(out / "tilt.csv");
     EXPECT_EQ(regions.header,
-              "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg,immersion_mm");
+              "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg,immersion_mm,"
+              "area_above_32_cm2");
     EXPECT_EQ(bags.header,
               "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm,inner_height_mm");
     EXPECT_EQ(tilt.header, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
@@ -46,6 +47,16 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     // the air left under him (inner height) between the board and its top, an untouched bag
     // none (empty).
     const int area = regions.column("area_cm2"), immersion = regions.column("immersion_mm");
+    // The area above 32 mmHg is part of the contact area, and where the peak is below 32 mmHg
+    // there is none.
+    const int risk = regions.column("area_above_32_cm2");
+    int atRisk = 0;
+    for (const auto& r : regions.rows) {
+        EXPECT_LE(std::stod(r.at(risk)), std::stod(r.at(area)) + 1e-9) << r.at(1);
+        if (std::stod(r.at(ppi)) <= 32.0) EXPECT_EQ(std::stod(r.at(risk)), 0.0) << r.at(1);
+        atRisk += std::stod(r.at(risk)) > 0.0;
+    }
+    EXPECT_GT(atRisk, 0);  // landing on the 4.5 g wedges, some regions lie above 32 mmHg
     const int inner = bags.column("inner_height_mm"), bagForce = bags.column("force_N");
     int immersed = 0, pressed = 0, untouched = 0;
     for (const auto& r : regions.rows) {
@@ -87,6 +98,7 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     EXPECT_EQ(page.str().find("INCOMPLETE RESULTS"), std::string::npos);
     EXPECT_NE(page.str().find("<th>highest patch peak</th>"), std::string::npos);
     EXPECT_NE(page.str().find("<th>deepest immersion</th>"), std::string::npos);
+    EXPECT_NE(page.str().find("<th>largest area above 32 mmHg</th>"), std::string::npos);
     const std::string bagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\" report ";
     auto run = [&](const std::string& args) {
         const int rc = std::system((bagsim + args + " > \"" + out.string() + ".report.log\" 2>&1").c_str());

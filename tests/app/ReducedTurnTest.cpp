@@ -42,6 +42,12 @@ TEST(ReducedTurn, TheCoarseTurnWithReducedBagsTiltsHimAsTheFiniteElementBagsDo) 
             EXPECT_NEAR(std::stod(r.at(thorax)), 4.16, 2.0);
         }
     EXPECT_TRUE(seen) << "no tilt row at 3.0 s";
+    // The reduced bag has no film whose points could say how far he pushed it down: its
+    // regions' immersion is left empty, not written as a depth of 0.
+    const Csv regions = readCsv(out / "regions.csv");
+    const int immersion = regions.column("immersion_mm");
+    ASSERT_GT(regions.rows.size(), 0u);
+    for (const auto& r : regions.rows) EXPECT_EQ(r.at(immersion), "") << r.at(1);
     // Settled (1.5 s): the bags carry his 735.5 N within 2 % (the settle's own criterion is
     // rest, not force; the FE run carried 735.6 N then).
     const Csv bags = readCsv(out / "bags.csv");

@@ -45,9 +45,15 @@ struct RegionLoad {
     double area = 0.0;          ///< [m^2] nodes' areas where the pressure exceeds the threshold
     double force = 0.0;         ///< [N] vertical (Ground +z) part of the contact force
     /// [m] the most a node above the area threshold lies below its height at the start
-    /// (file comment); 0 with no such node
+    /// (file comment); 0 with no such node; NaN on the reduced bag (no film: not measured)
     double immersion = 0.0;
+    /// [m^2] nodes' areas where the pressure exceeds kRiskPressure (32 mmHg)
+    double areaAtRisk = 0.0;
 };
+
+/// [Pa] 32 mmHg, the capillary closing pressure: the clinical reference for pressure-ulcer
+/// risk (RegionLoad::areaAtRisk, the verdict's time above it, the report's mat pictures).
+constexpr double kRiskPressure = 32.0 * 133.322387415;
 
 /// The names loads are reported under: the model's regions in order, then the 16 segments
 /// (for nodes in no region). Index i of calcRegionLoads() is name i.
