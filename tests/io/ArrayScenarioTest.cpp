@@ -396,9 +396,10 @@ TEST(ArrayScenario, TheFilmsDamperIsOffByDefaultAStiffnessPerAreaAndTheFiniteEle
         EXPECT_EQ(e.getLine(), 3) << bad;
         EXPECT_EQ(e.getKey(), "bag.film_damping") << bad;
     }
-    // The damped steps are the quasi-static stepping's: with the relaxed one (the default)
-    // or the dynamic one the damper would do nothing, so it is refused, saying why.
-    for (const char* stepping : {"", ", stepping: relaxed", ", stepping: dynamic"}) {
+    // The damped steps are the quasi-static stepping's: with the relaxed or the dynamic one
+    // the damper would do nothing, so it is refused, saying why.
+    EXPECT_DOUBLE_EQ(read(with(", film_damping: 1e5 Pa/m")).options.bag.damping, 1e5);
+    for (const char* stepping : {", stepping: relaxed", ", stepping: dynamic"}) {
         const io::InputError e =
             readError(with(std::string(stepping) + ", film_damping: 1e5 Pa/m"));
         EXPECT_EQ(e.getKey(), "bag.film_damping") << stepping;
@@ -465,15 +466,15 @@ TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreL
     }
 }
 
-TEST(ArrayScenario, TheFilmsSteppingIsRelaxedByDefaultAndDynamicWithItsSettings) {
+TEST(ArrayScenario, TheFilmsSteppingIsQuasiStaticByDefaultAndDynamicWithItsSettings) {
     auto with = [](const std::string& keys) {
         std::string t = kBase;
         t.replace(t.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm" + keys + "}");
         return t;
     };
-    EXPECT_EQ(read(kBase).options.bag.stepping, bags::AirbagSpec::Stepping::Relaxed);
-    EXPECT_EQ(read(with(", stepping: quasi-static")).options.bag.stepping,
-              bags::AirbagSpec::Stepping::QuasiStatic);
+    EXPECT_EQ(read(kBase).options.bag.stepping, bags::AirbagSpec::Stepping::QuasiStatic);
+    EXPECT_EQ(read(with(", stepping: relaxed")).options.bag.stepping,
+              bags::AirbagSpec::Stepping::Relaxed);
     const bags::AirbagSpec dflt = read(with(", stepping: dynamic")).options.bag;
     EXPECT_EQ(dflt.stepping, bags::AirbagSpec::Stepping::Dynamic);
     EXPECT_EQ(dflt.dynamics.massScale, 1000.0);
