@@ -1,5 +1,7 @@
 #include "ArrayVerdict.h"
 
+#include <cosim/ArrayReadings.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,7 +12,7 @@ namespace bagsim::app {
 namespace {
 
 constexpr double kMmHg = 133.322387415;        // [Pa]
-constexpr double kCapillary = 32.0 * kMmHg;    // the capillary closing pressure [Pa]
+constexpr double kCapillary = cosim::kRiskPressure;  // the capillary closing pressure [Pa]
 constexpr double kHandCheck = 0.025;           // [m] the nurses' hand check: 1 inch of air
 constexpr double kCarried = 1.0;               // [N] a bag that carries him
 constexpr double kNothing = 0.1;               // [N] a bag that carries nothing

@@ -235,7 +235,6 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         checkBetween(s, "stick_distance", sc.options.reducedFriction.stickDistance, 1e-4, 0.05,
                      "mm");
     }
-    if (reduced) b.stepping = bags::AirbagSpec::Stepping::QuasiStatic;  // no film to step
     if (reduced && (s.has("stepping") || s.has("dynamic")))
         s.fail(s.has("stepping") ? "stepping" : "dynamic",
                "is the finite-element bag's (how its film is stepped); the reduced bag has no "
