@@ -54,6 +54,15 @@ double calcBagVolume(const cosim::Bag& a) {
 struct Totals {
     int steps = 0, passes = 0, cuts = 0;
     long bodySteps = 0;  // the body integrator's internal steps in the committed passes
+    // Macro steps kept with no fixed point (CouplingOptions::keepUnconverged): how many, and
+    // the largest |H(x) - x| kept, its tolerance and when.
+    long unconverged = 0;
+    double worstResidual = 0.0, worstTolerance = 0.0, worstTime = 0.0;
+};
+// Totals as a checkpoint of the parts 'run-2' and 'run-3' holds them.
+struct TotalsBefore4 {
+    int steps = 0, passes = 0, cuts = 0;
+    long bodySteps = 0;
 };
 
 // Writes `data` to dir/checkpoint.bin through a temporary file, flushed to the disk and
@@ -323,13 +332,17 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         verdict.setFilmSteps(sc.options.reduced ? bags::AirbagSpec::Stepping::QuasiStatic
                                                 : sc.options.bag.stepping,
                              t.steps, t.largest, t.bag, sc.options.bag.forceTolerance);
+        const cosim::Scheme scheme = sc.options.coupling.scheme;
+        verdict.setCouplingSteps(
+            scheme == cosim::Scheme::Implicit || scheme == cosim::Scheme::TangentImplicit,
+            totals.unconverged, totals.worstResidual, totals.worstTolerance, totals.worstTime);
         return t;
     };
     // The checkpoint (docs/output-layout.md#checkpoint): header, the writers' positions, the
     // loop's own state, the verdict so far, then the model: body, bags, coupling, pneumatics,
     // controller. A resumed run reads it in that order.
     auto saveRunState = [&](bags::StateWriter& w) {
-        w.tag("run-3");
+        w.tag("run-4");
         w.pod(nextOutput), w.pod(settled), w.pod(nextCheckpoint);
         w.pod(std::uint64_t(events.size()));
         for (const cosim::ControlEvent& e : events) w.pod(e.time), w.str(e.text);
@@ -349,15 +362,24 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     bool resumedTallyKnown = true;  // a checkpoint written before the tally (run-2) has none
     auto loadRunState = [&](bags::StateReader& r) {
         const std::string part = r.str();
-        if (part != "run-3" && part != "run-2")
-            throw bags::StateError("checkpoint: expected the part 'run-3', found '" +
+        if (part != "run-4" && part != "run-3" && part != "run-2")
+            throw bags::StateError("checkpoint: expected the part 'run-4', found '" +
                                    part.substr(0, 60) + "' (the checkpoint is of another model)");
-        resumedTallyKnown = part == "run-3";
+        resumedTallyKnown = part != "run-2";
         r.pod(nextOutput), r.pod(settled), r.pod(nextCheckpoint);
         events.resize(r.pod<std::uint64_t>());
         for (cosim::ControlEvent& e : events) r.pod(e.time), e.text = r.str();
         eventsWritten = size_t(r.pod<std::uint64_t>());
-        r.pod(totals), r.pod(massMismatch), r.pod(envelope);
+        if (part == "run-4") {
+            r.pod(totals);
+        } else {  // before the tally of unconverged steps
+            TotalsBefore4 t;
+            r.pod(t);
+            totals = Totals();
+            totals.steps = t.steps, totals.passes = t.passes, totals.cuts = t.cuts;
+            totals.bodySteps = t.bodySteps;
+        }
+        r.pod(massMismatch), r.pod(envelope);
         r.vec(resumedAirVolume), r.vec(resumedAirRate);
         verdict.loadState(r);
         if (resumedTallyKnown) r.vec(resumedTally);
@@ -580,6 +602,21 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             totals.passes += s.iterations;
             totals.cuts += s.cuts;
             totals.bodySteps += poa->getBody().getLastIntegratorSteps();
+            if (!s.converged) {
+                ++totals.unconverged;
+                if (s.residual >= totals.worstResidual) {
+                    totals.worstResidual = s.residual;
+                    totals.worstTolerance = s.tolerance;
+                    totals.worstTime = s.time;
+                }
+                if (!quiet)
+                    std::cerr << "bagsim: warning: the coupling found no fixed point at "
+                              << fmt("%.6f s", s.time) << " (|H(x) - x| = "
+                              << fmt("%.3g N", s.residual) << " against "
+                              << fmt("%.3g N", s.tolerance) << " at the smallest step, "
+                              << fmt("%.3g ms", 1e3 * s.macroStep)
+                              << "); the step is kept and the run will be partial\n";
+            }
             if (air) {
                 // The committed step: each bag's volume now and its rate over the step; the
                 // bag's and the network's masses (one owner: they must agree to roundoff).
@@ -676,6 +713,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
               << fmt("%.3g N", unrelaxed.largest) << " (bag " << unrelaxed.bag
               << "; docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags)"
                  ": the run is partial\n";
+    if (totals.unconverged > 0)  // the coupling kept steps without a fixed point
+        table << "coupling: " << totals.unconverged
+              << " macro steps were kept without a fixed point at the smallest step, the "
+                 "largest |H(x) - x| "
+              << fmt("%.3g N", totals.worstResidual) << " against "
+              << fmt("%.3g N", totals.worstTolerance) << fmt(" at %.4f s", totals.worstTime)
+              << " (docs/cosim.md#the-schemes): the run is partial\n";
     {  // how deep a segment lies inside a film between its nodes, which the contact does not see
         const std::vector<cosim::PassThrough> pass = cosim::calcPassThroughs(*poa);
         const auto worst = std::max_element(
@@ -760,10 +804,16 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         s << "support verdict (verdict.csv):\n" << verdictText;
         s.close();
         if (!s) throw std::runtime_error("cannot write summary.txt in " + outPath.string());
+        std::string partial;
         if (unrelaxed.steps > 0)
-            writer->finish(fmt("%.4f s simulated", poa->getTime()),
-                           fmt("%ld", unrelaxed.steps) +
-                               " bag steps were kept unrelaxed (verdict.csv, 'bag films relaxed')");
+            partial = fmt("%ld", unrelaxed.steps) +
+                      " bag steps were kept unrelaxed (verdict.csv, 'bag films relaxed')";
+        if (totals.unconverged > 0)
+            partial += (partial.empty() ? "" : "; ") + fmt("%ld", totals.unconverged) +
+                       " macro steps were kept without a fixed point (verdict.csv, 'coupling "
+                       "converged')";
+        if (!partial.empty())
+            writer->finish(fmt("%.4f s simulated", poa->getTime()), partial);
         else
             writer->finish(fmt("%.4f s simulated", poa->getTime()));
         // Finished: nothing left to resume.
@@ -785,15 +835,20 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
               << "  " << io::kResultsH5 << "    pressure-mat frames (/mat), " << io::kResultsXdmf
               << " to open them in ParaView\n"
               << "  summary.txt, report.html (open it in a browser)\n";
-    if (unrelaxed.steps > 0) {
+    if (unrelaxed.steps > 0)
         std::cerr << "bagsim: run partial: " << unrelaxed.steps
                   << " bag steps were kept unrelaxed (largest residual "
                   << fmt("%.3g N", unrelaxed.largest) << ", bag " << unrelaxed.bag
                   << "); raise bag.dynamic.relax_substeps; results in " << outPath.string()
                   << "/ (marked INCOMPLETE, status partial)\n";
-        return 3;
-    }
-    return 0;
+    if (totals.unconverged > 0)
+        std::cerr << "bagsim: run partial: " << totals.unconverged
+                  << " macro steps were kept without the coupling's fixed point (largest "
+                  << "|H(x) - x| " << fmt("%.3g N", totals.worstResidual) << " against "
+                  << fmt("%.3g N", totals.worstTolerance) << fmt(" at %.4f s", totals.worstTime)
+                  << "); results in " << outPath.string()
+                  << "/ (marked INCOMPLETE, status partial)\n";
+    return unrelaxed.steps > 0 || totals.unconverged > 0 ? 3 : 0;
 }
 
 }  // namespace bagsim::app

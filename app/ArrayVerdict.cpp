@@ -120,6 +120,15 @@ void ArrayVerdict::setFilmSteps(bags::AirbagSpec::Stepping stepping, long unrela
     m_forceTolerance = tolerance;
 }
 
+void ArrayVerdict::setCouplingSteps(bool iterated, long unconverged, double worstResidual,
+                                    double worstTolerance, double worstTime) {
+    m_iterated = iterated;
+    m_unconverged = unconverged;
+    m_worstResidual = worstResidual;
+    m_worstTolerance = worstTolerance;
+    m_worstTime = worstTime;
+}
+
 std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
     std::vector<io::VerdictRow> rows;
     const double span = m_lastTime - m_firstTime;
@@ -213,6 +222,21 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
                             fmt("%.3g N", m_forceTolerance) + "); the largest residual kept " +
                             fmt("%.3g N", m_largestUnrelaxed) + " (bag " +
                             std::to_string(m_unrelaxedBag) + "); the run is partial"});
+    // The coupling at its fixed point (the implicit schemes keep a step without one only at
+    // the smallest step, coupling.keep_unconverged).
+    if (!m_iterated)
+        rows.push_back({"coupling converged", "n/a", kNaN, "steps",
+                        "a one-pass scheme (coupling.scheme): no fixed point is sought"});
+    else if (m_unconverged == 0)
+        rows.push_back({"coupling converged", "ok", 0.0, "steps",
+                        "every macro step reached the coupling's fixed point to its tolerance"});
+    else
+        rows.push_back({"coupling converged", "fail", double(m_unconverged), "steps",
+                        "macro steps kept without a fixed point at the smallest step "
+                        "(coupling.keep_unconverged); the largest |H(x) - x| kept " +
+                            fmt("%.3g N", m_worstResidual) + " against " +
+                            fmt("%.3g N", m_worstTolerance) + fmt(" at %.4f s", m_worstTime) +
+                            "; the run is partial"});
     // Regions.
     for (const std::string& name : m_regionOrder) {
         const Region& g = m_regions.at(name);

@@ -35,6 +35,11 @@ class ArrayVerdict {
                       int worstBag, double tolerance);
     /// True when setFilmSteps() was given unrelaxed steps: the run is then partial.
     bool hasUnrelaxedSteps() const { return m_unrelaxed > 0; }
+    /// Whether the coupling iterates to a fixed point (the implicit schemes) and how many
+    /// macro steps were kept without one at the smallest step (cosim::CouplingOptions::
+    /// keepUnconverged), the largest |H(x) - x| kept [N], its tolerance [N] and time [s].
+    void setCouplingSteps(bool iterated, long unconverged, double worstResidual,
+                          double worstTolerance, double worstTime);
     std::vector<io::VerdictRow> makeRows() const;
     /// What the frames so far left (a checkpoint), and back into a verdict made the same way.
     void saveState(bags::StateWriter& w) const;
@@ -51,6 +56,9 @@ class ArrayVerdict {
     long m_unrelaxed = 0;
     double m_largestUnrelaxed = 0.0, m_forceTolerance = 0.0;
     int m_unrelaxedBag = -1;
+    bool m_iterated = true;
+    long m_unconverged = 0;
+    double m_worstResidual = 0.0, m_worstTolerance = 0.0, m_worstTime = 0.0;
     // the judged window
     bool m_haveRef = false;
     double m_lastTime = 0.0, m_firstTime = 0.0;

@@ -1,7 +1,8 @@
 // bagsim run: reads a scenario, runs it, streams the results into the output folder and
 // prints progress and a summary. Exit status: 0 complete, 1 the run failed (numerical or I/O),
 // 2 bad input (scenario, options, output folder), 3 partial (a curve stopped on a numerical
-// failure, or relaxed bags kept steps unrelaxed), 130 interrupted by SIGINT (Ctrl-C), 143 by
+// failure, relaxed bags kept steps unrelaxed, or the coupling kept steps without a fixed
+// point), 130 interrupted by SIGINT (Ctrl-C), 143 by
 // SIGTERM (docs/output-layout.md).
 #include <algorithm>
 #include <bags/LoadTest.h>
@@ -78,9 +79,9 @@ const char* kHelp =
     "keeps what was computed, marked INCOMPLETE.\n"
     "\n"
     "exit status: 0 complete, 1 run failed (results so far kept, marked INCOMPLETE), 2 bad\n"
-    "input, 3 partial (a curve stopped on a numerical failure, or relaxed bags kept steps\n"
-    "unrelaxed; all results written, marked INCOMPLETE), 130 interrupted by SIGINT, 143 by\n"
-    "SIGTERM.\n";
+    "input, 3 partial (a curve stopped on a numerical failure, relaxed bags kept steps\n"
+    "unrelaxed, or the coupling kept steps without a fixed point; all results written,\n"
+    "marked INCOMPLETE), 130 interrupted by SIGINT, 143 by SIGTERM.\n";
 
 /// Bad command-line usage: exit status 2.
 struct UsageError : std::runtime_error {

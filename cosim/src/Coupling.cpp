@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -338,6 +339,9 @@ struct Coupling::Impl {
     }
 
     StepSummary runStep(double t, double dt, double tEnd, bool judge, bool& rejected);
+    /// Set by the steppers while they try a step at the smallest size with
+    /// CouplingOptions::keepUnconverged: runStep() then keeps a step that did not converge.
+    bool lastResort = false;
 
     // The order in dt of a step's accuracy measure, taken as 1 for every scheme: a held
     // load's change over the step (explicit; the first implicit pass) is first order; the
@@ -485,6 +489,11 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
     std::vector<ShapeWrench> w, seen(nl);
     std::vector<char> skip;          // participants left standing (skipTravel)
     std::vector<double> firstMiss;   // per participant: the linearisation's miss, first pass
+    // The pass of least residual so far (the one kept if the step is kept unconverged), and
+    // whether the pass under way is that pass again, taken after the last iteration.
+    Eigen::VectorXd bestX;
+    double bestResidual = std::numeric_limits<double>::infinity();
+    bool finalPass = false;
     m.accelerator->beginStep();
     for (int k = 0;; ++k) {
         m.body.rollback();
@@ -563,6 +572,21 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
         }
         if (o.scheme == Scheme::Explicit || o.scheme == Scheme::Tangent) break;
         if (sum.residual <= tolerance) break;
+        if (finalPass) {  // the best pass again: kept as it came out
+            sum.converged = false;
+            break;
+        }
+        if (sum.residual < bestResidual) {
+            bestResidual = sum.residual;
+            bestX = x;
+        }
+        if (k + 1 >= o.maxIterations && m.lastResort) {
+            sum.converged = false;
+            if (sum.residual <= bestResidual) break;  // this pass is the best one
+            x = bestX;
+            finalPass = true;
+            continue;
+        }
         if (k + 1 >= o.maxIterations) {
             m.rollbackAll();
             std::ostringstream s;
@@ -643,9 +667,12 @@ StepSummary Coupling::stepAccurate(double until) {
         m.restartAt(t, dt);
         bool rejected = false;
         StepSummary s;
+        m.lastResort = o.keepUnconverged && 0.5 * dt < std::min(o.minCutStep, o.minMacroStep);
         try {
             s = m.runStep(t, dt, tEnd, true, rejected);
+            m.lastResort = false;
         } catch (const bags::NumericalError&) {
+            m.lastResort = false;
             m.restartAt(t, h);
             if (0.5 * dt < std::min(o.minCutStep, o.minMacroStep)) throw;
             h = 0.5 * dt;
@@ -676,8 +703,11 @@ StepSummary Coupling::stepFixed() {
     Impl& m = *m_impl;
     int cuts = 0;
     for (;;) {
+        m.lastResort = m.options.keepUnconverged &&
+                       0.5 * m.options.macroStep < m.options.minMacroStep;
         try {
             StepSummary s = step();
+            m.lastResort = false;
             s.cuts = cuts;
             if (++m.goodInARow >= m.options.growAfter && m.options.macroStep < m.largestStep) {
                 setMacroStep(std::min(2.0 * m.options.macroStep, m.largestStep));
@@ -685,6 +715,7 @@ StepSummary Coupling::stepFixed() {
             }
             return s;
         } catch (const bags::NumericalError&) {
+            m.lastResort = false;
             m.goodInARow = 0;
             const double half = 0.5 * m.options.macroStep;
             if (half < m.options.minMacroStep) throw;

@@ -530,7 +530,7 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step", "max_macro_step",
                      "step_accuracy", "relative_tolerance", "absolute_tolerance",
                      "max_iterations", "threads", "body_accuracy", "tangent_tolerance",
-                     "skip_travel", "gas_tangent"});
+                     "skip_travel", "gas_tangent", "keep_unconverged"});
     cosim::CouplingOptions& c = o.coupling;
     // The defaults follow the bag model. Reduced bags: the tangent scheme (the implicit one
     // stops where a shape's overlap jumps, docs/reduced-bag.md#in-the-turn) and the body's
@@ -565,6 +565,9 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     c.skipTravel = s.getQuantity("skip_travel", D::Length, 0.0);
     checkBetween(s, "skip_travel", c.skipTravel, 0.0, 0.01, "mm", "0: every bag every step");
     c.gasTangent = s.getBool("gas_tangent", true);
+    // A step with no fixed point at the smallest step is kept (the run ends partial) rather
+    // than ending the run there (docs/cosim.md#the-schemes).
+    c.keepUnconverged = s.getBool("keep_unconverged", true);
     o.integrator.accuracy = s.getNumber("body_accuracy", reduced ? 1e-4 : 1e-6);
     if (!(o.integrator.accuracy > 0.0 && o.integrator.accuracy < 1e-2))
         s.fail("body_accuracy", "must lie between 0 and 0.01, e.g. 1e-6");

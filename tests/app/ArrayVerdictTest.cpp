@@ -137,3 +137,22 @@ TEST(ArrayVerdict, RelaxedBagsWithUnrelaxedStepsFail) {
         << r.detail;
     EXPECT_TRUE(v.hasUnrelaxedSteps());
 }
+
+// The coupling at its fixed point: ok with the implicit schemes when every step reached it,
+// fail with the count, the largest residual, its tolerance and time when steps were kept
+// without one (coupling.keep_unconverged), n/a for the one-pass schemes.
+TEST(ArrayVerdict, StepsKeptWithoutTheCouplingsFixedPointFail) {
+    const cosim::ArrayLayout layout = makeLayout();
+    bagsim::app::ArrayVerdict v(layout, bags::DoubleWedgeParams(), 1.0, 3.0, 0.0);
+    v.addFrame(frame(1.0, 0.0, 0.2, 10.0, 10.0), {0.1});
+    EXPECT_EQ(row(v.makeRows(), "coupling converged").status, "ok");  // implicit by default
+    v.setCouplingSteps(false, 0, 0.0, 0.0, 0.0);
+    EXPECT_EQ(row(v.makeRows(), "coupling converged").status, "n/a");
+    v.setCouplingSteps(true, 3, 0.0347, 0.0014, 22.625);
+    const io::VerdictRow r = row(v.makeRows(), "coupling converged");
+    EXPECT_EQ(r.status, "fail");
+    EXPECT_EQ(r.value, 3.0);
+    EXPECT_NE(r.detail.find("0.0347 N against 0.0014 N at 22.6250 s"), std::string::npos)
+        << r.detail;
+    EXPECT_NE(r.detail.find("the run is partial"), std::string::npos) << r.detail;
+}

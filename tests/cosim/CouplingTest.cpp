@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "BlockSystem.h"
 #include "SpringParticipant.h"
@@ -278,6 +279,48 @@ TEST(Coupling, AParticipantKeptShortOfItsEquilibriumWidensTheToleranceByItsForce
             EXPECT_TRUE(s.converged);
             EXPECT_EQ(s.unresolvedForce, 1e-3);
             EXPECT_LE(s.residual, s.tolerance + 1e-3);
+        }
+    }
+}
+
+TEST(Coupling, AStepWithNoFixedPointIsKeptAtTheSmallestStepAndSaysSo) {
+    // A bag whose wrench jumps +-1 mN from pass to pass whatever the pose (a fold giving way,
+    // unsaid) leaves the implicit passes no fixed point at any step. With keepUnconverged the
+    // step is halved to the smallest step as before, and there kept with its best pass,
+    // marked unconverged (the run ends partial); without it the step throws, as it always did.
+    const double kForever = std::numeric_limits<double>::infinity();
+    for (const bool adaptive : {false, true}) {
+        for (const bool keep : {false, true}) {
+            BlockSystem block(kMass, 10.0, kGravity);
+            SpringParticipant spring = makeSpring();
+            spring.unresolved = 1e-3;
+            block.start(0.0);
+            CouplingOptions o = options(Scheme::Implicit, AccelerationKind::IQNILS, 1e-3);
+            o.maxIterations = 10;
+            o.keepUnconverged = keep;
+            if (adaptive) {
+                o.adaptive = true;
+                o.minMacroStep = 1e-3, o.maxMacroStep = 1e-3;
+                o.minCutStep = 2.5e-4;
+            } else {
+                o.minMacroStep = 2.5e-4;
+            }
+            Coupling c(*block.body, {&spring}, {Link{block.shape, 0, 0}}, o);
+            c.initialize();
+            if (!keep) {
+                EXPECT_THROW(c.stepAdaptive(adaptive ? 1.0 : kForever), bags::NumericalError);
+                EXPECT_EQ(c.getTime(), 0.0);
+                continue;
+            }
+            const StepSummary s = c.stepAdaptive(adaptive ? 1.0 : kForever);
+            EXPECT_FALSE(s.converged) << adaptive;
+            EXPECT_EQ(s.cuts, 2) << adaptive;  // 1 ms, 0.5 ms, then kept at 0.25 ms
+            EXPECT_DOUBLE_EQ(s.macroStep, 2.5e-4) << adaptive;
+            EXPECT_DOUBLE_EQ(c.getTime(), 2.5e-4) << adaptive;
+            EXPECT_GT(s.residual, s.tolerance) << adaptive;
+            EXPECT_LT(s.residual, 3e-3) << adaptive;  // two alternating errors, and the pose's
+            // The block fell as it falls on the spring (0.25 ms in free fall from rest: 0.3 um).
+            EXPECT_NEAR(block.getZ(), -0.5 * kGravity * 2.5e-4 * 2.5e-4, 1e-7) << adaptive;
         }
     }
 }

@@ -126,6 +126,13 @@ struct CouplingOptions {
     /// [s] adaptive: the smallest step a failing step is halved to (below minMacroStep, which
     /// bounds only the steps chosen for accuracy: a bag that cannot follow may need less).
     double minCutStep = 1e-5;
+    /// stepAdaptive(): a step of the implicit schemes whose passes did not converge at the
+    /// smallest step (minCutStep, minMacroStep) is kept, with the pass of the least residual,
+    /// instead of failing: StepSummary::converged is then false and the caller says so (a
+    /// patient run is partial). A film whose equilibrium jumps as the body moves (a fold
+    /// giving way) leaves the coupling no fixed point at any step (docs/cosim.md#the-schemes).
+    /// false: such a step throws bags::NumericalError.
+    bool keepUnconverged = false;
     void validate() const;  ///< throws std::invalid_argument naming the option
 };
 
@@ -144,7 +151,9 @@ struct StepSummary {
     int step = 0;              ///< index of the macro step (0 the first)
     double time = 0.0;         ///< [s] at its end
     int iterations = 0;        ///< passes (1 for the one-pass schemes)
-    bool converged = true;     ///< implicit: within tolerance; one-pass schemes: true
+    /// implicit: within tolerance; one-pass schemes: true; false only for a step kept
+    /// unconverged at the smallest step (CouplingOptions::keepUnconverged)
+    bool converged = true;
     double residual = 0.0;     ///< [N] |H(x) - x| of the last pass (scaled as above)
     double wrenchNorm = 0.0;   ///< [N] |H(x)| of the last pass
     int bagIterations = 0;     ///< Newton iterations over every participant and pass
