@@ -51,6 +51,27 @@ double calcBagVolume(const cosim::Bag& a) {
     return v;
 }
 
+// The body's soft tissue in a few words: per site, one layer, or bare shapes.
+std::string describeBodyTissue(const cosim::PatientOnArrayOptions& o) {
+    if (!o.segmentTissue.empty()) {
+        std::string s = "soft tissue per site (bag.body_tissue):";
+        for (int i = 0; i < body::kTissueSiteCount; ++i) {
+            const auto site = body::TissueSite(i);
+            body::SoftTissue t;
+            for (int g = 0; g < body::kSegmentCount; ++g)
+                if (body::getTissueSite(body::Segment(g)) == site) t = o.segmentTissue[size_t(g)];
+            s += std::string(i ? "," : "") + " " + body::getTissueSiteName(site) + " " +
+                 (t.isRigid() ? std::string("none")
+                              : fmt("%.0f mm", 1e3 * t.thickness) + fmt(" %.0f kPa", 1e-3 * t.modulus));
+        }
+        return s;
+    }
+    if (o.contact.hasTissue())
+        return "soft tissue " + fmt("%.0f mm", 1e3 * o.contact.tissueThickness) +
+               fmt(" %.0f kPa", 1e-3 * o.contact.tissueModulus) + " on every segment";
+    return "bare shapes (no soft tissue)";
+}
+
 struct Totals {
     int steps = 0, passes = 0, cuts = 0;
     long bodySteps = 0;  // the body integrator's internal steps in the committed passes
@@ -191,7 +212,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                                               : "; no bed board under him (array.board_contact)");
         std::cerr << "; body on the films: "
                   << (sc.options.contact.friction > 0.0 ? "friction " + fmt("%g", sc.options.contact.friction)
-                                                        : std::string("frictionless"));
+                                                        : std::string("frictionless"))
+                  << ", " << describeBodyTissue(sc.options);
         std::cerr << "\n  " << cosim::toString(sc.options.coupling.scheme) << " coupling ("
                   << cosim::toString(sc.options.coupling.acceleration) << "), macro step "
                   << (sc.options.coupling.adaptive
@@ -720,17 +742,20 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
               << fmt("%.3g N", totals.worstResidual) << " against "
               << fmt("%.3g N", totals.worstTolerance) << fmt(" at %.4f s", totals.worstTime)
               << " (docs/cosim.md#the-schemes): the run is partial\n";
-    {  // how deep a segment lies inside a film between its nodes, which the contact does not see
+    {  // how deep a segment lies inside a film between its nodes, beyond its nodes' own
+       // depth (the penalty's, and a soft-tissue layer's compression), which the contact does
+       // not see
         const std::vector<cosim::PassThrough> pass = cosim::calcPassThroughs(*poa);
         const auto worst = std::max_element(
-            pass.begin(), pass.end(),
-            [](const cosim::PassThrough& a, const cosim::PassThrough& b) { return a.depth < b.depth; });
+            pass.begin(), pass.end(), [](const cosim::PassThrough& a, const cosim::PassThrough& b) {
+                return a.depth - a.nodeDepth < b.depth - b.nodeDepth;
+            });
         if (worst != pass.end() && worst->segment >= 0)
             table << "segments lie inside a film between its nodes by at most "
                   << fmt("%.2f mm", 1e3 * worst->depth) << " ("
                   << body::getSegmentName(static_cast<body::Segment>(worst->segment)) << ", bag "
                   << worst->bag << "; its nodes by " << fmt("%.2f mm", 1e3 * worst->nodeDepth) << ")"
-                  << (worst->depth > 5e-3
+                  << (worst->depth - worst->nodeDepth > 5e-3
                           ? ": the contact acts at the nodes and lets it through; a finer "
                             "bag.mesh_size holds it (docs/cosim.md#shapes-between-the-films-nodes)"
                           : "")

@@ -10,6 +10,16 @@
 
 namespace cosim {
 
+bags::RigidContact::Options PatientOnArrayOptions::getSegmentContact(body::Segment segment) const {
+    bags::RigidContact::Options c = contact;
+    if (!segmentTissue.empty()) {
+        const body::SoftTissue& t = segmentTissue.at(size_t(segment));
+        c.tissueThickness = t.thickness;
+        c.tissueModulus = t.isRigid() ? 0.0 : t.modulus;
+    }
+    return c;
+}
+
 void PatientOnArrayOptions::validate() const {
     layout.validate(bag.geometry);
     if (!(pairMargin >= 0.0) || !std::isfinite(pairMargin))
@@ -32,6 +42,19 @@ void PatientOnArrayOptions::validate() const {
         f.validate();
     }
     contact.validate();
+    if (!segmentTissue.empty()) {
+        if (segmentTissue.size() != size_t(body::kSegmentCount))
+            throw std::invalid_argument("segmentTissue: one layer per segment (" +
+                                        std::to_string(body::kSegmentCount) + "), or none");
+        for (int s = 0; s < body::kSegmentCount; ++s) {
+            const body::SoftTissue& t = segmentTissue[size_t(s)];
+            if (!t.isRigid() && model == BagModel::Reduced)
+                throw std::invalid_argument(
+                    "segmentTissue: a tissue layer is not valid with reduced bags (their contact "
+                    "law is their own, fitted with bare shapes); valid: rigid segments");
+            getSegmentContact(body::Segment(s)).validate();
+        }
+    }
     if (contact.friction > 0.0 && coupling.scheme == Scheme::Tangent && model == BagModel::FiniteElement)
         throw std::invalid_argument(
             "coupling.scheme: tangent is not valid with body friction (bag.body_friction > 0): "
@@ -223,7 +246,7 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         if (reduced)
             local = bagLocal = m.reducedBags[size_t(pos)]->addShape(b.shape);
         else
-            bagLocal = m.fe.addShape(pos, b.shape, options.contact, &local);
+            bagLocal = m.fe.addShape(pos, b.shape, options.getSegmentContact(seg), &local);
         const int bodyShape = m.body->addShape(model.getMobilizedBodyIndex(seg), b.X_BS);
         const body::ContactShape& cs = model.getContactShape(seg);
         const double reach = (cs.getBoundingCentre() - b.X_BS.p()).norm() + cs.getBoundingRadius();

@@ -1,6 +1,7 @@
 // Reading the patient-on-array scenario kind.
 #include <bags/Airbag.h>
 #include <bags/MaterialFit.h>
+#include <body/Tissue.h>
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayScenario.h>
 #include <io/InputError.h>
@@ -124,6 +125,57 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 
 // ---------------------------------------------------------------------------------------- bag
 
+// Soft tissue between the segments' bones and the films: the segments' shapes are the skin,
+// the layer lies inside them (docs/contact.md#soft-tissue). bag.body_tissue: absent or
+// `published`, each site's published layer (docs/body.md#soft-tissue; finite-element bags;
+// reduced bags: none); `none`, bare shapes; {thickness, modulus}, one layer on every segment;
+// {site: {thickness, modulus} or none, ...}, the published layers with those sites changed.
+void readBodyTissue(const ScenarioNode& bag, PatientOnArrayScenario& sc) {
+    const bool reduced = sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced;
+    const char* const reducedWhy =
+        " is not valid with model: reduced (the reduced bag's contact law is its own, fitted "
+        "with bare shapes); valid: none, or model: finite-element";
+    std::vector<std::string> sites;
+    for (int i = 0; i < body::kTissueSiteCount; ++i)
+        sites.push_back(body::getTissueSiteName(body::TissueSite(i)));
+    std::array<body::SoftTissue, body::kTissueSiteCount> perSite = body::getPublishedTissues();
+    if (!bag.has("body_tissue")) {
+        if (!reduced) sc.options.segmentTissue = body::makeSegmentTissue(perSite);
+        return;
+    }
+    const ScenarioNode t = bag.get("body_tissue");
+    if (t.isScalar()) {
+        const std::string v = t.asChoice({"published", "none"});
+        if (v == "published" && reduced) bag.fail("body_tissue", "published" + std::string(reducedWhy));
+        if (v == "published") sc.options.segmentTissue = body::makeSegmentTissue(perSite);
+        return;  // none: bare shapes (contact has no layer)
+    }
+    if (!t.isMap())
+        bag.fail("body_tissue",
+                 "must be published, none, {thickness, modulus} (one layer on every segment) or "
+                 "{site: {thickness, modulus} or none, ...} with sites occiput, scapulae, back, "
+                 "sacrum, buttocks, calves, heels, arms");
+    if (reduced) bag.fail("body_tissue", "a tissue layer" + std::string(reducedWhy));
+    if (t.has("thickness") || t.has("modulus")) {  // one layer on every segment
+        readTissueLayer(t, sc.options.contact);
+        return;
+    }
+    t.checkKeys({}, sites);
+    for (int i = 0; i < body::kTissueSiteCount; ++i) {
+        if (!t.has(sites[size_t(i)])) continue;
+        const ScenarioNode e = t.get(sites[size_t(i)]);
+        if (e.isScalar()) {
+            e.asChoice({"none"});
+            perSite[size_t(i)] = body::SoftTissue();
+            continue;
+        }
+        bags::RigidContact::Options c = sc.options.contact;
+        readTissueLayer(t.getSection(sites[size_t(i)]), c);
+        perSite[size_t(i)] = {c.tissueThickness, c.tissueModulus};
+    }
+    sc.options.segmentTissue = body::makeSegmentTissue(perSite);
+}
+
 void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
                      "contact_penalty", "body_friction", "friction_law", "slip_velocity",
@@ -157,9 +209,6 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
         s.fail("body_friction", fmtNumber(sc.options.contact.friction) +
                                     " is not valid; valid: 0 (frictionless) to 2, e.g. 0.4 "
                                     "(skin or cotton on a fabric or film: 0.3-0.5)");
-    // Soft tissue between the segments' bones and the films: the segments' shapes are the
-    // skin, the layer lies inside them (docs/contact.md#soft-tissue). None by default.
-    if (s.has("body_tissue")) readTissueLayer(s.getSection("body_tissue"), sc.options.contact);
     // How the friction force follows the slip (docs/contact.md#contact-law): the elastic stick
     // spring capped at mu f_n, or Coulomb regularised by the slip rate over the step.
     const std::string law = s.getChoice("friction_law", {"stick-slip", "regularised"}, "stick-slip");
@@ -253,12 +302,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     if (reduced && s.has("friction_law") && law != "stick-slip")
         s.fail("friction_law", law + " is not valid with model: reduced; valid: stick-slip "
                                      "(the reduced bag's one law)");
-    if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced &&
-        sc.options.contact.hasTissue())
-        s.fail("body_tissue",
-               "is not valid with model: reduced (the reduced bag's contact law "
-               "is its own, fitted with bare shapes); valid: leave it out, or "
-               "model: finite-element");
+    readBodyTissue(s, sc);
 }
 
 // -------------------------------------------------------------------------------------- array

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <io/ArrayScenario.h>
 #include <io/InputError.h>
+#include <io/LoadTestScenario.h>
 
 #include <cmath>
 #include <string>
@@ -186,7 +187,18 @@ TEST(ArrayScenario, BodyFrictionIsRefusedWithTheOnePassTangentScheme) {
 }
 
 TEST(ArrayScenario, TheBodysShapesTakeASoftTissueLayer) {
-    EXPECT_FALSE(read(kBase).options.contact.hasTissue());
+    // By default each segment has its site's published layer (body/Tissue.h), the contact
+    // options themselves none.
+    const cosim::PatientOnArrayOptions d = read(kBase).options;
+    EXPECT_FALSE(d.contact.hasTissue());
+    ASSERT_EQ(d.segmentTissue.size(), size_t(body::kSegmentCount));
+    const body::SoftTissue sacrum = body::getPublishedTissue(body::TissueSite::Sacrum);
+    EXPECT_GT(sacrum.thickness, 0.0);
+    EXPECT_EQ(d.getSegmentContact(body::Segment::LowerTrunk).tissueThickness, sacrum.thickness);
+    EXPECT_EQ(d.getSegmentContact(body::Segment::LowerTrunk).tissueModulus, sacrum.modulus);
+    EXPECT_EQ(d.getSegmentContact(body::Segment::FootL).tissueThickness,
+              body::getPublishedTissue(body::TissueSite::Heels).thickness);
+    EXPECT_FALSE(d.getSegmentContact(body::Segment::Head).hasTissue());  // none published
     auto with = [](const std::string& value) {
         std::string t = kBase;
         t.replace(t.find("bag: {mesh_size: 30 mm}"), 23,
@@ -200,9 +212,56 @@ TEST(ArrayScenario, TheBodysShapesTakeASoftTissueLayer) {
     EXPECT_EQ(e.getLine(), 3);
     EXPECT_EQ(e.getKey(), "bag.body_tissue.modulus");
     EXPECT_NE(e.getMessage().find("10-200 kPa"), std::string::npos) << e.what();
+    EXPECT_TRUE(sc.options.segmentTissue.empty());  // one layer: every segment's
     const io::InputError e2 = readError(with("{modulus: 30 kPa}"));
     EXPECT_EQ(e2.getKey(), "bag.body_tissue");
     EXPECT_NE(e2.getMessage().find("thickness"), std::string::npos) << e2.what();
+    // none: bare shapes; published: as the default.
+    const cosim::PatientOnArrayOptions none = read(with("none")).options;
+    EXPECT_TRUE(none.segmentTissue.empty());
+    EXPECT_FALSE(none.getSegmentContact(body::Segment::LowerTrunk).hasTissue());
+    EXPECT_EQ(read(with("published")).options.segmentTissue.size(), size_t(body::kSegmentCount));
+    // Sites changed on the published layers: the sacrum's own, the heels bare, the rest kept.
+    const cosim::PatientOnArrayOptions s2 =
+        read(with("{sacrum: {thickness: 20 mm, modulus: 30 kPa}, heels: none}")).options;
+    EXPECT_DOUBLE_EQ(s2.getSegmentContact(body::Segment::LowerTrunk).tissueThickness, 0.02);
+    EXPECT_DOUBLE_EQ(s2.getSegmentContact(body::Segment::LowerTrunk).tissueModulus, 3e4);
+    EXPECT_FALSE(s2.getSegmentContact(body::Segment::FootR).hasTissue());
+    EXPECT_EQ(s2.getSegmentContact(body::Segment::UpperTrunk).tissueThickness,
+              body::getPublishedTissue(body::TissueSite::Scapulae).thickness);
+    const io::InputError e3 = readError(with("{sacrun: none}"));
+    EXPECT_EQ(e3.getKey(), "bag.body_tissue.sacrun");
+    EXPECT_NE(e3.getMessage().find("sacrum"), std::string::npos) << e3.what();
+    const io::InputError e4 = readError(with("{heels: {thickness: 18 mm}}"));
+    EXPECT_EQ(e4.getKey(), "bag.body_tissue.heels");
+    EXPECT_NE(e4.getMessage().find("modulus"), std::string::npos) << e4.what();
+    const io::InputError e5 = readError(with("soft"));
+    EXPECT_EQ(e5.getKey(), "bag.body_tissue");
+    EXPECT_NE(e5.getMessage().find("published"), std::string::npos) << e5.what();
+}
+
+TEST(ArrayScenario, EverySegmentLiesOnOneTissueSiteAndTheSitesNamesAreTheScenarioKeys) {
+    const std::vector<body::SoftTissue> t = body::makeSegmentTissue(body::getPublishedTissues());
+    ASSERT_EQ(t.size(), size_t(body::kSegmentCount));
+    for (int g = 0; g < body::kSegmentCount; ++g) {
+        const body::SoftTissue p = body::getPublishedTissue(body::getTissueSite(body::Segment(g)));
+        EXPECT_EQ(t[size_t(g)].thickness, p.thickness) << g;
+        EXPECT_EQ(t[size_t(g)].modulus, p.modulus) << g;
+        // Within the range the scenario accepts for a layer (or none).
+        if (!p.isRigid()) {
+            EXPECT_GE(p.thickness, io::kMinTissueThickness) << g;
+            EXPECT_LE(p.thickness, io::kMaxTissueThickness) << g;
+            EXPECT_GE(p.modulus, io::kMinTissueModulus) << g;
+            EXPECT_LE(p.modulus, io::kMaxTissueModulus) << g;
+        }
+    }
+    EXPECT_EQ(body::getTissueSite(body::Segment::LowerTrunk), body::TissueSite::Sacrum);
+    EXPECT_EQ(body::getTissueSite(body::Segment::ThighL), body::TissueSite::Buttocks);
+    EXPECT_EQ(body::getTissueSite(body::Segment::FootR), body::TissueSite::Heels);
+    EXPECT_EQ(body::getTissueSite(body::Segment::UpperTrunk), body::TissueSite::Scapulae);
+    EXPECT_EQ(body::getTissueSite(body::Segment::ShankL), body::TissueSite::Calves);
+    EXPECT_EQ(body::getTissueSite(body::Segment::Head), body::TissueSite::Occiput);
+    EXPECT_STREQ(body::getTissueSiteName(body::TissueSite::Heels), "heels");
 }
 
 TEST(ArrayScenario, FrictionLawIsStickSlipByDefaultAndSlipVelocityBelongsToTheRegularisedLaw) {

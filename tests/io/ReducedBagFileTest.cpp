@@ -204,6 +204,11 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
     });
     EXPECT_EQ(e7.getKey(), "bag.body_tissue");
     EXPECT_NE(std::string(e7.what()).find("model: reduced"), std::string::npos) << e7.what();
+    EXPECT_TRUE(readWith("30 mm", "reduced", shipped).options.segmentTissue.empty());  // bare
+    const io::InputError e7b = expectInputError(
+        [&] { readWith("30 mm", "reduced", shipped + ", body_tissue: published"); });
+    EXPECT_EQ(e7b.getKey(), "bag.body_tissue");
+    EXPECT_NE(std::string(e7b.what()).find("model: reduced"), std::string::npos) << e7b.what();
     // Nor the film's damper: it has no film.
     const io::InputError e8 = expectInputError(
         [&] { readWith("30 mm", "reduced", shipped + ", film_damping: 1e5 Pa/m"); });

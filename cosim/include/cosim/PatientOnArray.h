@@ -17,6 +17,7 @@
 #include <bags/Airbag.h>
 #include <body/BodyModel.h>
 #include <body/SupportContact.h>
+#include <body/Tissue.h>
 
 #include <memory>
 #include <vector>
@@ -40,6 +41,13 @@ struct PatientOnArrayOptions {
     BagModel model = BagModel::FiniteElement;
     std::shared_ptr<const ReducedBagCalibration> reduced;  ///< Reduced: required
     bags::RigidContact::Options contact;  ///< contact of the body's shapes with the membranes
+    /// Per segment (body::Segment order, body::kSegmentCount entries): the soft-tissue layer
+    /// of its shape on the films (body/Tissue.h), in place of `contact`'s tissueThickness and
+    /// tissueModulus for that segment; a rigid entry (thickness 0) leaves that segment bare.
+    /// Empty: `contact`'s layer (none by default) for every segment. Finite-element bags only.
+    std::vector<body::SoftTissue> segmentTissue;
+    /// The contact options of one segment's shape: `contact` with its segmentTissue layer.
+    bags::RigidContact::Options getSegmentContact(body::Segment segment) const;
     /// Reduced bags with body friction (contact.friction > 0, its coefficient): the stick
     /// spring's travel to sliding and its damping time (ReducedBagFriction,
     /// docs/reduced-bag.md#friction). The coefficient here is ignored.
