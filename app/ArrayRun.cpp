@@ -479,6 +479,12 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         for (size_t i = 0; i < poa->getBagIndices().size(); ++i)
             bags[poa->getBagIndices()[i]] = &poa->updBag(int(i));
         bodySurface = cosim::makeBodySurface(poa->getModel());
+        {  // the bags as inflated, before he lies on them (and before any state is loaded)
+            double least = 1e30, highest = 0.0;
+            for (const cosim::BagReading& r : cosim::calcBagReadings(*poa))
+                least = std::min(least, r.gaugePressure), highest = std::max(highest, r.gaugePressure);
+            if (highest > 0.0) verdict.setRestPressures(least, highest);
+        }
         if (fromRest) {
             // The body, the bags and the coupling as the settle left them (before the network
             // is built: it starts from the bags' gas as it finds it).

@@ -40,6 +40,9 @@ class ArrayVerdict {
     /// keepUnconverged), the largest |H(x) - x| kept [N], its tolerance [N] and time [s].
     void setCouplingSteps(bool iterated, long unconverged, double worstResidual,
                           double worstTolerance, double worstTime);
+    /// The bags' gauge pressures [Pa] standing inflated before he lies on them, least and
+    /// highest: judged against the published clinical settings (the 'inflation' row).
+    void setRestPressures(double least, double highest);
     std::vector<io::VerdictRow> makeRows() const;
     /// What the frames so far left (a checkpoint), and back into a verdict made the same way.
     void saveState(bags::StateWriter& w) const;
@@ -56,6 +59,7 @@ class ArrayVerdict {
     long m_unrelaxed = 0;
     double m_largestUnrelaxed = 0.0, m_forceTolerance = 0.0;
     int m_unrelaxedBag = -1;
+    double m_restLeast = -1.0, m_restHighest = -1.0;  // -1: not set
     bool m_iterated = true;
     long m_unconverged = 0;
     double m_worstResidual = 0.0, m_worstTolerance = 0.0, m_worstTime = 0.0;

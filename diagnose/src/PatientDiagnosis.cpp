@@ -87,7 +87,9 @@ const std::vector<Effect>& getPatientEffects() {
          {{"offset", "g", 1e-3, -0.5e-3, 0.5e-3, 0.2e-3, "array.gas_mass (the stated mass plus this)"}},
          true},
         {"soft-tissue",
-         "soft tissue between his bones and the films (a Winkler layer in every segment)",
+         "soft tissue between his bones and the films: one Winkler layer in every segment, in "
+         "place of the scenario's own (each site's published layer by default); 0 mm: the "
+         "scenario's own",
          {{"thickness", "mm", 1e-3, 0.0, kMaxTissueThickness, 20e-3, "bag.body_tissue.thickness"},
           {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 30e3,
            "bag.body_tissue.modulus"}},
@@ -119,7 +121,8 @@ std::vector<std::pair<std::string, std::string>> getPatientEffectOverrides(
         return {{"array.gas_mass", fmt("%.9g", (statedGasMass + v[0]) * 1e3) + " g"}};
     }
     if (effect.name == "soft-tissue") {
-        // The scenario's layer is at least 0.5 mm thick; thinner is no layer (the model as it is).
+        // The scenario's layer is at least 0.5 mm thick; thinner is the model as it is (the
+        // scenario's own tissue: each site's published layer by default, or none).
         if (v[0] < 0.5e-3) return {};
         return {{"bag.body_tissue", "{thickness: " + fmt("%.9g", v[0] * 1e3) + " mm, modulus: " +
                                         fmt("%.9g", v[1] * 1e-3) + " kPa}"}};

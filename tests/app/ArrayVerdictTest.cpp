@@ -156,3 +156,21 @@ TEST(ArrayVerdict, StepsKeptWithoutTheCouplingsFixedPointFail) {
         << r.detail;
     EXPECT_NE(r.detail.find("the run is partial"), std::string::npos) << r.detail;
 }
+
+// The inflation: ok within the published clinical settings (up to 4 kPa), a warning above
+// them (a firm setting), no row when the pressures were not given.
+TEST(ArrayVerdict, AFirmInflationIsToldFromAClinicalOne) {
+    const cosim::ArrayLayout layout = makeLayout();
+    bagsim::app::ArrayVerdict v(layout, bags::DoubleWedgeParams(), 1.0, 3.0, 0.0);
+    v.addFrame(frame(1.0, 0.0, 0.2, 10.0, 10.0), {0.1});
+    for (const io::VerdictRow& r : v.makeRows()) EXPECT_NE(r.check, "inflation");
+    v.setRestPressures(3.9e3, 4.1e3);
+    io::VerdictRow r = row(v.makeRows(), "inflation");
+    EXPECT_EQ(r.status, "ok");
+    EXPECT_DOUBLE_EQ(r.value, 4.1);
+    v.setRestPressures(18.5e3, 20.5e3);
+    r = row(v.makeRows(), "inflation");
+    EXPECT_EQ(r.status, "warning");
+    EXPECT_NE(r.detail.find("18.5-20.5 kPa"), std::string::npos) << r.detail;
+    EXPECT_NE(r.detail.find("a firm setting"), std::string::npos) << r.detail;
+}
