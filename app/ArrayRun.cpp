@@ -250,16 +250,19 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     try {
         writer = resume ? std::make_unique<io::ArrayResultsWriter>(*outDir, sc.mat, *resume)
                         : std::make_unique<io::ArrayResultsWriter>(*outDir, info, sc.mat);
-    } catch (const bags::StateError& e) {
-        std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": " << e.what()
-                  << "\n";
-        outDir->setStatus("interrupted", std::string("resume refused: ") + e.what());
-        return 2;
     } catch (const std::exception& e) {
+        if (resume) {
+            // Refused before any file was touched (the writer checks every file before it
+            // cuts one): the folder, its marker included, stays as the stopped run left it.
+            std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": "
+                      << e.what() << " (the folder is left as it was)\n";
+            return 2;
+        }
         std::cerr << "bagsim: error: cannot write the results: " << e.what() << "\n";
         outDir->setStatus("failed", e.what());
         return 1;
     }
+    if (resume) outDir->markResumed();
 
     std::unique_ptr<cosim::PatientOnArray> poa;
     cosim::PressureMat mat(sc.mat);

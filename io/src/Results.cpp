@@ -89,9 +89,10 @@ OutputDir OutputDir::resume(const fs::path& path) {
                          "is not a folder; --resume takes the output folder of an interrupted run");
     OutputDir d;
     d.m_path = path;
-    d.setStatus("running", "resumed " + getUtcTimestamp());
     return d;
 }
+
+void OutputDir::markResumed() const { setStatus("running", "resumed " + getUtcTimestamp()); }
 
 void OutputDir::setStatus(const std::string& status, const std::string& detail) const {
     std::ofstream out(getFile(kMarkerName), std::ios::trunc);

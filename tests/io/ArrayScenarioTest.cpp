@@ -39,19 +39,30 @@ const std::string kBase =
 }  // namespace
 
 TEST(ArrayScenario, ReadsTheShippedScenariosInSI) {
-    for (const char* name : {"supine-on-array", "turn-left"}) {
-        const io::PatientOnArrayScenario sc = io::readPatientOnArrayScenario(io::ScenarioFile::load(
+    auto load = [](const std::string& name) {
+        return io::readPatientOnArrayScenario(io::ScenarioFile::load(
             std::string(BAGSIM_SOURCE_DIR) + "/scenarios/" + name + ".yaml"));
+    };
+    for (const char* name : {"supine-on-array", "supine-on-array-firm", "turn-left"}) {
+        const io::PatientOnArrayScenario sc = load(name);
         EXPECT_EQ(sc.name, name);
         EXPECT_DOUBLE_EQ(sc.patient.height, 1.75);
         EXPECT_DOUBLE_EQ(sc.patient.mass, 75.0);
         EXPECT_GE(sc.options.layout.rows * sc.options.layout.columns, 24);
-        EXPECT_DOUBLE_EQ(sc.options.layout.gasMass, 4.5e-3);
         EXPECT_DOUBLE_EQ(sc.options.layout.rowPitch, 0.36);
         EXPECT_DOUBLE_EQ(sc.options.integrator.contactDamping, 2.0);
         EXPECT_EQ(sc.mat.rows, 64);
         EXPECT_EQ(sc.mat.columns, 32);
     }
+    // The firm cases fill each bag with 4.5 g (about 20 kPa); the shipped supine one is set as a
+    // clinical mattress is, by its pressure at rest (4 kPa: less gas than 4.5 g), in three
+    // zones.
+    EXPECT_DOUBLE_EQ(load("supine-on-array-firm").options.layout.gasMass, 4.5e-3);
+    EXPECT_DOUBLE_EQ(load("turn-left").options.layout.gasMass, 4.5e-3);
+    const io::PatientOnArrayScenario clinical = load("supine-on-array");
+    EXPECT_LT(clinical.options.layout.gasMass, 4.5e-3);
+    EXPECT_GT(clinical.options.layout.gasMass, 3.0e-3);
+    EXPECT_EQ(clinical.options.layout.groups.size(), 3u);
     const io::PatientOnArrayScenario turn = io::readPatientOnArrayScenario(
         io::ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/turn-left.yaml"));
     EXPECT_DOUBLE_EQ(turn.duration, 30.0);

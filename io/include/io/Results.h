@@ -40,9 +40,13 @@ class OutputDir {
     ///   it are overwritten where the run writes them, others are left alone), or if it cannot
     ///   be created.
     OutputDir(const std::filesystem::path& path, bool force);
-    /// The folder of an interrupted run, to resume it: nothing in it is removed; the marker
-    /// says the run is running again. @throws InputError if it is not a folder.
+    /// The folder of an interrupted run, to resume it: nothing in it is removed or written
+    /// (the marker keeps the stopped run's status until markResumed(), so that a resume
+    /// refused on its checks leaves the folder as it was). @throws InputError if it is not a
+    /// folder.
     static OutputDir resume(const std::filesystem::path& path);
+    /// The marker says the run is running again (once the resume is accepted).
+    void markResumed() const;
 
     const std::filesystem::path& getPath() const { return m_path; }  ///< the folder
     /// Path of a file in the folder.
