@@ -1,6 +1,7 @@
 // bagsim run, kind patient-on-array: the patient lowered onto an array of airbags, settling,
 // then the gas of bags or groups changed over time (the coupling: cosim::PatientOnArray).
 #include "ArrayRun.h"
+#include "Format.h"
 
 #include <bagsim/Version.h>
 #include <cosim/ArrayPneumatics.h>
@@ -35,12 +36,6 @@
 namespace bagsim::app {
 
 namespace {
-
-std::string fmt(const char* f, double v) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
 
 constexpr double kDeg = 180.0 / 3.14159265358979323846;
 constexpr double kPressedThreshold = 5.0 * 133.322387415;  // [Pa] 5 mmHg, as regions.csv
@@ -79,11 +74,22 @@ struct Totals {
     // the largest |H(x) - x| kept, its tolerance and when.
     long unconverged = 0;
     double worstResidual = 0.0, worstTolerance = 0.0, worstTime = 0.0;
+    // Macro steps accepted where their passes stalled within coupling.accept_residual: how
+    // many, the largest |H(x) - x| accepted and when.
+    long accepted = 0;
+    double worstAccepted = 0.0, worstAcceptedTime = 0.0;
 };
 // Totals as a checkpoint of the parts 'run-2' and 'run-3' holds them.
 struct TotalsBefore4 {
     int steps = 0, passes = 0, cuts = 0;
     long bodySteps = 0;
+};
+// Totals as a checkpoint of the part 'run-4' holds them.
+struct TotalsBefore5 {
+    int steps = 0, passes = 0, cuts = 0;
+    long bodySteps = 0;
+    long unconverged = 0;
+    double worstResidual = 0.0, worstTolerance = 0.0, worstTime = 0.0;
 };
 
 // Writes `data` to dir/checkpoint.bin through a temporary file, flushed to the disk and
@@ -361,13 +367,15 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         verdict.setCouplingSteps(
             scheme == cosim::Scheme::Implicit || scheme == cosim::Scheme::TangentImplicit,
             totals.unconverged, totals.worstResidual, totals.worstTolerance, totals.worstTime);
+        verdict.setAcceptedSteps(totals.accepted, totals.worstAccepted, totals.worstAcceptedTime,
+                                 sc.options.coupling.acceptResidual);
         return t;
     };
     // The checkpoint (docs/output-layout.md#checkpoint): header, the writers' positions, the
     // loop's own state, the verdict so far, then the model: body, bags, coupling, pneumatics,
     // controller. A resumed run reads it in that order.
     auto saveRunState = [&](bags::StateWriter& w) {
-        w.tag("run-4");
+        w.tag("run-5");
         w.pod(nextOutput), w.pod(settled), w.pod(nextCheckpoint);
         w.pod(std::uint64_t(events.size()));
         for (const cosim::ControlEvent& e : events) w.pod(e.time), w.str(e.text);
@@ -387,16 +395,24 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     bool resumedTallyKnown = true;  // a checkpoint written before the tally (run-2) has none
     auto loadRunState = [&](bags::StateReader& r) {
         const std::string part = r.str();
-        if (part != "run-4" && part != "run-3" && part != "run-2")
-            throw bags::StateError("checkpoint: expected the part 'run-4', found '" +
+        if (part != "run-5" && part != "run-4" && part != "run-3" && part != "run-2")
+            throw bags::StateError("checkpoint: expected the part 'run-5', found '" +
                                    part.substr(0, 60) + "' (the checkpoint is of another model)");
         resumedTallyKnown = part != "run-2";
         r.pod(nextOutput), r.pod(settled), r.pod(nextCheckpoint);
         events.resize(r.pod<std::uint64_t>());
         for (cosim::ControlEvent& e : events) r.pod(e.time), e.text = r.str();
         eventsWritten = size_t(r.pod<std::uint64_t>());
-        if (part == "run-4") {
+        if (part == "run-5") {
             r.pod(totals);
+        } else if (part == "run-4") {  // before the tally of accepted steps
+            TotalsBefore5 t;
+            r.pod(t);
+            totals = Totals();
+            totals.steps = t.steps, totals.passes = t.passes, totals.cuts = t.cuts;
+            totals.bodySteps = t.bodySteps;
+            totals.unconverged = t.unconverged, totals.worstResidual = t.worstResidual;
+            totals.worstTolerance = t.worstTolerance, totals.worstTime = t.worstTime;
         } else {  // before the tally of unconverged steps
             TotalsBefore4 t;
             r.pod(t);
@@ -633,6 +649,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             totals.passes += s.iterations;
             totals.cuts += s.cuts;
             totals.bodySteps += poa->getBody().getLastIntegratorSteps();
+            if (s.accepted && s.converged) {
+                ++totals.accepted;
+                if (s.residual >= totals.worstAccepted) {
+                    totals.worstAccepted = s.residual;
+                    totals.worstAcceptedTime = s.time;
+                }
+            }
             if (!s.converged) {
                 ++totals.unconverged;
                 if (s.residual >= totals.worstResidual) {
@@ -744,6 +767,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
               << fmt("%.3g N", unrelaxed.largest) << " (bag " << unrelaxed.bag
               << "; docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags)"
                  ": the run is partial\n";
+    if (totals.accepted > 0)  // steps whose passes stalled within coupling.accept_residual
+        table << "coupling: " << totals.accepted << " of " << totals.steps
+              << " macro steps were accepted where their passes stalled within "
+                 "coupling.accept_residual ("
+              << fmt("%.3g N", sc.options.coupling.acceptResidual) << "), the largest |H(x) - x| "
+              << fmt("%.3g N", totals.worstAccepted) << fmt(" at %.4f s", totals.worstAcceptedTime)
+              << " (docs/cosim.md#the-schemes)\n";
     if (totals.unconverged > 0)  // the coupling kept steps without a fixed point
         table << "coupling: " << totals.unconverged
               << " macro steps were kept without a fixed point at the smallest step, the "

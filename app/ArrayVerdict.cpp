@@ -1,4 +1,5 @@
 #include "ArrayVerdict.h"
+#include "Format.h"
 
 #include <cosim/ArrayReadings.h>
 
@@ -22,12 +23,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // found (a 4.0 kPa default, studied down to 1.6 kPa; docs/validation-interface-pressure.md),
 // with 5 % for the setting's own tolerance.
 constexpr double kClinicalHighest = 4.0e3 * 1.05;
-
-std::string fmt(const char* f, double v) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
 
 }  // namespace
 
@@ -138,6 +133,14 @@ void ArrayVerdict::setCouplingSteps(bool iterated, long unconverged, double wors
     m_worstTime = worstTime;
 }
 
+void ArrayVerdict::setAcceptedSteps(long accepted, double worst, double worstTime,
+                                    double acceptResidual) {
+    m_accepted = accepted;
+    m_worstAccepted = worst;
+    m_worstAcceptedTime = worstTime;
+    m_acceptResidual = acceptResidual;
+}
+
 std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
     std::vector<io::VerdictRow> rows;
     const double span = m_lastTime - m_firstTime;
@@ -236,9 +239,18 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
     if (!m_iterated)
         rows.push_back({"coupling converged", "n/a", kNaN, "steps",
                         "a one-pass scheme (coupling.scheme): no fixed point is sought"});
-    else if (m_unconverged == 0)
+    else if (m_unconverged == 0 && m_accepted == 0)
         rows.push_back({"coupling converged", "ok", 0.0, "steps",
                         "every macro step reached the coupling's fixed point to its tolerance"});
+    else if (m_unconverged == 0)
+        rows.push_back({"coupling converged", "ok", 0.0, "steps",
+                        "every macro step reached the coupling's fixed point, " +
+                            std::to_string(m_accepted) +
+                            " of them where the passes stalled within coupling.accept_residual (" +
+                            fmt("%.3g N", m_acceptResidual) + "; the largest |H(x) - x| " +
+                            fmt("%.3g N", m_worstAccepted) +
+                            fmt(" at %.4f s", m_worstAcceptedTime) +
+                            "), the rest to the tolerance"});
     else
         rows.push_back({"coupling converged", "fail", double(m_unconverged), "steps",
                         "macro steps kept without a fixed point at the smallest step "

@@ -40,6 +40,10 @@ class ArrayVerdict {
     /// keepUnconverged), the largest |H(x) - x| kept [N], its tolerance [N] and time [s].
     void setCouplingSteps(bool iterated, long unconverged, double worstResidual,
                           double worstTolerance, double worstTime);
+    /// How many macro steps were accepted where their passes stalled within
+    /// cosim::CouplingOptions::acceptResidual [N], the largest |H(x) - x| accepted [N] and its
+    /// time [s]: said in the 'coupling converged' row, which they do not fail.
+    void setAcceptedSteps(long accepted, double worst, double worstTime, double acceptResidual);
     /// The bags' gauge pressures [Pa] standing inflated before he lies on them, least and
     /// highest: judged against the published clinical settings (the 'inflation' row).
     void setRestPressures(double least, double highest);
@@ -63,6 +67,8 @@ class ArrayVerdict {
     bool m_iterated = true;
     long m_unconverged = 0;
     double m_worstResidual = 0.0, m_worstTolerance = 0.0, m_worstTime = 0.0;
+    long m_accepted = 0;
+    double m_worstAccepted = 0.0, m_worstAcceptedTime = 0.0, m_acceptResidual = 0.0;
     // the judged window
     bool m_haveRef = false;
     double m_lastTime = 0.0, m_firstTime = 0.0;

@@ -1,5 +1,6 @@
 // bagsim run, kind patient-on-support: the patient settled on a rigid flat support.
 #include "PatientRun.h"
+#include "Format.h"
 
 #include <bagsim/Version.h>
 #include <body/SettleOnSupport.h>
@@ -21,12 +22,6 @@
 namespace bagsim::app {
 
 namespace {
-
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
 
 std::string describePatient(const body::PatientSpec& p) {
     std::ostringstream os;

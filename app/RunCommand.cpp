@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "Commands.h"
+#include "Format.h"
 #include "Interrupt.h"
 #include "ArrayRun.h"
 #include "PatientRun.h"
@@ -160,12 +161,6 @@ Args parseArgs(int argc, char** argv) {
             "which scenario? e.g. bagsim run "
             "scenarios/seed-load-test.yaml");
     return a;
-}
-
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
 }
 
 std::string formatPolynomial(const std::vector<double>& c) {

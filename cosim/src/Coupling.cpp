@@ -109,6 +109,8 @@ void CouplingOptions::validate() const {
         invalid("skipTravel", skipTravel, "0 (never skip) or a positive length [m]");
     if (!(tangentTolerance >= 0.0) || !std::isfinite(tangentTolerance))
         invalid("tangentTolerance", tangentTolerance, "0 (every step) or a positive force [N]");
+    if (!(acceptResidual >= 0.0) || !std::isfinite(acceptResidual))
+        invalid("acceptResidual", acceptResidual, "0 (off) or a positive force [N]");
 }
 
 using GasDerivative = Eigen::Matrix<double, 6, Eigen::Dynamic>;
@@ -494,6 +496,10 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
     Eigen::VectorXd bestX;
     double bestResidual = std::numeric_limits<double>::infinity();
     bool finalPass = false;
+    // The last pass that lowered the least residual by 1 % (CouplingOptions::acceptResidual:
+    // passes stall after kStallPasses more).
+    int lastGain = 0;
+    double gainBase = std::numeric_limits<double>::infinity();
     m.accelerator->beginStep();
     for (int k = 0;; ++k) {
         m.body.rollback();
@@ -579,6 +585,18 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
         if (sum.residual < bestResidual) {
             bestResidual = sum.residual;
             bestX = x;
+        }
+        if (bestResidual < 0.99 * gainBase) {
+            gainBase = bestResidual;
+            lastGain = k;
+        }
+        // Stalled: a pass within acceptResidual is accepted at this step's size (this pass
+        // itself, not the best one taken again: a bag's answer to the same poses may differ
+        // by as much as the stall).
+        const bool stalled = k - lastGain >= CouplingOptions::kStallPasses;
+        if (o.acceptResidual > 0.0 && stalled && sum.residual <= o.acceptResidual) {
+            sum.accepted = true;
+            break;
         }
         if (k + 1 >= o.maxIterations && m.lastResort) {
             sum.converged = false;

@@ -574,7 +574,7 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step", "max_macro_step",
                      "step_accuracy", "relative_tolerance", "absolute_tolerance",
                      "max_iterations", "threads", "body_accuracy", "tangent_tolerance",
-                     "skip_travel", "gas_tangent", "keep_unconverged"});
+                     "skip_travel", "gas_tangent", "keep_unconverged", "accept_residual"});
     cosim::CouplingOptions& c = o.coupling;
     // The defaults follow the bag model. Reduced bags: the tangent scheme (the implicit one
     // stops where a shape's overlap jumps, docs/reduced-bag.md#in-the-turn) and the body's
@@ -612,6 +612,11 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     // A step with no fixed point at the smallest step is kept (the run ends partial) rather
     // than ending the run there (docs/cosim.md#the-schemes).
     c.keepUnconverged = s.getBool("keep_unconverged", true);
+    // A step whose passes stall within this is accepted at its size: 0.1 N is 1 mmHg over one
+    // sensel of the clinical mat (7.7 cm2), a change no reading shows (docs/cosim.md).
+    c.acceptResidual = s.getQuantity("accept_residual", D::Force, 0.1);
+    checkBetween(s, "accept_residual", c.acceptResidual, 0.0, 10.0, "N",
+                 "0: only the tolerance is accepted");
     o.integrator.accuracy = s.getNumber("body_accuracy", reduced ? 1e-4 : 1e-6);
     if (!(o.integrator.accuracy > 0.0 && o.integrator.accuracy < 1e-2))
         s.fail("body_accuracy", "must lie between 0 and 0.01, e.g. 1e-6");

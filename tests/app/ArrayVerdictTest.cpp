@@ -155,6 +155,20 @@ TEST(ArrayVerdict, StepsKeptWithoutTheCouplingsFixedPointFail) {
     EXPECT_NE(r.detail.find("0.0347 N against 0.0014 N at 22.6250 s"), std::string::npos)
         << r.detail;
     EXPECT_NE(r.detail.find("the run is partial"), std::string::npos) << r.detail;
+    // Steps accepted where their passes stalled within coupling.accept_residual do not fail
+    // the row; it says how many and the largest residual accepted. Beside a step kept without
+    // a fixed point the row still fails.
+    v.setCouplingSteps(true, 0, 0.0, 0.0, 0.0);
+    v.setAcceptedSteps(12, 0.0412, 26.0123, 0.1);
+    const io::VerdictRow a = row(v.makeRows(), "coupling converged");
+    EXPECT_EQ(a.status, "ok");
+    EXPECT_NE(a.detail.find("12 of them where the passes stalled within "
+                            "coupling.accept_residual (0.1 N; the largest |H(x) - x| 0.0412 N "
+                            "at 26.0123 s)"),
+              std::string::npos)
+        << a.detail;
+    v.setCouplingSteps(true, 3, 0.0347, 0.0014, 22.625);
+    EXPECT_EQ(row(v.makeRows(), "coupling converged").status, "fail");
 }
 
 // The inflation: ok within the published clinical settings (up to 4 kPa), a warning above
@@ -173,4 +187,8 @@ TEST(ArrayVerdict, AFirmInflationIsToldFromAClinicalOne) {
     EXPECT_EQ(r.status, "warning");
     EXPECT_NE(r.detail.find("18.5-20.5 kPa"), std::string::npos) << r.detail;
     EXPECT_NE(r.detail.find("a firm setting"), std::string::npos) << r.detail;
+    // The whole text, its source included (it once lost its end to a fixed buffer).
+    EXPECT_NE(r.detail.find("1.6-4.0 kPa (docs/validation-interface-pressure.md)"),
+              std::string::npos)
+        << r.detail;
 }

@@ -325,6 +325,59 @@ TEST(Coupling, AStepWithNoFixedPointIsKeptAtTheSmallestStepAndSaysSo) {
     }
 }
 
+TEST(Coupling, PassesThatStallWithinTheAcceptedResidualKeepTheStepAtItsSize) {
+    // The +-1 mN bag of the test above. Its passes stall at a residual of about 2 mN, so with
+    // acceptResidual 5 mN every step is accepted at its full size after kStallPasses passes
+    // without a gain (no cut, converged, StepSummary::accepted), and the block moves as on a
+    // bag without the error to within what 1 mN can do: the spring's static deflection is
+    // m g / k = 3.9 mm; 1 mN on it is 0.2 um at rest, and a few um in 20 ms of a fall.
+    // acceptResidual far below the stall (10 uN) accepts nothing: halved and kept unconverged
+    // at the smallest step, as before. A step within the tolerance is never 'accepted'.
+    auto run = [](double unresolved, double accept, std::vector<StepSummary>& steps) {
+        BlockSystem block(kMass, 10.0, kGravity);
+        SpringParticipant spring = makeSpring();
+        spring.unresolved = unresolved;
+        block.start(0.0);
+        CouplingOptions o = options(Scheme::Implicit, AccelerationKind::IQNILS, 1e-3);
+        o.maxIterations = 30;
+        o.keepUnconverged = true;
+        o.minMacroStep = 2.5e-4;
+        o.acceptResidual = accept;
+        o.relativeTolerance = 1e-12, o.absoluteTolerance = 1e-7;
+        Coupling c(*block.body, {&spring}, {Link{block.shape, 0, 0}}, o);
+        c.initialize();
+        while (c.getTime() < 0.02 - 1e-12) steps.push_back(c.stepAdaptive(0.02));
+        return block.getZ();
+    };
+    std::vector<StepSummary> exact, accepted, refused;
+    const double zExact = run(0.0, 5e-3, exact);
+    const double zAccepted = run(1e-3, 5e-3, accepted);
+    for (const StepSummary& s : exact) {
+        EXPECT_TRUE(s.converged);
+        EXPECT_FALSE(s.accepted);
+        EXPECT_LE(s.residual, s.tolerance);
+    }
+    ASSERT_EQ(accepted.size(), 20u);
+    for (const StepSummary& s : accepted) {
+        EXPECT_TRUE(s.converged);
+        EXPECT_TRUE(s.accepted);
+        EXPECT_EQ(s.cuts, 0);
+        EXPECT_DOUBLE_EQ(s.macroStep, 1e-3);
+        EXPECT_GT(s.residual, s.tolerance);
+        EXPECT_LE(s.residual, 5e-3);
+        EXPECT_LE(s.iterations, 30);
+    }
+    EXPECT_NEAR(zAccepted, zExact, 5e-6);
+    run(1e-3, 1e-5, refused);
+    ASSERT_FALSE(refused.empty());
+    EXPECT_FALSE(refused.front().converged);
+    EXPECT_FALSE(refused.front().accepted);
+    EXPECT_EQ(refused.front().cuts, 2);  // 1 ms, 0.5 ms, kept at 0.25 ms
+    CouplingOptions bad;
+    bad.acceptResidual = -1.0;
+    EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 TEST(Coupling, BadLinksAndOptionsAreRefusedNamingWhatWouldBeValid) {
     BlockSystem block(kMass, 0.0, kGravity);
     SpringParticipant spring = makeSpring();

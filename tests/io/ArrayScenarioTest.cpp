@@ -536,6 +536,26 @@ TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreL
     }
 }
 
+TEST(ArrayScenario, StepsWithNoFixedPointAreKeptAndStalledPassesAcceptedWithinAResidual) {
+    // Patient runs keep a step with no fixed point at the smallest step (the run then ends
+    // partial) and accept a step whose passes stall within 0.1 N, 1 mmHg over one sensel of
+    // the clinical mat; both can be switched off; a bad residual is located.
+    const io::PatientOnArrayScenario plain = read(kBase);
+    EXPECT_TRUE(plain.options.coupling.keepUnconverged);
+    EXPECT_DOUBLE_EQ(plain.options.coupling.acceptResidual, 0.1);
+    auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
+    const io::PatientOnArrayScenario off =
+        read(with("keep_unconverged: false, accept_residual: 0 N"));
+    EXPECT_FALSE(off.options.coupling.keepUnconverged);
+    EXPECT_EQ(off.options.coupling.acceptResidual, 0.0);
+    EXPECT_DOUBLE_EQ(read(with("accept_residual: 50 mN")).options.coupling.acceptResidual, 0.05);
+    for (const char* bad : {"accept_residual: -1 N", "accept_residual: 20 N", "accept_residual: 5"}) {
+        const io::InputError e = readError(with(bad));
+        EXPECT_EQ(e.getLine(), 16) << bad;
+        EXPECT_EQ(e.getKey(), "coupling.accept_residual") << e.what();
+    }
+}
+
 TEST(ArrayScenario, TheFilmsSteppingIsQuasiStaticByDefaultAndDynamicWithItsSettings) {
     auto with = [](const std::string& keys) {
         std::string t = kBase;

@@ -133,6 +133,19 @@ struct CouplingOptions {
     /// giving way) leaves the coupling no fixed point at any step (docs/cosim.md#the-schemes).
     /// false: such a step throws bags::NumericalError.
     bool keepUnconverged = false;
+    /// [N] implicit schemes: once a step's passes stall short of the tolerance (no pass has
+    /// lowered the least |H(x) - x| by 1 % in kStallPasses passes), the first pass within
+    /// this is accepted at the step's size: StepSummary::accepted. A film near a fold has many
+    /// equilibria a few mN apart, so its wrench is not a function of the poses to better than
+    /// that, and the passes cannot reach a tolerance below it at any step
+    /// (docs/cosim.md#the-schemes); halving the step to the smallest then costs hundreds of
+    /// passes for nothing the outputs can show. Passes that do not come within it run on to
+    /// maxIterations, and the step is cut as before. 0 (the default): only the tolerance is
+    /// accepted.
+    double acceptResidual = 0.0;
+    /// Passes without a 1 % lower least residual after which a step counts as stalled
+    /// (acceptResidual).
+    static constexpr int kStallPasses = 8;
     void validate() const;  ///< throws std::invalid_argument naming the option
 };
 
@@ -154,6 +167,9 @@ struct StepSummary {
     /// implicit: within tolerance; one-pass schemes: true; false only for a step kept
     /// unconverged at the smallest step (CouplingOptions::keepUnconverged)
     bool converged = true;
+    /// converged to CouplingOptions::acceptResidual, not to the tolerance: the passes stalled
+    /// (residual then says where)
+    bool accepted = false;
     double residual = 0.0;     ///< [N] |H(x) - x| of the last pass (scaled as above)
     double wrenchNorm = 0.0;   ///< [N] |H(x)| of the last pass
     int bagIterations = 0;     ///< Newton iterations over every participant and pass
