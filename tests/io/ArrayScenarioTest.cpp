@@ -63,6 +63,7 @@ TEST(ArrayScenario, ReadsTheShippedScenariosInSI) {
     EXPECT_LT(clinical.options.layout.gasMass, 4.5e-3);
     EXPECT_GT(clinical.options.layout.gasMass, 3.0e-3);
     EXPECT_EQ(clinical.options.layout.groups.size(), 3u);
+    EXPECT_EQ(clinical.options.bag.stepping, bags::AirbagSpec::Stepping::Relaxed);
     const io::PatientOnArrayScenario turn = io::readPatientOnArrayScenario(
         io::ScenarioFile::load(std::string(BAGSIM_SOURCE_DIR) + "/scenarios/turn-left.yaml"));
     EXPECT_DOUBLE_EQ(turn.duration, 30.0);
