@@ -175,7 +175,79 @@ CheckpointHeader readCheckpointHeader(bags::StateReader& r) {
     h.overrides.resize(r.pod<std::uint64_t>());
     for (std::string& o : h.overrides) o = r.str();
     r.pod(h.time);
+    if (r.readTagIf("model")) h.model = r.str();
     return h;
+}
+
+// The model a scenario makes, as the run's header prints it: patient, array, films, contact,
+// coupling, gas, pneumatics, reduced bags (one line each, indented).
+std::string describeModel(const io::PatientOnArrayScenario& sc) {
+    const cosim::ArrayLayout& layout = sc.options.layout;
+    const body::PatientSpec& p = sc.patient;
+    const cosim::CouplingOptions& c = sc.options.coupling;
+    const bool reduced = sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced;
+    const bags::AirbagSpec::Stepping stepping = sc.options.bag.stepping;
+    std::ostringstream out;
+    out << "  patient " << body::getSexName(p.sex) << ", " << fmt("%.2f m", p.height) << ", "
+        << fmt("%.1f kg", p.mass) << ", " << body::getPostureName(p.posture) << "\n";
+    out << "  array " << layout.rows << " x " << layout.columns << " seed wedges ("
+        << sc.bagReading << ", mesh " << io::formatSignificant(sc.options.bag.geometry.meshSize, "mm")
+        << ", self-contact " << (sc.options.bag.selfContact ? "on" : "off");
+    if (!reduced)
+        out << ", films "
+            << (stepping == bags::AirbagSpec::Stepping::Relaxed   ? "relaxed"
+                : stepping == bags::AirbagSpec::Stepping::Dynamic ? "dynamic"
+                                                                  : "quasi-static");
+    out << "), " << io::formatQuantity(layout.gasMass, "g", 2) << " each";
+    for (const cosim::BagGroup& g : layout.groups)
+        out << ", group '" << g.name << "' " << io::formatQuantity(g.gasMass, "g", 2);
+    out << (sc.options.boardContact ? "; the bed board carries him where he reaches it"
+                                    : "; no bed board under him (array.board_contact)");
+    out << "; body on the films: "
+        << (sc.options.contact.friction > 0.0 ? "friction " + fmt("%g", sc.options.contact.friction)
+                                              : std::string("frictionless"))
+        << ", " << describeBodyTissue(sc.options) << "\n";
+    out << "  " << cosim::toString(c.scheme) << " coupling (" << cosim::toString(c.acceleration)
+        << "), macro step "
+        << (c.adaptive ? "adaptive " + io::formatSignificant(c.minMacroStep, "ms") + " to " +
+                             io::formatSignificant(c.maxMacroStep, "ms") +
+                             fmt(", accuracy %g x the tolerance", c.stepAccuracy)
+                       : io::formatSignificant(c.macroStep, "ms"))
+        << "; settle " << fmt("%g s", sc.settleTime) << ", then " << fmt("%g s", sc.duration)
+        << "\n";
+    for (const io::GasCommandText& g : sc.gasText)
+        out << "  gas from " << fmt("%g s", g.at) << " after the settle: " << g.who << " "
+            << g.what << "\n";
+    if (sc.hasPneumatics) {
+        out << "  pneumatics: " << sc.pneumatics.channels.size() << " channels";
+        for (const cosim::PneumaticChannel& ch : sc.pneumatics.channels)
+            out << " '" << ch.name << "' (" << ch.bags.size() << ")";
+        out << "; control " << (sc.controlKind.empty() ? "none" : sc.controlKind) << "\n";
+        for (const std::string& t : sc.controlText) out << "    " << t << "\n";
+    }
+    if (reduced)
+        out << "  bags: the reduced model (docs/reduced-bag.md), calibrated by "
+            << sc.options.reduced->source.substr(0, sc.options.reduced->source.find('\n')) << "\n";
+    return out.str();
+}
+
+// Why a checkpoint whose writer made the model `written` cannot be resumed by this build,
+// which makes `now`: the first line in which they differ.
+std::string describeModelDifference(const std::string& written, const std::string& now) {
+    auto lines = [](const std::string& t) {
+        std::vector<std::string> v;
+        std::istringstream in(t);
+        for (std::string l; std::getline(in, l);)
+            v.push_back(l.substr(std::min(l.find_first_not_of(' '), l.size())));
+        return v;
+    };
+    const std::vector<std::string> a = lines(written), b = lines(now);
+    size_t k = 0;
+    while (k < a.size() && k < b.size() && a[k] == b[k]) ++k;
+    return "the checkpoint was written by a build that made another model of this scenario (it "
+           "had \"" + (k < a.size() ? a[k] : std::string("nothing more")) +
+           "\", this build makes \"" + (k < b.size() ? b[k] : std::string("nothing more")) +
+           "\"); resume it with the build that wrote it, or run the scenario again";
 }
 
 int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
@@ -204,45 +276,12 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     sc.options.bag.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
     const cosim::ArrayLayout& layout = sc.options.layout;
     const body::PatientSpec& p = sc.patient;
+    // What this build makes of the scenario (printed, and kept in checkpoints: a resume by a
+    // build that makes another model of it is refused).
+    const std::string model = describeModel(sc);
     if (!quiet) {
         std::cerr << "bagsim " << bagsim::kVersion << ": " << file.getFileName() << " (" << sc.name
-                  << ")\n  patient " << body::getSexName(p.sex) << ", " << fmt("%.2f m", p.height)
-                  << ", " << fmt("%.1f kg", p.mass) << ", " << body::getPostureName(p.posture)
-                  << "\n  array " << layout.rows << " x " << layout.columns << " seed wedges ("
-                  << sc.bagReading << ", mesh " << io::formatSignificant(sc.options.bag.geometry.meshSize, "mm")
-                  << ", self-contact " << (sc.options.bag.selfContact ? "on" : "off") << "), "
-                  << io::formatQuantity(layout.gasMass, "g", 2) << " each";
-        for (const cosim::BagGroup& g : layout.groups)
-            std::cerr << ", group '" << g.name << "' " << io::formatQuantity(g.gasMass, "g", 2);
-        std::cerr << (sc.options.boardContact ? "; the bed board carries him where he reaches it"
-                                              : "; no bed board under him (array.board_contact)");
-        std::cerr << "; body on the films: "
-                  << (sc.options.contact.friction > 0.0 ? "friction " + fmt("%g", sc.options.contact.friction)
-                                                        : std::string("frictionless"))
-                  << ", " << describeBodyTissue(sc.options);
-        std::cerr << "\n  " << cosim::toString(sc.options.coupling.scheme) << " coupling ("
-                  << cosim::toString(sc.options.coupling.acceleration) << "), macro step "
-                  << (sc.options.coupling.adaptive
-                          ? "adaptive " + io::formatSignificant(sc.options.coupling.minMacroStep, "ms") +
-                                " to " + io::formatSignificant(sc.options.coupling.maxMacroStep, "ms") +
-                                fmt(", accuracy %g x the tolerance", sc.options.coupling.stepAccuracy)
-                          : io::formatSignificant(sc.options.coupling.macroStep, "ms"))
-                  << "; settle "
-                  << fmt("%g s", sc.settleTime) << ", then " << fmt("%g s", sc.duration) << "\n";
-        for (const io::GasCommandText& g : sc.gasText)
-            std::cerr << "  gas from " << fmt("%g s", g.at) << " after the settle: " << g.who
-                      << " " << g.what << "\n";
-        if (sc.hasPneumatics) {
-            std::cerr << "  pneumatics: " << sc.pneumatics.channels.size() << " channels";
-            for (const cosim::PneumaticChannel& c : sc.pneumatics.channels)
-                std::cerr << " '" << c.name << "' (" << c.bags.size() << ")";
-            std::cerr << "; control " << (sc.controlKind.empty() ? "none" : sc.controlKind) << "\n";
-            for (const std::string& t : sc.controlText) std::cerr << "    " << t << "\n";
-        }
-        if (sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced)
-            std::cerr << "  bags: the reduced model (docs/reduced-bag.md), calibrated by "
-                      << sc.options.reduced->source.substr(0, sc.options.reduced->source.find('\n'))
-                      << "\n";
+                  << ")\n" << model;
         std::cerr << "  writing to " << outPath.string()
                   << "/ (Ctrl-C stops and keeps what was computed, marked INCOMPLETE";
         if (sc.checkpointInterval > 0.0)
@@ -251,6 +290,15 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         std::cerr << ")\n";
     }
 
+    // A build whose defaults changed makes another model of the same scenario text: the
+    // checkpoint's state would be loaded into the wrong model. Refused before anything in the
+    // folder is touched (checkpoints written before the model was kept cannot say).
+    if (resume && !control.resumeModel.empty() && control.resumeModel != model) {
+        std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": "
+                  << describeModelDifference(control.resumeModel, model)
+                  << " (the folder is left as it was)\n";
+        return 2;
+    }
     io::RunInfo info{file.getFileName(), file.getText(), file.getOverrides(), commandLine};
     std::unique_ptr<io::ArrayResultsWriter> writer;
     try {
@@ -435,6 +483,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         w.pod(std::uint64_t(file.getOverrides().size()));
         for (const std::string& o : file.getOverrides()) w.str(o);
         w.pod(poa->getTime());
+        w.tag("model");
+        w.str(model);
     };
     auto writeStateFile = [&](const char* name, const char* magic, const bags::StateWriter& w) {
         bags::StateWriter head;

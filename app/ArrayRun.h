@@ -19,6 +19,8 @@ struct ArrayRunControl {
     /// A resumed run: the checkpoint read past its header (readCheckpointHeader()); the
     /// output folder is `out`, the folder of the run that wrote it. Null: a new run.
     bags::StateReader* resume = nullptr;
+    /// A resumed run: the model its checkpoint's writer made (CheckpointHeader::model).
+    std::string resumeModel;
     /// A run from a rest state (--from-rest): the rest state read past its header; the model
     /// built from the scenario takes the body's, the bags' and the coupling's state from it
     /// and runs on from the settle's end. `fromRestDir` names its folder (events, summary).
@@ -44,6 +46,9 @@ struct CheckpointHeader {
     std::string scenarioText;  ///< its text verbatim
     std::vector<std::string> overrides;  ///< --set key=value, in order
     double time = 0.0;         ///< [s] simulated, of the checkpoint
+    /// The model the writing build made of the scenario, as its run header prints it (empty
+    /// in checkpoints written before it was kept): a build that makes another is refused.
+    std::string model;
 };
 /// A checkpoint file: this magic line, the length of the data that follows and its FNV-1a
 /// hash (two little-endian uint64), then the data (header first).

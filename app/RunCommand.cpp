@@ -492,6 +492,7 @@ int runResume(const Args& args, const std::string& stopAfterText) {
     control.quiet = args.quiet;
     control.commandLine = args.commandLine;
     control.resume = &reader;
+    control.resumeModel = header.model;
     if (!stopAfterText.empty()) control.stopAfter = io::parseQuantity(stopAfterText, io::Dimension::Time);
     if (!args.quiet)
         std::cerr << "bagsim: resuming " << dir.string() << " at " << header.time

@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "ArrayRun.h"
 #include "ArrayRunTestUtil.h"
 
 namespace fs = std::filesystem;
@@ -132,6 +135,33 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
         << readLog(dir / "version.log");
     EXPECT_NE(readLog(dir / "version.log").find(std::string(", this is bagsim ") + bagsim::kVersion),
               std::string::npos);
+    // Written by a build that made another model of the same scenario (a default changed):
+    // the model the checkpoint keeps, as the run header prints it, differs from this build's;
+    // refused, naming the line, before anything in the folder is touched.
+    {
+        const std::string magic = bagsim::app::kCheckpointMagic;
+        std::string data = checkpoint.substr(magic.size() + 16);
+        const size_t at = data.find("body on the films: frictionless");
+        ASSERT_NE(at, std::string::npos);
+        data.replace(at + 30, 1, "S");
+        const std::uint64_t size = data.size(), hash = bagsim::app::calcCheckpointHash(data);
+        std::string head(16, '\0');
+        std::memcpy(head.data(), &size, 8);
+        std::memcpy(head.data() + 8, &hash, 8);
+        writeFile(out / "checkpoint.bin", magic + head + data);
+        const std::string bags = readFile(out / "bags.csv"), marker = readFile(out / "INCOMPLETE");
+        EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "model.log"), 2);
+        EXPECT_NE(readLog(dir / "model.log")
+                      .find("the checkpoint was written by a build that made another model of "
+                            "this scenario (it had \"array "),
+                  std::string::npos)
+            << readLog(dir / "model.log");
+        EXPECT_NE(readLog(dir / "model.log").find("frictionlesS"), std::string::npos);
+        EXPECT_NE(readLog(dir / "model.log").find("(the folder is left as it was)"),
+                  std::string::npos);
+        EXPECT_EQ(readFile(out / "bags.csv"), bags);
+        EXPECT_EQ(readFile(out / "INCOMPLETE"), marker);
+    }
     writeFile(out / "checkpoint.bin", checkpoint);
     EXPECT_EQ(readFile(out / "tilt.csv"), tilt);
 

@@ -76,6 +76,17 @@ class StateReader {
             throw StateError("checkpoint: expected the part '" + name + "', found '" +
                              got.substr(0, 60) + "' (the checkpoint is of another model)");
     }
+    /// True (and the tag read) if the next part is `name`; false, nothing read, otherwise or
+    /// at the end: for a part a later writer added.
+    bool readTagIf(const std::string& name) {
+        const size_t at = m_pos;
+        try {
+            if (str() == name) return true;
+        } catch (const StateError&) {
+        }
+        m_pos = at;
+        return false;
+    }
     template <class T>
     T pod() {
         static_assert(std::is_trivially_copyable<T>::value, "plain data only");
