@@ -231,9 +231,10 @@ std::string describeModel(const io::PatientOnArrayScenario& sc) {
     return out.str();
 }
 
-// Why a checkpoint whose writer made the model `written` cannot be resumed by this build,
-// which makes `now`: the first line in which they differ.
-std::string describeModelDifference(const std::string& written, const std::string& now) {
+// Why a checkpoint (or rest state: `what`) whose writer made the model `written` cannot be
+// taken up by this build, which makes `now`: the first line in which they differ.
+std::string describeModelDifference(const std::string& written, const std::string& now,
+                                    const std::string& what = "checkpoint") {
     auto lines = [](const std::string& t) {
         std::vector<std::string> v;
         std::istringstream in(t);
@@ -244,10 +245,11 @@ std::string describeModelDifference(const std::string& written, const std::strin
     const std::vector<std::string> a = lines(written), b = lines(now);
     size_t k = 0;
     while (k < a.size() && k < b.size() && a[k] == b[k]) ++k;
-    return "the checkpoint was written by a build that made another model of this scenario (it "
+    return "the " + what + " was written by a build that made another model of this scenario (it "
            "had \"" + (k < a.size() ? a[k] : std::string("nothing more")) +
            "\", this build makes \"" + (k < b.size() ? b[k] : std::string("nothing more")) +
-           "\"); resume it with the build that wrote it, or run the scenario again";
+           "\"); " + (what == "checkpoint" ? "resume it" : "start from it") +
+           " with the build that wrote it, or run the scenario again";
 }
 
 int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
@@ -262,6 +264,22 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     try {
         sc = io::readPatientOnArrayScenario(file);
         outPath = out.empty() ? std::filesystem::path("out") / sc.name : std::filesystem::path(out);
+        // A rest state's patient and array (the settle's model; gas, control and pneumatics
+        // may differ) must be what this build makes of them: the model's first two lines.
+        // Refused before the folder is made.
+        if (fromRest && !control.fromRestModel.empty()) {
+            auto settled = [](const std::string& m) {
+                const size_t first = m.find('\n');
+                return m.substr(0, first == std::string::npos ? first : m.find('\n', first + 1));
+            };
+            const std::string was = settled(control.fromRestModel), now = settled(describeModel(sc));
+            if (was != now) {
+                std::cerr << "bagsim: error: cannot start from the rest state in "
+                          << control.fromRestDir << ": "
+                          << describeModelDifference(was, now, "rest state") << "\n";
+                return 2;
+            }
+        }
         outDir = resume ? std::make_unique<io::OutputDir>(io::OutputDir::resume(outPath))
                         : std::make_unique<io::OutputDir>(outPath, control.force);
     } catch (const io::InputError& e) {
@@ -275,7 +293,6 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     // Ctrl-C is noticed within one Newton iteration of a bag (inflating the bags takes many).
     sc.options.bag.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };
     const cosim::ArrayLayout& layout = sc.options.layout;
-    const body::PatientSpec& p = sc.patient;
     // What this build makes of the scenario (printed, and kept in checkpoints: a resume by a
     // build that makes another model of it is refused).
     const std::string model = describeModel(sc);

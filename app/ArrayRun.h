@@ -26,6 +26,9 @@ struct ArrayRunControl {
     /// and runs on from the settle's end. `fromRestDir` names its folder (events, summary).
     bags::StateReader* fromRest = nullptr;
     std::string fromRestDir;
+    /// A run from a rest state: the model the rest state's writer made (CheckpointHeader::
+    /// model); its patient and array must be this build's.
+    std::string fromRestModel;
     /// [s] simulated: the run stops there as on Ctrl-C, after the macro step that reaches it
     /// (--stop-after, for tests of --resume); negative: never.
     double stopAfter = -1.0;

@@ -534,6 +534,7 @@ int runFromRest(const Args& args, const io::ScenarioFile& file, ArrayRunControl 
     readCheckpointHeader(reader);  // read above; the model's state follows
     control.fromRest = &reader;
     control.fromRestDir = dir.string();
+    control.fromRestModel = header.model;
     return runPatientOnArray(file, args.out, control);
 }
 

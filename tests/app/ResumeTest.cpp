@@ -72,6 +72,22 @@ void expectSameCsvFiles(const fs::path& whole, const fs::path& resumed) {
     EXPECT_EQ(readFile(whole / "results.xdmf"), readFile(resumed / "results.xdmf"));
 }
 
+// A checkpoint or rest state (magic, length and hash, data) as a build that printed `from`
+// where this one prints `to` (same length) would have written it: the data changed and the
+// length and hash made to match.
+std::string withModelText(const std::string& file, const std::string& magic,
+                          const std::string& from, const std::string& to) {
+    std::string data = file.substr(magic.size() + 16);
+    const size_t at = data.find(from);
+    if (at == std::string::npos || from.size() != to.size()) return file;
+    data.replace(at, from.size(), to);
+    const std::uint64_t size = data.size(), hash = bagsim::app::calcCheckpointHash(data);
+    std::string head(16, '\0');
+    std::memcpy(head.data(), &size, 8);
+    std::memcpy(head.data() + 8, &hash, 8);
+    return magic + head + data;
+}
+
 std::string readLog(const fs::path& p) { return readFile(p); }
 
 }  // namespace
@@ -139,16 +155,11 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
     // the model the checkpoint keeps, as the run header prints it, differs from this build's;
     // refused, naming the line, before anything in the folder is touched.
     {
-        const std::string magic = bagsim::app::kCheckpointMagic;
-        std::string data = checkpoint.substr(magic.size() + 16);
-        const size_t at = data.find("body on the films: frictionless");
-        ASSERT_NE(at, std::string::npos);
-        data.replace(at + 30, 1, "S");
-        const std::uint64_t size = data.size(), hash = bagsim::app::calcCheckpointHash(data);
-        std::string head(16, '\0');
-        std::memcpy(head.data(), &size, 8);
-        std::memcpy(head.data() + 8, &hash, 8);
-        writeFile(out / "checkpoint.bin", magic + head + data);
+        const std::string other =
+            withModelText(checkpoint, bagsim::app::kCheckpointMagic,
+                          "body on the films: frictionless", "body on the films: frictionlesS");
+        ASSERT_NE(other, checkpoint);
+        writeFile(out / "checkpoint.bin", other);
         const std::string bags = readFile(out / "bags.csv"), marker = readFile(out / "INCOMPLETE");
         EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "model.log"), 2);
         EXPECT_NE(readLog(dir / "model.log")
@@ -300,6 +311,20 @@ TEST(FromRest, ATurnFromTheRestStateOfASettleGivesTheWholeRunsBits) {
         << readLog(dir / "other.log");
     EXPECT_FALSE(fs::exists(dir / "other"));
     const std::string rest = readFile(dir / "settle" / "rest-state.bin");
+    {  // written by a build that made another patient or array of the same scenario
+        const std::string other =
+            withModelText(rest, bagsim::app::kRestStateMagic, "body on the films: frictionless",
+                          "body on the films: frictionlesS");
+        ASSERT_NE(other, rest);
+        writeFile(dir / "settle" / "rest-state.bin", other);
+        EXPECT_EQ(runBagsim(scenario + out("model") + sets + from("settle"), dir / "model.log"), 2);
+        EXPECT_NE(readLog(dir / "model.log")
+                      .find("the rest state was written by a build that made another model of "
+                            "this scenario (it had \"array "),
+                  std::string::npos)
+            << readLog(dir / "model.log");
+        EXPECT_FALSE(fs::exists(dir / "model"));
+    }
     std::string damaged = rest;
     damaged[damaged.size() - 20] ^= 1;
     writeFile(dir / "settle" / "rest-state.bin", damaged);
