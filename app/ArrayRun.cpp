@@ -213,6 +213,13 @@ std::string describeModel(const io::PatientOnArrayScenario& sc) {
                              io::formatSignificant(c.maxMacroStep, "ms") +
                              fmt(", accuracy %g x the tolerance", c.stepAccuracy)
                        : io::formatSignificant(c.macroStep, "ms"))
+        << fmt(", tolerance %g |H|", c.relativeTolerance)
+        << " + " << io::formatSignificant(c.absoluteTolerance, "mN")
+        << fmt(", %g passes", double(c.maxIterations))
+        << (c.keepUnconverged ? ", keeps" : ", stops at") << " a step with no fixed point"
+        << (c.acceptResidual > 0.0
+                ? ", accepts stalled passes within " + io::formatSignificant(c.acceptResidual, "mN")
+                : std::string())
         << "; settle " << fmt("%g s", sc.settleTime) << ", then " << fmt("%g s", sc.duration)
         << "\n";
     for (const io::GasCommandText& g : sc.gasText)

@@ -244,13 +244,13 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
                         "every macro step reached the coupling's fixed point to its tolerance"});
     else if (m_unconverged == 0)
         rows.push_back({"coupling converged", "ok", 0.0, "steps",
-                        "every macro step reached the coupling's fixed point, " +
-                            std::to_string(m_accepted) +
-                            " of them where the passes stalled within coupling.accept_residual (" +
+                        "every macro step reached the coupling's fixed point to its tolerance "
+                        "but " + std::to_string(m_accepted) +
+                            ", accepted where their passes stalled within coupling.accept_residual (" +
                             fmt("%.3g N", m_acceptResidual) + "; the largest |H(x) - x| " +
                             fmt("%.3g N", m_worstAccepted) +
                             fmt(" at %.4f s", m_worstAcceptedTime) +
-                            "), the rest to the tolerance"});
+                            ")"});
     else
         rows.push_back({"coupling converged", "fail", double(m_unconverged), "steps",
                         "macro steps kept without a fixed point at the smallest step "

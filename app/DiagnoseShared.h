@@ -5,6 +5,8 @@
 // bagsim fit-material too.
 #include <io/LoadTestScenario.h>
 
+#include "Format.h"
+
 #include <filesystem>
 #include <functional>
 #include <stdexcept>
@@ -17,9 +19,6 @@ namespace bagsim::app {
 struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
-
-/// One number formatted with the printf format `f` (e.g. "%.4g").
-std::string fmt(const char* f, double v);
 
 /// The value of the option argv[i]: argv[++i]; a UsageError ("--out needs a value")
 /// if there is none.

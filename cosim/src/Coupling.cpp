@@ -593,7 +593,8 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
         // Stalled: a pass within acceptResidual is accepted at this step's size (this pass
         // itself, not the best one taken again: a bag's answer to the same poses may differ
         // by as much as the stall).
-        const bool stalled = k - lastGain >= CouplingOptions::kStallPasses;
+        const bool stalled =
+            k - lastGain >= CouplingOptions::kStallPasses || k + 1 >= o.maxIterations;
         if (o.acceptResidual > 0.0 && stalled && sum.residual <= o.acceptResidual) {
             sum.accepted = true;
             break;

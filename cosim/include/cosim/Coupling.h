@@ -134,13 +134,15 @@ struct CouplingOptions {
     /// false: such a step throws bags::NumericalError.
     bool keepUnconverged = false;
     /// [N] implicit schemes: once a step's passes stall short of the tolerance (no pass has
-    /// lowered the least |H(x) - x| by 1 % in kStallPasses passes), the first pass within
+    /// lowered the least |H(x) - x| by 1 % in kStallPasses passes, or the last pass,
+    /// maxIterations, is reached), the first pass within
     /// this is accepted at the step's size: StepSummary::accepted. A film near a fold has many
     /// equilibria a few mN apart, so its wrench is not a function of the poses to better than
     /// that, and the passes cannot reach a tolerance below it at any step
     /// (docs/cosim.md#the-schemes); halving the step to the smallest then costs hundreds of
     /// passes for nothing the outputs can show. Passes that do not come within it run on to
-    /// maxIterations, and the step is cut as before. 0 (the default): only the tolerance is
+    /// maxIterations, and the step is cut as before. |H(x) - x| is the norm over every link,
+    /// so each link's share lies within it too. 0 (the default): only the tolerance is
     /// accepted.
     double acceptResidual = 0.0;
     /// Passes without a 1 % lower least residual after which a step counts as stalled
