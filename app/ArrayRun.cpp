@@ -340,7 +340,21 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         outDir->setStatus("failed", e.what());
         return 1;
     }
+    // The stopped run's marker, put back if the resume is refused past this point (the
+    // writer has then cut the files back to the checkpoint, which a later resume redoes).
+    const std::string stoppedMarker = resume ? outDir->readMarker() : std::string();
     if (resume) outDir->markResumed();
+    auto refuseResume = [&](const std::string& why) {
+        std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": " << why
+                  << " (the files are cut back to the checkpoint; the marker keeps the "
+                     "stopped run's status)\n";
+        writer->fail("interrupted", "resume refused: " + why);
+        try {
+            outDir->writeMarker(stoppedMarker + "bagsim run --resume was refused: " + why + "\n");
+        } catch (const std::exception&) {
+        }
+        return 2;
+    };
 
     std::unique_ptr<cosim::PatientOnArray> poa;
     cosim::PressureMat mat(sc.mat);
@@ -559,10 +573,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         try {
             loadRunState(*resume);
         } catch (const bags::StateError& e) {
-            std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": "
-                      << e.what() << "\n";
-            writer->fail("interrupted", std::string("resume refused: ") + e.what());
-            return 2;
+            return refuseResume(e.what());
         }
     }
     try {
@@ -660,10 +671,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                 resume->tag("end");
                 if (!resume->atEnd()) throw bags::StateError("checkpoint: data after its end");
             } catch (const bags::StateError& e) {
-                std::cerr << "bagsim: error: cannot resume from " << outPath.string() << ": "
-                          << e.what() << "\n";
-                writer->fail("interrupted", std::string("resume refused: ") + e.what());
-                return 2;
+                return refuseResume(e.what());
             }
             outDir->setStatus("running", "the patient on the bags (resumed" +
                                              fmt(" at %.4f s)", poa->getTime()));

@@ -94,6 +94,21 @@ OutputDir OutputDir::resume(const fs::path& path) {
 
 void OutputDir::markResumed() const { setStatus("running", "resumed " + getUtcTimestamp()); }
 
+std::string OutputDir::readMarker() const {
+    std::ifstream in(getFile(kMarkerName), std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return in ? text.str() : std::string();
+}
+
+void OutputDir::writeMarker(const std::string& text) const {
+    std::ofstream out(getFile(kMarkerName), std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out)
+        throw std::runtime_error("cannot write " + getFile(kMarkerName).string() + ": " +
+                                 std::strerror(errno));
+}
+
 void OutputDir::setStatus(const std::string& status, const std::string& detail) const {
     std::ofstream out(getFile(kMarkerName), std::ios::trunc);
     if (status == "partial")

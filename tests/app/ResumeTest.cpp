@@ -175,6 +175,31 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
     }
     writeFile(out / "checkpoint.bin", checkpoint);
     EXPECT_EQ(readFile(out / "tilt.csv"), tilt);
+    {  // A run part this build does not know (a sound file): found only once the writer has
+       // cut the files back to the checkpoint (their rows past it, which any resume writes
+       // again bit for bit, are gone); the marker keeps the stopped run's text and says so.
+        const std::string other =
+            withModelText(checkpoint, bagsim::app::kCheckpointMagic,
+                          std::string("\x05\0\0\0\0\0\0\0run-5", 13),
+                          std::string("\x05\0\0\0\0\0\0\0run-9", 13));
+        ASSERT_NE(other, checkpoint);
+        writeFile(out / "checkpoint.bin", other);
+        const std::string marker = readFile(out / "INCOMPLETE");
+        EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "part.log"), 2);
+        EXPECT_NE(readLog(dir / "part.log").find("expected the part 'run-5', found 'run-9'"),
+                  std::string::npos)
+            << readLog(dir / "part.log");
+        const std::string after = readFile(out / "INCOMPLETE");
+        EXPECT_EQ(after.substr(0, marker.size()), marker);
+        EXPECT_NE(after.find("bagsim run --resume was refused: checkpoint: expected the part"),
+                  std::string::npos)
+            << after;
+        const std::string cut = readFile(out / "tilt.csv");
+        EXPECT_LT(cut.size(), tilt.size());
+        EXPECT_EQ(tilt.substr(0, cut.size()), cut);
+        writeFile(out / "INCOMPLETE", marker);
+        writeFile(out / "checkpoint.bin", checkpoint);
+    }
 
     ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet --stop-after '0.25 s'",
                         dir / "resumed1.log"),

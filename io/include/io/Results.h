@@ -47,6 +47,10 @@ class OutputDir {
     static OutputDir resume(const std::filesystem::path& path);
     /// The marker says the run is running again (once the resume is accepted).
     void markResumed() const;
+    /// The marker's text as it stands ("" without one).
+    std::string readMarker() const;
+    /// Writes `text` as the marker, verbatim (a refused resume puts the stopped run's back).
+    void writeMarker(const std::string& text) const;
 
     const std::filesystem::path& getPath() const { return m_path; }  ///< the folder
     /// Path of a file in the folder.
