@@ -126,10 +126,11 @@ Eigen::Vector2d readXY(const ScenarioNode& s, const std::string& key, const std:
 // ---------------------------------------------------------------------------------------- bag
 
 // Soft tissue between the segments' bones and the films: the segments' shapes are the skin,
-// the layer lies inside them (docs/contact.md#soft-tissue). bag.body_tissue: absent or
-// `published`, each site's published layer (docs/body.md#soft-tissue; finite-element bags;
-// reduced bags: none); `none`, bare shapes; {thickness, modulus}, one layer on every segment;
-// {site: {thickness, modulus} or none, ...}, the published layers with those sites changed.
+// the layer lies inside them (docs/contact.md#contact-law, its soft tissue).
+// bag.body_tissue: absent or `published`, each site's published layer (docs/body.md#soft-tissue;
+// finite-element bags; reduced bags: none); `none`, bare shapes; {thickness, modulus}, one layer
+// on every segment; {site: {thickness, modulus} or none, ...}, the published layers with those
+// sites changed.
 void readBodyTissue(const ScenarioNode& bag, PatientOnArrayScenario& sc) {
     const bool reduced = sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced;
     const char* const reducedWhy =
@@ -626,7 +627,7 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
 // --------------------------------------------------------------------------------- pneumatics
 
 // Typical values of the clinical alternating-pressure and turning mattress hardware this
-// class of device uses (docs/pneumatics.md#the-scenarios-hardware): stated as typical values
+// class of device uses (docs/pneumatics.md#the-scenarios-hardware-typical-values): stated as typical values
 // of the class, not as one product's data.
 pneumatics::ValveSpec makeTypicalValve() {
     pneumatics::ValveSpec v;
