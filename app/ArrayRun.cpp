@@ -199,6 +199,9 @@ std::string describeModel(const io::PatientOnArrayScenario& sc) {
                 : stepping == bags::AirbagSpec::Stepping::Dynamic ? "dynamic"
                                                                   : "quasi-static");
     out << "), " << io::formatQuantity(layout.gasMass, "g", 2) << " each";
+    if (sc.fillFromBody > 0.0)
+        out << " (filled to " << io::formatQuantity(sc.fillFromBody, "kPa", 2)
+            << " at rest, set from his body)";
     for (const cosim::BagGroup& g : layout.groups)
         out << ", group '" << g.name << "' " << io::formatQuantity(g.gasMass, "g", 2);
     out << (sc.options.boardContact ? "; the bed board carries him where he reaches it"

@@ -174,6 +174,16 @@ double TargetController::findNextChange(double t) const {
     return t < m_start - kEps ? m_start : kInf;
 }
 
+double calcCellPressureForBody(const body::PatientSpec& patient) {
+    patient.validate();
+    body::PatientSpec reference;  // 75 kg, 1.75 m
+    reference.mass = 75.0;
+    reference.height = 1.75;
+    const double loadPerArea = patient.mass / patient.getBodySurfaceArea();
+    const double referenceLoad = reference.mass / reference.getBodySurfaceArea();
+    return 4000.0 * loadPerArea / referenceLoad;
+}
+
 double calcMassForStiffness(const std::vector<double>& m, const std::vector<double>& k,
                             double want) {
     if (m.size() != k.size() || m.size() < 2)

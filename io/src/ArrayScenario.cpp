@@ -312,9 +312,30 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
 // a regulated supply filling the cell to its setpoint, then sealed (Airbag::inflateToPressure()
 // on one bag of the array's geometry and mesh; the same for every bag, whatever its place).
 // One inflation per distinct pressure of the file.
+// A cell pressure [Pa gauge]: a pressure, or `from-body` (cosim::calcCellPressureForBody, from
+// the patient's mass and height; *fromBody then true).
+double readCellPressure(const ScenarioNode& s, const std::string& key,
+                        const body::PatientSpec& patient, bool* fromBody) {
+    *fromBody = false;
+    const ScenarioNode v = s.get(key);
+    if (v.isScalar() && v.asString() == "from-body") {
+        *fromBody = true;
+        return cosim::calcCellPressureForBody(patient);
+    }
+    if (!v.isScalar()) return v.asQuantity(D::Pressure);  // fails, naming what it is
+    try {
+        return parseQuantity(v.asString(), D::Pressure);
+    } catch (const UnitError& e) {
+        s.fail(key, std::string(e.what()) +
+                        "; or from-body (the pressure set from the patient's mass and height, "
+                        "docs/pneumatics.md#a-setpoint-from-his-body)");
+    }
+}
+
 double readMassAtPressure(const ScenarioNode& s, const std::string& key, const bags::AirbagSpec& bag,
-                          std::vector<std::pair<double, double>>& known) {
-    const double p = s.getQuantity(key, D::Pressure);
+                          std::vector<std::pair<double, double>>& known,
+                          const body::PatientSpec& patient, bool* fromBody) {
+    const double p = readCellPressure(s, key, patient, fromBody);
     checkBetween(s, key, p, 200.0, 1e5, "kPa",
                  "clinical cells run at about 1.5-8 kPa; the seed's wedge is at about 20 kPa with "
                  "4.5 g");
@@ -417,8 +438,10 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
                                  : "missing: the bags' fill, a gas mass (gas_mass: 4.5 g) or the "
                                    "gauge pressure they are filled to at rest (pressure: 4 kPa)");
     std::vector<std::pair<double, double>> known;  // pressure, mass: inflated once each
+    bool fromBody = false;
     if (s.has("pressure")) {
-        a.gasMass = readMassAtPressure(s, "pressure", sc.options.bag, known);
+        a.gasMass = readMassAtPressure(s, "pressure", sc.options.bag, known, sc.patient, &fromBody);
+        if (fromBody) sc.fillFromBody = cosim::calcCellPressureForBody(sc.patient);
     } else {
         a.gasMass = s.getQuantity("gas_mass", D::Mass);
         checkPositive(s, "gas_mass", a.gasMass, "g");
@@ -437,7 +460,9 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
             if (e.has("gas_mass") && e.has("pressure"))
                 e.fail("pressure", "and gas_mass both set the group's fill; valid: one of them");
             if (e.has("pressure")) {
-                g.gasMass = readMassAtPressure(e, "pressure", sc.options.bag, known);
+                g.gasMass = readMassAtPressure(e, "pressure", sc.options.bag, known, sc.patient,
+                                               &fromBody);
+                if (fromBody) sc.fillFromBody = cosim::calcCellPressureForBody(sc.patient);
             } else {
                 g.gasMass = e.getQuantity("gas_mass", D::Mass, a.gasMass);
                 checkPositive(e, "gas_mass", g.gasMass, "g");
@@ -983,24 +1008,45 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             sc.controller = std::make_shared<cosim::TargetController>(
                 cosim::TargetController::Quantity::MassPerBag, targets, t0 + at);
         } else if (sc.controlKind == "target-pressure") {
-            s.checkKeys({"kind", "targets"}, {"at"});
+            // Either a target per channel (targets:) or one for every channel (pressure:,
+            // band:); a pressure may be from-body.
+            s.checkKeys({"kind"}, {"at", "targets", "pressure", "band"});
             const double at = readAt(s);
-            const ScenarioNode ts = s.get("targets");
-            if (!ts.isSequence())
-                s.fail("targets", "must be a list, e.g. - {channel: right, pressure: 30 kPa}");
+            if (s.has("targets") == s.has("pressure"))
+                s.fail(s.has("targets") ? "pressure" : "targets",
+                       s.has("targets")
+                           ? "and targets both set the channels' pressures; valid: one of them"
+                           : "missing: targets (a list, e.g. - {channel: right, pressure: 4 kPa}) "
+                             "or pressure (one for every channel: 4 kPa, or from-body)");
+            if (s.has("band") && !s.has("pressure"))
+                s.fail("band", "goes with control.pressure; give each target its own band");
             std::vector<cosim::TargetController::Target> targets;
-            for (const ScenarioNode& e : ts.getElements()) {
-                e.checkKeys({"channel", "pressure"}, {"band"});
+            auto add = [&](const ScenarioNode& e, int channel) {
                 cosim::TargetController::Target t;
-                t.channel = findChannel(e, "channel", p);
-                t.value = e.getQuantity("pressure", D::Pressure);
+                t.channel = channel;
+                bool fromBody = false;
+                t.value = readCellPressure(e, "pressure", sc.patient, &fromBody);
                 checkBetween(e, "pressure", t.value, 0.0, 200e3, "kPa", "gauge");
                 t.band = e.getQuantity("band", D::Pressure, 1e3);
                 checkBetween(e, "band", t.band, 0.0, 50e3, "kPa");
                 targets.push_back(t);
-                sc.controlText.push_back("'" + p.channels[t.channel].name + "' to " +
-                                         fmtUnit(t.value, "kPa") + " gauge (band " +
-                                         fmtUnit(t.band, "kPa") + ")");
+                sc.controlText.push_back(
+                    "'" + p.channels[t.channel].name + "' to " + fmtUnit(t.value, "kPa") +
+                    " gauge (band " + fmtUnit(t.band, "kPa") + ")" +
+                    (fromBody ? " from his body (" + fmtUnit(sc.patient.mass, "kg") + ", " +
+                                    fmtUnit(sc.patient.height, "m") + ")"
+                              : std::string()));
+            };
+            if (s.has("pressure")) {
+                for (int c = 0; c < nc; ++c) add(s, c);
+            } else {
+                const ScenarioNode ts = s.get("targets");
+                if (!ts.isSequence())
+                    s.fail("targets", "must be a list, e.g. - {channel: right, pressure: 30 kPa}");
+                for (const ScenarioNode& e : ts.getElements()) {
+                    e.checkKeys({"channel", "pressure"}, {"band"});
+                    add(e, findChannel(e, "channel", p));
+                }
             }
             sc.controller = std::make_shared<cosim::TargetController>(
                 cosim::TargetController::Quantity::Pressure, targets, t0 + at);

@@ -294,3 +294,35 @@ TEST(PneumaticControl, TheTurnReachesItsTiltHoldsAndRestoresTheInitialMasses) {
     EXPECT_TRUE(std::isnan(g.getTiltReachedTime()));
     EXPECT_EQ(g.getPhase(), cosim::TurnController::Phase::Done);
 }
+
+TEST(PneumaticControl, TheCellPressureFromHisBodyFollowsHisLoadPerAreaOfBodySurface) {
+    // Reference: Mosteller's body surface area sqrt(h [cm] m [kg] / 3600), 1.9094 m^2 at 75 kg,
+    // 1.75 m (hand computation, 1e-4); 4 kPa for that body by definition (exactly: the same
+    // arithmetic). The rule's scaling: m / BSA = 60 sqrt(m / h), so 2.25 times the mass at one
+    // height is 1.5 times the pressure, and the bounds of the modelled bodies are 2.71-6.26 kPa.
+    body::PatientSpec p;
+    p.mass = 75.0;
+    p.height = 1.75;
+    EXPECT_NEAR(p.getBodySurfaceArea(), 1.9094, 1e-4);
+    EXPECT_EQ(cosim::calcCellPressureForBody(p), 4000.0);
+    body::PatientSpec light = p, heavy = p;
+    light.mass = 50.0;  // BMI 19.5
+    light.height = 1.60;
+    heavy.mass = 112.5;  // BMI 43.9
+    heavy.height = 1.60;
+    EXPECT_NEAR(cosim::calcCellPressureForBody(heavy) / cosim::calcCellPressureForBody(light), 1.5,
+                1e-12);
+    EXPECT_NEAR(cosim::calcCellPressureForBody(light),
+                4000.0 * std::sqrt((50.0 / 160.0) / (75.0 / 175.0)), 1e-9);
+    body::PatientSpec smallest = p, largest = p;
+    smallest.height = 1.4;
+    smallest.mass = 14.0 * 1.4 * 1.4;
+    largest.height = 2.1;
+    largest.mass = 50.0 * 2.1 * 2.1;
+    EXPECT_NEAR(cosim::calcCellPressureForBody(smallest), 2705.1, 0.1);
+    EXPECT_NEAR(cosim::calcCellPressureForBody(largest), 6261.0, 0.1);
+    // A body the model does not cover is refused, not extrapolated.
+    body::PatientSpec child = p;
+    child.height = 1.2;
+    EXPECT_THROW(cosim::calcCellPressureForBody(child), std::invalid_argument);
+}

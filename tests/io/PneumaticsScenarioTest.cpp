@@ -167,3 +167,50 @@ TEST(PneumaticsScenario, TheShippedPneumaticScenariosRead) {
         std::string(BAGSIM_SOURCE_DIR) + "/scenarios/turn-right-pneumatic.yaml"));
     EXPECT_NEAR(right.targetTilt, -30.0 * M_PI / 180.0, 1e-12);
 }
+
+TEST(PneumaticsScenario, TheZonesPressureIsStatedOnceOrSetFromHisBody) {
+    // control.pressure (with band) gives every channel one target; `from-body` sets it, and
+    // array.pressure likewise, from his mass and height (cosim::calcCellPressureForBody:
+    // 4 kPa at 75 kg and 1.75 m, and 3.5823 kPa at 55 kg and 1.60 m by hand computation).
+    const std::string control =
+        "pneumatics: {}\ncontrol: {kind: target-pressure, pressure: from-body, band: 0.3 kPa}\n";
+    const io::PatientOnArrayScenario sc = read(kBase + control);
+    EXPECT_EQ(sc.controlKind, "target-pressure");
+    ASSERT_EQ(sc.controlText.size(), 2u);
+    EXPECT_EQ(sc.controlText[0], "'left' to 4 kPa gauge (band 0.3 kPa) from his body (75 kg, 1.75 m)");
+    EXPECT_EQ(sc.controlText[1].substr(0, 20), "'right' to 4 kPa gau");
+    EXPECT_EQ(sc.fillFromBody, 0.0);  // the array is filled by gas mass here
+
+    std::string small = kBase + control;
+    small.replace(small.find("height: 1.75 m, mass: 75 kg"), 27, "height: 1.60 m, mass: 55 kg");
+    small.replace(small.find("  gas_mass: 4.5 g\n"), 18, "  pressure: from-body\n");
+    const io::PatientOnArrayScenario s2 = read(small);
+    EXPECT_NEAR(s2.fillFromBody, 3582.4, 0.1);
+    EXPECT_NE(s2.controlText[0].find("to 3.58236 kPa gauge (band 0.3 kPa) from his body (55 kg, 1.6 m)"),
+              std::string::npos)
+        << s2.controlText[0];
+    // The stated pressure fills the bags as a stated 3.58236 kPa does.
+    std::string stated = small;
+    stated.replace(stated.find("  pressure: from-body\n"), 22, "  pressure: 3582.36 Pa\n");
+    EXPECT_NEAR(read(stated).options.layout.gasMass, s2.options.layout.gasMass,
+                1e-6 * s2.options.layout.gasMass);
+
+    // Refused: both or neither of targets and pressure; a band without pressure; a word that
+    // is not from-body (its message names both valid forms).
+    auto refused = [](const std::string& text, const std::string& key, const std::string& what) {
+        const io::InputError e = readError(text);
+        EXPECT_EQ(e.getLine(), 17) << e.what();
+        EXPECT_EQ(e.getKey(), key) << e.what();
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    };
+    refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure, pressure: 4 kPa, "
+                    "targets: [{channel: left, pressure: 4 kPa}]}\n",
+            "control.pressure", "and targets both set the channels' pressures");
+    refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure}\n", "control.targets",
+            "missing: targets");
+    refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure, band: 1 kPa, "
+                    "targets: [{channel: left, pressure: 4 kPa}]}\n",
+            "control.band", "goes with control.pressure");
+    refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure, pressure: from-bdy}\n",
+            "control.pressure", "; or from-body (the pressure set from the patient's mass");
+}

@@ -22,6 +22,9 @@ struct PatientSpec {
 
     /// Body-mass index mass / height^2 [kg/m^2].
     double getBmi() const { return mass / (height * height); }
+    /// Body surface area [m^2] by Mosteller's formula, sqrt(height [cm] x mass [kg] / 3600)
+    /// (Mosteller 1987, N Engl J Med 317:1098).
+    double getBodySurfaceArea() const;
     /// Checks the ranges the model is valid for.
     /// @throws std::invalid_argument naming the key, the value and what is valid; nothing is
     /// clamped.

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "body/PatientSpec.h"
 #include "cosim/ArrayPneumatics.h"
 
 namespace cosim {
@@ -119,6 +120,17 @@ class TargetController : public PneumaticController {
     std::vector<BandController> m_band;
     double m_start = 0.0;
 };
+
+/// The cell pressure set from the patient's body [Pa gauge]: 4 kPa for a 75 kg, 1.75 m adult
+/// (the default of the active mattress in the Fitting Mode study, J Jpn WOCM 15(3)), scaled by
+/// his mass per area of body surface (Mosteller's), m / BSA = 60 sqrt(m / h) kg/m^2 with h in
+/// cm: a cell carries its share of him at about its own pressure (a slack film transmits the
+/// gas pressure), so the same immersion asks for a pressure in proportion to his load per
+/// area of his back, and the back's area in proportion to his body surface. No published
+/// rule of a device was found (they set 'a basic setting according to the user's weight'
+/// without saying how); docs/pneumatics.md#a-setpoint-from-his-body.
+/// Over the modelled bodies (BMI 14-50, 1.4-2.1 m) it lies between 2.71 and 6.26 kPa.
+double calcCellPressureForBody(const body::PatientSpec& patient);
 
 /// The gas mass [kg] that gives stiffness k [N/m] by linear interpolation in a k(m) table
 /// (masses increasing, stiffness strictly monotone over them).

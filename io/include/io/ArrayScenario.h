@@ -58,6 +58,9 @@ struct PatientOnArrayScenario {
     /// control section (with pneumatics): the controller, its times from the release; null:
     /// every valve stays closed. controlText says what it does, for the summary.
     std::shared_ptr<cosim::PneumaticController> controller;
+    /// [Pa gauge] the pressure the array (or a group) was filled to at rest when it was set
+    /// `from-body` (cosim::calcCellPressureForBody), else 0.
+    double fillFromBody = 0.0;
     std::string controlKind;  ///< "schedule", "target-mass", "target-pressure", "turn" or ""
     std::vector<std::string> controlText;
     double targetTilt = 0.0;  ///< [rad] the turn's target pelvis tilt (0: no turn)
