@@ -955,10 +955,10 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         if (!s) throw std::runtime_error("cannot write summary.txt in " + outPath.string());
         std::string partial;
         if (unrelaxed.steps > 0)
-            partial = fmt("%ld", unrelaxed.steps) +
+            partial = std::to_string(unrelaxed.steps) +
                       " bag steps were kept unrelaxed (verdict.csv, 'bag films relaxed')";
         if (totals.unconverged > 0)
-            partial += (partial.empty() ? "" : "; ") + fmt("%ld", totals.unconverged) +
+            partial += (partial.empty() ? "" : "; ") + std::to_string(totals.unconverged) +
                        " macro steps were kept without a fixed point (verdict.csv, 'coupling "
                        "converged')";
         if (!partial.empty())

@@ -6,6 +6,7 @@
 #include <body/SettleOnSupport.h>
 #include <io/InputError.h>
 #include <io/PatientScenario.h>
+#include <io/ResultFiles.h>
 #include <io/Results.h>
 #include <io/Units.h>
 
@@ -96,7 +97,7 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
     table << "share of the body weight per region:\n";
     table << "  region           force [N]  share [%]  peak [kPa]\n";
     std::ostringstream csv;
-    csv << "region,force_N,share_percent\n";
+    csv << io::kRegionLoadsHeader << "\n";
     for (std::size_t i = 0; i < r.regionNames.size(); ++i) {
         const double f = r.load.regionForce[i];
         csv << r.regionNames[i] << "," << fmt("%.4f", f) << "," << fmt("%.4f", 100 * f / r.weight)
@@ -115,7 +116,7 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
     table << line;
 
     try {
-        std::ofstream c(outDir->getFile("region_loads.csv"));
+        std::ofstream c(outDir->getFile(io::kRegionLoadsCsv));
         c << csv.str();
         std::ofstream s(outDir->getFile("summary.txt"));
         s << "bagsim " << bagsim::kVersion << " patient-on-support: " << file.getFileName() << " ("

@@ -176,10 +176,10 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info
     };
     open(d.regions, kRegionsCsv, kRegionsHeader);
     open(d.bags, kBagsCsv, kBagsHeader);
-    open(d.tilt, kTiltCsv, "time_s,pelvis_tilt_deg,thorax_tilt_deg");
-    open(d.body, kBodyCsv, "time_s,com_x_mm,com_y_mm,com_z_mm");
-    open(d.events, kEventsCsv, "time_s,event");
-    open(d.pneumatics, kPneumaticsCsv, "time_s,bag,sensor_kPa,inflow_g_per_s,outflow_g_per_s");
+    open(d.tilt, kTiltCsv, kTiltHeader);
+    open(d.body, kBodyCsv, kBodyHeader);
+    open(d.events, kEventsCsv, kEventsHeader);
+    open(d.pneumatics, kPneumaticsCsv, kPneumaticsHeader);
 }
 
 ArrayResultsWriter::~ArrayResultsWriter() {
@@ -322,7 +322,7 @@ void ArrayResultsWriter::addEvent(double time, const std::string& event) {
 
 std::string ArrayResultsWriter::writeVerdict(const std::vector<VerdictRow>& rows) {
     std::ostringstream csv, table;
-    csv << "check,status,value,unit,detail\n";
+    csv << kVerdictHeader << "\n";
     for (const VerdictRow& r : rows) {
         const std::string value = std::isfinite(r.value) ? fmt("%.6g", r.value) : "";
         csv << quoteCsvCell(r.check) << "," << r.status << "," << value << "," << quoteCsvCell(r.unit)

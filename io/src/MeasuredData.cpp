@@ -1,4 +1,5 @@
 #include <io/MeasuredData.h>
+#include <io/ResultFiles.h>
 
 #include <io/Scenario.h>
 #include <io/Units.h>
@@ -484,7 +485,7 @@ std::vector<std::string> writeMeasuredData(const std::string& folder,
 std::string formatRigReadingsCsv(const bags::LoadTestResult& result,
                                  const diagnose::RigEffects& rig, double rate) {
     std::ostringstream os;
-    os << "gas_mass_g,time_s,displacement_mm,force_N,pressure_kPa,branch\n";
+    os << kRigReadingsHeader << "\n";
     for (const bags::LoadCurve& c : result.curves) {
         const diagnose::MachineCurve mc = diagnose::calcMachineCurve(c, rig, rate);
         const std::vector<double> p = diagnose::applyPressureSensor(mc.time, mc.pressure, rig);

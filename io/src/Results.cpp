@@ -1,5 +1,6 @@
 #include <bagsim/Version.h>
 #include <io/InputError.h>
+#include <io/ResultFiles.h>
 #include <io/Results.h>
 
 #include <algorithm>
@@ -470,7 +471,7 @@ LoadTestWriter::LoadTestWriter(const OutputDir& dir, const RunInfo& info,
     d.csv.open(dir.getFile(kLoadDisplacementCsv), std::ios::trunc);
     if (!d.csv)
         throw std::runtime_error("cannot write " + dir.getFile(kLoadDisplacementCsv).string());
-    d.csv << "gas_mass_g,displacement_mm,force_N,pressure_kPa,branch\n";
+    d.csv << kLoadDisplacementHeader << "\n";
 }
 
 LoadTestWriter::~LoadTestWriter() {
@@ -604,7 +605,7 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
 
     {
         std::ofstream out(d.dir.getFile(kStiffnessCsv), std::ios::trunc);
-        out << "gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end\n";
+        out << kStiffnessHeader << "\n";
         for (size_t i = 0; i < n; ++i)
             out << fmtG(mass[i] * 1e3, 6) << ',' << fmtG(stiffness[i] * 1e-3) << ','
                 << fmtG(r.curves[i].stiffnessMin * 1e-3) << ','

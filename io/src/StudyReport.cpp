@@ -178,6 +178,10 @@ Output makeOutput(const std::string& name, int column) {
         const auto eq = inside.find('=');
         per = inside.substr(0, eq);
         perValue = eq == std::string::npos ? "" : inside.substr(eq + 1);
+        if (const auto c = base.rfind(':'); c != std::string::npos) {  // COLUMN:REDUCE[PER=V]
+            reduce = base.substr(c + 1);
+            base = base.substr(0, c);
+        }
     } else if (const auto c = name.rfind(':'); c != std::string::npos) {
         base = name.substr(0, c);
         reduce = name.substr(c + 1);

@@ -2,8 +2,10 @@
 #include <io/ArrayScenario.h>
 #include <io/LoadTestScenario.h>
 #include <io/PatientScenario.h>
+#include <io/ResultFiles.h>
 #include <io/StudyScenario.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -287,6 +289,28 @@ void combine(StudyScenario& s, const std::vector<Block>& blocks, const ScenarioN
     }
 }
 
+// The output's file and columns are ones a run of `kind` writes (io/ResultFiles.h): refused
+// here, before any case runs, rather than found missing after each.
+void checkOutputAgainstKind(const ScenarioNode& o, const StudyOutput& out, const std::string& kind) {
+    const std::vector<ResultCsv> files = getResultCsvs(kind);
+    if (files.empty()) return;
+    std::string names;
+    for (const ResultCsv& f : files) names += std::string(names.empty() ? "" : ", ") + f.file;
+    for (const ResultCsv& f : files) {
+        if (out.file != f.file) continue;
+        const std::vector<std::string> columns = splitResultHeader(f.header);
+        std::string list;
+        for (const std::string& c : columns) list += (list.empty() ? "" : ", ") + c;
+        for (const char* key : {"column", "per"}) {
+            const std::string& c = std::string(key) == "column" ? out.column : out.per;
+            if (c.empty() || std::find(columns.begin(), columns.end(), c) != columns.end()) continue;
+            o.fail(key, "\"" + c + "\": " + out.file + " has no such column; its columns: " + list);
+        }
+        return;
+    }
+    o.fail("file", "\"" + out.file + "\" is not a file a " + kind + " run writes; valid: " + names);
+}
+
 std::vector<StudyOutput> readOutputs(const ScenarioNode& root, const std::string& kind) {
     std::vector<StudyOutput> outputs;
     if (!root.has("outputs")) {
@@ -296,7 +320,7 @@ std::vector<StudyOutput> readOutputs(const ScenarioNode& root, const std::string
             return {{"region_loads.csv", "share_percent", "region", "", 0}};
         root.fail("outputs", "a study of kind " + kind +
                                  " names its outputs, e.g. outputs: [{file: regions.csv, "
-                                 "column: peak_pressure_mmHg, per: region}]");
+                                 "column: patch_peak_mmHg, per: region, reduce: last}]");
     }
     const ScenarioNode list = root.get("outputs");
     if (!list.isSequence() || list.getElements().empty())
@@ -314,12 +338,13 @@ std::vector<StudyOutput> readOutputs(const ScenarioNode& root, const std::string
             out.file.find("..") != std::string::npos || fs::path(out.file).extension() != ".csv")
             o.fail("file", "\"" + out.file +
                                "\": a CSV file the run writes in its folder, e.g. stiffness.csv");
-        if (o.has("per") && o.has("reduce"))
-            o.fail("reduce", "give per (a column per row) or reduce (one number), not both");
         out.per = o.getString("per", "");
-        out.reduce = o.has("per")
+        // With per: no reduce, one value per row (each row its own value of `per`), or the
+        // reduction over the rows of each value (a time series: last, the value at the end).
+        out.reduce = o.has("per") && !o.has("reduce")
                          ? ""
                          : o.getChoice("reduce", {"first", "last", "min", "max", "mean"}, "first");
+        checkOutputAgainstKind(o, out, kind);
         const std::string name = out.file + ":" + out.column + ":" + out.per + ":" + out.reduce;
         if (!names.insert(name).second) o.fail("this output is listed twice");
         outputs.push_back(out);

@@ -59,8 +59,31 @@ CasePaths getCasePaths(const fs::path& out, const std::string& key) {
     return {cases / key, cases / (key + ".log"), cases / (key + ".result")};
 }
 
-/// The outputs of a finished run, read from its CSV files. Returns "" or what is missing.
-std::string collectOutputs(const io::StudyScenario& s, const fs::path& dir, CaseRecord* r) {
+/// first, last, min, max or mean of a column's cells ("" if none is a number, for min, max
+/// and mean; the cells as written for first and last).
+std::string reduceValues(const std::vector<std::string>& values, const std::string& reduce) {
+    if (values.empty()) return "";
+    if (reduce == "first") return values.front();
+    if (reduce == "last") return values.back();
+    double acc = reduce == "min" ? INFINITY : reduce == "max" ? -INFINITY : 0.0;
+    int n = 0;
+    for (const std::string& t : values) {
+        char* end = nullptr;
+        const double x = std::strtod(t.c_str(), &end);
+        if (end == t.c_str() || !std::isfinite(x)) continue;
+        ++n;
+        acc = reduce == "min" ? std::min(acc, x) : reduce == "max" ? std::max(acc, x) : acc + x;
+    }
+    if (n == 0) return "";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", reduce == "mean" ? acc / n : acc);
+    return buf;
+}
+
+}  // namespace
+
+std::string collectOutputs(const io::StudyScenario& s, const std::filesystem::path& dir,
+                           CaseRecord* r) {
     for (size_t j = 0; j < s.outputs.size(); ++j) {
         const io::StudyOutput& o = s.outputs[j];
         const std::string where =
@@ -89,38 +112,36 @@ std::string collectOutputs(const io::StudyScenario& s, const fs::path& dir, Case
             values.push_back(col < int(cells.size()) ? cells[col] : "");
             keys.push_back(per >= 0 && per < int(cells.size()) ? cells[per] : "");
         }
-        if (per >= 0) {
-            for (size_t k = 0; k < values.size(); ++k)
-                r->outputs.push_back(
-                    {int(j), o.column + "[" + o.per + "=" + keys[k] + "]", values[k]});
+        if (per < 0) {
+            r->outputs.push_back({int(j), o.reduce == "first" ? o.column : o.column + ":" + o.reduce,
+                                  reduceValues(values, o.reduce)});
             continue;
         }
-        const std::string name = o.reduce == "first" ? o.column : o.column + ":" + o.reduce;
-        std::string v;
-        if (!values.empty() && (o.reduce == "first" || o.reduce == "last")) {
-            v = o.reduce == "first" ? values.front() : values.back();
-        } else if (!values.empty()) {
-            double acc = o.reduce == "min" ? INFINITY : o.reduce == "max" ? -INFINITY : 0.0;
-            int n = 0;
-            for (const std::string& t : values) {
-                char* end = nullptr;
-                const double x = std::strtod(t.c_str(), &end);
-                if (end == t.c_str() || !std::isfinite(x)) continue;
-                ++n;
-                acc = o.reduce == "min"   ? std::min(acc, x)
-                      : o.reduce == "max" ? std::max(acc, x)
-                                          : acc + x;
-            }
-            if (n > 0) {
-                char buf[32];
-                std::snprintf(buf, sizeof buf, "%.10g", o.reduce == "mean" ? acc / n : acc);
-                v = buf;
-            }
+        // One column per value of `per`, in the order of its first row.
+        std::vector<std::string> order;
+        std::map<std::string, std::vector<std::string>> groups;
+        for (size_t k = 0; k < values.size(); ++k) {
+            auto [it, fresh] = groups.try_emplace(keys[k]);
+            if (fresh) order.push_back(keys[k]);
+            it->second.push_back(values[k]);
         }
-        r->outputs.push_back({int(j), name, v});
+        for (const std::string& key : order) {
+            const std::vector<std::string>& g = groups[key];
+            if (o.reduce.empty() && g.size() > 1)
+                return where + ": " + o.file + " has " + std::to_string(g.size()) + " rows with " +
+                       o.per + " = " + key +
+                       "; give the output a reduce (last: the value at the end of a time "
+                       "series; first, min, max, mean), or per a column whose values differ";
+            r->outputs.push_back(
+                {int(j),
+                 o.column + (o.reduce.empty() ? "" : ":" + o.reduce) + "[" + o.per + "=" + key + "]",
+                 o.reduce.empty() ? g.front() : reduceValues(g, o.reduce)});
+        }
     }
     return "";
 }
+
+namespace {
 
 /// Why a run did not complete: its marker's detail, else the last line it printed.
 std::string findReason(const CasePaths& p) {
@@ -224,13 +245,9 @@ class CaseProcess {
         }
         const int code = WEXITSTATUS(waitStatus);
         if (code == 0 || code == 3) {
-            r.status = code == 0 ? "ok" : "partial";
-            if (code == 3) r.reason = findReason(m_paths);
-            const std::string missing = collectOutputs(s, m_paths.dir, &r);
-            if (!missing.empty()) {
-                r.status = "failed";
-                r.reason = missing;
-            }
+            r.runStatus = code == 0 ? "ok" : "partial";
+            if (code == 3) r.runReason = findReason(m_paths);
+            recollectOutputs(s, m_paths.dir, &r);
             return r;
         }
         r.status = "failed";
@@ -307,6 +324,8 @@ std::string formatRecord(const CaseRecord& r) {
     std::snprintf(secs, sizeof secs, "%.3f", r.seconds);
     out << "status=" << r.status << "\nreason=" << oneLine(r.reason) << "\nseconds=" << secs
         << "\n";
+    if (!r.runStatus.empty())
+        out << "run_status=" << r.runStatus << "\nrun_reason=" << oneLine(r.runReason) << "\n";
     for (const CaseRecord::Output& o : r.outputs)
         out << "output=" << o.output << "\t" << oneLine(o.name) << "\t" << oneLine(o.value) << "\n";
     out << "end\n";
@@ -332,6 +351,10 @@ bool parseRecord(const std::string& text, CaseRecord* r) {
             r->reason = value;
         } else if (field == "seconds") {
             r->seconds = std::atof(value.c_str());
+        } else if (field == "run_status") {
+            r->runStatus = value;
+        } else if (field == "run_reason") {
+            r->runReason = value;
         } else if (field == "output") {
             const auto t1 = value.find('\t'), t2 = value.find('\t', t1 + 1);
             if (t1 == std::string::npos || t2 == std::string::npos) return false;
@@ -339,7 +362,34 @@ bool parseRecord(const std::string& text, CaseRecord* r) {
                                   value.substr(t1 + 1, t2 - t1 - 1), value.substr(t2 + 1)});
         }
     }
+    if (r->runStatus.empty() && (r->status == "ok" || r->status == "partial")) {
+        r->runStatus = r->status;
+        r->runReason = r->reason;
+    }
     return end && (r->status == "ok" || r->status == "partial" || r->status == "failed");
+}
+
+bool recollectOutputs(const io::StudyScenario& s, const std::filesystem::path& dir, CaseRecord* r) {
+    if (r->runStatus != "ok" && r->runStatus != "partial") return false;
+    const CaseRecord before = *r;
+    r->status = r->runStatus;
+    r->reason = r->runReason;
+    r->outputs.clear();
+    const std::string missing = collectOutputs(s, dir, r);
+    if (!missing.empty()) {
+        r->status = "failed";
+        r->reason = missing;
+    }
+    auto same = [](const CaseRecord& a, const CaseRecord& b) {
+        if (a.status != b.status || a.reason != b.reason || a.outputs.size() != b.outputs.size())
+            return false;
+        for (size_t k = 0; k < a.outputs.size(); ++k)
+            if (a.outputs[k].output != b.outputs[k].output || a.outputs[k].name != b.outputs[k].name ||
+                a.outputs[k].value != b.outputs[k].value)
+                return false;
+        return true;
+    };
+    return !same(before, *r);
 }
 
 std::string Options::validate() const {
@@ -473,6 +523,8 @@ Summary runStudy(const io::StudyScenario& s, const Options& o) {
         const CasePaths p = getCasePaths(o.outDir, io::getCaseKey(s, s.cases[i]));
         CaseRecord r;
         if (parseRecord(readText(p.record), &r) && !(o.retryFailed && r.status == "failed")) {
+            // The outputs again from the run's folder: the study's outputs may have changed.
+            if (recollectOutputs(s, p.dir, &r)) writeRecord(p.record, r);
             records[i] = r;
             have[i] = true;
             ++sum.skipped;

@@ -37,6 +37,10 @@ rc=$?
 grep -q '^status: partial' "$dir/whole/INCOMPLETE" || fail "the marker does not say partial"
 grep -Eq "$said" "$dir/whole/summary.txt" || fail "summary.txt does not count the steps"
 grep -Eq "^$row,fail,[1-9]" "$dir/whole/verdict.csv" || fail "verdict.csv has no failing '$row' row"
+# The marker's reason (what a study's table shows) counts the same steps as verdict.csv.
+n=$(grep "^$row" "$dir/whole/verdict.csv" | cut -d, -f3)
+grep -Eq "(^|; )$n (bag steps were kept unrelaxed|macro steps were kept without a fixed point)" \
+    "$dir/whole/INCOMPLETE" || fail "the marker does not count the $n steps: $(cat "$dir/whole/INCOMPLETE")"
 "$bagsim" run "$scenario" --out "$dir/resumed" "$@" --stop-after 0.025s
 rc=$?
 [ $rc -eq 130 ] || fail "the stopped run exited $rc, expected 130"

@@ -11,7 +11,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
+
+#include <unistd.h>
 
 namespace {
 
@@ -128,6 +131,19 @@ TEST(StudyScenario, MistakesNameFileLineKeyAndWhatIsValid) {
          "a, "
          "reduce: median}\n",
          "first, last, min, max, mean"},
+        // Outputs are checked against the files and columns the base scenario's kind writes
+        // (io/ResultFiles.h), before any case runs.
+        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: regions.csv, "
+         "column: patch_peak_mmHg}\n",
+         "\"regions.csv\" is not a file a seed-load-test run writes; valid: load_displacement.csv, "
+         "stiffness.csv, rig_readings.csv"},
+        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: stiffness.csv, "
+         "column: stifness_N_per_mm}\n",
+         "\"stifness_N_per_mm\": stiffness.csv has no such column; its columns: gas_mass_g, "
+         "stiffness_N_per_mm, k_min_N_per_mm"},
+        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: stiffness.csv, "
+         "column: r2, per: gas_mass}\n",
+         "key 'outputs[0].per': \"gas_mass\": stiffness.csv has no such column"},
     };
     for (const Case& c : cases) {
         const io::InputError e = readError(std::string(kHead) + c.body);
@@ -240,3 +256,57 @@ TEST(StudyTable, Hdf5HoldsTheSameTable) {
 }
 
 }  // namespace
+
+TEST(StudyOutputs, ATimeSeriesIsReducedPerValueAndARepeatedValueWithoutReduceIsNamed) {
+    // A regions.csv-like time series: two regions at three times. `per: region` with `reduce:
+    // last` gives each region's value at the end; `max` its largest; without `reduce` the
+    // repeated region is refused by name (it would otherwise give one column three times).
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("bagsim-study-outputs-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    {
+        std::ofstream f(dir / "regions.csv");
+        f << "time_s,region,patch_peak_mmHg\n"
+             "0.5,sacrum,30\n0.5,heel_l,50\n1.0,sacrum,41\n1.0,heel_l,45\n1.5,sacrum,38\n"
+             "1.5,heel_l,47\n";
+    }
+    auto collect = [&](const std::string& output, std::string* missing) {
+        const bool array = output.find("regions.csv") != std::string::npos;
+        const io::StudyScenario s = readText(
+            array ? "kind: study\nscenario: supine-on-array-coarse.yaml\nparameters:\n  grid: "
+                    "{run.duration: [1 s]}\noutputs:\n  - " + output + "\n"
+                  : std::string(kHead) + "parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n"
+                                         "outputs:\n  - " + output + "\n");
+        study::CaseRecord r;
+        *missing = study::collectOutputs(s, dir, &r);
+        std::map<std::string, std::string> out;
+        for (const auto& o : r.outputs) out[o.name] = o.value;
+        return out;
+    };
+    std::string missing;
+    auto last = collect("{file: regions.csv, column: patch_peak_mmHg, per: region, reduce: last}",
+                        &missing);
+    EXPECT_EQ(missing, "");
+    ASSERT_EQ(last.size(), 2u);
+    EXPECT_EQ(last["patch_peak_mmHg:last[region=sacrum]"], "38");
+    EXPECT_EQ(last["patch_peak_mmHg:last[region=heel_l]"], "47");
+    auto max = collect("{file: regions.csv, column: patch_peak_mmHg, per: region, reduce: max}",
+                       &missing);
+    EXPECT_EQ(max["patch_peak_mmHg:max[region=sacrum]"], "41");
+    EXPECT_EQ(max["patch_peak_mmHg:max[region=heel_l]"], "50");
+    collect("{file: regions.csv, column: patch_peak_mmHg, per: region}", &missing);
+    EXPECT_NE(missing.find("regions.csv has 3 rows with region = sacrum; give the output a "
+                           "reduce (last: the value at the end of a time series"),
+              std::string::npos)
+        << missing;
+    // One row per value (as the load test's stiffness.csv has) needs no reduce.
+    {
+        std::ofstream f(dir / "stiffness.csv");
+        f << "gas_mass_g,stiffness_N_per_mm\n3.5,5.8\n3,1.7\n";
+    }
+    auto k = collect("{file: stiffness.csv, column: stiffness_N_per_mm, per: gas_mass_g}", &missing);
+    EXPECT_EQ(missing, "");
+    EXPECT_EQ(k["stiffness_N_per_mm[gas_mass_g=3.5]"], "5.8");
+    EXPECT_EQ(k["stiffness_N_per_mm[gas_mass_g=3]"], "1.7");
+    std::filesystem::remove_all(dir);
+}

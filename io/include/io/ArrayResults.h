@@ -13,6 +13,7 @@
 #include <bags/StateStream.h>
 #include <cosim/ArrayReadings.h>
 #include <cosim/ArrayShapes.h>
+#include <io/ResultFiles.h>
 #include <io/Results.h>
 
 #include <memory>
@@ -28,12 +29,7 @@ inline constexpr const char* kBodyCsv = "body.csv";
 inline constexpr const char* kEventsCsv = "events.csv";
 inline constexpr const char* kPneumaticsCsv = "pneumatics.csv";
 inline constexpr const char* kVerdictCsv = "verdict.csv";
-/// The headers of regions.csv and bags.csv (docs/output-layout.md#patient-on-array).
-inline constexpr const char* kRegionsHeader =
-    "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg,immersion_mm,"
-    "area_above_32_cm2";
-inline constexpr const char* kBagsHeader =
-    "time_s,bag,mass_g,pressure_kPa,volume_l,force_N,overlap_mm,inner_height_mm";
+// The headers: io/ResultFiles.h (docs/output-layout.md#patient-on-array).
 
 /// One bag's pneumatics at an output time (pneumatics.csv).
 struct PneumaticsReading {

@@ -32,8 +32,10 @@ struct StudyCase {
 struct StudyOutput {
     std::string file;    ///< CSV file in the run's folder ("stiffness.csv")
     std::string column;  ///< its column ("stiffness_N_per_mm")
-    std::string per;     ///< if set: one table column per row, named by this column's value
-    std::string reduce;  ///< without `per`: first, last, min, max or mean of the column
+    std::string per;     ///< if set: one table column per value of this column
+    /// first, last, min, max or mean of the column (with `per`: over the rows of each value;
+    /// "" with `per`: one row per value, a value on two rows is an error)
+    std::string reduce;
     int line = 0;        ///< line of the output in the study file
 };
 

@@ -26,6 +26,12 @@ struct CaseRecord {
     std::string status;  ///< ok, partial, failed (or, never recorded: interrupted, not-run)
     std::string reason;  ///< why it failed or is partial; "" if ok
     double seconds = 0;  ///< wall-clock time of its run [s]
+    /// The run's own status and reason, before its outputs were collected (ok, partial or
+    /// failed): the outputs of a run that ended ok or partial are collected again when the
+    /// study is run again, so that a changed `outputs` list never leaves a stale table.
+    /// Records of older versions have none: their status stands for it.
+    std::string runStatus;
+    std::string runReason;
     /// Collected outputs: (index of the StudyOutput, column name, value as written by the run).
     struct Output {
         int output = 0;
@@ -87,6 +93,18 @@ void prepareStudyDir(const std::filesystem::path& dir, const io::StudyScenario& 
 /// (built with BAGSIM_MPI) rank 0 hands out the cases and writes the table; a rank that dies loses
 /// only the case it was running.
 Summary runStudy(const io::StudyScenario& s, const Options& o);
+
+/// The study's outputs of one finished run (its folder `dir`) into r->outputs: per output,
+/// one value (`reduce` over the column), or with `per` one per value of that column (its
+/// rows reduced, or, without `reduce`, its one row; docs/studies.md#outputs). Returns "" or
+/// what is missing (no such file or column, a `per` value on two rows without `reduce`).
+std::string collectOutputs(const io::StudyScenario& s, const std::filesystem::path& dir,
+                           CaseRecord* r);
+
+/// The outputs of a run that ended ok or partial (r->runStatus) collected again from its
+/// folder into *r, its status and reason with them (failed where an output is missing).
+/// Returns true if the record changed. A run that failed is left as it is (false).
+bool recollectOutputs(const io::StudyScenario& s, const std::filesystem::path& dir, CaseRecord* r);
 
 /// The table from the records (in the study's case order); missing records are `not-run` (or
 /// `interrupted` if listed in `interrupted`).
