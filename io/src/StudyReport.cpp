@@ -413,13 +413,37 @@ std::string getDash(int i) {
     return kDashes[std::max(i, 0) % 6];
 }
 
+/// The parameters other than p whose values go one to one with p's over the table (a zip of
+/// two keys swept together: the fill at rest and the controller's setpoint): they do not
+/// split p's lines, and p stands for them on its axis.
+std::set<size_t> findPartners(const Study& s, size_t p) {
+    std::set<size_t> out;
+    for (size_t q = 0; q < s.parameters.size(); ++q) {
+        if (q == p) continue;
+        std::map<std::string, std::string> forward, backward;
+        bool oneToOne = true;
+        for (size_t r = 0; r < s.table.rows.size() && oneToOne; ++r) {
+            const std::string a = s.formatValue(p, r), b = s.formatValue(q, r);
+            const auto f = forward.emplace(a, b).first;
+            const auto g = backward.emplace(b, a).first;
+            oneToOne = f->second == b && g->second == a;
+        }
+        if (oneToOne) out.insert(q);
+    }
+    return out;
+}
+
 /// `y` (one value per row of the table, NaN where none) against parameter p: one line per
-/// combination of the other parameters, each case a point on it.
+/// combination of the other parameters (those swept with p aside), each case a point on it.
 std::string drawAgainst(const Study& s, size_t p, const std::vector<double>& y,
-                        const std::string& yAxis, const std::string& title,
+                        const std::string& yAxis, const std::string& titleIn,
                         const std::vector<svg::RefLine>& refLines = {}) {
     const Parameter& q = s.parameters[p];
-    const Groups g = groupRows(s, {p});
+    std::set<size_t> skip = findPartners(s, p);
+    std::string title = titleIn;
+    for (size_t k : skip) title += ", " + describeKey(s.parameters[k].key) + " with it";
+    skip.insert(p);
+    const Groups g = groupRows(s, skip);
     std::vector<svg::Series> series;
     const bool cloud = g.rows.size() > kMaxSeries;
     if (cloud) {
@@ -483,8 +507,13 @@ std::string drawAgainst(const Study& s, size_t p, const std::vector<double>& y,
 /// The numeric parameters that take two values or more: what the outputs are drawn against.
 std::vector<size_t> findAxes(const Study& s) {
     std::vector<size_t> axes;
-    for (size_t p = 0; p < s.parameters.size(); ++p)
-        if (s.parameters[p].numeric && s.parameters[p].distinct.size() >= 2) axes.push_back(p);
+    for (size_t p = 0; p < s.parameters.size(); ++p) {
+        if (!s.parameters[p].numeric || s.parameters[p].distinct.size() < 2) continue;
+        // A parameter swept one to one with an axis already drawn is drawn on that axis.
+        bool drawn = false;
+        for (size_t q : findPartners(s, p)) drawn = drawn || std::find(axes.begin(), axes.end(), q) != axes.end();
+        if (!drawn) axes.push_back(p);
+    }
     return axes;
 }
 

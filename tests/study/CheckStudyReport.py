@@ -75,12 +75,13 @@ assert '2 ok, 0 partial, 2 failed, 0 not run, 0 interrupted' in text
 assert 'tiny load test, two contact penalties x a working and a failing solver' in text
 assert 'kind: seed-load-test' in text  # the base scenario as run
 
-# Three swept parameters with numbers x three numeric outputs; then the load-displacement
-# curves of the two cases that ran.
+# Three swept parameters with numbers, two of them zipped (one to one: drawn once, on the
+# first, the other named with it) x three numeric outputs; then the load-displacement curves
+# of the two cases that ran.
 titles = page.svg_titles
 curves = [t for t in titles if ' against ' in t and not t.startswith('Force against')]
 expected = [o + ' against ' + p
-            for p in ('contact penalty', 'solver.max_iterations', 'solver.stabilization')
+            for p in ('contact penalty', 'solver.max_iterations, solver.stabilization with it')
             for o in ('stiffness at gas mass 3.5 g', 'r\u00b2 (min)', 'force (max)')]
 assert curves == expected, curves
 ld = [t for t in titles if t.startswith('Force against displacement')]
