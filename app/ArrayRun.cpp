@@ -632,6 +632,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             }
             air = std::make_unique<cosim::ArrayPneumatics>(sc.pneumatics, sc.options.bag.gas,
                                                            masses, volumes);
+            // From a rest state the bags stand at the settle's end: the network starts there.
+            if (fromRest) air->setStartTime(poa->getTime());
             for (int b : air->getBags()) {
                 const auto it = std::find(poa->getBagIndices().begin(),
                                           poa->getBagIndices().end(), b);

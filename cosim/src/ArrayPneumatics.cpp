@@ -162,14 +162,20 @@ void ArrayPneumatics::setVent(int channel, bool open) {
 bool ArrayPneumatics::isInflateOpen(int c) const { return m_channels.at(c).inflateOpen; }
 bool ArrayPneumatics::isVentOpen(int c) const { return m_channels.at(c).ventOpen; }
 
+void ArrayPneumatics::setStartTime(double t) {
+    if (m_savedTime != -1.0)  // a step was taken
+        throw std::logic_error("the pneumatic network's clock is set before its first step");
+    m_time = t;
+}
+
 std::vector<double> ArrayPneumatics::step(double t, double dt,
                                           const std::vector<pneumatics::BagVolume>& v) {
     if (t == m_savedTime) {
         m_net = m_saved;  // the same step again (cut): from its start
     } else {
         if (!(std::abs(t - m_time) <= 1e-9 * std::max(1.0, std::abs(t))))
-            throw std::invalid_argument("ArrayPneumatics::step: from " + std::to_string(t) +
-                                        " s, but the network stands at " +
+            throw std::invalid_argument("the pneumatic network was asked to step from " +
+                                        std::to_string(t) + " s, but it stands at " +
                                         std::to_string(m_time) + " s");
         m_saved = m_net;
         m_savedTime = t;

@@ -357,3 +357,47 @@ TEST(FromRest, ATurnFromTheRestStateOfASettleGivesTheWholeRunsBits) {
     EXPECT_NE(readLog(dir / "damaged.log").find("rest-state.bin is damaged"), std::string::npos)
         << readLog(dir / "damaged.log");
 }
+
+TEST(FromRest, PneumaticRunsStartFromARestStateWithEveryShippedController) {
+    // A scenario with pneumatics: (the network is built at the rest state's time, its clock
+    // set there; before, every such run failed at its first step, "from 0.05 s, but the
+    // network stands at 0 s"). The settle of the coarse pneumatic turn (0.05 s), then a run from
+    // its rest state with each kind of controller the shipped scenarios use: each ends (exit
+    // 0) and its controller acts from the settle's end, as events.csv says.
+    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/from-rest-pneumatic";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string scenario = "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"";
+    const std::string settle = " --set run.settle_time='0.05 s' --quiet";
+    ASSERT_EQ(runBagsim(scenario + settle + " --set run.duration='0 s' --out \"" +
+                            (dir / "rest").string() + "\"",
+                        dir / "rest.log"),
+              0)
+        << readLog(dir / "rest.log");
+    struct Case {
+        std::string name, control, event;
+    };
+    const std::vector<Case> cases = {
+        {"turn", "", "0.0500,turn started (target pelvis tilt +12.0 deg)"},
+        {"schedule", "{kind: schedule, commands: [{at: 0.01 s, channel: right, inflate: open}]}",
+         "0.0600,schedule: channel 'right' inflate open"},
+        {"target-mass", "{kind: target-mass, targets: [{channel: right, mass: 5 g}]}",
+         "0.0500,target mass: channel 'right' filling at 4.5000 g a bag (target 5.0000 g a bag)"},
+        {"target-pressure", "{kind: target-pressure, pressure: from-body, band: 0.3 kPa}",
+         "0.0500,target pressure: channel 'left' venting at sensor"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const std::string control = c.control.empty() ? "" : " --set \"control=" + c.control + "\"";
+        EXPECT_EQ(runBagsim(scenario + settle + " --set run.duration='0.05 s'" + control +
+                                " --from-rest \"" + (dir / "rest").string() + "\" --out \"" +
+                                (dir / c.name).string() + "\"",
+                            dir / (c.name + ".log")),
+                  0)
+            << readLog(dir / (c.name + ".log"));
+        const std::string events = readFile(dir / c.name / "events.csv");
+        EXPECT_NE(events.find("0.0500,started from the rest state in"), std::string::npos) << events;
+        EXPECT_NE(events.find(c.event), std::string::npos) << events;
+        EXPECT_NE(events.find("0.1000,run ended"), std::string::npos) << events;
+    }
+}

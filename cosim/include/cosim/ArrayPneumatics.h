@@ -92,6 +92,10 @@ class ArrayPneumatics {
     std::vector<double> step(double t, double dt, const std::vector<pneumatics::BagVolume>& v);
     /// Time [s] of the network's state (the end of the last step).
     double getTime() const { return m_time; }
+    /// Starts the network's clock at t [s] (before its first step): a run from a rest state,
+    /// whose bags stand at the settle's end, builds its network there.
+    /// @throws std::logic_error once the network has stepped.
+    void setStartTime(double t);
 
     // --- read back (the last step)
     /// The channel's sensor reading [Pa] gauge: its line's, or its single bag's.
