@@ -18,6 +18,8 @@ namespace fs = std::filesystem;
 
 std::string takeOptionValue(int argc, char** argv, int& i) {
     if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + " needs a value");
+    if (argv[i + 1][0] == '\0')
+        throw UsageError(std::string(argv[i]) + " needs a value, not an empty one");
     return argv[++i];
 }
 

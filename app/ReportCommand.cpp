@@ -57,6 +57,10 @@ int runReportCommand(int argc, char** argv) {
                 return 2;
             }
             out = a == "--out" ? argv[++i] : a.substr(6);
+            if (out.empty()) {
+                std::cerr << "bagsim report: --out needs a file name, not an empty one\n";
+                return 2;
+            }
         } else if (a.rfind("-", 0) == 0 && a.size() > 1) {
             std::cerr << "bagsim report: unknown option '" << a
                       << "'; valid: --out FILE, --force, --help\n";

@@ -122,8 +122,23 @@ Args parseArgs(int argc, char** argv) {
             a.quiet = true;
         } else if (arg == "--out" || arg.rfind("--out=", 0) == 0) {
             a.out = value("--out");
+            if (a.out.empty())
+                throw UsageError("--out needs a folder, not an empty path (without --out the "
+                                 "results go to out/NAME)");
         } else if (arg == "--set" || arg.rfind("--set=", 0) == 0) {
-            a.sets.push_back(value("--set"));
+            const std::string set = value("--set");
+            // One value a key: a second would silently win.
+            auto keyOf = [](const std::string& s) {
+                std::string k = s.substr(0, s.find('='));
+                k.erase(0, k.find_first_not_of(" \t"));
+                k.erase(k.find_last_not_of(" \t") + 1);
+                return k;
+            };
+            for (const std::string& earlier : a.sets)
+                if (set.find('=') != std::string::npos && keyOf(earlier) == keyOf(set))
+                    throw UsageError("--set " + keyOf(set) + " is given twice ('" + earlier +
+                                     "' and '" + set + "'); give each key once");
+            a.sets.push_back(set);
         } else if (arg == "--resume" || arg.rfind("--resume=", 0) == 0) {
             a.resume = value("--resume");
         } else if (arg == "--from-rest" || arg.rfind("--from-rest=", 0) == 0) {

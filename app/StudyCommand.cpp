@@ -88,11 +88,15 @@ Args parseArgs(int argc, char** argv) {
     for (size_t i = 0; i < words.size(); ++i) {
         auto [name, inlineValue] = splitOption(words[i]);
         const bool takesValue = name == "--out" || name == "--jobs" || name == "-j";
+        const bool inlined = words[i].size() > name.size();  // --out=VALUE, VALUE maybe empty
         std::string v = inlineValue;
-        if (takesValue && v.empty()) {
+        if (takesValue && !inlined) {
             if (i + 1 == words.size()) throw UsageError(name + " needs a value");
             v = words[++i];
         }
+        if (name == "--out" && v.empty())
+            throw UsageError("--out needs a folder, not an empty path (without --out the study "
+                             "goes to out/NAME)");
         if (name == "--out")
             a.out = v;
         else if (name == "--jobs" || name == "-j")

@@ -153,7 +153,12 @@ ScenarioFile ScenarioFile::parse(const std::string& text, const std::string& nam
     file.m_source->fileName = name;
     file.m_source->text = text;
     try {
-        file.m_root = YAML::Load(text);
+        const std::vector<YAML::Node> documents = YAML::LoadAll(text);
+        if (documents.size() > 1)
+            throw InputError(name, toLine(documents[1].Mark()), "",
+                             "a second YAML document (after '---'): a scenario is one document; "
+                             "put each scenario in a file of its own");
+        file.m_root = documents.empty() ? YAML::Node() : documents.front();
     } catch (const YAML::ParserException& e) {
         throw InputError(name, toLine(e.mark), "", "not valid YAML: " + e.msg);
     }

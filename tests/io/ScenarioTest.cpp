@@ -142,6 +142,18 @@ TEST(Scenario, YamlSyntaxErrorBecomesInputErrorWithLine) {
     EXPECT_NE(std::string(e2.what()).find("YAML mapping"), std::string::npos) << e2.what();
 }
 
+TEST(Scenario, ASecondYamlDocumentIsAnErrorAtItsLine) {
+    // It used to be ignored: the run took the first document and said nothing of the rest.
+    const InputError e = expectInputError(
+        [] { ScenarioFile::parse("kind: a\nairbag: {width: 1 mm}\n---\nkind: b\n", "t.yaml"); });
+    EXPECT_EQ(e.getWhere(), "t.yaml");
+    EXPECT_EQ(e.getLine(), 4);
+    EXPECT_NE(std::string(e.what()).find("a second YAML document"), std::string::npos) << e.what();
+    // A document marker before the only document, and an empty file, are one document.
+    EXPECT_NO_THROW(ScenarioFile::parse("---\nkind: a\n", "one.yaml"));
+    EXPECT_NO_THROW(ScenarioFile::parse("", "empty.yaml"));
+}
+
 TEST(Scenario, MissingFileIsAnInputError) {
     const InputError e = expectInputError([] { ScenarioFile::load("/nonexistent/x.yaml"); });
     EXPECT_EQ(e.getWhere(), "/nonexistent/x.yaml");
