@@ -384,6 +384,14 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     };
     cosim::BodySurface bodySurface;  // bags and body for ParaView (results.xdmf)
     Eigen::Matrix3Xd bagNodes, bodyNodes;
+    // The finite-element bags, with their index in the array (the reduced ones are left out).
+    auto feBags = [&] {
+        std::vector<std::pair<cosim::BagParticipant*, int>> fe;
+        for (size_t b = 0; b < poa->getBagIndices().size(); ++b)
+            if (auto* p = dynamic_cast<cosim::BagParticipant*>(&poa->updBag(int(b))))
+                fe.emplace_back(p, poa->getBagIndices()[b]);
+        return fe;
+    };
     auto record = [&] {
         io::ArrayFrame f;
         f.time = poa->getTime();
@@ -411,6 +419,11 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         }
         writer->addFrame(f);
         verdict.addFrame(f, pressedHeights);
+        for (const auto& [fe, bag] : feBags()) {
+            double stretch = 1.0;
+            const double use = fe->getAirbag().calcFittedRangeUse(&stretch);
+            verdict.addFilmRange(use, stretch, bag, f.time);
+        }
         return f;
     };
     auto where = [&] {
@@ -431,14 +444,6 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         long steps = 0;
         double largest = 0.0;
         int bag = -1;
-    };
-    // The finite-element bags, with their index in the array (the reduced ones are left out).
-    auto feBags = [&] {
-        std::vector<std::pair<cosim::BagParticipant*, int>> fe;
-        for (size_t b = 0; b < poa->getBagIndices().size(); ++b)
-            if (auto* p = dynamic_cast<cosim::BagParticipant*>(&poa->updBag(int(b))))
-                fe.emplace_back(p, poa->getBagIndices()[b]);
-        return fe;
     };
     auto tallyUnrelaxed = [&] {
         UnrelaxedTally t;
@@ -959,6 +964,10 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         if (unrelaxed.steps > 0)
             partial = std::to_string(unrelaxed.steps) +
                       " bag steps were kept unrelaxed (verdict.csv, 'bag films relaxed')";
+        if (verdict.isFilmOutsideItsRange())
+            partial += std::string(partial.empty() ? "" : "; ") +
+                       "a film left its material's fitted range, outside the model's envelope "
+                       "(verdict.csv, 'film within its fitted range')";
         if (totals.unconverged > 0)
             partial += (partial.empty() ? "" : "; ") + std::to_string(totals.unconverged) +
                        " macro steps were kept without a fixed point (verdict.csv, 'coupling "
@@ -999,7 +1008,13 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                   << fmt("%.3g N", totals.worstTolerance) << fmt(" at %.4f s", totals.worstTime)
                   << "); results in " << outPath.string()
                   << "/ (marked INCOMPLETE, status partial)\n";
-    return unrelaxed.steps > 0 || totals.unconverged > 0 ? 3 : 0;
+    if (verdict.isFilmOutsideItsRange())
+        std::cerr << "bagsim: run partial: a film was stretched beyond its material's fitted "
+                     "range (verdict.csv, 'film within its fitted range'): outside the model's "
+                     "envelope; results in "
+                  << outPath.string() << "/ (marked INCOMPLETE, status partial)\n";
+    return unrelaxed.steps > 0 || totals.unconverged > 0 || verdict.isFilmOutsideItsRange() ? 3
+                                                                                            : 0;
 }
 
 }  // namespace bagsim::app

@@ -213,6 +213,23 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
                         "board) " + window + ": bag " + std::to_string(m_minHeightBag) +
                             fmt(" at %.2f s", m_minHeightTime) +
                             "; fail below 25 mm (the hand check: an inch of air)"});
+    // The film within the range its material law was fitted and is stable in.
+    if (m_filmBag < 0)
+        rows.push_back({"film within its fitted range", "n/a", kNaN, "%",
+                        "no finite-element film judged (reduced bags, or a law without a "
+                        "fitted range)"});
+    else
+        rows.push_back(
+            {"film within its fitted range", m_filmUse > 1.0 ? "fail" : "ok", 100.0 * m_filmUse,
+             "%",
+             std::string(m_filmUse > 1.0
+                  ? "a film was stretched beyond the range its material law was fitted and is "
+                    "stable in (I1 - 3 above the law's limit): the results from there on are "
+                    "outside the model's envelope; the run is partial. Largest: "
+                  : "every film stayed within its material's fitted, stable range; the largest "
+                    "use of it: ") +
+                 "bag " + std::to_string(m_filmBag) + fmt(" at %.2f s", m_filmTime) +
+                 fmt(", principal stretch %.3f", m_filmStretch)});
     // The films at their equilibrium (the relaxed stepping keeps a step whose sub-steps ran
     // out; the quasi-static one cuts it, the dynamic one has no equilibrium to reach).
     using Stepping = bags::AirbagSpec::Stepping;
@@ -306,6 +323,11 @@ void loadMap(bags::StateReader& r, std::map<int, double>& m) {
 
 }  // namespace
 
+void ArrayVerdict::addFilmRange(double use, double stretch, int bag, double time) {
+    if (bag < 0 || !(use > m_filmUse)) return;
+    m_filmUse = use, m_filmStretch = stretch, m_filmBag = bag, m_filmTime = time;
+}
+
 void ArrayVerdict::saveState(bags::StateWriter& w) const {
     w.tag("verdict-2");  // 2: with the regions' patch peaks
     w.pod(m_reached), w.pod(m_turnedTilt), w.pod(m_back), w.pod(m_turnKnown);
@@ -324,6 +346,8 @@ void ArrayVerdict::saveState(bags::StateWriter& w) const {
     }
     w.pod(std::uint64_t(m_regionOrder.size()));
     for (const std::string& name : m_regionOrder) w.str(name);
+    w.tag("film-range");  // a later part: checkpoints before it have none
+    w.pod(m_filmUse), w.pod(m_filmStretch), w.pod(m_filmTime), w.pod(m_filmBag);
 }
 
 void ArrayVerdict::loadState(bags::StateReader& r) {
@@ -348,6 +372,9 @@ void ArrayVerdict::loadState(bags::StateReader& r) {
     }
     m_regionOrder.resize(r.pod<std::uint64_t>());
     for (std::string& name : m_regionOrder) name = r.str();
+    if (r.readTagIf("film-range")) {
+        r.pod(m_filmUse), r.pod(m_filmStretch), r.pod(m_filmTime), r.pod(m_filmBag);
+    }
 }
 
 }  // namespace bagsim::app

@@ -47,6 +47,14 @@ class ArrayVerdict {
     /// The bags' gauge pressures [Pa] standing inflated before he lies on them, least and
     /// highest: judged against the published clinical settings (the 'inflation' row).
     void setRestPressures(double least, double highest);
+    /// One output frame's film: the largest use of its material's fitted range over the
+    /// finite-element bags (bags::Airbag::calcFittedRangeUse; above 1: beyond it), that
+    /// element's principal stretch, its bag, at `time` [s]; every frame from the bags'
+    /// inflation on is judged (an input that overstretches the film at rest is outside the
+    /// envelope from the start).
+    void addFilmRange(double use, double stretch, int bag, double time);
+    /// True when a frame's film left its material's fitted range: the run is then partial.
+    bool isFilmOutsideItsRange() const { return m_filmUse > 1.0; }
     std::vector<io::VerdictRow> makeRows() const;
     /// What the frames so far left (a checkpoint), and back into a verdict made the same way.
     void saveState(bags::StateWriter& w) const;
@@ -64,6 +72,8 @@ class ArrayVerdict {
     double m_largestUnrelaxed = 0.0, m_forceTolerance = 0.0;
     int m_unrelaxedBag = -1;
     double m_restLeast = -1.0, m_restHighest = -1.0;  // -1: not set
+    double m_filmUse = -1.0, m_filmStretch = 1.0, m_filmTime = 0.0;  // -1: no frame judged
+    int m_filmBag = -1;
     bool m_iterated = true;
     long m_unconverged = 0;
     double m_worstResidual = 0.0, m_worstTolerance = 0.0, m_worstTime = 0.0;

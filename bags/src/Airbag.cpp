@@ -1718,6 +1718,34 @@ double Airbag::getTotalGasMass() const { return m_impl->totalMass(); }
 double Airbag::getGasMass(int bag) const { return m_impl->bagMass(checkBag(bag)); }
 int Airbag::getNumBags() const { return m_impl->numBags; }
 
+double Airbag::calcFittedRangeUse(double* stretch) const {
+    const Impl& m = *m_impl;
+    const MembraneMaterial& material = m.model->getMaterial();
+    const double limit = calcFittedRangeLimit(material);
+    // With a tension field the law is evaluated only where the film is taut (at C) or
+    // wrinkled (uniaxially, at its largest stretch); slack film carries nothing.
+    const bool tensionField = dynamic_cast<const WrinklingMaterial*>(&material) != nullptr;
+    double use = 0.0, best = 1.0;
+    if (std::isfinite(limit) && limit > 0.0) {
+        for (int e = 0; e < m.model->getMesh().getNumTris(); ++e) {
+            const Mat2 C = m.model->calcElementC(m.x, e);
+            const double det = C.determinant();
+            if (!(det > 0.0)) continue;
+            double l1 = 1.0, l2 = 1.0;
+            WrinklingMaterial::calcPrincipalStretches(C, &l1, &l2);
+            double x = C.trace() + 1.0 / det - 3.0;  // I1 - 3, plane stress incompressible
+            if (tensionField && l1 <= 1.0) x = 0.0;                          // slack
+            else if (tensionField && l2 < 1.0 / std::sqrt(l1)) x = l1 * l1 + 2.0 / l1 - 3.0;  // wrinkled
+            if (x / limit > use) {
+                use = x / limit;
+                best = l1;
+            }
+        }
+    }
+    if (stretch) *stretch = best;
+    return use;
+}
+
 int Airbag::checkBag(int bag) const {
     if (bag < 0 || bag >= m_impl->numBags)
         throw std::out_of_range("Airbag: bag " + std::to_string(bag) + " of " +

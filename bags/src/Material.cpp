@@ -330,6 +330,14 @@ double MembraneMaterial::calcUniaxialNominalStress(double lambda) const {
     return S(0) * lambda;
 }
 
+double calcFittedRangeLimit(const MembraneMaterial& material) {
+    if (const auto* w = dynamic_cast<const WrinklingMaterial*>(&material))
+        return calcFittedRangeLimit(w->getBase());
+    InvariantPolynomial law;
+    if (material.getInvariantPolynomial(&law)) return law.continuationLimit;
+    return std::numeric_limits<double>::infinity();
+}
+
 std::unique_ptr<MembraneMaterial> makeNeoHookean(double C10) {
     return std::make_unique<NeoHookean>(C10);
 }

@@ -192,3 +192,24 @@ TEST(ArrayVerdict, AFirmInflationIsToldFromAClinicalOne) {
               std::string::npos)
         << r.detail;
 }
+
+// The film within its material's fitted range: n/a with no film judged; ok at a use below 1
+// (the largest kept, with its bag, time and stretch); fail above, which makes the run partial.
+TEST(ArrayVerdict, AFilmBeyondItsFittedRangeFailsTheRunsEnvelope) {
+    bagsim::app::ArrayVerdict v(makeLayout(), bags::DoubleWedgeParams(), 1.0, 3.0, 0.0);
+    EXPECT_EQ(row(v.makeRows(), "film within its fitted range").status, "n/a");
+    v.addFilmRange(0.05, 1.02, 7, 0.5);
+    v.addFilmRange(0.30, 1.08, 12, 1.5);
+    v.addFilmRange(0.10, 1.04, 3, 2.0);
+    io::VerdictRow r = row(v.makeRows(), "film within its fitted range");
+    EXPECT_EQ(r.status, "ok");
+    EXPECT_DOUBLE_EQ(r.value, 30.0);
+    EXPECT_NE(r.detail.find("bag 12 at 1.50 s, principal stretch 1.080"), std::string::npos) << r.detail;
+    EXPECT_FALSE(v.isFilmOutsideItsRange());
+    v.addFilmRange(2.5, 1.9, 24, 2.5);
+    r = row(v.makeRows(), "film within its fitted range");
+    EXPECT_EQ(r.status, "fail");
+    EXPECT_NE(r.detail.find("outside the model's envelope; the run is partial"), std::string::npos)
+        << r.detail;
+    EXPECT_TRUE(v.isFilmOutsideItsRange());
+}

@@ -238,6 +238,13 @@ public:
     /// (AirbagSpec::prony): only the shapes' poses can change what advance() finds.
     bool isGasStill() const;
 
+    /// How far the film is into its material's fitted range: the largest (I1 - 3) / limit over
+    /// the film's elements now, limit = calcFittedRangeLimit(material) (0 where the law has no
+    /// such limit). Above 1 an element is beyond the range the law was fitted for and stable in
+    /// (the continued Yeoh there is an extrapolation, not the film): the results are outside
+    /// the model's envelope. *stretch (optional): that element's largest principal stretch.
+    double calcFittedRangeUse(double* stretch = nullptr) const;
+
     // --- the bags of a module (one unless AirbagSpec::cluster)
     int getNumBags() const;
     /// Bag b's nodes are [first, second) of the module's mesh.

@@ -71,6 +71,12 @@ public:
     virtual std::unique_ptr<MembraneMaterial> clone() const = 0;
 };
 
+/// The largest I1 - 3 [-] up to which `material` is the law it was fitted as: a Yeoh
+/// continued beyond its stable range (makeStableYeoh) is its fitted polynomial only up to
+/// InvariantPolynomial::continuationLimit; a tension-field material is its base's. Infinity
+/// where no such limit is known (the law holds as written everywhere).
+double calcFittedRangeLimit(const MembraneMaterial& material);
+
 /// W = C10 (I1 - 3).  @pre C10 > 0.
 std::unique_ptr<MembraneMaterial> makeNeoHookean(double C10);
 /// W = C10 (I1 - 3) + C01 (I2 - 3).

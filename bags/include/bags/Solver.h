@@ -181,6 +181,8 @@ public:
     /// The film's stress S_v [Pa] of triangle e at x under the current step potential (the
     /// material's stress without Prony terms).
     Eigen::Vector3d calcElementStress(const Eigen::Matrix3Xd& x, int e) const;
+    /// The in-plane right Cauchy-Green tensor C of triangle e at x (in its element frame).
+    Mat2 calcElementC(const Eigen::Matrix3Xd& x, int e) const;
 
     /// Total potential energy and its derivatives at x, added into acc.
     void addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
@@ -269,7 +271,6 @@ private:
     /// strain with det(I + 2 q) <= 0).
     bool addBranches(int e, const Mat2& C, double* W, Eigen::Vector3d* S,
                      Eigen::Matrix3d* D) const;
-    Mat2 calcElementC(const Eigen::Matrix3Xd& x, int e) const;
 };
 
 /// Minimises the model's energy over the free dofs, starting from x (updated in place).
