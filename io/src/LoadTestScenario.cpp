@@ -515,7 +515,10 @@ void readGas(const ScenarioNode& s, bags::GasOptions& g) {
     g.polytropicIndex = s.getNumber("polytropic_index", g.polytropicIndex);
     g.gamma = s.getNumber("gamma", g.gamma);
     checkRange(s, "molar_mass", g.molarMass, 0, false, kInf, false, "g/mol");
-    checkRange(s, "temperature", g.temperature, 0, false, kInf, false, "K", "absolute temperature");
+    // A film bag's air: the film's law was fitted at room temperature, and polyurethane and
+    // PVC films soften well below 100 degC; a gas far outside is not a bag this model describes.
+    checkRange(s, "temperature", g.temperature, 223.15, true, 373.15, true, "K",
+               "-50 to 100 degC: the air of a film bag, whose law was fitted at room temperature");
     checkRange(s, "ambient_pressure", g.ambientPressure, 0, false, kInf, false, "kPa",
                "absolute pressure");
     checkRange(s, "polytropic_index", g.polytropicIndex, 1, true, kInf, false, "");

@@ -306,6 +306,17 @@ TEST(LoadTestScenario, RangesAreCheckedWithTheKeysLine) {
     const InputError e = errorFor(kBase + "gas: {temperature: -300 degC}\n");
     EXPECT_EQ(e.getKey(), "gas.temperature");
     EXPECT_EQ(e.getLine(), 16);
+    // A gas a film bag cannot hold (it ran to 'complete' at 5000 K): refused, with the range.
+    for (const char* t : {"5000 K", "150 degC", "-60 degC"}) {
+        const InputError hot = errorFor(kBase + "gas: {temperature: " + t + "}\n");
+        EXPECT_EQ(hot.getKey(), "gas.temperature") << t;
+        EXPECT_NE(std::string(hot.what()).find("must be in [223.15 K, 373.15 K]"), std::string::npos)
+            << hot.what();
+    }
+    for (const char* t : {"23 degC", "40 degC", "0 degC"})
+        EXPECT_NO_THROW(io::readLoadTestScenario(
+            ScenarioFile::parse(kBase + "gas: {temperature: " + t + "}\n", "t.yaml")))
+            << t;
     const InputError e2 = errorFor(kBase + "contact: {block: {friction: -0.1}}\n");
     EXPECT_EQ(e2.getKey(), "contact.block.friction");
     const InputError e3 = errorFor(kBase + "  stiffness_range: [10 N, 60 N]\n");
