@@ -419,7 +419,12 @@ int run(const Args& a) {
     diagnose::WhereOptions wo;
     wo.loadFrom = sc.options.stiffnessFrom;
     wo.loadTo = sc.options.stiffnessTo;
-    diagnose::WhereReport where = diagnose::calcWhere(tests, wo);
+    diagnose::WhereReport where;
+    try {
+        where = diagnose::calcWhere(tests, wo);
+    } catch (const std::domain_error& e) {  // a non-finite residual: the data's sample
+        throw io::InputError(a.measured, 0, "", e.what());
+    }
     where.statedInputs = diagnose::describeInputs(data);
     if (!a.quiet) printWhere(where, std::cout);
 

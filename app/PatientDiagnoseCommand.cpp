@@ -151,8 +151,13 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     folds.subjects = base.subjects;  // the reader asks for a subject in every test, and two or more
     folds.testSubject = base.testSubject;
     const std::vector<double>& edges = folds.windowEdges;
-    const diagnose::WhereReport where =
-        diagnose::calcPatientWhere(base, diagnose::calcPatientSimulatedDifference(base, half), edges, 2.0);
+    diagnose::WhereReport where;
+    try {
+        where = diagnose::calcPatientWhere(base, diagnose::calcPatientSimulatedDifference(base, half),
+                                           edges, 2.0);
+    } catch (const std::domain_error& e) {  // a non-finite residual: the data's sample
+        throw io::InputError(a.measured, 0, "", e.what());
+    }
     if (!a.quiet) printWhere(base, where, std::cout);
 
     std::unique_ptr<diagnose::WhichReport> which;

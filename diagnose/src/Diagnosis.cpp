@@ -390,6 +390,24 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             }
             r.signatures.push_back(s);
         }
+        // A residual that is not a finite number (a sample of 1e200 squares to infinity) must
+        // never reach a verdict: infinity against an infinite uncertainty compares as "within".
+        if (!std::isfinite(sumSq)) {
+            double worst = -1.0, when = 0.0;
+            size_t which = 0;
+            for (const TestComparison& t : tests) {
+                const ChannelComparison& ch = t.channels[c];
+                for (size_t i = 0; i < ch.measured.size(); ++i) {
+                    const double a = std::max(std::abs(ch.measured[i]), std::abs(ch.simulated[i]));
+                    if (!(a <= worst)) worst = a, when = ch.time[i], which = size_t(t.test);
+                }
+            }
+            throw std::domain_error("the " + name + " residual is not a finite number: test " +
+                                    std::to_string(which + 1) + fmt(" at %g s", when) +
+                                    " has a sample of " + fmt("%g", worst) +
+                                    " (in SI); no verdict can be drawn from it. Check that "
+                                    "sample in the measured data");
+        }
         ChannelSummary cs;
         cs.channel = name;
         cs.rmse = total ? std::sqrt(sumSq / double(total)) : 0.0;

@@ -488,6 +488,11 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
             for (size_t i : idx) y.push_back(ch.measured[i]);
             addSecondDifferences(y, dd);
         }
+        if (!std::isfinite(sumSq))  // never a verdict from a residual that is not a number
+            throw std::domain_error("the " + ch.name +
+                                    " residual is not a finite number (a sample of the measured "
+                                    "data or of the simulation too large to square); no verdict "
+                                    "can be drawn from it. Check the channel's samples");
         ChannelSummary cs;
         cs.channel = ch.name;
         cs.rmse = res.empty() ? 0.0 : std::sqrt(sumSq / double(res.size()));

@@ -626,3 +626,34 @@ TEST(Where, AFlatChannelHasNoShareAndShiftsNoOther) {
     u.channels.pop_back();
     EXPECT_THROW(diagnose::calcWhere({t, u}, {}), std::invalid_argument);
 }
+
+TEST(Where, AResidualThatIsNotAFiniteNumberGivesNoVerdict) {
+    // One absurd sample (1e200 N squares to infinity): the RMSE and the noise were infinite,
+    // infinity > 2 x infinity is false, and the verdict read "within the validation
+    // uncertainty". Now calcWhere refuses, naming the channel, the test, the time and the
+    // sample (the command turns it into a bad-input error on the measured data, exit 2).
+    diagnose::TestComparison t;
+    t.test = 2;
+    diagnose::ChannelComparison c;
+    c.kind = diagnose::ChannelKind::Force;
+    for (int i = 0; i < 6; ++i) {
+        c.time.push_back(0.5 * i);
+        c.displacement.push_back(1e-3 * i);
+        c.force.push_back(i);
+        c.loading.push_back(1);
+        c.measured.push_back(i == 4 ? 1e200 : 0.1 * i);
+        c.simulated.push_back(0.1 * i);
+    }
+    t.channels.push_back(c);
+    try {
+        diagnose::calcWhere({t}, {});
+        ADD_FAILURE() << "no error for a sample of 1e200 N";
+    } catch (const std::domain_error& e) {
+        EXPECT_NE(std::string(e.what()).find("the force residual is not a finite number: test 3 "
+                                             "at 2 s has a sample of 1e+200"),
+                  std::string::npos)
+            << e.what();
+    }
+    t.channels[0].measured[4] = 0.4;  // the same data without it: a verdict
+    EXPECT_NO_THROW(diagnose::calcWhere({t}, {}));
+}
