@@ -358,6 +358,17 @@ double readMassAtPressure(const ScenarioNode& s, const std::string& key, const b
     return mass;
 }
 
+// A gas mass no film bag can hold (io::calcMostPlausibleGasMass) is refused at its key.
+void checkPlausibleGas(const ScenarioNode& s, const std::string& key, double mass,
+                       const bags::AirbagSpec& bag) {
+    const double most = calcMostPlausibleGasMass(bag.geometry, bag.gas);
+    if (mass > most)
+        s.fail(key, fmtUnit(mass, "g") + " is more gas than this bag can hold: it would fill its "
+                        "unstretched volume at over 1 MPa gauge (a film bag bursts far below; "
+                        "the seed's is at about 20 kPa with 4.5 g); valid: at most " +
+                        fmtUnit(std::floor(most * 1e4) / 1e4, "g"));
+}
+
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     s.checkKeys({"rows", "columns"},
                 {"gas_mass", "pressure", "row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
@@ -445,6 +456,7 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     } else {
         a.gasMass = s.getQuantity("gas_mass", D::Mass);
         checkPositive(s, "gas_mass", a.gasMass, "g");
+        checkPlausibleGas(s, "gas_mass", a.gasMass, sc.options.bag);
     }
     if (s.has("groups")) {
         const ScenarioNode gs = s.get("groups");
@@ -466,6 +478,7 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
             } else {
                 g.gasMass = e.getQuantity("gas_mass", D::Mass, a.gasMass);
                 checkPositive(e, "gas_mass", g.gasMass, "g");
+                if (e.has("gas_mass")) checkPlausibleGas(e, "gas_mass", g.gasMass, sc.options.bag);
             }
             a.groups.push_back(g);
         }

@@ -262,6 +262,9 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
             if (!fs::exists(f, ec))
                 e.fail(key, "channel file \"" + name + "\" is missing (" + f.string() +
                                 "); valid: a CSV file in the folder (docs/measured-data.md)");
+            if (!fs::is_regular_file(f, ec))
+                e.fail(key, "\"" + name + "\" is not a file (" + f.string() +
+                                "); valid: a CSV file in the folder (docs/measured-data.md)");
             return f.string();
         };
         const std::string machine = channelPath("machine");
@@ -314,8 +317,9 @@ void readStiffnessChannel(const ScenarioNode& root, const fs::path& dir,
     const std::string name = root.getString("stiffness");
     const fs::path f = fs::path(name).is_absolute() ? fs::path(name) : dir / name;
     std::error_code ec;
-    if (!fs::exists(f, ec))
-        root.fail("stiffness", "stiffness file \"" + name + "\" is missing (" + f.string() +
+    if (!fs::exists(f, ec) || !fs::is_regular_file(f, ec))
+        root.fail("stiffness", "stiffness file \"" + name + "\" is " +
+                                   (fs::exists(f, ec) ? "not a file (" : "missing (") + f.string() +
                                    "); valid: a CSV file with the columns gas_mass_g, "
                                    "stiffness_N/mm and optionally stage (docs/measured-data.md)");
     data.stiffnessFile = f.string();

@@ -317,6 +317,16 @@ TEST(LoadTestScenario, RangesAreCheckedWithTheKeysLine) {
         EXPECT_NO_THROW(io::readLoadTestScenario(
             ScenarioFile::parse(kBase + "gas: {temperature: " + t + "}\n", "t.yaml")))
             << t;
+    // More gas than the bag can hold (ten atmospheres in its unstretched 2.625 L: 34 g).
+    const std::string masses = "gas_masses: [";
+    std::string heavy = kBase;
+    heavy.replace(heavy.find(masses), masses.size(), masses + "80 g, ");
+    const InputError gas = errorFor(heavy);
+    EXPECT_EQ(gas.getKey(), "test.gas_masses");
+    EXPECT_NE(std::string(gas.what()).find("80 g is more gas than this bag can hold"),
+              std::string::npos)
+        << gas.what();
+    EXPECT_NE(std::string(gas.what()).find("valid: at most 34"), std::string::npos) << gas.what();
     const InputError e2 = errorFor(kBase + "contact: {block: {friction: -0.1}}\n");
     EXPECT_EQ(e2.getKey(), "contact.block.friction");
     const InputError e3 = errorFor(kBase + "  stiffness_range: [10 N, 60 N]\n");

@@ -80,6 +80,12 @@ double estimateNumNodes(const bags::DoubleWedgeParams& g);
 /// block is large enough to squeeze the bag flat.
 double estimateForceCapacity(const bags::LoadTestOptions& o);
 
+/// The most gas [kg] a bag of geometry g can plausibly hold: the mass that fills its
+/// unstretched (flat-panel) volume at 1 MPa gauge, ten atmospheres, far beyond what a film bag
+/// survives (the seed's bag is at about 20 kPa with 4.5 g). More cannot be physical and is
+/// refused where it is read (test.gas_masses, array.gas_mass).
+double calcMostPlausibleGasMass(const bags::DoubleWedgeParams& g, const bags::GasOptions& gas);
+
 /// The scenario kinds `bagsim run` knows.
 std::vector<std::string> getScenarioKinds();
 
