@@ -482,6 +482,26 @@ int runResume(const Args& args, const std::string& stopAfterText) {
     if (!readStateFile(cp, kCheckpointMagic, "checkpoint", "its run cannot be resumed",
                        "resume it with bagsim", &payload, &header, &file, &why))
         return refuse(why);
+    // The checkpoint must be this folder's run: its scenario and overrides are the ones the
+    // folder's results.h5 records (a checkpoint copied from another run of the same scenario
+    // would continue that run into these files).
+    try {
+        const io::RunInfo folder = io::readRunInfo(dir.string());
+        if (folder.scenarioText != header.scenarioText)
+            return refuse("its checkpoint was written by another run than the one whose results "
+                          "are there (the scenario differs: " +
+                          describeFirstDifference(folder.scenarioText, header.scenarioText) +
+                          "); the folder is left as it was");
+        if (folder.overrides != header.overrides)
+            return refuse("its checkpoint was written by another run than the one whose results "
+                          "are there (overrides " + joinOverrides(header.overrides) +
+                          " in the checkpoint, " + joinOverrides(folder.overrides) +
+                          " in results.h5); the folder is left as it was");
+    } catch (const std::exception& e) {
+        return refuse(std::string("its results.h5 cannot be read (") + e.what() +
+                      "), so the checkpoint cannot be checked against the run there; the folder "
+                      "is left as it was");
+    }
     bags::StateReader reader(payload);
     readCheckpointHeader(reader);  // read above; the model's state follows
     if (!args.scenario.empty()) {

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -430,6 +431,26 @@ void LoadTestWriter::Impl::close() {
     mesh.reset();
     meta.reset();
     file.reset();
+}
+
+RunInfo readRunInfo(const std::string& dir) {
+    const std::string path = (std::filesystem::path(dir) / kResultsH5).string();
+    h5::Handle file = h5::openFileReadOnly(path);
+    if (!h5::hasLink(file.get(), "meta"))
+        throw std::runtime_error(path + " has no /meta group: not written by bagsim");
+    h5::Handle meta = h5::openGroup(file.get(), "meta");
+    auto str = [&](const char* key) {
+        return h5::hasAttribute(meta.get(), key) ? h5::readStringAttribute(meta.get(), key)
+                                                 : std::string();
+    };
+    RunInfo info;
+    info.scenarioText = str("scenario");
+    info.scenarioFile = str("scenario_file");
+    info.commandLine = str("command_line");
+    std::istringstream os(str("overrides"));
+    for (std::string line; std::getline(os, line);)
+        if (!line.empty()) info.overrides.push_back(line);
+    return info;
 }
 
 h5::Handle createRunMeta(hid_t file, const RunInfo& info, const std::string& kind) {

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -400,4 +401,41 @@ TEST(FromRest, PneumaticRunsStartFromARestStateWithEveryShippedController) {
         EXPECT_NE(events.find(c.event), std::string::npos) << events;
         EXPECT_NE(events.find("0.1000,run ended"), std::string::npos) << events;
     }
+}
+
+TEST(Resume, ACheckpointOfAnotherRunIsRefusedAndTheFolderKept) {
+    // Two runs of one scenario, one with another override (run.duration), both stopped; the
+    // first's checkpoint copied into the second's folder. It used to be resumed: the first
+    // run continued into the second's files. Now refused (exit 2) naming the overrides of
+    // both, every file of the folder as it was; the first run still resumes from its own.
+    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume-other";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string scenario = "\"" + kScenarios + "supine-on-array-coarse.yaml\"";
+    const std::string sets = " --quiet --set run.settle_time='0.06 s' --set "
+                             "output.checkpoint_every='0.02 s' --stop-after '0.045 s'";
+    ASSERT_EQ(runBagsim(scenario + sets + " --out \"" + (dir / "a").string() + "\"", dir / "a.log"),
+              130);
+    ASSERT_EQ(runBagsim(scenario + sets + " --set run.duration='0 s' --out \"" +
+                            (dir / "b").string() + "\"",
+                        dir / "b.log"),
+              130);
+    fs::copy_file(dir / "a" / "checkpoint.bin", dir / "b" / "checkpoint.bin",
+                  fs::copy_options::overwrite_existing);
+    std::map<std::string, std::string> before;
+    for (const auto& e : fs::directory_iterator(dir / "b"))
+        before[e.path().filename().string()] = readFile(e.path());
+    EXPECT_EQ(runBagsim("--resume \"" + (dir / "b").string() + "\"", dir / "b-resume.log"), 2);
+    const std::string log = readLog(dir / "b-resume.log");
+    EXPECT_NE(log.find("its checkpoint was written by another run than the one whose results are "
+                       "there (overrides"),
+              std::string::npos)
+        << log;
+    EXPECT_NE(log.find("--set run.duration=0 s in results.h5"), std::string::npos) << log;
+    std::map<std::string, std::string> after;
+    for (const auto& e : fs::directory_iterator(dir / "b"))
+        after[e.path().filename().string()] = readFile(e.path());
+    EXPECT_TRUE(before == after) << "the folder changed";
+    EXPECT_EQ(runBagsim("--resume \"" + (dir / "a").string() + "\" --quiet", dir / "a-resume.log"), 0)
+        << readLog(dir / "a-resume.log");
 }

@@ -94,6 +94,11 @@ struct RunInfo {
     std::string commandLine;             ///< the program's arguments, for the record
 };
 
+/// The record of where a run came from in the results.h5 of folder `dir` (/meta scenario,
+/// scenario_file, overrides, command_line): a run's identity, against which a checkpoint found
+/// in the folder is checked. @throws std::runtime_error if there is none or it cannot be read.
+RunInfo readRunInfo(const std::string& dir);
+
 /// Streams a load test (bags::runLoadTest) into results.h5, results.xdmf and the CSV files.
 class LoadTestWriter {
   public:
