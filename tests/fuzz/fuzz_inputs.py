@@ -41,7 +41,8 @@ SEEDS = [  # (file, command, weight)
 ]
 INTERNAL = re.compile(r'std::|\b[A-Za-z_]\w*::[A-Za-z_]|bad_alloc|what\(\)|YAML::|Eigen|'
                       r'terminate called|basic_string|Assertion .* failed')
-WHERE = re.compile(r"key '|--set |\.yaml:\d+|\.csv\b|--[a-z-]+|option|usage:|scenario file")
+WHERE = re.compile(r"key '|--set |\.yaml:\d+|\.csv\b|--[a-z-]+|option|usage:|scenario file|"
+                   r"error: /\S+: ")  # the last: a file the input named, by its path
 LINE = re.compile(r'^(\s*(?:-\s+)?)([A-Za-z_][\w.]*)(\s*:\s*)([^#{\[\n][^#\n]*?)(\s*(?:#.*)?)$')
 NUMBER = re.compile(r'[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?')
 MAGNITUDES = ['1e-300', '1e300', '1e400', '-1e400', '0', '-1', '-0', 'nan', '.nan', 'inf',
