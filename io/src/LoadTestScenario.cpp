@@ -1,4 +1,5 @@
 #include <io/LoadTestScenario.h>
+#include <io/PatientScenario.h>
 
 #include <bags/Bending.h>
 #include <bags/MaterialFit.h>
@@ -945,12 +946,7 @@ LoadTestScenario readLoadTestScenario(const ScenarioFile& file) {
 
     LoadTestScenario sc;
     sc.name = root.getString("name", file.getStem());
-    if (sc.name.empty() ||
-        sc.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
-                                  "._-") != std::string::npos)
-        root.fail("name", "\"" + sc.name +
-                              "\" names the output folder: use letters, digits, "
-                              "'.', '_' and '-' only");
+    checkScenarioName(root, sc.name);
     sc.description = root.getString("description", "");
 
     bags::LoadTestOptions& o = sc.options;

@@ -81,6 +81,12 @@ void checkScenarioName(const ScenarioNode& root, const std::string& name) {
         root.fail("name", "\"" + name +
                               "\" names the output folder: use letters, digits, "
                               "'.', '_' and '-' only");
+    // out/. and out/.. are not a folder of the run's own (out/.. is where bagsim was started).
+    if (name.find_first_not_of('.') == std::string::npos)
+        root.fail("name", "\"" + name +
+                              "\" names the output folder out/" + name +
+                              ", which is not a folder of its own; valid: a name with a letter "
+                              "or digit, e.g. supine-75kg");
 }
 
 body::PatientSpec readPatientSection(const ScenarioNode& s) {

@@ -400,6 +400,7 @@ StudyScenario readStudyScenario(const ScenarioFile& file) {
     s.studyFile = file.getFileName();
     s.studyText = file.getText();
     s.name = root.getString("name", file.getStem());
+    checkScenarioName(root, s.name);
     s.description = root.getString("description", "");
 
     // The base scenario, relative to the study file.

@@ -719,3 +719,16 @@ TEST(LoadTestScenario, DynamicKeysAreCheckedAndLocated) {
         errorFor(kBase + "solver:\n  stepping: dynamic\n  dynamic: {mass_scale: 0.5}\n");
     EXPECT_EQ(e4.getKey(), "solver.dynamic.mass_scale");
 }
+
+TEST(LoadTestScenario, ANameOfDotsIsNotAnOutputFolderOfItsOwn) {
+    // name: ".." made the default output folder out/.., the folder bagsim was started in: the
+    // run wrote its files there. Refused, as is a name with a slash.
+    for (const char* name : {"\"..\"", "\".\"", "\"...\""}) {
+        const InputError e = errorFor("name: " + std::string(name) + "\n" + kBase);
+        EXPECT_EQ(e.getKey(), "name") << name;
+        EXPECT_NE(std::string(e.what()).find("which is not a folder of its own"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(errorFor("name: ../up\n" + kBase).getKey(), "name");
+    EXPECT_NO_THROW(io::readLoadTestScenario(ScenarioFile::parse("name: a.b-c_1\n" + kBase, "n.yaml")));
+}

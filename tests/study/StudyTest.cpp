@@ -133,6 +133,11 @@ TEST(StudyScenario, MistakesNameFileLineKeyAndWhatIsValid) {
          "first, last, min, max, mean"},
         // Outputs are checked against the files and columns the base scenario's kind writes
         // (io/ResultFiles.h), before any case runs.
+        // A study's name is its output folder's (out/NAME): checked as a run's.
+        {"name: ../..\nparameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n",
+         "names the output folder: use letters, digits"},
+        {"name: ..\nparameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n",
+         "which is not a folder of its own"},
         {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: regions.csv, "
          "column: patch_peak_mmHg}\n",
          "\"regions.csv\" is not a file a seed-load-test run writes; valid: load_displacement.csv, "
