@@ -101,7 +101,8 @@ const char* kHelp =
     "have channels for; also film-friction, gas-mass-bias, soft-tissue, each trial value a\n"
     "co-simulation) are fitted on all windows but one and judged on the one left out.\n"
     "\n"
-    "exit status: 0 diagnosed, 1 a simulation failed, 2 bad input, 130/143 interrupted.\n";
+    "exit status: 0 diagnosed, 1 a simulation failed, 2 bad input, 129/130/143 interrupted\n"
+    "(SIGHUP, SIGINT, SIGTERM).\n";
 
 struct Args {
     std::string measured, out, commandLine;

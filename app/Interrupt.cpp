@@ -24,11 +24,13 @@ InterruptGuard::InterruptGuard() {
     g_signal = 0;
     m_previousInt = std::signal(SIGINT, onInterrupt);
     m_previousTerm = std::signal(SIGTERM, onInterrupt);
+    m_previousHup = std::signal(SIGHUP, onInterrupt);  // the terminal closed: stop as for SIGTERM
 }
 
 InterruptGuard::~InterruptGuard() {
     std::signal(SIGINT, m_previousInt);
     std::signal(SIGTERM, m_previousTerm);
+    std::signal(SIGHUP, m_previousHup);
 }
 
 int getInterruptSignal() { return g_signal; }
@@ -38,7 +40,7 @@ void throwIfInterrupted() {
 }
 
 std::string describeInterruptSignal(int sig) {
-    return sig == SIGTERM ? "SIGTERM" : "the user (SIGINT)";
+    return sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP (its terminal closed)" : "the user (SIGINT)";
 }
 
 int getInterruptExitCode(int sig) { return 128 + sig; }

@@ -1,5 +1,5 @@
 #pragma once
-/// @file Stopping a run on SIGINT (Ctrl-C) or SIGTERM with its results kept. While an
+/// @file Stopping a run on SIGINT (Ctrl-C), SIGTERM or SIGHUP with its results kept. While an
 /// InterruptGuard lives, either signal only sets a flag (a second one ends the program at once,
 /// as without the guard); the run calls throwIfInterrupted() where it can stop cleanly (after a
 /// load step, within a Newton iteration, between integration chunks), catches Interrupted,
@@ -16,7 +16,7 @@ struct Interrupted : std::runtime_error {
     int signal;  ///< SIGINT or SIGTERM
 };
 
-/// Installs the SIGINT and SIGTERM handlers and clears the flag; restores the previous
+/// Installs the SIGINT, SIGTERM and SIGHUP handlers and clears the flag; restores the previous
 /// handlers when destroyed.
 class InterruptGuard {
   public:
@@ -28,6 +28,7 @@ class InterruptGuard {
   private:
     void (*m_previousInt)(int);
     void (*m_previousTerm)(int);
+    void (*m_previousHup)(int);
 };
 
 /// The signal received since the guard was made (SIGINT or SIGTERM), 0 if none.
@@ -36,7 +37,8 @@ int getInterruptSignal();
 void throwIfInterrupted();
 /// "the user (SIGINT)" or "SIGTERM", for messages.
 std::string describeInterruptSignal(int signal);
-/// The shell's convention for a run ended by a signal: 128 + signal (130 SIGINT, 143 SIGTERM).
+/// The shell's convention for a run ended by a signal: 128 + signal (129 SIGHUP, 130 SIGINT,
+/// 143 SIGTERM).
 int getInterruptExitCode(int signal);
 
 }  // namespace bagsim::app

@@ -49,7 +49,7 @@ diagnose::PatientChannels runCoSimulation(const io::ScenarioFile& file, const st
     while (waitpid(pid, &status, 0) < 0)
         if (errno != EINTR) throw std::runtime_error("lost the co-simulation's process");
     const int rc = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    if (rc == 130 || rc == 143) throw Interrupted(rc - 128);
+    if (rc == 129 || rc == 130 || rc == 143) throw Interrupted(rc - 128);
     throwIfInterrupted();
     if (rc != 0)
         throw std::runtime_error("the co-simulation in " + dir + " failed (exit status " +

@@ -82,7 +82,7 @@ const char* kHelp =
     "exit status: 0 complete, 1 run failed (results so far kept, marked INCOMPLETE), 2 bad\n"
     "input, 3 partial (a curve stopped on a numerical failure, relaxed bags kept steps\n"
     "unrelaxed, or the coupling kept steps without a fixed point; all results written,\n"
-    "marked INCOMPLETE), 130 interrupted by SIGINT, 143 by SIGTERM.\n";
+    "marked INCOMPLETE), 130 interrupted by SIGINT, 143 by SIGTERM, 129 by SIGHUP.\n";
 
 /// Bad command-line usage: exit status 2.
 struct UsageError : std::runtime_error {

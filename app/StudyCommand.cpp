@@ -52,7 +52,8 @@ const char* kHelp =
     "running cases, keeps every case done and writes the table marked interrupted.\n"
     "\n"
     "exit status: 0 every case ok, 3 some case failed or is partial (see its row), 1 the table\n"
-    "could not be written, 2 bad input, 130 interrupted by SIGINT, 143 by SIGTERM.\n";
+    "could not be written, 2 bad input, 130 interrupted by SIGINT, 143 by SIGTERM, 129 by\n"
+    "SIGHUP.\n";
 
 struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;

@@ -128,7 +128,8 @@ const char* kHelp =
     "  e.g. --test woman@small-woman:patient.sex=female,patient.height=1.55m,patient.mass=50kg);\n"
     "  every test names one, at least two subjects; the diagnosis leaves one subject out.\n"
     "\n"
-    "exit status: 0 written, 1 the truth run failed, 2 bad input, 130/143 interrupted.\n";
+    "exit status: 0 written, 1 the truth run failed, 2 bad input, 129/130/143 interrupted\n"
+    "(SIGHUP, SIGINT, SIGTERM).\n";
 
 /// The truth's imperfection seed is the scenario's plus this.
 constexpr std::uint64_t kTruthSeedOffset = 100;

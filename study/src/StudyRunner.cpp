@@ -266,7 +266,8 @@ class CaseProcess {
 
 bool isInterruptExit(int waitStatus) {
     return WIFEXITED(waitStatus) &&
-           (WEXITSTATUS(waitStatus) == 130 || WEXITSTATUS(waitStatus) == 143);
+           (WEXITSTATUS(waitStatus) == 129 || WEXITSTATUS(waitStatus) == 130 ||
+            WEXITSTATUS(waitStatus) == 143);
 }
 
 void writeRecord(const fs::path& path, const CaseRecord& r) {
