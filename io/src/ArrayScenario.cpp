@@ -750,11 +750,31 @@ void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
         if (!c.isSequence() || c.getElements().size() < 2) pump.fail("curve", example);
         p.pump.pressureRise.clear();
         p.pump.massFlow.clear();
+        // Each point checked here, in the user's words and units (the library's own check
+        // below speaks of its fields in SI).
         for (const ScenarioNode& e : c.getElements()) {
             if (!e.isSequence() || e.getElements().size() != 2) e.fail(example);
-            p.pump.pressureRise.push_back(e.getElements()[0].asQuantity(D::Pressure));
-            p.pump.massFlow.push_back(e.getElements()[1].asQuantity(D::MassFlow));
+            const ScenarioNode rise = e.getElements()[0], flow = e.getElements()[1];
+            const double dp = rise.asQuantity(D::Pressure), q = flow.asQuantity(D::MassFlow);
+            if (!(dp >= 0.0))
+                rise.fail("the pressure rise " + rise.asString() + " is below 0 kPa; valid: 0 kPa "
+                          "(the free-flow point) or more");
+            if (!(q >= 0.0))
+                flow.fail("the mass flow " + flow.asString() + " is below 0 g/s; valid: 0 g/s or more");
+            if (!p.pump.pressureRise.empty() && !(dp > p.pump.pressureRise.back()))
+                rise.fail("the pressure rise " + rise.asString() + " is not above the point "
+                          "before's; valid: points in increasing pressure rise, e.g. [[0 kPa, "
+                          "8 g/s], [60 kPa, 5 g/s], [120 kPa, 0 g/s]]");
+            if (!p.pump.massFlow.empty() && q > p.pump.massFlow.back())
+                flow.fail("the mass flow " + flow.asString() + " is above the point before's; "
+                          "valid: a pump delivers less as the pressure it works against rises");
+            p.pump.pressureRise.push_back(dp);
+            p.pump.massFlow.push_back(q);
         }
+        if (p.pump.massFlow.back() != 0.0)
+            c.getElements().back().getElements()[1].fail(
+                "the last point's mass flow is " + c.getElements().back().getElements()[1].asString() +
+                "; valid: 0 g/s, the last point is the pump's shut-off pressure");
         try {
             p.pump.validate("pump curve");
         } catch (const std::invalid_argument& err) {

@@ -99,7 +99,7 @@ TEST(PneumaticsScenario, ErrorsAreLocatedAtTheirKeys) {
 
     const io::InputError curve = readError(
         kBase + "pneumatics:\n  pump: {curve: [[0 kPa, 0.1 g/s], [50 kPa, 0.2 g/s]]}\n");
-    EXPECT_EQ(curve.getKey(), "pneumatics.pump.curve");
+    EXPECT_EQ(curve.getKey(), "pneumatics.pump.curve[1][1]");  // at the point that rises
 
     const io::InputError misspelt = readError(kBase + "pneumatics:\n  manifodl: {}\n");
     EXPECT_NE(misspelt.getMessage().find("did you mean 'manifold'"), std::string::npos)
@@ -213,4 +213,29 @@ TEST(PneumaticsScenario, TheZonesPressureIsStatedOnceOrSetFromHisBody) {
             "control.band", "goes with control.pressure");
     refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure, pressure: from-bdy}\n",
             "control.pressure", "; or from-body (the pressure set from the patient's mass");
+}
+
+TEST(PneumaticsScenario, APumpCurvesFaultIsNamedAtItsPointInTheUsersUnits) {
+    // It was "pump curve: 'pressureRise[1]' = 0 Pa is invalid": a C++ field, in SI.
+    auto error = [](const std::string& curve) {
+        return readError(kBase + "pneumatics:\n  pump: {curve: " + curve + "}\n");
+    };
+    const io::InputError flat = error("[[0 kPa, 8 g/s], [0 kPa, 5 g/s]]");
+    EXPECT_EQ(flat.getKey(), "pneumatics.pump.curve[1][0]") << flat.what();
+    EXPECT_NE(flat.getMessage().find("the pressure rise 0 kPa is not above the point before's"),
+              std::string::npos)
+        << flat.what();
+    EXPECT_EQ(std::string(flat.what()).find("pressureRise"), std::string::npos) << flat.what();
+    const io::InputError rising = error("[[0 kPa, 5 g/s], [60 kPa, 8 g/s], [120 kPa, 0 g/s]]");
+    EXPECT_EQ(rising.getKey(), "pneumatics.pump.curve[1][1]") << rising.what();
+    EXPECT_NE(rising.getMessage().find("the mass flow 8 g/s is above the point before's"),
+              std::string::npos)
+        << rising.what();
+    const io::InputError open = error("[[0 kPa, 8 g/s], [60 kPa, 5 g/s]]");
+    EXPECT_EQ(open.getKey(), "pneumatics.pump.curve[1][1]") << open.what();
+    EXPECT_NE(open.getMessage().find("the last point is the pump's shut-off pressure"),
+              std::string::npos)
+        << open.what();
+    EXPECT_NO_THROW(read(kBase + "pneumatics:\n  pump: {curve: [[0 kPa, 8 g/s], [60 kPa, 5 g/s], "
+                                 "[120 kPa, 0 g/s]]}\n"));
 }
