@@ -358,14 +358,17 @@ void checkCase(const StudyScenario& s, size_t index, const std::string& basePath
                const ScenarioNode& setSection) {
     const StudyCase& c = s.cases[index];
     ScenarioFile f = ScenarioFile::parse(s.baseText, basePath);
+    // The files only some runs of a kind write (io::ResultFiles' `when`): pneumatics.csv with a
+    // pneumatics section, rig_readings.csv with a rig section.
+    bool pneumatics = true, rig = true;
     try {
         for (const std::string& o : getCaseOverrides(s, c)) f.applyOverride(o);
         if (s.baseKind == "seed-load-test")
-            readLoadTestScenario(f);
+            rig = !readLoadTestScenario(f).rig.isNone();
         else if (s.baseKind == "patient-on-support")
             readPatientOnSupportScenario(f);
         else if (s.baseKind == "patient-on-array")
-            readPatientOnArrayScenario(f);
+            pneumatics = readPatientOnArrayScenario(f).hasPneumatics;
     } catch (const InputError& e) {
         const std::string prefix = "--set ";
         if (e.getWhere().rfind(prefix, 0) != 0) throw;
@@ -382,6 +385,16 @@ void checkCase(const StudyScenario& s, size_t index, const std::string& basePath
             throw InputError(s.studyFile, setSection.getLine(key), setSection.getChildPath(key),
                              s.baseScenario + " refuses it: " + detail);
         throw InputError(s.studyFile, 0, key, detail);
+    }
+    for (const StudyOutput& o : s.outputs) {
+        const bool missing = (o.file == "pneumatics.csv" && !pneumatics) ||
+                             (o.file == "rig_readings.csv" && !rig);
+        if (missing)
+            throw InputError(s.studyFile, o.line, "outputs",
+                             o.file + " is written only by a run with a " +
+                                 (o.file == "pneumatics.csv" ? "pneumatics" : "rig") +
+                                 " section, and case " + std::to_string(index + 1) + " of " +
+                                 s.baseScenario + " has none; valid: an output its runs write");
     }
 }
 

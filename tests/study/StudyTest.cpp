@@ -149,6 +149,10 @@ TEST(StudyScenario, MistakesNameFileLineKeyAndWhatIsValid) {
         {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: stiffness.csv, "
          "column: r2, per: gas_mass}\n",
          "key 'outputs[0].per': \"gas_mass\": stiffness.csv has no such column"},
+        // A file only some runs of the kind write: the tiny load test has no rig section.
+        {"parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\noutputs:\n  - {file: "
+         "rig_readings.csv, column: force_N}\n",
+         "rig_readings.csv is written only by a run with a rig section, and case 1 of"},
     };
     for (const Case& c : cases) {
         const io::InputError e = readError(std::string(kHead) + c.body);
