@@ -345,6 +345,10 @@ double parseInterval(const std::string& option, const std::string& text) {
     try {
         const double v = io::parseQuantity(text, io::Dimension::Time);
         if (!(v > 0.0)) throw std::invalid_argument("must be greater than 0 s");
+        // A test's samples go as its length over the interval: 1e-9 s filled the memory.
+        if (v < 1e-3)
+            throw std::invalid_argument("is finer than 1 ms, a 1 kHz logger (a 100 s test would "
+                                        "give over 100 000 rows a channel); valid: 1 ms to 60 s");
         return v;
     } catch (const std::exception& e) {
         throw UsageError(option + " '" + text + "': " + e.what());
