@@ -1191,6 +1191,23 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     out.checkKeys({}, {"every", "checkpoint_every"});
     sc.outputInterval = out.getQuantity("every", D::Time, sc.outputInterval);
     checkBetween(out, "every", sc.outputInterval, 1e-3, 60.0, "ms");
+    {  // the mat's frames: frames x sensels x 8 bytes, refused before anything runs
+        const double frames = std::floor(sc.getEndTime() / sc.outputInterval) + 2.0;
+        const double bytes = frames * double(sc.mat.rows) * double(sc.mat.columns) * 8.0;
+        if (bytes > kMaxMatFrameBytes) {
+            const double every = sc.getEndTime() /
+                                 (kMaxMatFrameBytes / (8.0 * sc.mat.rows * sc.mat.columns) - 2.0);
+            const ScenarioNode& at = out.has("every") ? out : mat;
+            at.fail(out.has("every") ? "every" : "rows",
+                    fmtUnit(sc.outputInterval, "ms") + " over " + fmtUnit(sc.getEndTime(), "s") +
+                        " with a mat of " + std::to_string(sc.mat.rows) + " x " +
+                        std::to_string(sc.mat.columns) + " sensels writes about " +
+                        fmtNumber(std::round(bytes / 1e9)) +
+                        " GB of frames; at most 4 GiB are allowed; valid: output.every at least " +
+                        fmtNumber(std::ceil(every * 1e3)) + " ms, or fewer sensels "
+                        "(docs/scenario-reference.md#limits)");
+        }
+    }
     sc.checkpointInterval = out.getQuantity("checkpoint_every", D::Time, sc.checkpointInterval);
     if (sc.checkpointInterval != 0.0)
         checkBetween(out, "checkpoint_every", sc.checkpointInterval, 1e-3, 3600.0, "s",

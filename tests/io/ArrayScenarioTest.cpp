@@ -678,3 +678,16 @@ TEST(ArrayScenario, ThePressureAtRestSetsTheFillAsAClinicalMattressIsSet) {
     refused((with("  pressure: 4 kPa\n", ", gas_mass: 4 g, pressure: 4 kPa")), 14,
                      "array.groups[1].pressure", "and gas_mass both set the group's fill");
 }
+
+TEST(ArrayScenario, AMatWhoseFramesWouldFillTheDiskIsRefused) {
+    // frames x sensels x 8 bytes above 4 GiB (1 ms over an hour on a 1024 x 1024 mat: 30 TB)
+    // is refused at output.every with the size and the least interval that fits; the shipped
+    // 64 x 32 mat at 50 ms over 30 s is 10 MB.
+    const io::InputError e = readError(kBase + "mat: {rows: 1024, columns: 1024}\noutput: {every: 1 ms}\n");
+    EXPECT_EQ(e.getKey(), "output.every") << e.what();
+    EXPECT_NE(std::string(e.what()).find("sensels writes about"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("at most 4 GiB are allowed; valid: output.every at least"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NO_THROW(read(kBase + "mat: {rows: 64, columns: 32}\noutput: {every: 50 ms}\n"));
+}

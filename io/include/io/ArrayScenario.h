@@ -26,6 +26,9 @@ inline constexpr const char* kPatientOnArrayKind = "patient-on-array";
 /// Most bags in an array: each is a membrane model of its own (a 30 mm mesh about 170
 /// nodes, a 10 mm mesh about 1500); 400 bags is a whole bed of 20 mm cells many times over.
 inline constexpr int kMaxArrayBags = 400;
+/// The pressure mat's frames a run may write into results.h5 (frames x rows x columns doubles):
+/// 4 GiB, hundreds of times a 30 s turn's (600 frames of 64 x 32 sensels: 10 MB).
+inline constexpr double kMaxMatFrameBytes = 4.0 * 1024 * 1024 * 1024;
 
 /// A gas command as written, for the summary ("right: target 5.5 g at 0.05 g/s from 0 s").
 struct GasCommandText {
