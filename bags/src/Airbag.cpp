@@ -1724,7 +1724,7 @@ double Airbag::calcFittedRangeUse(double* stretch) const {
     const double limit = calcFittedRangeLimit(material);
     // With a tension field the law is evaluated only where the film is taut (at C) or
     // wrinkled (uniaxially, at its largest stretch); slack film carries nothing.
-    const bool tensionField = dynamic_cast<const WrinklingMaterial*>(&material) != nullptr;
+    const auto* tensionField = dynamic_cast<const WrinklingMaterial*>(&material);
     double use = 0.0, best = 1.0;
     if (std::isfinite(limit) && limit > 0.0) {
         for (int e = 0; e < m.model->getMesh().getNumTris(); ++e) {
@@ -1734,8 +1734,9 @@ double Airbag::calcFittedRangeUse(double* stretch) const {
             double l1 = 1.0, l2 = 1.0;
             WrinklingMaterial::calcPrincipalStretches(C, &l1, &l2);
             double x = C.trace() + 1.0 / det - 3.0;  // I1 - 3, plane stress incompressible
-            if (tensionField && l1 <= 1.0) x = 0.0;                          // slack
-            else if (tensionField && l2 < 1.0 / std::sqrt(l1)) x = l1 * l1 + 2.0 / l1 - 3.0;  // wrinkled
+            const int state = tensionField ? tensionField->calcState(C) : 0;  // taut, wrinkled, slack
+            if (state == 2) x = 0.0;
+            else if (state == 1) x = l1 * l1 + 2.0 / l1 - 3.0;  // uniaxial at its largest stretch
             if (x / limit > use) {
                 use = x / limit;
                 best = l1;

@@ -362,11 +362,7 @@ double readMassAtPressure(const ScenarioNode& s, const std::string& key, const b
 void checkPlausibleGas(const ScenarioNode& s, const std::string& key, double mass,
                        const bags::AirbagSpec& bag) {
     const double most = calcMostPlausibleGasMass(bag.geometry, bag.gas);
-    if (mass > most)
-        s.fail(key, fmtUnit(mass, "g") + " is more gas than this bag can hold: it would fill its "
-                        "unstretched volume at over 1 MPa gauge (a film bag bursts far below; "
-                        "the seed's is at about 20 kPa with 4.5 g); valid: at most " +
-                        fmtUnit(std::floor(most * 1e4) / 1e4, "g"));
+    if (mass > most) s.fail(key, describeTooMuchGas(mass, most));
 }
 
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {

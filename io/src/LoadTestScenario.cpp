@@ -800,12 +800,7 @@ void checkLimits(const ScenarioNode& root, const bags::LoadTestOptions& o) {
     // A gas mass no film bag can hold (ten atmospheres in its unstretched volume).
     const double mostGas = calcMostPlausibleGasMass(o.geometry, o.gas);
     for (double m : o.gasMasses)
-        if (m > mostGas)
-            test.fail("gas_masses",
-                      fmt(toUnit(m, "g")) + " g is more gas than this bag can hold: it would "
-                      "fill its unstretched volume at over 1 MPa gauge (a film bag bursts far "
-                      "below; the seed's is at about 20 kPa with 4.5 g); valid: at most " +
-                          fmt(std::floor(toUnit(mostGas, "g") * 10) / 10) + " g");
+        if (m > mostGas) test.fail("gas_masses", describeTooMuchGas(m, mostGas));
     const double steps = o.geometry.height / o.displacementStep;
     if (steps > kMaxStepsPerBranch)
         test.fail(
@@ -903,6 +898,13 @@ double estimateForceCapacity(const bags::LoadTestOptions& o) {
 double calcMostPlausibleGasMass(const bags::DoubleWedgeParams& g, const bags::GasOptions& gas) {
     return (gas.ambientPressure + 1e6) * g.calcFlatVolume() /
            (gas.getSpecificGasConstant() * gas.temperature);
+}
+
+std::string describeTooMuchGas(double mass, double most) {
+    return fmt(toUnit(mass, "g")) + " g is more gas than this bag can hold: it would fill its "
+           "unstretched volume at over 1 MPa gauge (a film bag bursts far below; the seed's is "
+           "at about 20 kPa with 4.5 g); valid: at most " +
+           fmt(std::floor(toUnit(most, "g") * 10) / 10) + " g";
 }
 
 std::vector<std::string> getScenarioKinds() {

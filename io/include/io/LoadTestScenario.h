@@ -85,6 +85,8 @@ double estimateForceCapacity(const bags::LoadTestOptions& o);
 /// survives (the seed's bag is at about 20 kPa with 4.5 g). More cannot be physical and is
 /// refused where it is read (test.gas_masses, array.gas_mass).
 double calcMostPlausibleGasMass(const bags::DoubleWedgeParams& g, const bags::GasOptions& gas);
+/// The message for a gas mass [kg] above that, `most` [kg]: why, and what is valid.
+std::string describeTooMuchGas(double mass, double most);
 
 /// The scenario kinds `bagsim run` knows.
 std::vector<std::string> getScenarioKinds();
