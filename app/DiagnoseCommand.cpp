@@ -347,7 +347,7 @@ int run(const Args& a) {
         write("diagnosis.json", io::formatDiagnosisJson(info, {}, nullptr, stiffness.get(),
                                                         curveWhich.get(), curveNotRun));
         if (curveWhich)
-            std::cout << "verdict: " << curveWhich->which.verdict << " ("
+            std::cout << "verdict: " << diagnose::describeVerdict(curveWhich->which) << " ("
                       << curveWhich->which.reason << ")\n";
         else
             std::cout << "verdict: not run ("
@@ -532,7 +532,7 @@ int run(const Args& a) {
     write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get(), stiffness.get(),
                                                     curveWhich.get(), curveNotRun));
     if (which)
-        std::cout << "verdict: " << which->verdict << " (" << which->reason << ")\n";
+        std::cout << "verdict: " << diagnose::describeVerdict(*which) << " (" << which->reason << ")\n";
     else
         std::cout << "verdict: not run (" << (a.whereOnly ? "--where-only" : "one test: no test to hold out")
                   << ")\n";

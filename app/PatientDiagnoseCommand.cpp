@@ -233,7 +233,7 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     writeOutputFile(out, "diagnosis.json",
                     io::formatPatientDiagnosisJson(info, base, where, which.get(), folds));
     if (which)
-        std::cout << "verdict: " << which->verdict << " (" << which->reason << ")\n";
+        std::cout << "verdict: " << diagnose::describeVerdict(*which) << " (" << which->reason << ")\n";
     else
         std::cout << "verdict: not run (--where-only)\n";
     std::cout << "diagnosis in " << out.string() << "/: diagnosis.json, residuals.csv, report.html ("

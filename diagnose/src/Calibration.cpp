@@ -634,6 +634,44 @@ void calibratePairs(WhichReport& report, const MeasuredData& data,
         if (report.pairs[i].accepted) report.pairChosen = static_cast<int>(i);
 }
 
+// Where, on these tests, the named single's fit and each rival's (both fitted on all tests)
+// differ most against the channel's validation uncertainty: a channel they differ in by more than
+// twice it would tell them apart if measured again with less noise; less, and only another
+// measurement can (appended to the verdict's tellApart and reason).
+void addWhereFitsDiffer(WhichReport& r, const GapScale& g) {
+    if (r.rivals.empty() || r.verdictEffects.size() != 1) return;
+    const CandidateResult* named = findSingle(r, r.verdictEffects.front());
+    if (!named || named->fitted.empty()) return;
+    std::string text;
+    for (const std::string& rival : r.rivals) {
+        const CandidateResult* other = findSingle(r, rival);
+        if (!other || other->fitted.size() != named->fitted.size()) continue;
+        double most = -1.0;
+        std::string where;
+        for (size_t t = 0; t < named->fitted.size(); ++t) {
+            const TestComparison& a = named->fitted[t];
+            const std::vector<double> d = calcSimulatedRmsDifference(a, other->fitted[t]);
+            for (size_t c = 0; c < d.size() && c < a.channels.size(); ++c) {
+                const ChannelKind kind = a.channels[c].kind;
+                if (kind == ChannelKind::Mass) continue;
+                const double u = g.getUncertainty(kind, a.test);
+                if (!(u > 0.0) || !(d[c] / u > most)) continue;
+                most = d[c] / u;
+                where = "the " + getChannelName(kind) + " of the " +
+                        fmt("%.3g", a.gasMass * 1e3) + " g test";
+            }
+        }
+        if (most < 0.0) continue;
+        text += (text.empty() ? "" : "; ") + named->effect + " and " + rival +
+                " fitted on all tests differ most in " + where + ", by " + fmt("%.2g", most) +
+                " times its validation uncertainty" +
+                (most > kExplainedMultiple ? "" : " (no channel of these tests tells them apart)");
+    }
+    if (text.empty()) return;
+    r.tellApart += (r.tellApart.empty() ? "" : "; ") + text;
+    r.reason += "; " + text;
+}
+
 }  // namespace
 
 std::string listConfusableWith(const WhichReport& report, const std::string& effect) {
@@ -644,19 +682,12 @@ std::string listConfusableWith(const WhichReport& report, const std::string& eff
 }
 
 void judgeCandidates(WhichReport& report, bool withinValidation, const std::string& noneReason,
-                     const CalibrationOptions& o) {
+                     const ChannelUncertainties& validation, const CalibrationOptions& o) {
     std::stable_sort(report.candidates.begin(), report.candidates.end(),
                      [](const CandidateResult& a, const CandidateResult& b) {
                          return a.score > b.score;
                      });
-    report.confusable.clear();
-    for (size_t i = 0; i < report.candidates.size(); ++i)
-        for (size_t j = i + 1; j < report.candidates.size(); ++j) {
-            const CandidateResult &a = report.candidates[i], &b = report.candidates[j];
-            if (a.score >= o.explainThreshold && b.score >= o.explainThreshold &&
-                std::fabs(a.excessShrink - b.excessShrink) < 0.1)
-                report.confusable.push_back({a.effect, b.effect});
-        }
+    report.confusable = findConfusable(report.candidates, o.explainThreshold, validation);
     const CandidateResult* best = report.candidates.empty() ? nullptr : &report.candidates[0];
     report.verdictEffects.clear();
     if (withinValidation) {
@@ -670,8 +701,6 @@ void judgeCandidates(WhichReport& report, bool withinValidation, const std::stri
                         fmt("%.4f", best->excessBefore) + " to " + fmt("%.4f", best->excessAfter) +
                         "; the whole gap by " + fmt("%.0f", 100 * best->shrink) + " %, from " +
                         fmt("%.4f", best->heldoutBefore) + " to " + fmt("%.4f", best->heldoutAfter) + ")";
-        const std::string others = listConfusableWith(report, best->effect);
-        if (!others.empty()) report.reason += "; confusable with " + others + " on these data";
     } else {
         report.verdict = "unexplained";
         report.reason = "no candidate shrinks the held-out gap beyond the validation "
@@ -706,10 +735,13 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
             return std::vector<std::vector<double>>();
         }));
     }
+    ChannelUncertainties validation;
+    for (const ChannelSummary& c : where.channels)
+        if (c.channel != getChannelName(ChannelKind::Mass)) validation[c.channel] = c.validation;
     judgeCandidates(report, where.withinValidation,
                     "every channel's RMSE is within twice its validation uncertainty "
                     "(sensor noise, numerical and input uncertainty)",
-                    o);
+                    validation, o);
 
     calibratePairs(report, data, base, baseRig, baseResult, baseline, where, simulate, o, cache, g);
     if (report.pairChosen >= 0) {
@@ -741,6 +773,8 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
     } else if (report.pairStageRan) {
         report.reason += "; no pair of effects explains what is left (the pair stage names none)";
     }
+    qualifyVerdict(report, validation, getEffects());
+    addWhereFitsDiffer(report, g);
     return report;
 }
 

@@ -71,21 +71,27 @@ const std::vector<Effect>& getPatientEffects() {
          {{"lag", "s", 1.0, 0.0, PatientInstruments::kMaxBagSensorLag, 0.1, "(the bags' sensors)"},
           {"offset", "kPa", 1e3, -PatientInstruments::kMaxBagSensorOffset,
            PatientInstruments::kMaxBagSensorOffset, 0.5e3, "(the bags' sensors)"}},
-         false},
+         false, true,
+         "a reference gauge on a bag's own port read beside its sensor"},
         {kMatGain,
          "the pressure mat reads every sensel's pressure times 1 + gain (calibration, creep, "
          "temperature)",
          {{"gain", "", 1.0, -PatientInstruments::kMaxMatGain, PatientInstruments::kMaxMatGain, 0.1,
            "(the mat)"}},
-         false},
+         false, true,
+         "the mat calibrated under a known pressure (a bladder at a set pressure over it)"},
         {"film-friction",
          "Coulomb friction between his skin or sheet and the bags' films",
          {{"friction", "", 1.0, 0.0, 1.0, 0.4, "bag.body_friction"}},
-         true},
+         true, true,
+         "a slide test of his sheet on the film (the force that starts it sliding under a "
+         "known load)"},
         {"gas-mass-bias",
          "the bags hold another gas mass than the one stated (filling, leaks before the record)",
          {{"offset", "g", 1e-3, -0.5e-3, 0.5e-3, 0.2e-3, "array.gas_mass (the stated mass plus this)"}},
-         true},
+         true, true,
+         "the bags' gas masses metered as they are filled, or their pressures read with no one "
+         "on them"},
         {"soft-tissue",
          "soft tissue between his bones and the films: one Winkler layer in every segment, in "
          "place of the scenario's own (each site's published layer by default); 0 mm: the "
@@ -93,7 +99,8 @@ const std::vector<Effect>& getPatientEffects() {
          {{"thickness", "mm", 1e-3, 0.0, kMaxTissueThickness, 20e-3, "bag.body_tissue.thickness"},
           {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 30e3,
            "bag.body_tissue.modulus"}},
-         true},
+         true, true,
+         "his tissue's thickness at the sites (ultrasound) and its stiffness (indentation)"},
     };
     return effects;
 }
@@ -812,13 +819,9 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
                      [](const CandidateResult& a, const CandidateResult& b) { return a.score > b.score; });
 
     // The verdict as the rig's single stage.
-    for (size_t i = 0; i < report.candidates.size(); ++i)
-        for (size_t j = i + 1; j < report.candidates.size(); ++j) {
-            const CandidateResult &a = report.candidates[i], &b = report.candidates[j];
-            if (a.score >= o.explainThreshold && b.score >= o.explainThreshold &&
-                std::fabs(a.excessShrink - b.excessShrink) <= 0.1)
-                report.confusable.push_back({a.effect, b.effect});
-        }
+    ChannelUncertainties validation;
+    for (const ChannelSummary& c : where.channels) validation[c.channel] = c.validation;
+    report.confusable = findConfusable(report.candidates, o.explainThreshold, validation);
     const CandidateResult* best = report.candidates.empty() ? nullptr : &report.candidates.front();
     report.pairStageReason = "not run on a patient's data (one effect at a time)";
     if (where.withinValidation) {
@@ -836,6 +839,7 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
                                    " (at least " + fmt("%g", o.explainThreshold) + " needed)"
                              : "no candidate applies to these channels";
     }
+    qualifyVerdict(report, validation, getPatientEffects());
     return report;
 }
 

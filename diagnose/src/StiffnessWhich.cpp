@@ -265,6 +265,8 @@ StiffnessWhich calibrateStiffnessCandidates(const StiffnessComparison& cmp,
         out.interpolationErrors.push_back({c.effect->name, calcInterpolationError(c)});
         CandidateResult cr;
         cr.effect = c.effect->name;
+        if (std::isfinite(out.interpolationErrors.back().second))
+            cr.predictionUncertainty = out.interpolationErrors.back().second;
         cr.simulations = c.simulations;
         double sb = 0.0, sa = 0.0, seb = 0.0, sea = 0.0;
         std::vector<double> heldMeasured, heldAfter;
@@ -316,11 +318,12 @@ StiffnessWhich calibrateStiffnessCandidates(const StiffnessComparison& cmp,
         out.identical.push_back({{"machine-compliance", "bed-compliance"},
                                  "both a compliance in series with the block: k / (1 + c k)"});
     out.which.pairStageReason = "not run: a stiffness curve's candidates are fitted one at a time";
+    const ChannelUncertainties uncertainties{{"stiffness", out.validation}};
     judgeCandidates(out.which, out.withinValidation,
                     "the stiffness's RMSE (" + fmt("%.3g N/mm", out.rmse * 1e-3) +
                         ") is within twice its validation uncertainty (" +
                         fmt("%.3g N/mm", validation * 1e-3) + ": " + validationWhat + ")",
-                    o);
+                    uncertainties, o);
     // Every candidate acts at each mass through the mass only, so a scale of the gas mass is a
     // flowmeter gain: name it, since the library has no gain of the flowmeter to be confusable
     // with.
@@ -345,6 +348,7 @@ StiffnessWhich calibrateStiffnessCandidates(const StiffnessComparison& cmp,
             out.which.reason += "; on a stiffness curve it is the same as " +
                                 (out.which.verdict == pair.first ? pair.second : pair.first) +
                                 " (" + why + ")";
+    qualifyVerdict(out.which, uncertainties, getEffects());
     return out;
 }
 

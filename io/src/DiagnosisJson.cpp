@@ -15,6 +15,7 @@ using diagnose::getChannelKind;
 using json::formatFolds;
 using json::formatGaps;
 using json::formatParameters;
+using json::formatVerdictQualifiers;
 using json::num;
 using json::str;
 
@@ -155,7 +156,8 @@ std::string formatCurveWhich(const diagnose::StiffnessWhich& w) {
     os << "],\n    \"verdict\": " << str(w.which.verdict) << ", \"verdict_effects\": [";
     for (size_t i = 0; i < w.which.verdictEffects.size(); ++i)
         os << (i ? ", " : "") << str(w.which.verdictEffects[i]);
-    os << "], \"reason\": " << str(w.which.reason) << "}";
+    os << "], " << formatVerdictQualifiers(w.which) << ", \"reason\": " << str(w.which.reason)
+       << "}";
     return os.str();
 }
 
@@ -221,7 +223,8 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
             os << "  \"verdict\": " << str(curveWhich->which.verdict) << ",\n  \"verdict_effects\": [";
             for (size_t i = 0; i < curveWhich->which.verdictEffects.size(); ++i)
                 os << (i ? ", " : "") << str(curveWhich->which.verdictEffects[i]);
-            os << "],\n  \"reason\": " << str("the stiffness curve's: " + curveWhich->which.reason) << "\n}\n";
+            os << "],\n  " << formatVerdictQualifiers(curveWhich->which) << ",\n  \"reason\": "
+               << str("the stiffness curve's: " + curveWhich->which.reason) << "\n}\n";
         } else {
             os << "  \"verdict\": null,\n  \"reason\": "
                << str("which effect: not run (" + (curveNotRun.empty() ? std::string("--where-only") : curveNotRun) + ")")
@@ -335,7 +338,8 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
         os << "]},\n  \"verdict\": " << str(which->verdict) << ",\n  \"verdict_effects\": [";
         for (size_t i = 0; i < which->verdictEffects.size(); ++i)
             os << (i ? ", " : "") << str(which->verdictEffects[i]);
-        os << "],\n  \"reason\": " << str(which->reason) << "\n";
+        os << "],\n  " << formatVerdictQualifiers(*which) << ",\n  \"reason\": "
+           << str(which->reason) << "\n";
     } else {
         os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run (--where-only or one test)\"\n";
     }

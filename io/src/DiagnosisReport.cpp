@@ -63,7 +63,7 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
        << esc(info.scenarioFile) << "; " << esc(info.program) << "; " << info.simulations
        << " simulations, " << num(info.seconds, "%.1f") << " s. See docs/diagnosis.md.</p>";
     if (which)
-        os << "<h2>Verdict: " << esc(which->verdict) << "</h2><p>" << esc(which->reason) << "</p>";
+        os << "<h2>Verdict: " << esc(diagnose::describeVerdict(*which)) << "</h2><p>" << esc(which->reason) << "</p>";
     os << "<h2>Where</h2><p>Gap " << num(w.gap) << " (" << esc(diagnose::describeGap(w)) << ")"
        << (w.withinValidation ? ", within the validation uncertainty" : "")
        << ".</p><table><tr><th>channel</th><th>RMSE</th><th>range</th><th>noise</th>"

@@ -47,6 +47,19 @@ inline std::string formatParameters(const diagnose::Effect* e, const std::vector
     return os.str() + "}";
 }
 
+/// What a verdict can say (diagnose::qualifyVerdict): "explained" ("fully", "partly" or null
+/// when no effect is named), "residual_ratio" and "residual_channel", "rivals", "tell_apart".
+inline std::string formatVerdictQualifiers(const diagnose::WhichReport& w) {
+    std::string rivals;
+    for (const std::string& r : w.rivals) rivals += (rivals.empty() ? "" : ", ") + str(r);
+    return "\"explained\": " + (w.explained.empty() ? std::string("null") : str(w.explained)) +
+           ", \"residual_ratio\": " + num(w.residualRatio, "%.4g") +
+           ", \"residual_channel\": " +
+           (w.residualChannel.empty() ? std::string("null") : str(w.residualChannel)) +
+           ", \"rivals\": [" + rivals + "], \"tell_apart\": " +
+           (w.tellApart.empty() ? std::string("null") : str(w.tellApart));
+}
+
 // The held-out gaps of a candidate or pair: before and after, whole and beyond the
 // uncertainty, their shrinks and the score.
 inline std::string formatGaps(const diagnose::CandidateResult& c) {

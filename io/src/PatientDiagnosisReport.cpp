@@ -148,7 +148,8 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
         os << "],\n  \"verdict\": " << str(which->verdict) << ",\n  \"verdict_effects\": [";
         for (size_t i = 0; i < which->verdictEffects.size(); ++i)
             os << (i ? ", " : "") << str(which->verdictEffects[i]);
-        os << "],\n  \"reason\": " << str(which->reason) << "\n}\n";
+        os << "],\n  " << json::formatVerdictQualifiers(*which) << ",\n  \"reason\": "
+           << str(which->reason) << "\n}\n";
     } else {
         os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run (--where-only)\"\n}\n";
     }
@@ -193,7 +194,7 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
        << " against " << esc(info.scenarioFile) << " (" << esc(info.program) << ", "
        << info.simulations << " co-simulations, " << svg::num(info.seconds, "%.0f") << " s)</p>\n";
     if (which)
-        os << "<h2>Verdict: " << esc(which->verdict) << "</h2>\n<p>" << esc(which->reason) << "</p>\n";
+        os << "<h2>Verdict: " << esc(diagnose::describeVerdict(*which)) << "</h2>\n<p>" << esc(which->reason) << "</p>\n";
     os << "<h2>Where</h2>\n<p>gap " << svg::num(w.gap, "%.4f")
        << " (RMS over the channels of RMSE / measured range)"
        << (w.withinValidation ? ", within the validation uncertainty" : "") << "</p>\n"

@@ -198,10 +198,33 @@ TEST(Diagnosis, FlowmeterBiasIsFoundWithItsOffset) {
 }
 
 TEST(Diagnosis, MachineComplianceIsFoundInTheForceChannel) {
+    // Without a gauge under the bed board the machine's compliance and the bed's are one spring
+    // in series with the block: the verdict names both and the gauge that would part them.
     const Diagnosed d = diagnoseStandIn("machine-compliance", {0.5e-3});
     EXPECT_GT(d.where.channels[0].shareOfGap, 0.5);
-    EXPECT_EQ(d.which.verdict, "machine-compliance") << d.which.reason;
+    EXPECT_EQ(d.which.verdict, "machine-compliance or bed-compliance") << d.which.reason;
+    ASSERT_EQ(d.which.verdictEffects.size(), 1u);
+    EXPECT_EQ(d.which.verdictEffects[0], "machine-compliance");
+    EXPECT_EQ(d.which.rivals, std::vector<std::string>{"bed-compliance"});
+    EXPECT_EQ(d.which.explained, "fully") << d.which.reason;
+    EXPECT_LE(d.which.residualRatio, diagnose::kExplainedMultiple);
+    EXPECT_NE(d.which.tellApart.find("a gauge under the bed board"), std::string::npos)
+        << d.which.tellApart;
+    // Their fits are the same spring: no channel of these tests tells them apart.
+    EXPECT_NE(d.which.tellApart.find("no channel of these tests tells them apart"),
+              std::string::npos)
+        << d.which.tellApart;
+    EXPECT_EQ(d.which.reason.rfind("explained by machine-compliance or bed-compliance", 0), 0u)
+        << d.which.reason;
     EXPECT_NEAR(findCandidate(d.which, "machine-compliance").parameters[0], 0.5e-3, 0.05e-3);
+}
+
+TEST(Diagnosis, WithABedGaugeTheMachinesComplianceIsNamedAlone) {
+    const Diagnosed d = diagnoseStandIn(EffectValues{{"machine-compliance", {0.5e-3}}}, true, {},
+                                        true);
+    EXPECT_EQ(d.which.verdict, "machine-compliance") << d.which.reason;
+    EXPECT_TRUE(d.which.rivals.empty());
+    EXPECT_EQ(d.which.explained, "fully") << d.which.reason;
 }
 
 TEST(Diagnosis, ALoadCellGainOutsideTheLibraryIsUnexplained) {
@@ -233,20 +256,24 @@ TEST(Diagnosis, RegimeSharesAddUpPerSplit) {
     }
 }
 
-TEST(Diagnosis, GasTemperatureAndFlowmeterBiasAreNamedConfusable) {
+TEST(Diagnosis, AWarmerGasIsToldFromAFlowmeterBiasByWhatTheBiasLeaves) {
     // A gas 5 K warmer acts as 1.7 % more gas: a flowmeter offset of 0.07-0.08 g mimics it
-    // over these masses, so the diagnosis names the pair.
+    // over these masses, and shrinks the held-out gap about as much (within 0.1). But held out,
+    // the offset leaves a channel beyond twice its validation uncertainty where the warmer gas
+    // leaves none: the data tell them apart, and the verdict names the gas alone.
     const Diagnosed d = diagnoseStandIn("gas-temperature", {5.0});
-    ASSERT_FALSE(d.which.confusable.empty()) << d.which.reason;
-    const auto& pair = d.which.confusable[0];
-    EXPECT_TRUE((pair.first == "gas-temperature" && pair.second == "flowmeter-bias") ||
-                (pair.first == "flowmeter-bias" && pair.second == "gas-temperature"));
-    EXPECT_TRUE(d.which.verdict == "gas-temperature" || d.which.verdict == "flowmeter-bias");
-    const std::string other =
-        d.which.verdict == "gas-temperature" ? "flowmeter-bias" : "gas-temperature";
-    EXPECT_NE(d.which.reason.find("confusable with " + other), std::string::npos)
-        << d.which.reason;
-    EXPECT_NEAR(findCandidate(d.which, "gas-temperature").parameters[0], 5.0, 0.5);
+    const diagnose::CandidateResult& gas = findCandidate(d.which, "gas-temperature");
+    const diagnose::CandidateResult& bias = findCandidate(d.which, "flowmeter-bias");
+    EXPECT_LT(std::fabs(gas.excessShrink - bias.excessShrink), diagnose::kRivalMargin);
+    diagnose::ChannelUncertainties u;
+    for (const auto& c : d.where.channels) u[c.channel] = c.validation;
+    u.erase("mass");
+    EXPECT_LE(diagnose::calcResidualRatio(gas, u), diagnose::kExplainedMultiple);
+    EXPECT_GT(diagnose::calcResidualRatio(bias, u), diagnose::kExplainedMultiple);
+    EXPECT_TRUE(d.which.confusable.empty()) << d.which.reason;
+    EXPECT_EQ(d.which.verdict, "gas-temperature") << d.which.reason;
+    EXPECT_EQ(d.which.explained, "fully") << d.which.reason;
+    EXPECT_NEAR(gas.parameters[0], 5.0, 0.5);
 }
 
 TEST(Diagnosis, TheLoadCellGainIsNotACandidateUnlessNamed) {
@@ -278,7 +305,13 @@ TEST(Diagnosis, TwoEffectsAtOnceAreBothNamed) {
     const diagnose::PairResult& p = d.which.pairs[d.which.pairChosen];
     EXPECT_TRUE(p.refined && p.accepted);
     ASSERT_EQ(d.which.verdictEffects.size(), 2u) << d.which.verdict;
-    EXPECT_EQ(d.which.verdict, "machine-compliance + pressure-sensor");
+    // Without a bed gauge the bed's compliance with the sensor is the same pair: named with it.
+    EXPECT_EQ(d.which.verdict,
+              "machine-compliance + pressure-sensor or bed-compliance + pressure-sensor");
+    EXPECT_NE(d.which.tellApart.find("bed-compliance: a gauge under the bed board"),
+              std::string::npos)
+        << d.which.tellApart;
+    EXPECT_EQ(d.which.tellApart.find("pressure-sensor:"), std::string::npos) << d.which.tellApart;
     EXPECT_EQ(d.which.verdictEffects[0], "machine-compliance");
     EXPECT_EQ(d.which.verdictEffects[1], "pressure-sensor");
     // Both parameter sets come back: compliance, then lag and offset.
@@ -317,7 +350,7 @@ TEST(Diagnosis, ASingleEffectGetsNoSecond) {
         EXPECT_EQ(u.which.verdict, d.which.verdict);
         EXPECT_EQ(d.which.pairChosen, -1) << effect << ": " << d.which.reason;
         ASSERT_EQ(d.which.verdictEffects.size(), 1u) << effect << ": " << d.which.verdict;
-        EXPECT_EQ(d.which.verdictEffects[0], d.which.verdict);
+        EXPECT_EQ(d.which.verdict.rfind(d.which.verdictEffects[0], 0), 0u) << d.which.verdict;
         for (const auto& p : d.which.pairs) EXPECT_FALSE(p.accepted) << effect << ": " << p.why;
     }
 }
@@ -656,4 +689,79 @@ TEST(Where, AResidualThatIsNotAFiniteNumberGivesNoVerdict) {
     }
     t.channels[0].measured[4] = 0.4;  // the same data without it: a verdict
     EXPECT_NO_THROW(diagnose::calcWhere({t}, {}));
+}
+
+TEST(Diagnosis, AnEffectThatLeavesAResidualIsNamedAsPartlyExplaining) {
+    // The pressure sensor's lag and offset, and a load cell reading 5 % high (outside the
+    // library). The sensor alone explains too little of the whole gap; the pair stage adds the
+    // flowmeter's bias, which mimics part of the gain. Held out, the force stays 7 times its
+    // validation uncertainty: whatever is named explains only a part, and the verdict says so.
+    const Diagnosed d = diagnoseStandIn(
+        EffectValues{{"pressure-sensor", {3.0, 200.0}}, {"load-cell-gain", {0.05}}});
+    ASSERT_FALSE(d.which.verdictEffects.empty()) << d.which.reason;
+    EXPECT_NE(std::find(d.which.verdictEffects.begin(), d.which.verdictEffects.end(),
+                        "pressure-sensor"),
+              d.which.verdictEffects.end())
+        << d.which.verdict;
+    EXPECT_EQ(d.which.explained, "partly") << d.which.reason;
+    EXPECT_EQ(d.which.residualChannel, "force");
+    EXPECT_GT(d.which.residualRatio, 2.0 * diagnose::kExplainedMultiple);
+    EXPECT_EQ(d.which.reason.rfind("partly explained by " + d.which.verdict + ": held out, ", 0),
+              0u)
+        << d.which.reason;
+    EXPECT_NE(d.which.reason.find("leaves the force at "), std::string::npos);
+    EXPECT_NE(d.which.reason.find("a residual remains that it does not explain"),
+              std::string::npos);
+    EXPECT_EQ(diagnose::describeVerdict(d.which), d.which.verdict + ", partly explained");
+    // Alone, the sensor explains everything.
+    const Diagnosed alone = diagnoseStandIn("pressure-sensor", {3.0, 200.0});
+    EXPECT_EQ(alone.which.explained, "fully") << alone.which.reason;
+    EXPECT_EQ(diagnose::describeVerdict(alone.which), "pressure-sensor");
+}
+
+TEST(Diagnosis, NoneAndUnexplainedAreNotQualified) {
+    for (const Diagnosed& d : {diagnoseStandIn("", {}), diagnoseStandIn("load-cell-gain", {0.1})}) {
+        EXPECT_TRUE(d.which.explained.empty()) << d.which.verdict;
+        EXPECT_TRUE(d.which.rivals.empty());
+        EXPECT_TRUE(std::isnan(d.which.residualRatio));
+    }
+}
+
+TEST(Diagnosis, ConfusableCandidatesMustExplainAlike) {
+    // findConfusable on made-up candidates, the validation uncertainty 1 N on the force.
+    auto make = [](const std::string& name, double shrink, double rmse) {
+        diagnose::CandidateResult c;
+        c.effect = name;
+        c.excessShrink = shrink;
+        c.score = shrink - 0.05;
+        diagnose::GapMetrics m;
+        m.channel = "force";
+        m.rmse = rmse;
+        c.heldoutMetricsAfter = {m};
+        return c;
+    };
+    const diagnose::ChannelUncertainties u{{"force", 1.0}};
+    using Pairs = std::vector<std::pair<std::string, std::string>>;
+    // Both within twice the uncertainty, shrinks 0.05 apart: rivals.
+    EXPECT_EQ(diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.90, 1.9)}, 0.5, u),
+              (Pairs{{"a", "b"}}));
+    // The same shrinks, but b leaves 2.5 times the uncertainty: told apart.
+    EXPECT_TRUE(diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.90, 2.5)}, 0.5, u)
+                    .empty());
+    // Both beyond (both partly): rivals.
+    EXPECT_EQ(diagnose::findConfusable({make("a", 0.70, 3.0), make("b", 0.65, 4.0)}, 0.5, u),
+              (Pairs{{"a", "b"}}));
+    // Shrinks 0.15 apart: told apart.
+    EXPECT_TRUE(diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.80, 1.9)}, 0.5, u)
+                    .empty());
+    // The better just passes the threshold, the other just misses it: rivals all the same.
+    EXPECT_EQ(diagnose::findConfusable({make("a", 0.56, 3.0), make("b", 0.50, 3.0)}, 0.5, u),
+              (Pairs{{"a", "b"}}));
+    // Neither explains: no pair.
+    EXPECT_TRUE(diagnose::findConfusable({make("a", 0.40, 3.0), make("b", 0.38, 3.0)}, 0.5, u)
+                    .empty());
+    // A candidate's own prediction error widens its scale: 2.5 N over hypot(1, 1) is within.
+    diagnose::CandidateResult b = make("b", 0.90, 2.5);
+    b.predictionUncertainty = 1.0;
+    EXPECT_EQ(diagnose::findConfusable({make("a", 0.95, 1.5), b}, 0.5, u), (Pairs{{"a", "b"}}));
 }

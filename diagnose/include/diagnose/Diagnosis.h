@@ -24,6 +24,7 @@
 
 #include <array>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -303,6 +304,10 @@ struct CandidateResult {
     /// Every test compared with the effect at the parameters fitted on all tests (for the
     /// report's before/after curves); empty if that simulation failed.
     std::vector<TestComparison> fitted;
+    /// [SI] the candidate's own numerical error of prediction (a stiffness curve's grid
+    /// interpolation; 0 where it is simulated), added in quadrature to each channel's validation
+    /// uncertainty when what it leaves is judged (calcResidualRatio).
+    double predictionUncertainty = 0.0;
 };
 
 /// Two effects fitted at once (both parameter sets), as a single candidate is: its
@@ -348,14 +353,72 @@ struct WhichReport {
     std::vector<std::pair<std::string, std::string>> confusable;
     /// Accepted pairs (as "first + second") whose gains are within 0.1 of the named pair's.
     std::vector<std::pair<std::string, std::string>> confusablePairs;
+
+    // What the verdict can and cannot say (qualifyVerdict; docs/diagnosis.md#what-a-verdict-says).
+    /// "fully" when, held out, the verdict's effects bring every channel within
+    /// kExplainedMultiple times its validation uncertainty; "partly" when a channel stays
+    /// beyond it (or its held-out residual could not be measured); "" when the verdict names
+    /// no effect.
+    std::string explained;
+    /// The largest held-out RMSE with the verdict's effects over its channel's validation
+    /// uncertainty, and that channel (NaN and "" when not measured).
+    double residualRatio = std::numeric_limits<double>::quiet_NaN();
+    std::string residualChannel;
+    /// Explanations these data do not tell from the named one (singles, or pairs as
+    /// "first + second"): the verdict names them with it, "A or B". `verdictEffects` are the
+    /// best explanation's effects, the one fitted in the report's curves.
+    std::vector<std::string> rivals;
+    /// With rivals: the measurement that would tell them apart (each differing effect's
+    /// Effect::isolatedBy) and, on the rig, where their fits differ most on these tests.
+    std::string tellApart;
 };
 
-/// Ranks the candidates by score, names the confusable pairs (both scores at least the
-/// threshold, shrinks beyond the uncertainty within 0.1) and gives the verdict: `none` when
-/// `withinValidation` (with `noneReason`), the best effect when its score reaches the
-/// threshold, else `unexplained`. Shared by the tests' and the stiffness curve's which part.
+/// A named effect explains the gap when, held out, it brings every channel within this many
+/// times the channel's validation uncertainty: the rule that calls data `none`, applied to what
+/// the effect leaves.
+inline constexpr double kExplainedMultiple = 2.0;
+/// Two candidates are rivals (confusable) when the better one reaches the threshold, their
+/// shrinks of the held-out gap beyond the uncertainty are within this, and both explain alike
+/// (both fully or both partly, by kExplainedMultiple).
+inline constexpr double kRivalMargin = 0.1;
+
+/// The validation uncertainty per channel name [SI] that a verdict is judged against.
+using ChannelUncertainties = std::map<std::string, double>;
+
+/// The largest held-out RMSE of a candidate's channels over their validation uncertainty (with
+/// its own predictionUncertainty; NaN when none of its channels can be judged; infinity for a
+/// residual that is not a finite number), and that channel.
+double calcResidualRatio(const CandidateResult& c, const ChannelUncertainties& validation,
+                         std::string* channel = nullptr);
+
+/// The confusable pairs among ranked candidates: the better of the two scores at least
+/// `threshold`, their shrinks beyond the uncertainty are within kRivalMargin, and, held out,
+/// both bring every channel within kExplainedMultiple times its validation uncertainty or
+/// neither does (a candidate that leaves a residual the other does not is told apart by these
+/// data).
+std::vector<std::pair<std::string, std::string>> findConfusable(
+    const std::vector<CandidateResult>& candidates, double threshold,
+    const ChannelUncertainties& validation);
+
+/// Qualifies a verdict that names effects (a single or a pair; nothing for `none` or
+/// `unexplained`): `explained` and the residual ratio from the named candidate's held-out
+/// metrics against `validation` (the validation uncertainty per channel name [SI]; channels
+/// not listed are not judged); the rivals (the single's confusable, the pair's confusable
+/// pairs) named in the verdict as "A or B"; what tells them apart from `library`'s
+/// isolatedBy. The reason starts with what the verdict can say ("partly explained by A or B:
+/// ...").
+void qualifyVerdict(WhichReport& report, const ChannelUncertainties& validation,
+                    const std::vector<Effect>& library);
+
+/// The verdict as one line: "pressure-sensor", "A or B, partly explained", "none".
+std::string describeVerdict(const WhichReport& report);
+
+/// Ranks the candidates by score, names the confusable pairs (findConfusable, judged against
+/// `validation`) and gives the verdict: `none` when `withinValidation` (with `noneReason`), the
+/// best effect when its score reaches the threshold, else `unexplained`. Shared by the tests'
+/// and the stiffness curve's which part; qualifyVerdict then says what the verdict can say.
 void judgeCandidates(WhichReport& report, bool withinValidation, const std::string& noneReason,
-                     const CalibrationOptions& options);
+                     const ChannelUncertainties& validation, const CalibrationOptions& options);
 
 /// The effects `report.confusable` pairs with `effect`, joined by ", " ("" if none).
 std::string listConfusableWith(const WhichReport& report, const std::string& effect);

@@ -33,6 +33,9 @@ struct Effect {
     /// False for effects kept out of the candidate library on purpose (an effect the
     /// diagnosis does not know, for the withheld-effect checks); --candidates may name them.
     bool inLibrary = true;
+    /// The measurement that isolates this effect from the others (what a verdict that cannot
+    /// tell it from a rival advises to measure): "a gauge under the bed board".
+    std::string isolatedBy;
 };
 
 /// Upper bound of the heat exchange's time constant as a candidate [s]: beyond about three
@@ -72,10 +75,17 @@ inline constexpr double kMaxTissueThickness = 40e-3;  ///< [m]
 inline constexpr double kMinTissueModulus = 10e3;     ///< [Pa]
 inline constexpr double kMaxTissueModulus = 200e3;    ///< [Pa]
 
+/// Bound of the film-stiffness candidate, the relative change of the film's membrane stiffness
+/// (thickness times modulus, docs/diagnosis.md#film-stiffness): 40 % either way. A coated
+/// fabric's thickness is held to a tolerance of the order of 10 %, and a law fitted to one
+/// batch's tensile test may misstate another batch's modulus by tens of percent (a judgement,
+/// not a measurement of this film); beyond 40 % the film is another film, not a misstatement.
+inline constexpr double kMaxFilmStiffnessChange = 0.4;
+
 /// The effects, in a fixed order: pressure-sensor, flowmeter-bias, gas-temperature,
 /// machine-compliance, block-friction, leakage, heat-exchange, bed-compliance,
-/// viscoelasticity, fabric-anisotropy, soft-tissue, bag-volume (the library), load-cell-gain
-/// (kept out of it).
+/// viscoelasticity, fabric-anisotropy, soft-tissue, bag-volume, film-stiffness (the library),
+/// load-cell-gain (kept out of it).
 const std::vector<Effect>& getEffects();
 /// The effect of that name in a library (this one, or the patient's: PatientDiagnosis.h), or
 /// nullptr; and the library's names joined by ", ".
@@ -94,7 +104,8 @@ std::string listEffectNames();
 /// viscoelasticity options.prony, one term; fabric-anisotropy wraps options.material in a
 /// bags::FabricMaterial whose warp and weft moduli are both the ratio times 3 mu, angle 0;
 /// soft-tissue sets options.blockContact.tissueThickness and .tissueModulus, both 0 for a
-/// thickness of 0; bag-volume scales the bag, options.bagScale, by bags::changeBagVolume: on
+/// thickness of 0; film-stiffness multiplies options.thickness by 1 + change and divides
+/// options.density by it (the sheet's weight, and its bending stiffness, stay as stated); bag-volume scales the bag, options.bagScale, by bags::changeBagVolume: on
 /// the bag as sized, a fill mass's sizing done first, as bagsim's commands do).
 /// @throws std::invalid_argument for a value outside the bounds, naming it.
 void applyEffect(const Effect& effect, const std::vector<double>& values,
