@@ -309,3 +309,43 @@ TEST(Effects, BagVolumeMovesTheFillMassAsStated) {
                     m1 * 1e3, m1 / m0);
     }
 }
+
+// The film's stiffness misstated (its thickness or its modulus): the membrane's thickness, and
+// so every membrane force, times 1 + change; the sheet's weight (density x thickness) and its
+// bending stiffness as stated; no instrument touched; outside -40 % to +40 % refused naming the
+// bounds.
+TEST(Effects, FilmStiffnessScalesTheMembraneNotItsWeight) {
+    const diagnose::Effect* effect = diagnose::findEffect("film-stiffness");
+    ASSERT_NE(effect, nullptr);
+    EXPECT_TRUE(effect->changesTheBag);
+    EXPECT_TRUE(effect->inLibrary);
+    EXPECT_FALSE(effect->isolatedBy.empty());
+    ASSERT_EQ(effect->parameters.size(), 1u);
+    bags::LoadTestOptions o;
+    o.material = bags::makeStableYeoh(31.587917e6, -0.76582566e6, -3.06587618e6);
+    o.bendingStiffness = 2e-4;
+    o.gasMasses = {4e-3};
+    diagnose::RigEffects rig;
+    for (double c : {-0.4, -0.15, 0.1, 0.4}) {
+        bags::LoadTestOptions on = o;
+        diagnose::applyEffect(*effect, {c}, {}, rig, on);
+        EXPECT_NEAR(on.thickness, (1.0 + c) * o.thickness, 1e-18) << c;
+        EXPECT_NEAR(on.density * on.thickness, o.density * o.thickness, 1e-12) << c;
+        EXPECT_EQ(on.bendingStiffness, o.bendingStiffness);
+        EXPECT_EQ(on.material, o.material);
+        const bags::AirbagSpec spec = bags::makeAirbagSpec(on);
+        EXPECT_NEAR(spec.thickness, (1.0 + c) * o.thickness, 1e-18) << c;
+    }
+    EXPECT_TRUE(rig.isNone());
+    bags::LoadTestOptions none = o;
+    diagnose::applyEffect(*effect, {0.0}, {}, rig, none);
+    EXPECT_EQ(none.thickness, o.thickness);
+    EXPECT_EQ(none.density, o.density);
+    try {
+        bags::LoadTestOptions bad = o;
+        diagnose::applyEffect(*effect, {0.5}, {}, rig, bad);
+        FAIL() << "a change of 50 % was accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("valid: -0.4 to 0.4"), std::string::npos) << e.what();
+    }
+}

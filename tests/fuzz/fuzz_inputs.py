@@ -7,7 +7,8 @@ Seeds: the test scenarios (a load test, the coarse patient on the array, the coa
 turn), the tiny study and the seed study's measured data (`bagsim diagnose`), copied into WORKDIR with their neighbours so that relative paths
 resolve. Each case applies one mutation to one seed (a value's magnitude, unit or type, a
 key duplicated, dropped or misspelt, a second YAML document, a path to a folder or to
-/dev/zero, a file cut short) and runs `bagsim run` (or `bagsim study`) on it with a time limit;
+/dev/zero, a file cut short, a scenario past 1 MiB or a CSV of 200 000 more rows; in 5 % of
+the cases also an --out that cannot be made: under a file, /proc or /dev/null) and runs `bagsim run` (or `bagsim study`) on it with a time limit;
 a run still going at the limit was accepted and is stopped with SIGTERM.
 
 Every case must hold:
@@ -16,7 +17,8 @@ Every case must hold:
     line, a key ('key ...' or --set KEY) or an option;
   - no message names C++ internals (std::, a :: scope, bad_alloc, what(), YAML::, Eigen);
   - a run stopped by SIGTERM ends within 10 s with 143;
-  - exit statuses are the documented ones: 0, 1, 2, 3, 129, 130, 143.
+  - exit statuses are the documented ones: 0, 1, 2, 3, 129, 130, 143;
+  - an --out that cannot be made never ends 0, and the file in its way is left as it was.
 Prints a line per failure (the mutation, the status, the first line of the message) and a
 summary of the classes found; exits 1 if any case failed.
 """
@@ -59,7 +61,10 @@ def mutate(text, rng):
     lines = text.split('\n')
     keyed = [i for i, l in enumerate(lines) if LINE.match(l)]
     kind = rng.choice(['magnitude', 'magnitude', 'unit', 'type', 'duplicate', 'drop', 'misspell',
-                       'document', 'path', 'cut', 'garbage'])
+                       'document', 'path', 'cut', 'garbage', 'huge'])
+    if kind == 'huge':  # past the scenario reader's 1 MiB: refused without being read
+        return text + '\n' + ('# ' + 'x' * 98 + '\n') * 11000, 'padded to %d bytes' % (
+            len(text) + 1100001)
     if kind == 'document':
         return text + '\n---\nkind: seed-load-test\n', 'a second YAML document'
     if kind == 'cut':
@@ -130,7 +135,7 @@ def mutate_measured(workdir, k, rng):
             rows = f.read().split('\n')
         data = [i for i, r in enumerate(rows) if r and not r.startswith('#') and CELL.search(r)]
         op = rng.choice(['cell', 'cell', 'cell', 'drop-column', 'empty', 'duplicate-header',
-                         'extra-cell'])
+                         'extra-cell', 'huge'])
         if op == 'cell' and data:
             i = rng.choice(data)
             cells = list(CELL.finditer(rows[i]))
@@ -144,6 +149,10 @@ def mutate_measured(workdir, k, rng):
         elif op == 'empty':
             rows = []
             what = 'stiffness.csv empty'
+        elif op == 'huge':  # 200 000 more rows of the last one: read, limited or stopped
+            last = rows[data[-1]] if data else '1,1'
+            rows += [last] * 200000
+            what = 'stiffness.csv with 200 000 more rows'
         elif op == 'duplicate-header':
             head = next((i for i, r in enumerate(rows) if r and not r.startswith('#')), 0)
             rows.insert(head + 1, rows[head])
@@ -157,6 +166,17 @@ def mutate_measured(workdir, k, rng):
     with open(manifest, 'w', encoding='utf-8', errors='surrogateescape') as f:
         f.write(text)
     return folder, what
+
+
+def unwritable_out(workdir, k, rng):
+    """An --out the program cannot make (it runs as root in CI, so no mode bits): under a
+    file, under /proc, or under /dev/null: (the path, what it is)."""
+    blocker = os.path.join(workdir, 'file-%05d' % k)
+    with open(blocker, 'w', encoding='utf-8') as f:
+        f.write('the user\'s file, not a folder\n')
+    return rng.choice([(os.path.join(blocker, 'out'), '--out under a file'),
+                       ('/proc/bagsim-fuzz-out-%d' % k, '--out under /proc'),
+                       ('/dev/null/out', '--out under /dev/null')]), blocker
 
 
 def run_case(bagsim, command, path, out, timeout):
@@ -231,6 +251,7 @@ def main():
                 text = f.read()
         seeds += [(name, command, text)] * weight
     classes, failures, statuses = {}, 0, {}
+    unwritable, huge = 0, 0
     start = time.time()
     for k in range(a.cases):
         name, command, text = rng.choice(seeds)
@@ -242,10 +263,23 @@ def main():
             with open(path, 'w', encoding='utf-8', errors='surrogateescape') as f:
                 f.write(mutant)
         out = os.path.join(a.workdir, 'out-%05d' % k)
+        blocker = None
+        if rng.random() < 0.05:  # the input as it is or mutated, the output place unwritable
+            (out, where), blocker = unwritable_out(a.workdir, k, rng)
+            what += '; ' + where
+            unwritable += 1
+        huge += 'padded to' in what or '200 000 more rows' in what
         rc, stopped, out_text, secs = run_case(a.bagsim, command, path, out, a.timeout)
         key = 'stopped' if stopped else str(rc)
         statuses[key] = statuses.get(key, 0) + 1
         wrong = judge(rc, stopped, out_text, out)
+        if blocker:
+            with open(blocker, encoding='utf-8') as f:
+                if f.read() != 'the user\'s file, not a folder\n':
+                    wrong.append('the user\'s file in the way of --out was changed')
+            if rc == 0 and not stopped:
+                wrong.append('exit 0 with an output folder that cannot be made')
+            os.remove(blocker)
         for w in wrong:
             classes[w] = classes.get(w, 0) + 1
         if wrong:
@@ -257,8 +291,9 @@ def main():
         if not (wrong and a.keep):
             shutil.rmtree(path) if os.path.isdir(path) else os.remove(path)
         shutil.rmtree(out, ignore_errors=True)
-    print('fuzz: %d cases in %.0f s (seed %d); exit statuses %s; %d failed' %
-          (a.cases, time.time() - start, a.seed,
+    print('fuzz: %d cases in %.0f s (seed %d; %d with an --out that cannot be made, %d with a '
+          'huge file); exit statuses %s; %d failed' %
+          (a.cases, time.time() - start, a.seed, unwritable, huge,
            ', '.join('%s: %d' % kv for kv in sorted(statuses.items())), failures))
     for c, n in sorted(classes.items(), key=lambda kv: -kv[1]):
         print('  %5d  %s' % (n, c))
