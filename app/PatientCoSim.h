@@ -18,7 +18,7 @@ namespace bagsim::app {
 /// folder, whose summary says why).
 diagnose::PatientChannels runCoSimulation(const io::ScenarioFile& file, const std::string& dir);
 
-/// The mat's sensels given the body region they lie under (docs/diagnosis.md#where-on-the-body):
+/// The mat's sensels given the body region they lie under (docs/diagnosis.md#a-patient-on-the-array):
 /// the regions that a supine patient lies on (those on his back: occiput, scapulae, spine,
 /// elbows, sacrum, ischia, calves, heels), projected onto the bed from the standing reference
 /// frame at his position (superior along +x, his right along +y); a sensel goes to the nearest

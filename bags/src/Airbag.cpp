@@ -1266,8 +1266,8 @@ struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
 };
 
 // The quasi-static step's equilibrium by dynamic relaxation (AirbagSpec::Stepping::Relaxed,
-// docs/solver.md#relaxed-stepping). The step's time passes at its start as in the quasi-static
-// stepping: gas flows and leakage, the orifice's transfer (explicit, at the start's
+// docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags).
+// The step's time passes at its start as in the quasi-static stepping: gas flows and leakage, the orifice's transfer (explicit, at the start's
 // pressures), the friction's slip and the viscous branches' step potential. Then the film's
 // damped explicit dynamics run in pseudo-time: the shapes moved to their poses at the
 // relaxation pace, then held there while the film relaxes, its velocity zeroed at every peak

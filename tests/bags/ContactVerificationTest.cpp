@@ -246,7 +246,7 @@ TEST(ContactVerification, FlatPlateOnFixedGasMassRaisesPressureAndCarriesItTimes
 }
 
 // A compliant layer on the plate (soft tissue or a pad: RigidContact::Options::tissueThickness,
-// docs/contact.md#soft-tissue) in series with the film. Where the film lies flat on the plate
+// docs/contact.md#contact-law) in series with the film. Where the film lies flat on the plate
 // the contact pressure is the gas's gauge pressure p (above), so the layer is compressed by the
 // same c everywhere in the patch, c solving sigma(c) = p s (the law per reference area, s the
 // film's areal stretch there), which at small strain is the Winkler layer's c = p s h / E

@@ -211,7 +211,7 @@ TEST(ReducedBag, ASmallSphereSunkPastItsWidestIsNeverPushedDown) {
     // beta = 1) from touching until it lies wholly below: its vertical force >= 0 at every
     // 0.5 mm step, and between steps it changes by less than a tenth of P pi R^2 (no load
     // gained or lost at once as its widest passes the top). (A wholly sunk shape carries
-    // nothing here: docs/reduced-bag.md#a-shape-sunk-below-the-top.)
+    // nothing here: docs/reduced-bag.md#a-shape-sunk-past-its-widest.)
     // Its tangent, 4 mm and 12 mm past its widest (top samples fading by their upward
     // normals, column samples sliding along their columns), against central differences as
     // in TheTangentMatchesFiniteDifferencesOfTheWrench: within 5e-4 of the largest entry.

@@ -105,7 +105,7 @@ public:
         /// A compliant layer on the shape (soft tissue over bone, a pad on an indenter), inside
         /// its surface: the surface is the layer's unloaded outside, the rigid core lies
         /// tissueThickness below it. 0 (with tissueModulus 0): no layer, the shape is rigid.
-        /// The layer is a Winkler bed in series with the penalty (docs/contact.md#soft-tissue).
+        /// The layer is a Winkler bed in series with the penalty (docs/contact.md#contact-law).
         double tissueThickness = 0.0;  ///< [m] layer thickness h
         double tissueModulus = 0.0;    ///< [Pa] its effective compressive (Young's) modulus E
         bool hasTissue() const { return tissueThickness > 0.0; }

@@ -5,7 +5,7 @@
 /// changed over time. Sections: patient, bag, array, gas, coupling, run, mat, output. Units
 /// are converted to SI; every value is checked, and an error names the file, line, key and
 /// what is valid (overlapping bags, a patient off the array, an unknown group included).
-/// Keys, units and ranges: docs/scenario-reference.md#patient-on-array.
+/// Keys, units and ranges: docs/scenario-reference.md#kind-patient-on-array.
 
 #include <body/PatientSpec.h>
 #include <cosim/ArrayPneumatics.h>

@@ -1,7 +1,7 @@
 #pragma once
 /// @file The reduced bag's calibration file (cosim::ReducedBagCalibration) as text: written by
 /// the calibration (bench_reduced_bag calibrate), read for `bag: {model: reduced}`. Line
-/// format and every record: docs/reduced-bag.md#the-calibration-file. SI units throughout.
+/// format and every record: docs/reduced-bag.md#calibration. SI units throughout.
 
 #include <cosim/PatientOnArray.h>
 #include <cosim/ReducedBag.h>
