@@ -444,6 +444,15 @@ int run(const Args& a) {
         diagnose::CalibrationOptions co;
         co.candidates = a.candidates;
         co.threads = a.threads;
+        // The which stage runs minutes to an hour: a line as each candidate and pair starts.
+        const auto whichStart = std::chrono::steady_clock::now();
+        if (!a.quiet)
+            co.progress = [whichStart](const std::string& what, int number, int count) {
+                const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                               whichStart).count();
+                std::cout << "which: " << number << " of " << count << ", " << what << " ("
+                          << fmt("%.0f s", s) << " so far)" << std::endl;
+            };
         auto counted = [&](const bags::LoadTestOptions& o) {
             bags::LoadTestOptions m = o;
             m.solver.monitor = [](int, double, double, double) { throwIfInterrupted(); };

@@ -80,8 +80,9 @@ const char* kHelp =
     "keeps what was computed, marked INCOMPLETE.\n"
     "\n"
     "exit status: 0 complete, 1 run failed (results so far kept, marked INCOMPLETE), 2 bad\n"
-    "input, 3 partial (a curve stopped on a numerical failure, relaxed bags kept steps\n"
-    "unrelaxed, or the coupling kept steps without a fixed point; all results written,\n"
+    "input, 3 partial (a curve stopped on a numerical failure or outside the model's\n"
+    "envelope, a film beyond its law's fitted range, relaxed bags kept steps unrelaxed, or\n"
+    "the coupling kept steps without a fixed point; all results written,\n"
     "marked INCOMPLETE), 130 interrupted by SIGINT, 143 by SIGTERM, 129 by SIGHUP.\n";
 
 /// Bad command-line usage: exit status 2.
@@ -793,8 +794,8 @@ int runRunCommand(int argc, char** argv) {
         int failed = 0;
         for (const bags::LoadCurve& c : result.curves) failed += io::isCurveFailed(c) ? 1 : 0;
         std::cerr << "bagsim: run partial: " << failed << " of " << result.curves.size()
-                  << " curves stopped on a numerical failure (listed as FAILED above); results "
-                     "kept in "
+                  << " curves stopped on a numerical failure or outside the model's envelope "
+                     "(listed as FAILED above); results kept in "
                   << dir << "/ (marked INCOMPLETE, status partial)\n";
         return 3;
     }

@@ -44,6 +44,26 @@ std::string describeBottomedOut(double disp, double force) {
     return r.str();
 }
 
+// The envelope of a loading: the block presses deeper at a fixed gas mass, so the force of a
+// sealed bag rises. Keeps the most force reached in `most`; a fall beyond kForceFallShare of it
+// and beyond `floor` marks the curve outside the model's envelope, says so, and returns true
+// (the curve stops there).
+bool leavesEnvelope(LoadCurve& curve, double disp, double force, double& most, double floor) {
+    if (!(force <= most)) {
+        most = force;
+        return false;
+    }
+    if (most - force <= std::max(kForceFallShare * most, floor)) return false;
+    curve.outsideEnvelope = true;
+    std::ostringstream r;
+    r << "outside the model's envelope: the block force fell from " << most << " N to " << force
+      << " N at block travel " << disp * 1e3
+      << " mm while the block pressed deeper at a fixed gas mass, which a sealed bag cannot do "
+         "(the film let the block through: a peak force beyond what the bag carries)";
+    curve.failure = r.str();
+    return true;
+}
+
 Eigen::Isometry3d makeBlockPose(const Vec3& centreXY, double zBottom) {
     Eigen::Isometry3d X_GS = Eigen::Isometry3d::Identity();
     X_GS.translation() = Vec3(centreXY.x(), centreXY.y(), zBottom + kBlockHalfHeight);
@@ -491,7 +511,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 }
                 bag.commit();
                 disp = 0.0;
-                double force = 0.0, stiffnessEstimate = 0.0;
+                double force = 0.0, stiffnessEstimate = 0.0, most = 0.0;
                 const double maxDisp = top - 0.002;  // the block stops 2 mm above the bed board
                 while (force < o.peakForce * (1.0 - 1e-3)) {
                     double step = dy.recordEvery;
@@ -512,6 +532,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                     const double prevForce = force;
                     disp += step;
                     force = record(disp, true, sum);
+                    if (leavesEnvelope(curve, disp, force, most, o.stiffnessFrom)) break;
                     const double kk = (force - prevForce) / step;
                     if (kk > 0.0 && force >= 0.25 * o.stiffnessFrom) stiffnessEstimate = kk;
                     // The pace. While a slack bag folds in under next to no force the block's
@@ -547,7 +568,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 }
                 curve.kineticShare = inRange ? share : lastShare;
                 if (curve.kineticShare <= dy.kineticShareLimit || halving >= dy.maxHalvings ||
-                    curve.failed)
+                    curve.failed || curve.outsideEnvelope)
                     break;
                 // Again at half the speed, from the unloaded state.
                 bag.setSnapshot(unloaded);
@@ -564,7 +585,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             held.clear();
             // Unloading: back up until the block leaves the bag.
             const double turn = disp;
-            while (o.unload && !curve.failed && disp > 0.0) {
+            while (o.unload && !curve.failed && !curve.outsideEnvelope && disp > 0.0) {
                 const double step = std::min(dy.recordEvery, disp);
                 AdvanceSummary sum;
                 setPace(turn - disp + step);
@@ -587,7 +608,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             }
         } else {
             // Loading: displacement control, adaptive, aiming the last step at the peak force.
-            double ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0;
+            double ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0, most = 0.0;
             const double minStep = 5e-5;  // [m] smaller steps rarely rescue a slack curve
             const double maxDisp = top - 0.002;  // the block stops 2 mm above the bed board
             while (force < o.peakForce * (1.0 - 1e-3)) {
@@ -625,6 +646,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 const double prevForce = force;
                 disp += step;
                 force = record(disp, true, sum);
+                if (leavesEnvelope(curve, disp, force, most, o.stiffnessFrom)) break;
                 const double kk = (force - prevForce) / step;
                 if (kk > 0.0) stiffnessEstimate = kk;
                 if (sum.newtonIterations < 6)
@@ -635,7 +657,7 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             // Unloading: back up the same way until the block leaves the bag.
             ds = o.displacementStep;
             double unloadForce = force;
-            while (o.unload && disp > 0.0) {
+            while (o.unload && !curve.outsideEnvelope && disp > 0.0) {
                 const double cap = (unloadForce < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
                                    o.displacementStep;
                 double step = std::min({ds, cap, disp});

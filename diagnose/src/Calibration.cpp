@@ -605,9 +605,13 @@ void calibratePairs(WhichReport& report, const MeasuredData& data,
     std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
         return report.pairs[x].screenCost < report.pairs[y].screenCost;
     });
+    const int refined = std::min<int>(o.pairsRefined, static_cast<int>(order.size()));
     for (size_t r = 0; r < order.size() && static_cast<int>(r) < o.pairsRefined; ++r) {
         PairResult& p = report.pairs[order[r]];
         if (!std::isfinite(p.screenCost)) continue;
+        if (o.progress)
+            o.progress("pair " + p.first + " + " + p.second + " (fitted in full)",
+                       static_cast<int>(r) + 1, refined);
         const CandidateResult& a = *findSingle(report, p.first);
         const CandidateResult& b = *findSingle(report, p.second);
         Evaluator& e = *evaluators[order[r]];
@@ -725,11 +729,17 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
 
     SimulationCache cache;
     WhichReport report;
-    for (const Effect& effect : getEffects()) {
-        if (o.candidates.empty() ? !effect.inLibrary
+    std::vector<const Effect*> chosen;
+    for (const Effect& effect : getEffects())
+        if (o.candidates.empty() ? effect.inLibrary
                                  : std::find(o.candidates.begin(), o.candidates.end(),
-                                             effect.name) == o.candidates.end())
-            continue;
+                                             effect.name) != o.candidates.end())
+            chosen.push_back(&effect);
+    for (const Effect* candidate : chosen) {
+        const Effect& effect = *candidate;
+        if (o.progress)
+            o.progress(effect.name, static_cast<int>(report.candidates.size()) + 1,
+                       static_cast<int>(chosen.size()));
         Evaluator e(data, base, baseRig, baseResult, {&effect}, simulate, cache);
         report.candidates.push_back(calibrateCandidate(e, effect.name, n, baseline, g, o, [](int) {
             return std::vector<std::vector<double>>();

@@ -115,8 +115,8 @@ void OutputDir::setStatus(const std::string& status, const std::string& detail) 
     std::ofstream out(getFile(kMarkerName), std::ios::trunc);
     if (status == "partial")
         out << "This folder's results are incomplete: the run finished, but part of it did not "
-               "hold (a curve stopped on a numerical failure, or bag steps were kept unrelaxed; "
-               "the line below says which).\n";
+               "hold (a curve stopped on a numerical failure or outside the model's envelope, "
+               "or bag steps were kept unrelaxed; the line below says which).\n";
     else if (status == "running")
         out << "This folder's results are incomplete: the run that writes them has not finished "
                "(or was killed).\n";
@@ -147,11 +147,12 @@ bool isCurveFailed(const bags::LoadCurve& c) {
     // The load test's one physical early end is "bottomed out: ..."; every other reason is a
     // step that could not be solved (a bottomed-out curve whose unloading then fails is
     // flagged by `failed`).
-    return c.failed || !c.quasiStatic ||
+    return c.failed || !c.quasiStatic || c.outsideEnvelope ||
            (!c.failure.empty() && c.failure.rfind("bottomed out", 0) != 0);
 }
 
 std::string getCurveEnd(const bags::LoadCurve& c) {
+    if (c.outsideEnvelope) return "outside-envelope";
     if (!c.quasiStatic && !c.failed) return "not-quasi-static";
     if (isCurveFailed(c)) return "failed";
     if (c.reachedPeak) return "peak";
@@ -664,7 +665,8 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
     const std::string status = numFailed > 0 ? "partial" : "complete";
     const std::string message =
         numFailed > 0 ? std::to_string(numFailed) + " of " + std::to_string(n) +
-                            " curves stopped on a numerical failure (" + failures + ")"
+                            " curves stopped on a numerical failure or outside the model's "
+                            "envelope (" + failures + ")"
                       : std::string("");
     h5::setAttribute(d.meta.get(), "status", status);
     h5::setAttribute(d.meta.get(), "message", message);

@@ -184,6 +184,11 @@ struct LoadCurve {
     bool reachedPeak = false;
     std::string failure;             ///< empty, or why the curve stopped early
     bool failed = false;             ///< a step could not be solved (not a bottoming out)
+    /// The curve left the model's envelope and was stopped there (`failure` says how): the
+    /// block force fell by more than kForceFallShare of the most it had reached (and by more
+    /// than the stiffness range's start) while the block pressed deeper at a fixed gas mass,
+    /// which a sealed bag cannot do: the film let the block through.
+    bool outsideEnvelope = false;
     int stabilizedSteps = 0;         ///< steps accepted with the stabilisation springs
     /// Largest ratio, over the loading steps, of the energy the stabilisation springs held at
     /// the accepted states so far (LoadStep::stabilizationEnergy summed) to the work the block
@@ -234,6 +239,12 @@ double stepOverSnap(const std::function<bool(double)>& tryTravel, double from, d
                     double dir, double limit, double displacementStep);
 
 LoadTestResult runLoadTest(const LoadTestOptions& options, const LoadTestObserver& observer = {});
+
+/// The share of the most force a loading has reached by which the block force may fall while
+/// the block presses deeper before the curve is outside the model's envelope
+/// (LoadCurve::outsideEnvelope). A sealed bag's force rises as the block goes down; a fold
+/// snapping through under the block loses a little of it for a step.
+inline constexpr double kForceFallShare = 0.25;
 
 /// [N] the most of the peak force that LoadTestOptions::residualTolerance scales.
 inline constexpr double kToleranceForceCap = 50.0;

@@ -259,6 +259,10 @@ struct CalibrationOptions {
     bool pairGate = true;
     int pairFirstMembers = 2;
     int pairsRefined = 3;
+    /// Called before each candidate, and each pair the pair stage screens and fits, is
+    /// calibrated: what it is ("gas-temperature", "pair machine-compliance + pressure-sensor"),
+    /// its number from 1 and how many there are in that stage (a progress line; may be empty).
+    std::function<void(const std::string& what, int number, int count)> progress;
 };
 
 struct FoldResult {

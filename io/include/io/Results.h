@@ -75,14 +75,17 @@ inline constexpr const char* kCheckpointFile = "checkpoint.bin";
 inline constexpr const char* kRestStateFile = "rest-state.bin";
 
 /// True if a curve stopped on a numerical failure (LoadCurve::failure says "no convergence
-/// ..."), or a dynamic test's curve was not quasi-static (its film's kinetic energy over the
-/// limit of the block's work): the run's status is then "partial". A curve that bottomed out
+/// ..."), a dynamic test's curve was not quasi-static (its film's kinetic energy over the
+/// limit of the block's work), or the curve left the model's envelope (the block force fell
+/// while the block pressed deeper: LoadCurve::outsideEnvelope): the run's status is then
+/// "partial". A curve that bottomed out
 /// (the block reached its stop 2 mm above the bed board before the peak force) ended on a
 /// physical outcome and is not a failure.
 bool isCurveFailed(const bags::LoadCurve& curve);
 
-/// How a curve ended, as written in stiffness.csv's column "end": "not-quasi-static" (a
-/// dynamic test's curve over its kinetic-energy limit), "failed" (isCurveFailed()), "peak"
+/// How a curve ended, as written in stiffness.csv's column "end": "outside-envelope" (the
+/// block force fell while the block pressed deeper), "not-quasi-static" (a dynamic test's
+/// curve over its kinetic-energy limit), "failed" (isCurveFailed()), "peak"
 /// (reached the peak force), "bottomed-out" or "stopped" (any other early end).
 std::string getCurveEnd(const bags::LoadCurve& curve);
 
