@@ -379,6 +379,16 @@ int run(const Args& a) {
     const size_t firstInputRun = runs.size();
     const std::vector<diagnose::InputRun> inputRuns = diagnose::makeInputRuns(data, sc.options);
     for (const diagnose::InputRun& r : inputRuns) runs.push_back(r.options);
+    if (!a.quiet)  // on the seed's bag these take minutes: say what runs before it does
+        std::cout << "where: " << runs.size() << " load tests (the scenario, at half its step"
+                  << (meshCheck > 0.0 ? ", on the finer mesh" : "")
+                  << (firstInputRun > firstPopulationRun
+                          ? ", " + std::to_string(firstInputRun - firstPopulationRun) +
+                                " bags of the imperfection's population"
+                          : std::string())
+                  << (inputRuns.empty() ? "" : ", " + std::to_string(inputRuns.size()) +
+                                                   " for the stated inputs")
+                  << "), " << a.threads << " at a time ..." << std::endl;
     std::vector<bags::LoadTestResult> results = diagnose::runLoadTests(runs, simulate, a.threads);
     simulations += static_cast<int>(runs.size());
     const bags::LoadTestResult base = std::move(results[0]);
