@@ -12,8 +12,11 @@
 
 #include <Eigen/SparseCore>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
+#include <sstream>
+#include <vector>
 
 using namespace bags;
 
@@ -114,9 +117,25 @@ TEST(Solver, NewtonConvergesQuadraticallyNearEquilibrium) {
     SolveSummary s1 = solveEquilibrium(model, x, so);
     ASSERT_TRUE(s1.converged) << s1.residualNorm;
     Eigen::Matrix3Xd y = perturbed(x, 1e-4, 3);
+    std::vector<double> r;  // the residual at each Newton iteration [N]
+    so.monitor = [&r](int, double residual, double, double) { r.push_back(residual); };
     SolveSummary s2 = solveEquilibrium(model, y, so);
     ASSERT_TRUE(s2.converged);
     EXPECT_LE(s2.iterations, 8);
+    // The rate: near the solution each step squares the error (the forcing term tightens with
+    // the residual, so the inexact solve keeps the order). Over the last three residuals above
+    // the round-off floor the estimated order log(r2/r1) / log(r1/r0) is at least 1.5, and the
+    // last step gains at least two digits.
+    std::vector<double> q;
+    for (double v : r)
+        if (v > 1e-10) q.push_back(v);
+    ASSERT_GE(q.size(), 3u) << "too few iterations to see the rate";
+    const size_t n = q.size();
+    const double order = std::log(q[n - 1] / q[n - 2]) / std::log(q[n - 2] / q[n - 3]);
+    std::ostringstream trace;
+    for (double v : r) trace << v << " ";
+    EXPECT_GE(order, 1.5) << "residuals: " << trace.str();
+    EXPECT_LT(q[n - 1] / q[n - 2], 1e-2) << "residuals: " << trace.str();
     // The perturbed start returns to the same volume (unique equilibrium of the gas sphere).
     EXPECT_NEAR(calcChamberVolume(m, 0, y), calcChamberVolume(m, 0, x), 1e-9 * V0);
 }

@@ -1,4 +1,5 @@
-// `bagsim body`: exit codes, messages, and the CSV carrying the same numbers as the table.
+// `bagsim body`: exit codes, messages, and the CSV carrying the same numbers as the table. The
+// program is built with this test (tests/body/CMakeLists.txt): its absence is a failure.
 #include <body/Anthropometry.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -28,7 +29,7 @@ bool haveBagsim() { return std::ifstream(kBagsim).good(); }
 }  // namespace
 
 TEST(BodyCommand, PrintsTableAndCsvWithTheSameMasses) {
-    if (!haveBagsim()) GTEST_SKIP() << "bagsim not built at " << kBagsim;
+    ASSERT_TRUE(haveBagsim()) << "bagsim not built at " << kBagsim;
     std::string table, csv;
     ASSERT_EQ(run("body --sex female --height 1.62 --mass 58", table), 0) << table;
     ASSERT_EQ(run("body --sex female --height 1.62 --mass 58 --format csv", csv), 0) << csv;
@@ -57,7 +58,7 @@ TEST(BodyCommand, PrintsTableAndCsvWithTheSameMasses) {
 }
 
 TEST(BodyCommand, RefusesBadInputNamingTheFlag) {
-    if (!haveBagsim()) GTEST_SKIP() << "bagsim not built at " << kBagsim;
+    ASSERT_TRUE(haveBagsim()) << "bagsim not built at " << kBagsim;
     std::string out;
     EXPECT_EQ(run("body --sex male --height 2.3 --mass 80", out), 2);
     EXPECT_NE(out.find("--height"), std::string::npos) << out;
