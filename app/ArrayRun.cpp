@@ -3,6 +3,7 @@
 #include "ArrayRun.h"
 #include "Format.h"
 
+#include <bags/Units.h>
 #include <bagsim/Version.h>
 #include <cosim/ArrayPneumatics.h>
 #include <cosim/ArrayReadings.h>
@@ -38,7 +39,7 @@ namespace bagsim::app {
 namespace {
 
 constexpr double kDeg = 180.0 / 3.14159265358979323846;
-constexpr double kPressedThreshold = 5.0 * 133.322387415;  // [Pa] 5 mmHg, as regions.csv
+constexpr double kPressedThreshold = 5.0 * bags::kPascalsPerMmHg;  // [Pa] 5 mmHg, as regions.csv
 
 double calcBagVolume(const cosim::Bag& a) {
     double v = 0.0;
@@ -904,8 +905,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         char line[160];
         const std::string depth = std::isnan(r.immersion) ? "-" : fmt("%.1f", 1e3 * r.immersion);
         std::snprintf(line, sizeof line, "  %-15s %11.1f %12.1f %12.1f %10.2f %15s\n",
-                      r.name.c_str(), r.peakPressure / 133.322387415,
-                      r.meanPressure / 133.322387415, r.area * 1e4, r.force, depth.c_str());
+                      r.name.c_str(), r.peakPressure / bags::kPascalsPerMmHg,
+                      r.meanPressure / bags::kPascalsPerMmHg, r.area * 1e4, r.force, depth.c_str());
         table << line;
     }
     if (air) {

@@ -1,6 +1,7 @@
 #include "ArrayVerdict.h"
 #include "Format.h"
 
+#include <bags/Units.h>
 #include <cosim/ArrayReadings.h>
 
 #include <algorithm>
@@ -12,7 +13,7 @@ namespace bagsim::app {
 
 namespace {
 
-constexpr double kMmHg = 133.322387415;        // [Pa]
+constexpr double kMmHg = bags::kPascalsPerMmHg;        // [Pa]
 constexpr double kCapillary = cosim::kRiskPressure;  // the capillary closing pressure [Pa]
 constexpr double kHandCheck = 0.025;           // [m] the nurses' hand check: 1 inch of air
 constexpr double kCarried = 1.0;               // [N] a bag that carries him

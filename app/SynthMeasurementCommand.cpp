@@ -3,6 +3,7 @@
 // diagnosis simulates (docs/diagnosis.md#synthetic-measured-data). The effect's name and
 // parameters go only to the label file.
 #include <bags/LoadTest.h>
+#include <bags/Units.h>
 #include <diagnose/Effects.h>
 #include <diagnose/PatientDiagnosis.h>
 #include <diagnose/Synthesis.h>
@@ -564,7 +565,7 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
                                  "synthesised by\n# bagsim synth-measurement from a truth "
                                  "co-simulation of scenario.yaml.\n");
     writeLabel(a, effects, shownParams,
-               "noise: {mat: " + fmt("%g", so.matNoise / 133.322387415) + " mmHg, tilt: " +
+               "noise: {mat: " + fmt("%g", so.matNoise / bags::kPascalsPerMmHg) + " mmHg, tilt: " +
                    fmt("%g", so.tiltNoise * 180.0 / 3.14159265358979323846) + " deg, pressure: " +
                    fmt("%g", so.pressureNoise * 1e-3) + " kPa}\nseed: " + std::to_string(a.seed) +
                    "\nsample_interval: " + fmt("%g", so.sampleInterval) + " s\nmat_interval: " +

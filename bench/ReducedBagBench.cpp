@@ -40,6 +40,7 @@
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
 #include <bags/Airbag.h>
 #include <bags/Solver.h>
+#include <bags/Units.h>
 #include <body/Anthropometry.h>
 #include <cosim/ArrayReadings.h>
 #include <cosim/ReducedBag.h>
@@ -87,7 +88,7 @@ void pressureMeasures(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& p, const
 
 using Vec3 = Eigen::Vector3d;
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kMmHg = 133.322387415;
+constexpr double kMmHg = bags::kPascalsPerMmHg;
 
 std::string shell(const char* cmd) {
     std::string out;

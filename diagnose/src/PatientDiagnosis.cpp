@@ -1,5 +1,6 @@
 #include <diagnose/PatientDiagnosis.h>
 
+#include <bags/Units.h>
 #include <diagnose/RigEffects.h>
 #include <diagnose/Signatures.h>
 
@@ -18,7 +19,7 @@ namespace {
 using detail::fmt;
 using detail::kNaN;
 
-constexpr double kMmHg = 133.322387415;  // [Pa]
+constexpr double kMmHg = bags::kPascalsPerMmHg;  // [Pa]
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 // The instrument effects' names.

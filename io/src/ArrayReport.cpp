@@ -1,3 +1,4 @@
+#include <bags/Units.h>
 #include <cosim/ArrayReadings.h>
 #include <io/ArrayReport.h>
 #include <io/InputError.h>
@@ -24,7 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kMmHg = 133.322387415;  // [Pa]
+constexpr double kMmHg = bags::kPascalsPerMmHg;  // [Pa]
 constexpr double kThresholdMmHg = cosim::kRiskPressure / kMmHg;  // capillary closing, 32 mmHg
 // The colour scale's top [mmHg] at most: as a clinical mat's display, it resolves the range
 // around 32 mmHg; higher sensels take the top colour (the captions give the true peaks).

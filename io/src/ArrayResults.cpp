@@ -1,4 +1,5 @@
 #include <io/ArrayResults.h>
+#include <bags/Units.h>
 #include <io/StudyTable.h>
 
 #include <chrono>
@@ -16,7 +17,7 @@ namespace io {
 
 namespace {
 
-constexpr double kMmHg = 133.322387415;  // [Pa]
+constexpr double kMmHg = bags::kPascalsPerMmHg;  // [Pa]
 constexpr double kPi = 3.14159265358979323846;
 
 std::string fmt(const char* f, double v) {

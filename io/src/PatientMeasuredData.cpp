@@ -1,6 +1,7 @@
 #include <io/MeasuredData.h>
 #include <io/PatientMeasuredData.h>
 
+#include <bags/Units.h>
 #include <io/InputError.h>
 #include <io/Results.h>
 #include <io/Scenario.h>
@@ -32,7 +33,7 @@ using csv::splitCsv;
 using csv::splitHeader;
 using csv::trim;
 
-constexpr double kMmHg = 133.322387415;  // [Pa]
+constexpr double kMmHg = bags::kPascalsPerMmHg;  // [Pa]
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxMatSide = 1024;  // sensels along either side of a mat
 

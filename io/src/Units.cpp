@@ -1,5 +1,6 @@
 #include <io/Units.h>
 #include <bags/Text.h>
+#include <bags/Units.h>
 
 #include <charconv>
 #include <cmath>
@@ -34,7 +35,7 @@ const std::vector<UnitInfo>& getUnitTable() {
         {"hPa", D::Pressure, 1e2},
         {"bar", D::Pressure, 1e5},
         {"mbar", D::Pressure, 1e2},
-        {"mmHg", D::Pressure, 133.322387415},  // conventional millimetre of mercury
+        {"mmHg", D::Pressure, bags::kPascalsPerMmHg},  // conventional millimetre of mercury
 
         {"mm/min", D::Velocity, 1e-3 / 60.0},
         {"mm/s", D::Velocity, 1e-3},

@@ -27,6 +27,8 @@
 /// a node's pressure is its force over its lumped area, which at the contact's rim and along
 /// the seams changes with the mesh (docs/reduced-bag.md, "Which peak").
 
+#include <bags/Units.h>
+
 #include <limits>
 #include <string>
 #include <vector>
@@ -53,7 +55,7 @@ struct RegionLoad {
 
 /// [Pa] 32 mmHg, the capillary closing pressure: the clinical reference for pressure-ulcer
 /// risk (RegionLoad::areaAtRisk, the verdict's time above it, the report's mat pictures).
-constexpr double kRiskPressure = 32.0 * 133.322387415;
+constexpr double kRiskPressure = 32.0 * bags::kPascalsPerMmHg;
 
 /// The names loads are reported under: the model's regions in order, then the 16 segments
 /// (for nodes in no region). Index i of calcRegionLoads() is name i.
@@ -70,7 +72,7 @@ constexpr double kDefaultPatchArea = 20e-4;
 /// @param areaThreshold [Pa] pressure above which a node's area counts as contact area
 /// @param patchArea [m^2] the disc of the patch peak
 std::vector<RegionLoad> calcRegionLoads(const PatientOnArray& poa,
-                                        double areaThreshold = 5.0 * 133.322387415,
+                                        double areaThreshold = 5.0 * bags::kPascalsPerMmHg,
                                         double patchArea = kDefaultPatchArea);
 
 /// The highest load inside any disc of area `patchArea` centred on one of the points, over

@@ -12,6 +12,7 @@
 /// fits each candidate on all time windows but one and judges it on the one left out, with the
 /// rig's scoring rule (CalibrationOptions' penalty and threshold).
 
+#include <bags/Units.h>
 #include <diagnose/Diagnosis.h>
 #include <diagnose/Effects.h>
 #include <diagnose/PatientData.h>
@@ -64,7 +65,7 @@ PatientChannels readPatientInstruments(const PatientChannels& run, const Patient
 struct PatientSynthesisOptions {
     double sampleInterval = 0.02;  ///< [s] tilt and bag sensors sample at this interval
     double matInterval = 0.1;      ///< [s] the mat's frame interval
-    double matNoise = 0.5 * 133.322387415;  ///< [Pa] per loaded sensel (0.5 mmHg)
+    double matNoise = 0.5 * bags::kPascalsPerMmHg;  ///< [Pa] per loaded sensel (0.5 mmHg)
     double tiltNoise = 0.1 * 3.14159265358979323846 / 180.0;  ///< [rad] (0.1 deg)
     double pressureNoise = 50.0;   ///< [Pa] the bags' sensors (0.05 kPa)
     std::uint64_t seed = 1;
