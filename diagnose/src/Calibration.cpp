@@ -545,7 +545,7 @@ void calibratePairs(WhichReport& report, const MeasuredData& data,
         double u = 0.0;
         for (const ChannelSummary& c : where.channels)
             if (c.channel == m.channel) u = c.validation;
-        if (m.rmse > 2.0 * u)
+        if (m.rmse > kExplainedMultiple * u)
             left += (left.empty() ? "" : ", ") + m.channel + " RMSE " +
                     fmt("%.4g", m.rmse / getChannelUnitScale(getChannelKind(m.channel))) + " " +
                     getChannelUnit(getChannelKind(m.channel)) + " > twice " +

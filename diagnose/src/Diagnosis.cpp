@@ -431,7 +431,8 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
     for (size_t c = 0; c < nch; ++c) r.channels[c].shareOfGap = sum2 > 0.0 ? nrmse2[c] / sum2 : 0.0;
     r.withinValidation = true;
     for (const ChannelSummary& cs : r.channels)
-        if (cs.channel != "mass" && cs.rmse > 2.0 * cs.validation) r.withinValidation = false;
+        if (cs.channel != "mass" && cs.rmse > kExplainedMultiple * cs.validation)
+            r.withinValidation = false;
     return r;
 }
 

@@ -527,7 +527,7 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
     for (size_t k = 0; k < r.channels.size(); ++k) r.channels[k].shareOfGap = sum2 > 0.0 ? nrmse2[k] / sum2 : 0.0;
     r.withinValidation = true;
     for (const ChannelSummary& cs : r.channels)
-        if (cs.rmse > 2.0 * cs.validation) r.withinValidation = false;
+        if (cs.rmse > kExplainedMultiple * cs.validation) r.withinValidation = false;
     return r;
 }
 

@@ -257,7 +257,7 @@ StiffnessWhich calibrateStiffnessCandidates(const StiffnessComparison& cmp,
     out.rmse = std::sqrt(s2 / n);
     out.validation = validation;
     out.validationWhat = validationWhat;
-    out.withinValidation = out.rmse <= 2.0 * validation;
+    out.withinValidation = out.rmse <= kExplainedMultiple * validation;
 
     for (const CurveCandidate& c : candidates) {
         if (!c.effect || c.effect->parameters.size() != 1)

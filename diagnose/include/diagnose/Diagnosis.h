@@ -378,8 +378,9 @@ struct WhichReport {
 };
 
 /// A named effect explains the gap when, held out, it brings every channel within this many
-/// times the channel's validation uncertainty: the rule that calls data `none`, applied to what
-/// the effect leaves.
+/// times the channel's validation uncertainty: the rule that calls data `none` (calcWhere's
+/// withinValidation, the stiffness curve's, the patient's, the pair stage's gate), applied to
+/// what the effect leaves.
 inline constexpr double kExplainedMultiple = 2.0;
 /// Two candidates are rivals (confusable) when the better one reaches the threshold, their
 /// shrinks of the held-out gap beyond the uncertainty are within this, and both explain alike
