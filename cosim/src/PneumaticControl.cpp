@@ -226,6 +226,10 @@ void TurnSpec::validate(int numChannels) const {
         throw std::invalid_argument(
             "turn: start, hold, min mass and max pressure must be >= 0, the longest turn time "
             "and the band > 0");
+    if (!(holdPressure >= 0.0 && holdPressure < 1e6) || !(pressureBand > 0.0))
+        throw std::invalid_argument("turn: the held pressure " + fmt("%g kPa", 1e-3 * holdPressure) +
+                                    " and its band " + fmt("%g kPa", 1e-3 * pressureBand) +
+                                    "; valid: 0 (sealed) to 1000 kPa, a band > 0");
 }
 
 TurnController::TurnController(const TurnSpec& spec, int numChannels) : m_spec(spec) {
@@ -233,6 +237,29 @@ TurnController::TurnController(const TurnSpec& spec, int numChannels) : m_spec(s
     m_channels = spec.inflate;
     m_channels.insert(m_channels.end(), spec.vent.begin(), spec.vent.end());
     m_band.resize(m_channels.size());
+    m_isTurnChannel.assign(numChannels, 0);
+    for (int c : m_channels) m_isTurnChannel[c] = 1;
+    if (isHeld()) m_hold.resize(numChannels);
+}
+
+void TurnController::holdChannel(int c, double t, ArrayPneumatics& p,
+                                 std::vector<ControlEvent>& events) {
+    if (p.getChannelBags(c).empty()) return;
+    const double v = p.readChannelSensor(c);
+    const BandController::State before = m_hold[c].getState();
+    if (m_hold[c].update(v, m_spec.holdPressure, m_spec.pressureBand, c, p))
+        events.push_back({t, "zone held: channel '" + p.getChannelName(c) + "' " +
+                                 stateText(m_hold[c].getState()) + " at sensor " +
+                                 fmt("%.3f kPa", 1e-3 * v) + " (setpoint " +
+                                 fmt("%.3f kPa", 1e-3 * m_spec.holdPressure) + ")" +
+                                 (before != BandController::State::Holding ? ": setpoint reached"
+                                                                           : "")});
+}
+
+void TurnController::holdOthers(double t, ArrayPneumatics& p, std::vector<ControlEvent>& events,
+                                bool all) {
+    for (int c = 0; c < int(m_isTurnChannel.size()); ++c)
+        if (all || !m_isTurnChannel[c]) holdChannel(c, t, p, events);
 }
 
 void TurnController::closeAll(ArrayPneumatics& p) const {
@@ -250,15 +277,27 @@ void TurnController::update(const ControlInputs& in, ArrayPneumatics& p,
         return n ? p.getChannelBagMass(c) / double(n) : 0.0;
     };
     const double sign = m_spec.tilt > 0.0 ? 1.0 : -1.0;
+    if (m_phase == Phase::Done) {
+        if (isHeld()) holdOthers(t, p, events, true);
+        return;
+    }
     if (m_phase == Phase::Waiting) {
-        if (t < m_spec.start - kEps) return;
+        if (t < m_spec.start - kEps) {
+            if (isHeld()) holdOthers(t, p, events, true);
+            return;
+        }
         m_initialMass.clear();
         for (int c : m_channels) m_initialMass.push_back(perBag(c));
+        // From here the turn commands its own channels; the zone hold starts them again
+        // from rest once they are back.
+        for (int c : m_channels)
+            if (isHeld()) m_hold[c].setState(BandController::State::Holding);
         m_phase = Phase::Turning;
         m_phaseStart = t;
         events.push_back({t, "turn started (target pelvis tilt " +
                                  fmt("%+.1f deg", m_spec.tilt * 180.0 / M_PI) + ")"});
     }
+    if (isHeld()) holdOthers(t, p, events, false);
     if (m_phase == Phase::Turning) {
         if (sign * in.pelvisTilt >= std::abs(m_spec.tilt)) {
             m_reached = t;
@@ -305,20 +344,28 @@ void TurnController::update(const ControlInputs& in, ArrayPneumatics& p,
     if (m_phase == Phase::Returning) {
         bool done = true;
         for (size_t i = 0; i < m_channels.size(); ++i) {
-            const double m = perBag(m_channels[i]);
-            // Back to the start's mass: fill or vent until it is crossed (no dead band to
-            // start from: every channel moves back, then holds within the band).
+            const int c = m_channels[i];
+            // Back to the start's mass, or to the zones' pressure: fill or vent until it is
+            // crossed (no dead band to start from: every channel moves back, then holds
+            // within the band).
+            const double now = isHeld() ? p.readChannelSensor(c) : perBag(c);
+            const double target = isHeld() ? m_spec.holdPressure : m_initialMass[i];
+            const double band = isHeld() ? m_spec.pressureBand : m_spec.band;
             if (m_band[i].getState() == BandController::State::Holding &&
-                std::abs(m - m_initialMass[i]) > 0.0 && t == m_phaseStart)
-                m_band[i].update(m, m_initialMass[i], 0.0, m_channels[i], p);
+                std::abs(now - target) > 0.0 && t == m_phaseStart)
+                m_band[i].update(now, target, 0.0, c, p);
             else
-                m_band[i].update(m, m_initialMass[i], m_spec.band, m_channels[i], p);
+                m_band[i].update(now, target, band, c, p);
             done = done && m_band[i].getState() == BandController::State::Holding;
         }
         if (done) {
             closeAll(p);
             m_phase = Phase::Done;
-            events.push_back({t, "back to supine (initial masses restored)"});
+            events.push_back({t, isHeld() ? "back to supine (the turned zones at " +
+                                                fmt("%.3f kPa", 1e-3 * m_spec.holdPressure) +
+                                                ")"
+                                          : std::string("back to supine (initial masses "
+                                                        "restored)")});
         }
     }
 }
@@ -383,6 +430,7 @@ void TurnController::saveState(bags::StateWriter& w) const {
     w.vec(m_turnedMass);
     w.pod(m_turnedTilt);
     saveBands(w, m_band);
+    if (isHeld()) saveBands(w, m_hold);
 }
 
 void TurnController::loadState(bags::StateReader& r) {
@@ -401,6 +449,7 @@ void TurnController::loadState(bags::StateReader& r) {
     r.vec(m_turnedMass);
     r.pod(m_turnedTilt);
     loadBands(r, m_band, false);
+    if (isHeld()) loadBands(r, m_hold, true);
 }
 
 }  // namespace cosim

@@ -1081,7 +1081,8 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
                 cosim::TargetController::Quantity::Pressure, targets, t0 + at);
         } else {
             s.checkKeys({"kind", "tilt"}, {"at", "inflate", "vent", "hold", "max_turn_time",
-                                           "min_mass", "max_pressure", "band"});
+                                           "min_mass", "max_pressure", "band", "pressure",
+                                           "pressure_band"});
             cosim::TurnSpec t;
             t.start = t0 + readAt(s);
             t.inflate = readChannelList(s, "inflate", p);
@@ -1099,6 +1100,20 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             checkBetween(s, "max_pressure", t.maxPressure, 0.0, 500e3, "kPa");
             t.band = s.getQuantity("band", D::Mass, 0.02e-3);
             checkBetween(s, "band", t.band, 1e-7, 1e-3, "g");
+            // The zones held at a setpoint (a clinical mattress) or sealed (the default).
+            bool fromBody = false;
+            if (s.has("pressure")) {
+                if (s.has("band"))
+                    s.fail("band", "is the mass band of a return to the start's masses; with "
+                                   "control.pressure the turn returns to the pressure within "
+                                   "pressure_band (valid: pressure_band, or no pressure)");
+                t.holdPressure = readCellPressure(s, "pressure", sc.patient, &fromBody);
+                checkBetween(s, "pressure", t.holdPressure, 200.0, 100e3, "kPa", "gauge");
+                t.pressureBand = s.getQuantity("pressure_band", D::Pressure, 0.3e3);
+                checkBetween(s, "pressure_band", t.pressureBand, 10.0, 50e3, "kPa");
+            } else if (s.has("pressure_band")) {
+                s.fail("pressure_band", "goes with control.pressure (the zones' setpoint)");
+            }
             sc.targetTilt = t.tilt;
             sc.controller = std::make_shared<cosim::TurnController>(t, nc);
             std::string in, out;
@@ -1108,7 +1123,17 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
                                      (in.empty() ? "none" : in) + ", vent " +
                                      (out.empty() ? "none" : out) + " to a pelvis tilt of " +
                                      fmtUnit(t.tilt, "deg") + ", hold " + fmtUnit(t.hold, "s") +
-                                     ", then back to the initial masses");
+                                     (t.holdPressure > 0.0
+                                          ? ", then back to the zones' setpoint"
+                                          : ", then back to the initial masses"));
+            if (t.holdPressure > 0.0)
+                sc.controlText.push_back(
+                    "every zone held at " + fmtUnit(t.holdPressure, "kPa") + " gauge (band " +
+                    fmtUnit(t.pressureBand, "kPa") + ")" +
+                    (fromBody ? " from his body (" + fmtUnit(sc.patient.mass, "kg") + ", " +
+                                    fmtUnit(sc.patient.height, "m") + ")"
+                              : std::string()) +
+                    " from the release, the turned zones sealed while he is turned and held");
         }
     } catch (const std::invalid_argument& err) {
         s.fail(err.what());

@@ -215,6 +215,41 @@ TEST(PneumaticsScenario, TheZonesPressureIsStatedOnceOrSetFromHisBody) {
             "control.pressure", "; or from-body (the pressure set from the patient's mass");
 }
 
+TEST(PneumaticsScenario, ATurnHoldsTheZonesAtAPressureWhenOneIsGiven) {
+    // control.pressure on a turn: the zones held at it (from-body: 4 kPa for this man) within
+    // pressure_band (0.3 kPa by default); the run header says so. Refused: the mass band of a
+    // sealed turn beside it, a pressure_band alone, a pressure outside 0.2-100 kPa.
+    const std::string turn = "pneumatics: {}\ncontrol: {kind: turn, tilt: 12 deg, inflate: [right], "
+                             "vent: [left]";
+    const io::PatientOnArrayScenario sc = read(kBase + turn + ", pressure: from-body}\n");
+    ASSERT_EQ(sc.controlText.size(), 2u);
+    EXPECT_NE(sc.controlText[0].find("then back to the zones' setpoint"), std::string::npos)
+        << sc.controlText[0];
+    EXPECT_EQ(sc.controlText[1],
+              "every zone held at 4 kPa gauge (band 0.3 kPa) from his body (75 kg, 1.75 m) from "
+              "the release, the turned zones sealed while he is turned and held");
+    const io::PatientOnArrayScenario stated =
+        read(kBase + turn + ", pressure: 5 kPa, pressure_band: 0.5 kPa}\n");
+    EXPECT_NE(stated.controlText[1].find("held at 5 kPa gauge (band 0.5 kPa) from the release"),
+              std::string::npos)
+        << stated.controlText[1];
+    const io::PatientOnArrayScenario sealed = read(kBase + turn + ", band: 0.05 g}\n");
+    ASSERT_EQ(sealed.controlText.size(), 1u);
+    EXPECT_NE(sealed.controlText[0].find("then back to the initial masses"), std::string::npos);
+
+    auto refused = [](const std::string& text, const std::string& key, const std::string& what) {
+        const io::InputError e = readError(text);
+        EXPECT_EQ(e.getLine(), 17) << e.what();
+        EXPECT_EQ(e.getKey(), key) << e.what();
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    };
+    refused(kBase + turn + ", pressure: 4 kPa, band: 0.05 g}\n", "control.band",
+            "with control.pressure the turn returns to the pressure within pressure_band");
+    refused(kBase + turn + ", pressure_band: 0.3 kPa}\n", "control.pressure_band",
+            "goes with control.pressure");
+    refused(kBase + turn + ", pressure: 150 kPa}\n", "control.pressure", "150 kPa");
+}
+
 TEST(PneumaticsScenario, APumpCurvesFaultIsNamedAtItsPointInTheUsersUnits) {
     // It was "pump curve: 'pressureRise[1]' = 0 Pa is invalid": a C++ field, in SI.
     auto error = [](const std::string& curve) {

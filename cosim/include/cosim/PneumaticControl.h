@@ -142,6 +142,10 @@ double calcMassForStiffness(const std::vector<double>& masses,
 /// pelvis tilt reaches `tilt` (signed: positive onto his left side), or `maxTurnTime` passes;
 /// all valves close for `hold`; then every turn channel is brought back to the mass per bag
 /// it had at the start (dead band `band`): back to supine.
+/// With a `holdPressure` (a clinical mattress's zones, held at their setpoint) every channel's
+/// sensor is held at it within `pressureBand` from the release: all of them before the turn
+/// and after it, the channels the turn does not move throughout; the turn channels are
+/// sealed for `hold` and then brought back to the pressure, not to their masses.
 struct TurnSpec {
     double start = 0.0;                ///< [s]
     std::vector<int> inflate, vent;    ///< channels
@@ -151,6 +155,8 @@ struct TurnSpec {
     double minMass = 0.0;              ///< [kg] per bag: venting stops below it (0: none)
     double maxPressure = 0.0;          ///< [Pa] gauge: filling stops above it (0: none)
     double band = 0.05e-3;             ///< [kg] per bag, for the return
+    double holdPressure = 0.0;         ///< [Pa] gauge, the zones' setpoint (0: sealed bags)
+    double pressureBand = 0.3e3;       ///< [Pa] its dead band (with a holdPressure)
     /// @throws std::invalid_argument naming the parameter.
     void validate(int numChannels) const;
 };
@@ -176,6 +182,11 @@ class TurnController : public PneumaticController {
 
   private:
     void closeAll(ArrayPneumatics& p) const;
+    /// Holds channel c at the spec's pressure (its own dead band m_hold[c]); says what changed.
+    void holdChannel(int c, double t, ArrayPneumatics& p, std::vector<ControlEvent>& events);
+    /// Holds every channel that is not a turn channel (all of them with `all`).
+    void holdOthers(double t, ArrayPneumatics& p, std::vector<ControlEvent>& events, bool all);
+    bool isHeld() const { return m_spec.holdPressure > 0.0; }
     TurnSpec m_spec;
     Phase m_phase = Phase::Waiting;
     double m_phaseStart = 0.0;
@@ -185,6 +196,8 @@ class TurnController : public PneumaticController {
     std::vector<double> m_turnedMass;    // per bag, per m_channels entry, at the turn's end
     double m_turnedTilt = 0.0;
     std::vector<BandController> m_band;  // the return
+    std::vector<char> m_isTurnChannel;   // per channel of the network
+    std::vector<BandController> m_hold;  // per channel of the network: the zones' setpoint
 };
 
 }  // namespace cosim
