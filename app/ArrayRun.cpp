@@ -437,7 +437,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                             turn->getTurnedMasses().empty()
                                 ? std::numeric_limits<double>::quiet_NaN()
                                 : turn->getTurnedTilt(),
-                            turn->getPhase() == cosim::TurnController::Phase::Done);
+                            turn->getPhase() == cosim::TurnController::Phase::Done,
+                            turn->getHoldPressure());
     };
     // The relaxed bags' steps kept unrelaxed, summed over the bags, the largest residual and
     // its bag; into the verdict.

@@ -104,7 +104,9 @@ void ArrayVerdict::addFrame(const io::ArrayFrame& f, const std::vector<double>& 
     }
 }
 
-void ArrayVerdict::setTurn(double reachedTime, double turnedTilt, bool backToSupine) {
+void ArrayVerdict::setTurn(double reachedTime, double turnedTilt, bool backToSupine,
+                           double setpoint) {
+    m_setpoint = setpoint;
     m_reached = reachedTime;
     m_turnedTilt = turnedTilt;
     m_back = backToSupine;
@@ -164,9 +166,15 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
         else
             rows.push_back({"target tilt reached", "warning", kNaN, "deg",
                             "not reached yet: the run ended during the turn (" + target + ")"});
+        const std::string restored =
+            m_setpoint > 0.0
+                ? "the turned zones were brought back to their setpoint (" +
+                      fmt("%.3f kPa", 1e-3 * m_setpoint) + ")"
+                : std::string("the initial gas masses were restored");
+        const std::string short_ = m_setpoint > 0.0 ? "the turned zones were back at their setpoint"
+                                                    : "the initial masses were restored";
         rows.push_back({"back to supine", m_back ? "ok" : "warning", kNaN, "",
-                        m_back ? "the initial gas masses were restored"
-                               : "the run ended before the initial masses were restored"});
+                        m_back ? restored : "the run ended before " + short_});
     }
     // Travel toward the edge.
     if (!m_haveRef) {

@@ -26,8 +26,10 @@ class ArrayVerdict {
     /// One output frame with the lowest pressed-node height per bag of frame.bags [m].
     void addFrame(const io::ArrayFrame& frame, const std::vector<double>& pressedHeights);
     /// The turn's outcome: when the target tilt was reached (NaN: never), the pelvis tilt
-    /// when the turn ended [rad] (NaN: it had not) and whether it went back to supine.
-    void setTurn(double reachedTime, double turnedTilt, bool backToSupine);
+    /// when the turn ended [rad] (NaN: it had not) and whether it went back to supine; the
+    /// return is to the zones' setpoint [Pa] when one is given (> 0), else to the masses.
+    void setTurn(double reachedTime, double turnedTilt, bool backToSupine,
+                 double setpoint = 0.0);
     /// How the bags' films were stepped (bags::AirbagSpec::Stepping) and, for the relaxed
     /// stepping, how many committed bag steps were kept unrelaxed (their film's sub-steps ran
     /// out before its force tolerance), the largest force residual kept [N], its bag.
@@ -67,6 +69,7 @@ class ArrayVerdict {
     double m_settle = 0.0, m_duration = 0.0, m_targetTilt = 0.0;
     double m_reached = 0.0, m_turnedTilt = 0.0;
     bool m_back = false, m_turnKnown = false;
+    double m_setpoint = 0.0;  // [Pa] the zones' setpoint a held turn returns to (0: masses)
     bags::AirbagSpec::Stepping m_stepping = bags::AirbagSpec::Stepping::QuasiStatic;
     long m_unrelaxed = 0;
     double m_largestUnrelaxed = 0.0, m_forceTolerance = 0.0;

@@ -163,6 +163,18 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "bench_cosim: %s\n", e.what());
         return 2;
     }
+    // This loop is a copy of bagsim run's without the pneumatic network and its controller:
+    // timing such a scenario here would leave out the flows between its bags (which, with the
+    // films' friction, cost 4 times the rest on the clinical turns: docs/performance.md).
+    if (sc.hasPneumatics) {
+        std::fprintf(stderr,
+                     "bench_cosim: %s has a pneumatics section, which this bench does not run "
+                     "(its bags' flows and controller would be left out of the figures); time it "
+                     "with bagsim run (summary.txt gives the wall-clock), or remove the "
+                     "pneumatics and control sections\n",
+                     path.c_str());
+        return 2;
+    }
     const cosim::PatientOnArrayOptions& o = sc.options;
     std::printf("bench_cosim %s", path.c_str());
     for (const std::string& s : sets) std::printf(" --set %s", s.c_str());

@@ -70,6 +70,15 @@ TEST(ArrayVerdict, EachCheckFollowsItsCriterion) {
     EXPECT_EQ(row(rows, "target tilt reached").status, "ok");
     EXPECT_NEAR(row(rows, "target tilt reached").value, 0.5 * 180 / M_PI, 1e-9);
     EXPECT_EQ(row(rows, "back to supine").status, "ok");
+    EXPECT_EQ(row(rows, "back to supine").detail, "the initial gas masses were restored");
+    // A turn with the zones held returns to their setpoint, and says so.
+    v.setTurn(2.0, 0.5, true, 4000.0);
+    EXPECT_EQ(row(v.makeRows(), "back to supine").detail,
+              "the turned zones were brought back to their setpoint (4.000 kPa)");
+    v.setTurn(2.0, 0.5, false, 4000.0);
+    EXPECT_EQ(row(v.makeRows(), "back to supine").detail,
+              "the run ended before the turned zones were back at their setpoint");
+    v.setTurn(2.0, 0.5, true);
     // Ends at y = -300 mm: column 0's bags stand at y = -315 mm, 100 mm wide, so their inner
     // edge is at -265 mm and he lies over the outer column.
     EXPECT_EQ(row(rows, "slid or rolled toward the edge").status, "fail");

@@ -160,7 +160,19 @@ TEST(PneumaticsScenario, TheShippedPneumaticScenariosRead) {
             std::string(BAGSIM_SOURCE_DIR) + "/scenarios/" + name + ".yaml"));
         EXPECT_TRUE(sc.hasPneumatics);
         EXPECT_TRUE(sc.controller);
-        EXPECT_EQ(sc.pneumatics.channels.size(), 2u);
+        // Clinical inflation: filled at rest to the setpoint from the patient's body; the turns
+        // hold three zones (left, centre, right columns), the cycle its two sets of rows.
+        const bool turn = std::string(name).rfind("turn", 0) == 0;
+        EXPECT_EQ(sc.pneumatics.channels.size(), turn ? 3u : 2u);
+        EXPECT_GT(sc.fillFromBody, 2.7e3);
+        EXPECT_LT(sc.fillFromBody, 6.3e3);
+        EXPECT_EQ(sc.options.bag.stepping, bags::AirbagSpec::Stepping::Relaxed);
+        EXPECT_TRUE(sc.options.bag.selfContact);
+        if (turn) {
+            const auto* t = dynamic_cast<const cosim::TurnController*>(sc.controller.get());
+            ASSERT_NE(t, nullptr);
+            EXPECT_EQ(t->getHoldPressure(), sc.fillFromBody);  // held where they were filled
+        }
         EXPECT_DOUBLE_EQ(sc.options.bag.geometry.meshSize, 0.02);
     }
     const io::PatientOnArrayScenario right = io::readPatientOnArrayScenario(io::ScenarioFile::load(

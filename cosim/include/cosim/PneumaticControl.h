@@ -179,6 +179,8 @@ class TurnController : public PneumaticController {
     const std::vector<double>& getStartMasses() const { return m_initialMass; }
     const std::vector<double>& getTurnedMasses() const { return m_turnedMass; }
     double getTurnedTilt() const { return m_turnedTilt; }  ///< [rad] pelvis, at the turn's end
+    /// [Pa] the zones' setpoint the turn holds and returns to (0: sealed zones, masses).
+    double getHoldPressure() const { return m_spec.holdPressure; }
 
   private:
     void closeAll(ArrayPneumatics& p) const;
