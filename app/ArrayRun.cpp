@@ -57,8 +57,9 @@ std::string describeBodyTissue(const cosim::PatientOnArrayOptions& o) {
             for (int g = 0; g < body::kSegmentCount; ++g)
                 if (body::getTissueSite(body::Segment(g)) == site) t = o.segmentTissue[size_t(g)];
             s += std::string(i ? "," : "") + " " + body::getTissueSiteName(site) + " " +
-                 (t.isRigid() ? std::string("none")
-                              : fmt("%.0f mm", 1e3 * t.thickness) + fmt(" %.0f kPa", 1e-3 * t.modulus));
+                 (t.isRigid()
+                      ? std::string("none")
+                      : fmt("%.0f mm", 1e3 * t.thickness) + fmt(" %.0f kPa", 1e-3 * t.modulus));
         }
         return s;
     }
@@ -161,9 +162,8 @@ std::string describeRestDifference(const io::ScenarioFile& run, const io::Scenar
     // What acts only after the settle (the gas schedule, the controller and its network: the
     // network of a run from rest starts from the bags' gas as it finds it) or only on the
     // outputs.
-    static const std::vector<std::string> kFree = {"description", "gas",      "control",
-                                                   "pneumatics",  "run.duration", "mat",
-                                                   "output"};
+    static const std::vector<std::string> kFree = {"description",  "gas", "control", "pneumatics",
+                                                   "run.duration", "mat", "output"};
     return findFirstDifference(run.getRoot().getYaml(), rest.getRoot().getYaml(), "", kFree);
 }
 
@@ -191,8 +191,8 @@ std::string describeModel(const io::PatientOnArrayScenario& sc) {
     std::ostringstream out;
     out << "  patient " << body::getSexName(p.sex) << ", " << fmt("%.2f m", p.height) << ", "
         << fmt("%.1f kg", p.mass) << ", " << body::getPostureName(p.posture) << "\n";
-    out << "  array " << layout.rows << " x " << layout.columns << " seed wedges ("
-        << sc.bagReading << ", mesh " << io::formatSignificant(sc.options.bag.geometry.meshSize, "mm")
+    out << "  array " << layout.rows << " x " << layout.columns << " seed wedges (" << sc.bagReading
+        << ", mesh " << io::formatSignificant(sc.options.bag.geometry.meshSize, "mm")
         << ", self-contact " << (sc.options.bag.selfContact ? "on" : "off");
     if (!reduced)
         out << ", films "
@@ -217,8 +217,8 @@ std::string describeModel(const io::PatientOnArrayScenario& sc) {
                              io::formatSignificant(c.maxMacroStep, "ms") +
                              fmt(", accuracy %g x the tolerance", c.stepAccuracy)
                        : io::formatSignificant(c.macroStep, "ms"))
-        << fmt(", tolerance %g |H|", c.relativeTolerance)
-        << " + " << io::formatSignificant(c.absoluteTolerance, "mN")
+        << fmt(", tolerance %g |H|", c.relativeTolerance) << " + "
+        << io::formatSignificant(c.absoluteTolerance, "mN")
         << fmt(", %g passes", double(c.maxIterations))
         << (c.keepUnconverged ? ", keeps" : ", stops at") << " a step with no fixed point"
         << (c.acceptResidual > 0.0
@@ -227,8 +227,8 @@ std::string describeModel(const io::PatientOnArrayScenario& sc) {
         << "; settle " << fmt("%g s", sc.settleTime) << ", then " << fmt("%g s", sc.duration)
         << "\n";
     for (const io::GasCommandText& g : sc.gasText)
-        out << "  gas from " << fmt("%g s", g.at) << " after the settle: " << g.who << " "
-            << g.what << "\n";
+        out << "  gas from " << fmt("%g s", g.at) << " after the settle: " << g.who << " " << g.what
+            << "\n";
     if (sc.hasPneumatics) {
         out << "  pneumatics: " << sc.pneumatics.channels.size() << " channels";
         for (const cosim::PneumaticChannel& ch : sc.pneumatics.channels)
@@ -256,10 +256,12 @@ std::string describeModelDifference(const std::string& written, const std::strin
     const std::vector<std::string> a = lines(written), b = lines(now);
     size_t k = 0;
     while (k < a.size() && k < b.size() && a[k] == b[k]) ++k;
-    return "the " + what + " was written by a build that made another model of this scenario (it "
-           "had \"" + (k < a.size() ? a[k] : std::string("nothing more")) +
-           "\", this build makes \"" + (k < b.size() ? b[k] : std::string("nothing more")) +
-           "\"); " + (what == "checkpoint" ? "resume it" : "start from it") +
+    return "the " + what +
+           " was written by a build that made another model of this scenario (it "
+           "had \"" +
+           (k < a.size() ? a[k] : std::string("nothing more")) + "\", this build makes \"" +
+           (k < b.size() ? b[k] : std::string("nothing more")) + "\"); " +
+           (what == "checkpoint" ? "resume it" : "start from it") +
            " with the build that wrote it, or run the scenario again";
 }
 
@@ -283,7 +285,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                 const size_t first = m.find('\n');
                 return m.substr(0, first == std::string::npos ? first : m.find('\n', first + 1));
             };
-            const std::string was = settled(control.fromRestModel), now = settled(describeModel(sc));
+            const std::string was = settled(control.fromRestModel),
+                              now = settled(describeModel(sc));
             if (was != now) {
                 std::cerr << "bagsim: error: cannot start from the rest state in "
                           << control.fromRestDir << ": "
@@ -309,7 +312,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     const std::string model = describeModel(sc);
     if (!quiet) {
         std::cerr << "bagsim " << bagsim::kVersion << ": " << file.getFileName() << " (" << sc.name
-                  << ")\n" << model;
+                  << ")\n"
+                  << model;
         std::cerr << "  writing to " << outPath.string()
                   << "/ (Ctrl-C stops and keeps what was computed, marked INCOMPLETE";
         if (sc.checkpointInterval > 0.0)
@@ -433,12 +437,11 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     };
     auto setTurn = [&] {
         if (const auto* turn = dynamic_cast<const cosim::TurnController*>(sc.controller.get()))
-            verdict.setTurn(turn->getTiltReachedTime(),
-                            turn->getTurnedMasses().empty()
-                                ? std::numeric_limits<double>::quiet_NaN()
-                                : turn->getTurnedTilt(),
-                            turn->getPhase() == cosim::TurnController::Phase::Done,
-                            turn->getHoldPressure());
+            verdict.setTurn(
+                turn->getTiltReachedTime(),
+                turn->getTurnedMasses().empty() ? std::numeric_limits<double>::quiet_NaN()
+                                                : turn->getTurnedTilt(),
+                turn->getPhase() == cosim::TurnController::Phase::Done, turn->getHoldPressure());
     };
     // The relaxed bags' steps kept unrelaxed, summed over the bags, the largest residual and
     // its bag; into the verdict.
@@ -456,9 +459,9 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                 t.bag = bag;
             }
         }
-        verdict.setFilmSteps(sc.options.reduced ? bags::AirbagSpec::Stepping::QuasiStatic
-                                                : sc.options.bag.stepping,
-                             t.steps, t.largest, t.bag, sc.options.bag.forceTolerance);
+        verdict.setFilmSteps(
+            sc.options.reduced ? bags::AirbagSpec::Stepping::QuasiStatic : sc.options.bag.stepping,
+            t.steps, t.largest, t.bag, sc.options.bag.forceTolerance);
         const cosim::Scheme scheme = sc.options.coupling.scheme;
         verdict.setCouplingSteps(
             scheme == cosim::Scheme::Implicit || scheme == cosim::Scheme::TangentImplicit,
@@ -486,7 +489,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                 tally.push_back(fe->getLargestUnrelaxedResidual());
         w.vec(tally);
     };
-    std::vector<double> resumedTally;  // until the bags are built
+    std::vector<double> resumedTally;                      // until the bags are built
     std::vector<double> resumedAirVolume, resumedAirRate;  // until the network is built
     bool resumedTallyKnown = true;  // a checkpoint written before the tally (run-2) has none
     auto loadRunState = [&](bags::StateReader& r) {
@@ -538,7 +541,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         bags::StateWriter head;
         head.pod(std::uint64_t(w.getData().size()));
         head.pod(calcCheckpointHash(w.getData()));
-        writeFileAtomically(outDir->getFile(name), std::string(magic) + head.getData() + w.getData());
+        writeFileAtomically(outDir->getFile(name),
+                            std::string(magic) + head.getData() + w.getData());
     };
     auto saveCheckpoint = [&] {
         bags::StateWriter w;
@@ -596,7 +600,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         {  // the bags as inflated, before he lies on them (and before any state is loaded)
             double least = 1e30, highest = 0.0;
             for (const cosim::BagReading& r : cosim::calcBagReadings(*poa))
-                least = std::min(least, r.gaugePressure), highest = std::max(highest, r.gaugePressure);
+                least = std::min(least, r.gaugePressure),
+                highest = std::max(highest, r.gaugePressure);
             if (highest > 0.0) verdict.setRestPressures(least, highest);
         }
         if (fromRest) {
@@ -620,8 +625,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             std::cerr << "  built in " << fmt("%.1f s", wall()) << ": "
                       << poa->getBagIndices().size() << " bags under him, "
                       << poa->getPairs().size() << " segment-bag pairs; released "
-                      << fmt("%.1f mm", 1e3 * poa->getReleaseClearance())
-                      << " above the board\n";
+                      << fmt("%.1f mm", 1e3 * poa->getReleaseClearance()) << " above the board\n";
         if (!quiet && sc.options.neighbourContact) {
             // The modules of neighbours that may touch (one participant each).
             std::cerr << "  neighbouring bags touch: " << poa->getModules().size()
@@ -642,8 +646,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             // From a rest state the bags stand at the settle's end: the network starts there.
             if (fromRest) air->setStartTime(poa->getTime());
             for (int b : air->getBags()) {
-                const auto it = std::find(poa->getBagIndices().begin(),
-                                          poa->getBagIndices().end(), b);
+                const auto it =
+                    std::find(poa->getBagIndices().begin(), poa->getBagIndices().end(), b);
                 airParticipant.push_back(int(it - poa->getBagIndices().begin()));
                 airVolume.push_back(volumes[b]);
                 airRate.push_back(0.0);
@@ -685,8 +689,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             } catch (const bags::StateError& e) {
                 return refuseResume(e.what());
             }
-            outDir->setStatus("running", "the patient on the bags (resumed" +
-                                             fmt(" at %.4f s)", poa->getTime()));
+            outDir->setStatus(
+                "running", "the patient on the bags (resumed" + fmt(" at %.4f s)", poa->getTime()));
             if (!quiet)
                 std::cerr << "  resumed at " << fmt("%.4f s", poa->getTime())
                           << " from the checkpoint\n";
@@ -759,8 +763,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                 }
                 if (!quiet)
                     std::cerr << "bagsim: warning: the coupling found no fixed point at "
-                              << fmt("%.6f s", s.time) << " (|H(x) - x| = "
-                              << fmt("%.3g N", s.residual) << " against "
+                              << fmt("%.6f s", s.time)
+                              << " (|H(x) - x| = " << fmt("%.3g N", s.residual) << " against "
                               << fmt("%.3g N", s.tolerance) << " at the smallest step, "
                               << fmt("%.3g ms", 1e3 * s.macroStep)
                               << "); the step is kept and the run will be partial\n";
@@ -780,7 +784,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             throwIfInterrupted();
             if (control.stopAfter >= 0.0 && poa->getTime() >= control.stopAfter - 1e-9)
                 throw Interrupted(SIGINT);  // as Ctrl-C noticed here (--stop-after)
-            if (sc.options.reduced) {  // the reduced bags' first exit of each kind
+            if (sc.options.reduced) {       // the reduced bags' first exit of each kind
                 const cosim::EnvelopeCounts e = poa->getEnvelopeCounts();
                 const std::string w =
                     cosim::describeNewEnvelopeExits(e, envelope, *sc.options.reduced);
@@ -796,8 +800,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                 if (!quiet && wall() - lastPrint > 5.0) {
                     lastPrint = wall();
                     std::cerr << "  t " << fmt("%7.3f", f.time) << fmt(" of %g s", end)
-                              << "  bags carry "
-                              << fmt("%7.1f N", poa->calcBagForce()) << " of "
+                              << "  bags carry " << fmt("%7.1f N", poa->calcBagForce()) << " of "
                               << fmt("%.1f N", poa->getWeight()) << "  tilt pelvis "
                               << fmt("%+5.1f", f.pelvisTilt * kDeg) << " thorax "
                               << fmt("%+5.1f deg", f.thoraxTilt * kDeg) << "  "
@@ -822,7 +825,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         return getInterruptExitCode(e.signal);
     } catch (const std::exception& e) {
         if (getInterruptSignal()) {
-            stop("interrupted", Interrupted(getInterruptSignal()).what() + std::string(" ") + where());
+            stop("interrupted",
+                 Interrupted(getInterruptSignal()).what() + std::string(" ") + where());
             return getInterruptExitCode(getInterruptSignal());
         }
         stop("failed", std::string("run failed ") + where() + ": " + e.what());
@@ -859,7 +863,10 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
               << " bag steps were kept unrelaxed (the film's sub-steps ran out before its "
                  "force tolerance), the largest residual "
               << fmt("%.3g N", unrelaxed.largest) << " (bag " << unrelaxed.bag
-              << "; docs/solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-patients-bags)"
+              << "; "
+                 "docs/"
+                 "solver.md#relaxed-stepping-the-equilibrium-found-by-the-film-in-time-for-the-"
+                 "patients-bags)"
                  ": the run is partial\n";
     if (totals.accepted > 0)  // steps whose passes stalled within coupling.accept_residual
         table << "coupling: " << totals.accepted << " of " << totals.steps
@@ -876,8 +883,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
               << fmt("%.3g N", totals.worstTolerance) << fmt(" at %.4f s", totals.worstTime)
               << " (docs/cosim.md#the-schemes): the run is partial\n";
     {  // how deep a segment lies inside a film between its nodes, beyond its nodes' own
-       // depth (the penalty's, and a soft-tissue layer's compression), which the contact does
-       // not see
+        // depth (the penalty's, and a soft-tissue layer's compression), which the contact does
+        // not see
         const std::vector<cosim::PassThrough> pass = cosim::calcPassThroughs(*poa);
         const auto worst = std::max_element(
             pass.begin(), pass.end(), [](const cosim::PassThrough& a, const cosim::PassThrough& b) {
@@ -887,7 +894,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
             table << "segments lie inside a film between its nodes by at most "
                   << fmt("%.2f mm", 1e3 * worst->depth) << " ("
                   << body::getSegmentName(static_cast<body::Segment>(worst->segment)) << ", bag "
-                  << worst->bag << "; its nodes by " << fmt("%.2f mm", 1e3 * worst->nodeDepth) << ")"
+                  << worst->bag << "; its nodes by " << fmt("%.2f mm", 1e3 * worst->nodeDepth)
+                  << ")"
                   << (worst->depth - worst->nodeDepth > 5e-3
                           ? ": the contact acts at the nodes and lets it through; a finer "
                             "bag.mesh_size holds it (docs/cosim.md#shapes-between-the-films-nodes)"
@@ -897,8 +905,10 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     if (const double board = poa->calcBoardForce(); board > 0.0)
         table << "the bed board carries " << fmt("%.2f N", board)
               << " of him directly (pressed through slack bags or beside the array)\n";
-    table << "tilt: pelvis " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk) * kDeg)
-          << ", thorax " << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk) * kDeg)
+    table << "tilt: pelvis "
+          << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::LowerTrunk) * kDeg)
+          << ", thorax "
+          << fmt("%+.2f deg", cosim::calcSegmentTilt(*poa, body::Segment::UpperTrunk) * kDeg)
           << " (positive: turned onto his left side)\n"
           << "  region           PPI [mmHg]  mean [mmHg]  area [cm^2]  force [N]  immersion [mm]\n";
     for (const cosim::RegionLoad& r : regions) {
@@ -911,8 +921,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         table << line;
     }
     if (air) {
-        table << "pneumatics: gas masses of bag and network agree to "
-              << fmt("%.1e", massMismatch) << " (largest relative difference over the run)\n";
+        table << "pneumatics: gas masses of bag and network agree to " << fmt("%.1e", massMismatch)
+              << " (largest relative difference over the run)\n";
         for (int c = 0; c < air->getNumChannels(); ++c) {
             const size_t n = air->getChannelBags(c).size();
             table << "  channel '" << air->getChannelName(c) << "': " << n << " bags, "
@@ -938,8 +948,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
     }
     table << totals.steps << " macro steps (" << totals.cuts << " cuts), "
           << fmt("%.2f", totals.steps ? double(totals.passes) / totals.steps : 0.0)
-          << " coupling passes a step, " << totals.bodySteps
-          << " steps of the body's integrator; " << fmt("%.1f s", wall()) << " wall-clock\n";
+          << " coupling passes a step, " << totals.bodySteps << " steps of the body's integrator; "
+          << fmt("%.1f s", wall()) << " wall-clock\n";
     std::string verdictText;
     try {
         events.push_back({poa->getTime(), "run ended"});
@@ -985,7 +995,8 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
         return 1;
     }
     writeReportAfterRun(outPath, quiet);
-    std::cout << table.str() << "support verdict:\n" << verdictText << "results in " << outPath.string() << "/:\n"
+    std::cout << table.str() << "support verdict:\n"
+              << verdictText << "results in " << outPath.string() << "/:\n"
               << "  " << io::kRegionsCsv << "   " << io::kRegionsHeader << "\n"
               << "  " << io::kBagsCsv << "      " << io::kBagsHeader << "\n"
               << "  " << io::kTiltCsv << "      time_s,pelvis_tilt_deg,thorax_tilt_deg\n"
@@ -1015,8 +1026,7 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
                      "range (verdict.csv, 'film within its fitted range'): outside the model's "
                      "envelope; results in "
                   << outPath.string() << "/ (marked INCOMPLETE, status partial)\n";
-    return unrelaxed.steps > 0 || totals.unconverged > 0 || verdict.isFilmOutsideItsRange() ? 3
-                                                                                            : 0;
+    return unrelaxed.steps > 0 || totals.unconverged > 0 || verdict.isFilmOutsideItsRange() ? 3 : 0;
 }
 
 }  // namespace bagsim::app

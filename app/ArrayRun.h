@@ -44,11 +44,11 @@ int runPatientOnArray(const io::ScenarioFile& file, const std::string& out,
 
 /// What a checkpoint says of the run that wrote it.
 struct CheckpointHeader {
-    std::string version;       ///< bagsim's version that wrote it
-    std::string scenarioFile;  ///< the scenario's path as given
-    std::string scenarioText;  ///< its text verbatim
+    std::string version;                 ///< bagsim's version that wrote it
+    std::string scenarioFile;            ///< the scenario's path as given
+    std::string scenarioText;            ///< its text verbatim
     std::vector<std::string> overrides;  ///< --set key=value, in order
-    double time = 0.0;         ///< [s] simulated, of the checkpoint
+    double time = 0.0;                   ///< [s] simulated, of the checkpoint
     /// The model the writing build made of the scenario, as its run header prints it (empty
     /// in checkpoints written before it was kept): a build that makes another is refused.
     std::string model;

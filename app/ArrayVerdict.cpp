@@ -13,11 +13,11 @@ namespace bagsim::app {
 
 namespace {
 
-constexpr double kMmHg = bags::kPascalsPerMmHg;        // [Pa]
+constexpr double kMmHg = bags::kPascalsPerMmHg;      // [Pa]
 constexpr double kCapillary = cosim::kRiskPressure;  // the capillary closing pressure [Pa]
-constexpr double kHandCheck = 0.025;           // [m] the nurses' hand check: 1 inch of air
-constexpr double kCarried = 1.0;               // [N] a bag that carries him
-constexpr double kNothing = 0.1;               // [N] a bag that carries nothing
+constexpr double kHandCheck = 0.025;                 // [m] the nurses' hand check: 1 inch of air
+constexpr double kCarried = 1.0;                     // [N] a bag that carries him
+constexpr double kNothing = 0.1;                     // [N] a bag that carries nothing
 constexpr double kDeg = 180.0 / 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // [Pa] the highest cell pressure of the published clinical settings of active air mattresses
@@ -43,7 +43,8 @@ ArrayVerdict::ArrayVerdict(const cosim::ArrayLayout& layout, const bags::DoubleW
     m_innerEdgeHigh = 1e9;
     for (const cosim::ArrayBag& b : m_bags) {
         if (b.column == 0) m_innerEdgeLow = std::max(m_innerEdgeLow, b.footprintMax.y());
-        if (b.column == m_columns - 1) m_innerEdgeHigh = std::min(m_innerEdgeHigh, b.footprintMin.y());
+        if (b.column == m_columns - 1)
+            m_innerEdgeHigh = std::min(m_innerEdgeHigh, b.footprintMin.y());
     }
 }
 
@@ -113,8 +114,8 @@ void ArrayVerdict::setTurn(double reachedTime, double turnedTilt, bool backToSup
     m_turnKnown = true;
 }
 
-void ArrayVerdict::setFilmSteps(bags::AirbagSpec::Stepping stepping, long unrelaxed,
-                                double largest, int worstBag, double tolerance) {
+void ArrayVerdict::setFilmSteps(bags::AirbagSpec::Stepping stepping, long unrelaxed, double largest,
+                                int worstBag, double tolerance) {
     m_stepping = stepping;
     m_unrelaxed = unrelaxed;
     m_largestUnrelaxed = largest;
@@ -167,10 +168,9 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
             rows.push_back({"target tilt reached", "warning", kNaN, "deg",
                             "not reached yet: the run ended during the turn (" + target + ")"});
         const std::string restored =
-            m_setpoint > 0.0
-                ? "the turned zones were brought back to their setpoint (" +
-                      fmt("%.3f kPa", 1e-3 * m_setpoint) + ")"
-                : std::string("the initial gas masses were restored");
+            m_setpoint > 0.0 ? "the turned zones were brought back to their setpoint (" +
+                                   fmt("%.3f kPa", 1e-3 * m_setpoint) + ")"
+                             : std::string("the initial gas masses were restored");
         const std::string short_ = m_setpoint > 0.0 ? "the turned zones were back at their setpoint"
                                                     : "the initial masses were restored";
         rows.push_back({"back to supine", m_back ? "ok" : "warning", kNaN, "",
@@ -182,14 +182,19 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
     } else {
         const bool over = m_lastY < m_innerEdgeLow || m_lastY > m_innerEdgeHigh;
         const bool far = std::abs(m_maxTravel) > m_columnPitch && m_columnPitch > 0.0;
-        rows.push_back(
-            {"slid or rolled toward the edge", over ? "fail" : far ? "warning" : "ok",
-             1e3 * m_maxTravel, "mm",
-             "largest lateral travel of his centre of mass " + window + fmt(" (at %.2f s", m_maxTravelTime) +
-                 "); at the end at y = " + fmt("%.1f mm", 1e3 * m_lastY) +
-                 "; fail when it ends over the outer column (beyond y = " +
-                 fmt("%.0f mm", 1e3 * m_innerEdgeLow) + " or " + fmt("%.0f mm", 1e3 * m_innerEdgeHigh) +
-                 "); warning beyond one column pitch (" + fmt("%.0f mm", 1e3 * m_columnPitch) + ")"});
+        rows.push_back({"slid or rolled toward the edge",
+                        over  ? "fail"
+                        : far ? "warning"
+                              : "ok",
+                        1e3 * m_maxTravel, "mm",
+                        "largest lateral travel of his centre of mass " + window +
+                            fmt(" (at %.2f s", m_maxTravelTime) +
+                            "); at the end at y = " + fmt("%.1f mm", 1e3 * m_lastY) +
+                            "; fail when it ends over the outer column (beyond y = " +
+                            fmt("%.0f mm", 1e3 * m_innerEdgeLow) + " or " +
+                            fmt("%.0f mm", 1e3 * m_innerEdgeHigh) +
+                            "); warning beyond one column pitch (" +
+                            fmt("%.0f mm", 1e3 * m_columnPitch) + ")"});
         std::string lost;
         double first = kNaN;
         for (const auto& [bag, t] : m_edgeLost) {
@@ -199,10 +204,11 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
         rows.push_back({"contact lost at the array edge", lost.empty() ? "ok" : "warning",
                         double(m_edgeLost.size()), "bags",
                         lost.empty() ? "no outer bag lost him as he moved toward its edge"
-                                     : "outer bags " + lost + " carried him (1 N or more) and "
-                                       "nothing (< 0.1 N) once he had moved 10 mm or more "
-                                       "further toward their edge; the first from " +
-                                       fmt("%.2f s", first)});
+                                     : "outer bags " + lost +
+                                           " carried him (1 N or more) and "
+                                           "nothing (< 0.1 N) once he had moved 10 mm or more "
+                                           "further toward their edge; the first from " +
+                                           fmt("%.2f s", first)});
     }
     // Fell through or off the bags: his centre of mass below the bed board (with
     // array.board_contact off only the bags carry him; with it the board stops him).
@@ -219,7 +225,8 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
         rows.push_back({"bag bottomed out", m_minHeight < kHandCheck ? "fail" : "ok",
                         1e3 * m_minHeight, "mm",
                         "least inner height under a pressed node (its height above the bed "
-                        "board) " + window + ": bag " + std::to_string(m_minHeightBag) +
+                        "board) " +
+                            window + ": bag " + std::to_string(m_minHeightBag) +
                             fmt(" at %.2f s", m_minHeightTime) +
                             "; fail below 25 mm (the hand check: an inch of air)"});
     // The film within the range its material law was fitted and is stable in.
@@ -231,12 +238,13 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
         rows.push_back(
             {"film within its fitted range", m_filmUse > 1.0 ? "fail" : "ok", 100.0 * m_filmUse,
              "%",
-             std::string(m_filmUse > 1.0
-                  ? "a film was stretched beyond the range its material law was fitted and is "
-                    "stable in (I1 - 3 above the law's limit): the results from there on are "
-                    "outside the model's envelope; the run is partial. Largest: "
-                  : "every film stayed within its material's fitted, stable range; the largest "
-                    "use of it: ") +
+             std::string(
+                 m_filmUse > 1.0
+                     ? "a film was stretched beyond the range its material law was fitted and is "
+                       "stable in (I1 - 3 above the law's limit): the results from there on are "
+                       "outside the model's envelope; the run is partial. Largest: "
+                     : "every film stayed within its material's fitted, stable range; the largest "
+                       "use of it: ") +
                  "bag " + std::to_string(m_filmBag) + fmt(" at %.2f s", m_filmTime) +
                  fmt(", principal stretch %.3f", m_filmStretch)});
     // The films at their equilibrium (the relaxed stepping keeps a step whose sub-steps ran
@@ -269,14 +277,14 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
         rows.push_back({"coupling converged", "ok", 0.0, "steps",
                         "every macro step reached the coupling's fixed point to its tolerance"});
     else if (m_unconverged == 0)
-        rows.push_back({"coupling converged", "ok", 0.0, "steps",
-                        "every macro step reached the coupling's fixed point to its tolerance "
-                        "but " + std::to_string(m_accepted) +
-                            ", accepted where their passes stalled within coupling.accept_residual (" +
-                            fmt("%.3g N", m_acceptResidual) + "; the largest |H(x) - x| " +
-                            fmt("%.3g N", m_worstAccepted) +
-                            fmt(" at %.4f s", m_worstAcceptedTime) +
-                            ")"});
+        rows.push_back(
+            {"coupling converged", "ok", 0.0, "steps",
+             "every macro step reached the coupling's fixed point to its tolerance "
+             "but " +
+                 std::to_string(m_accepted) +
+                 ", accepted where their passes stalled within coupling.accept_residual (" +
+                 fmt("%.3g N", m_acceptResidual) + "; the largest |H(x) - x| " +
+                 fmt("%.3g N", m_worstAccepted) + fmt(" at %.4f s", m_worstAcceptedTime) + ")"});
     else
         rows.push_back({"coupling converged", "fail", double(m_unconverged), "steps",
                         "macro steps kept without a fixed point at the smallest step "

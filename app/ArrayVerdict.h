@@ -28,8 +28,7 @@ class ArrayVerdict {
     /// The turn's outcome: when the target tilt was reached (NaN: never), the pelvis tilt
     /// when the turn ended [rad] (NaN: it had not) and whether it went back to supine; the
     /// return is to the zones' setpoint [Pa] when one is given (> 0), else to the masses.
-    void setTurn(double reachedTime, double turnedTilt, bool backToSupine,
-                 double setpoint = 0.0);
+    void setTurn(double reachedTime, double turnedTilt, bool backToSupine, double setpoint = 0.0);
     /// How the bags' films were stepped (bags::AirbagSpec::Stepping) and, for the relaxed
     /// stepping, how many committed bag steps were kept unrelaxed (their film's sub-steps ran
     /// out before its force tolerance), the largest force residual kept [N], its bag.
@@ -74,7 +73,7 @@ class ArrayVerdict {
     long m_unrelaxed = 0;
     double m_largestUnrelaxed = 0.0, m_forceTolerance = 0.0;
     int m_unrelaxedBag = -1;
-    double m_restLeast = -1.0, m_restHighest = -1.0;  // -1: not set
+    double m_restLeast = -1.0, m_restHighest = -1.0;                 // -1: not set
     double m_filmUse = -1.0, m_filmStretch = 1.0, m_filmTime = 0.0;  // -1: no frame judged
     int m_filmBag = -1;
     bool m_iterated = true;

@@ -5,13 +5,13 @@
 
 namespace bagsim::app {
 
-int runRunCommand(int argc, char** argv);          ///< bagsim run SCENARIO.yaml [--out DIR]
-int runBodyCommand(int argc, char** argv);         ///< bagsim body --sex ... --height ... --mass ...
+int runRunCommand(int argc, char** argv);   ///< bagsim run SCENARIO.yaml [--out DIR]
+int runBodyCommand(int argc, char** argv);  ///< bagsim body --sex ... --height ... --mass ...
 int runFitMaterialCommand(int argc, char** argv);  ///< bagsim fit-material TENSILE.csv --model ...
 int runSynthMeasurementCommand(int argc, char** argv);  ///< bagsim synth-measurement --scenario ...
-int runDiagnoseCommand(int argc, char** argv);  ///< bagsim diagnose --measured DIR
-int runStudyCommand(int argc, char** argv);     ///< bagsim study STUDY.yaml [--out DIR]
-int runReportCommand(int argc, char** argv);    ///< bagsim report DIR [--out FILE]
-int runCompareCommand(int argc, char** argv);   ///< bagsim compare REFERENCE RUN
+int runDiagnoseCommand(int argc, char** argv);          ///< bagsim diagnose --measured DIR
+int runStudyCommand(int argc, char** argv);             ///< bagsim study STUDY.yaml [--out DIR]
+int runReportCommand(int argc, char** argv);            ///< bagsim report DIR [--out FILE]
+int runCompareCommand(int argc, char** argv);           ///< bagsim compare REFERENCE RUN
 
 }  // namespace bagsim::app

@@ -32,7 +32,8 @@ const char* kHelp =
     "(the mean and rms of run / reference - 1, the regions within the peak tolerance; a region\n"
     "the run does not load then counts as -100 %). Its last line says whether the run meets\n"
     "both tolerances everywhere, or that the comparison is not whole (an unfinished folder,\n"
-    "rows or moments one run lacks, no region judged): docs/reduced-bag.md#checking-a-run-against-a-reference.\n"
+    "rows or moments one run lacks, no region judged): "
+    "docs/reduced-bag.md#checking-a-run-against-a-reference.\n"
     "\n"
     "options:\n"
     "  --from TIME            compare rows from this time on, e.g. '1.5 s' (default 0 s)\n"
@@ -94,8 +95,9 @@ int runCompareCommand(int argc, char** argv) {
                     std::string n = s;
                     const bool percent = !n.empty() && n.back() == '%';
                     if (percent) n.pop_back();
-                    const std::string valid = "; valid: a percentage (15%) or a fraction "
-                                              "below 1 (0.15), more than 0";
+                    const std::string valid =
+                        "; valid: a percentage (15%) or a fraction "
+                        "below 1 (0.15), more than 0";
                     try {
                         opt.peakTolerance = io::parseQuantity(n, io::Dimension::Dimensionless) *
                                             (percent ? 0.01 : 1.0);
@@ -122,13 +124,15 @@ int runCompareCommand(int argc, char** argv) {
         }
     }
     if (dirs.size() != 2)
-        return usageError("give two results folders, the reference first, e.g. bagsim compare "
-                          "out/turn-fe out/turn-reduced");
+        return usageError(
+            "give two results folders, the reference first, e.g. bagsim compare "
+            "out/turn-fe out/turn-reduced");
     if (!(opt.tiltTolerance > 0.0)) return usageError("--tilt-tolerance must be positive");
     // Times are matched to 0.1 ms: a run's output times lie between 0 and a day or so.
     for (double t : opt.times)
         if (!(t >= 0.0 && t <= 1e6))
-            return usageError("--times: " + std::to_string(t) + " s is not a run's output time; "
+            return usageError("--times: " + std::to_string(t) +
+                              " s is not a run's output time; "
                               "valid: 0 s to 1e6 s");
     if (!(opt.from >= 0.0 && opt.from <= 1e6))
         return usageError("--from must lie between 0 s and 1e6 s");
@@ -157,7 +161,8 @@ int runCompareCommand(int argc, char** argv) {
         }
         fs::rename(tmp, csv, ec);
         if (ec) {
-            std::cerr << "bagsim: error: " << csv << ": cannot be written (" << ec.message() << ")\n";
+            std::cerr << "bagsim: error: " << csv << ": cannot be written (" << ec.message()
+                      << ")\n";
             std::error_code ignored;
             fs::remove(tmp, ignored);
             return 1;

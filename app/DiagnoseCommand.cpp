@@ -109,7 +109,7 @@ struct Args {
     bool force = false, whereOnly = false, quiet = false, stopIfWithin = false;
     std::vector<std::string> candidates;
     int threads = 1;
-    int windows = 3;  ///< a patient's data: the time windows of the folds
+    int windows = 3;              ///< a patient's data: the time windows of the folds
     double curveStep = 0.125e-3;  ///< a stiffness curve: the dense curve's step [kg]
     int curveVolumes = 9;         ///< a stiffness curve: bag-volume's grid points
     std::string cache;            ///< a stiffness curve: the cache folder ("": OUT/curve-cache)
@@ -123,12 +123,18 @@ Args parseArgs(int argc, char** argv) {
     for (int i = 0; i < argc; ++i) {
         const std::string arg = argv[i];
         auto value = [&] { return takeOptionValue(argc, argv, i); };
-        if (arg == "--measured") a.measured = value();
-        else if (arg == "--out") a.out = value();
-        else if (arg == "--force") a.force = true;
-        else if (arg == "--where-only") a.whereOnly = true;
-        else if (arg == "--stop-if-within") a.stopIfWithin = true;
-        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
+        if (arg == "--measured")
+            a.measured = value();
+        else if (arg == "--out")
+            a.out = value();
+        else if (arg == "--force")
+            a.force = true;
+        else if (arg == "--where-only")
+            a.whereOnly = true;
+        else if (arg == "--stop-if-within")
+            a.stopIfWithin = true;
+        else if (arg == "--quiet" || arg == "-q")
+            a.quiet = true;
         else if (arg == "--threads") {
             const std::string v = value();
             if (v.empty() || v.find_first_not_of("0123456789") != std::string::npos ||
@@ -160,19 +166,22 @@ Args parseArgs(int argc, char** argv) {
             a.curveStep = m;
         } else if (arg == "--curve-volumes") {
             const std::string v = value();
-            if (v.empty() || v.size() > 3 || v.find_first_not_of("0123456789") != std::string::npos ||
-                std::stoi(v) < 3 || std::stoi(v) > 41 || std::stoi(v) % 2 == 0)
-                throw UsageError("--curve-volumes '" + v + "' is not valid; valid: an odd count from 3 to 41");
+            if (v.empty() || v.size() > 3 ||
+                v.find_first_not_of("0123456789") != std::string::npos || std::stoi(v) < 3 ||
+                std::stoi(v) > 41 || std::stoi(v) % 2 == 0)
+                throw UsageError("--curve-volumes '" + v +
+                                 "' is not valid; valid: an odd count from 3 to 41");
             a.curveVolumes = std::stoi(v);
         } else if (arg == "--cache") {
             a.cache = value();
         } else if (arg == "--mesh-check") {
             a.meshCheck = value();
         } else
-            throw UsageError("unknown option '" + arg +
-                             "'; valid: --measured, --out, --force, --where-only, --stop-if-within, "
-                             "--candidates, --threads, --windows, --curve-step, --curve-volumes, --cache, "
-                             "--mesh-check, --quiet, --help");
+            throw UsageError(
+                "unknown option '" + arg +
+                "'; valid: --measured, --out, --force, --where-only, --stop-if-within, "
+                "--candidates, --threads, --windows, --curve-step, --curve-volumes, --cache, "
+                "--mesh-check, --quiet, --help");
     }
     if (a.measured.empty()) throw UsageError("--measured DIR is required");
     if (a.out.empty()) {
@@ -184,8 +193,7 @@ Args parseArgs(int argc, char** argv) {
 }
 
 void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
-    out << "where: gap " << fmt("%.4f", w.gap)
-        << " (" << diagnose::describeGap(w) << ")"
+    out << "where: gap " << fmt("%.4f", w.gap) << " (" << diagnose::describeGap(w) << ")"
         << (w.withinValidation ? ", within the validation uncertainty" : "") << "\n";
     out << "  channel   RMSE        range       noise       numerical   input       gas mass    "
            "room temp.  validation  share of gap\n";
@@ -194,24 +202,24 @@ void printWhere(const diagnose::WhereReport& w, std::ostream& out) {
         const double u = diagnose::getChannelUnitScale(kind);
         const std::string un = " " + diagnose::getChannelUnit(kind);
         char line[300];
-        std::snprintf(line, sizeof line,
-                      "  %-8s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %s\n",
-                      c.channel.c_str(), (fmt("%.4g", c.rmse / u) + un).c_str(),
-                      (fmt("%.4g", c.range / u) + un).c_str(),
-                      (fmt("%.3g", c.noise / u) + un).c_str(),
-                      (fmt("%.3g", c.numerical / u) + un).c_str(),
-                      (fmt("%.3g", c.input / u) + un).c_str(),
-                      (fmt("%.3g", c.inputGasMass / u) + un).c_str(),
-                      (fmt("%.3g", c.inputTemperature / u) + un).c_str(),
-                      (fmt("%.3g", c.validation / u) + un).c_str(),
-                      c.channel == "mass" ? "(consistency only)"
-                                          : (fmt("%.0f", 100 * c.shareOfGap) + " %").c_str());
+        std::snprintf(
+            line, sizeof line,
+            "  %-8s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %-10s  %s\n",
+            c.channel.c_str(), (fmt("%.4g", c.rmse / u) + un).c_str(),
+            (fmt("%.4g", c.range / u) + un).c_str(), (fmt("%.3g", c.noise / u) + un).c_str(),
+            (fmt("%.3g", c.numerical / u) + un).c_str(), (fmt("%.3g", c.input / u) + un).c_str(),
+            (fmt("%.3g", c.inputGasMass / u) + un).c_str(),
+            (fmt("%.3g", c.inputTemperature / u) + un).c_str(),
+            (fmt("%.3g", c.validation / u) + un).c_str(),
+            c.channel == "mass" ? "(consistency only)"
+                                : (fmt("%.0f", 100 * c.shareOfGap) + " %").c_str());
         out << line;
     }
     out << "  (input: a stated imperfection's spread; gas mass, room temp.: the protocol's stated "
            "standard uncertainties by their sensitivities; validation: the root sum square)\n";
     for (const auto& s : w.statedInputs)
-        out << "  stated " << (s.input == diagnose::ProtocolInput::GasMass ? "gas mass" : "room temperature")
+        out << "  stated "
+            << (s.input == diagnose::ProtocolInput::GasMass ? "gas mass" : "room temperature")
             << " uncertainty: " << io::formatStatedInput(s) << "\n";
     out << "  largest shares of squared error (per channel and split):\n";
     for (const auto& r : w.regimes)
@@ -236,24 +244,25 @@ void printStiffness(const diagnose::StiffnessComparison& k, std::ostream& out) {
         << "  gas mass   measured   simulated   difference   stage stated / simulated\n";
     for (const auto& p : k.points) {
         char line[200];
-        std::snprintf(line, sizeof line, "  %-9s  %-9s  %-10s  %-11s  %s / %s%s\n",
-                      fmt("%.3g g", p.gasMass * 1e3).c_str(), fmt("%.3f", p.measured * 1e-3).c_str(),
-                      std::isfinite(p.simulated) ? fmt("%.3f", p.simulated * 1e-3).c_str() : "none",
-                      std::isfinite(p.simulated)
-                          ? fmt("%+.3f", (p.measured - p.simulated) * 1e-3).c_str()
-                          : "-",
-                      p.measuredStage ? std::to_string(p.measuredStage).c_str() : "-",
-                      p.simulatedStage ? std::to_string(p.simulatedStage).c_str() : "-",
-                      p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
+        std::snprintf(
+            line, sizeof line, "  %-9s  %-9s  %-10s  %-11s  %s / %s%s\n",
+            fmt("%.3g g", p.gasMass * 1e3).c_str(), fmt("%.3f", p.measured * 1e-3).c_str(),
+            std::isfinite(p.simulated) ? fmt("%.3f", p.simulated * 1e-3).c_str() : "none",
+            std::isfinite(p.simulated) ? fmt("%+.3f", (p.measured - p.simulated) * 1e-3).c_str()
+                                       : "-",
+            p.measuredStage ? std::to_string(p.measuredStage).c_str() : "-",
+            p.simulatedStage ? std::to_string(p.simulatedStage).c_str() : "-",
+            p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
         out << line;
     }
     for (const auto& r : k.regimes)
-        out << "  " << r.regime << ": " << r.points << (r.points == 1 ? " mass" : " masses") << ", RMSE " << fmt("%.3g", r.rmse * 1e-3)
-            << " N/mm, bias (measured - simulated) " << fmt("%+.3g", r.bias * 1e-3) << " N/mm, "
-            << fmt("%.0f %%", 100 * r.relative) << " of the measured, share "
-            << fmt("%.0f %%", 100 * r.share) << "\n";
-    out << "  scale: measured = (1 " << fmt("%+.3f", k.scale) << ") x simulated; least stiffness at "
-        << fmt("%.3g g", k.leastMeasured * 1e3) << " measured, "
+        out << "  " << r.regime << ": " << r.points << (r.points == 1 ? " mass" : " masses")
+            << ", RMSE " << fmt("%.3g", r.rmse * 1e-3) << " N/mm, bias (measured - simulated) "
+            << fmt("%+.3g", r.bias * 1e-3) << " N/mm, " << fmt("%.0f %%", 100 * r.relative)
+            << " of the measured, share " << fmt("%.0f %%", 100 * r.share) << "\n";
+    out << "  scale: measured = (1 " << fmt("%+.3f", k.scale)
+        << ") x simulated; least stiffness at " << fmt("%.3g g", k.leastMeasured * 1e3)
+        << " measured, "
         << (std::isfinite(k.leastSimulated) ? fmt("%.3g g", k.leastSimulated * 1e3) : "none")
         << " simulated; stages agree at " << k.stagesAgreeing << " of " << k.stagesCompared
         << " masses; " << k.missing << " without a simulated stiffness\n";
@@ -262,11 +271,13 @@ void printStiffness(const diagnose::StiffnessComparison& k, std::ostream& out) {
 int run(const Args& a) {
     if (io::readMeasuredKind(a.measured) != "") {
         if (!a.meshCheck.empty())
-            throw UsageError("--mesh-check is for the rig's tests; a patient's numerical "
-                             "uncertainty is its run at half the macro step");
+            throw UsageError(
+                "--mesh-check is for the rig's tests; a patient's numerical "
+                "uncertainty is its run at half the macro step");
         if (a.stopIfWithin)
-            throw UsageError("--stop-if-within is for the rig's tests; a patient's diagnosis "
-                             "fits its candidates (or use --where-only)");
+            throw UsageError(
+                "--stop-if-within is for the rig's tests; a patient's diagnosis "
+                "fits its candidates (or use --where-only)");
         PatientDiagnoseArgs p;
         p.measured = a.measured, p.out = a.out, p.commandLine = a.commandLine;
         p.force = a.force, p.whereOnly = a.whereOnly, p.quiet = a.quiet;
@@ -309,7 +320,9 @@ int run(const Args& a) {
     info.scenarioFile = data.scenarioFile;
     info.program = std::string("bagsim ") + bagsim::kVersion;
     info.commandLine = a.commandLine;
-    auto write = [&](const std::string& name, const std::string& text) { writeOutputFile(out, name, text); };
+    auto write = [&](const std::string& name, const std::string& text) {
+        writeOutputFile(out, name, text);
+    };
     // A measured stiffness curve: its masses in turn, let down from the largest as in the
     // seed's test, loading only. A curve that stops or gives no stiffness is a finding, not a
     // failure of the diagnosis.
@@ -343,7 +356,8 @@ int run(const Args& a) {
     }
     if (data.tests.empty()) {
         info.simulations = simulations;
-        info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        info.seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         write("diagnosis.json", io::formatDiagnosisJson(info, {}, nullptr, stiffness.get(),
                                                         curveWhich.get(), curveNotRun));
         if (curveWhich)
@@ -386,8 +400,9 @@ int run(const Args& a) {
                           ? ", " + std::to_string(firstInputRun - firstPopulationRun) +
                                 " bags of the imperfection's population"
                           : std::string())
-                  << (inputRuns.empty() ? "" : ", " + std::to_string(inputRuns.size()) +
-                                                   " for the stated inputs")
+                  << (inputRuns.empty()
+                          ? ""
+                          : ", " + std::to_string(inputRuns.size()) + " for the stated inputs")
                   << "), " << a.threads << " at a time ..." << std::endl;
     std::vector<bags::LoadTestResult> results = diagnose::runLoadTests(runs, simulate, a.threads);
     simulations += static_cast<int>(runs.size());
@@ -422,7 +437,8 @@ int run(const Args& a) {
             for (size_t c = 0; c < d.size(); ++c) sum2[c] += d[c] * d[c];
         }
         for (size_t c = 0; c < sum2.size(); ++c)
-            t.inputUncertainty[c] = population.empty() ? 0.0 : std::sqrt(sum2[c] / double(population.size()));
+            t.inputUncertainty[c] =
+                population.empty() ? 0.0 : std::sqrt(sum2[c] / double(population.size()));
         tests.push_back(std::move(t));
     }
     diagnose::addInputUncertainties(data, inputRuns, inputResults, sc.rig, sc.options.loadingRate,
@@ -445,10 +461,12 @@ int run(const Args& a) {
         // --stop-if-within spares their fits.
         which = std::make_unique<diagnose::WhichReport>();
         which->verdict = "none";
-        which->reason = "every channel's RMSE is within twice its validation uncertainty "
-                        "(sensor noise, numerical and input uncertainty); no candidate fitted "
-                        "(--stop-if-within)";
-        which->pairStageReason = "not run: every channel is within twice its validation uncertainty";
+        which->reason =
+            "every channel's RMSE is within twice its validation uncertainty "
+            "(sensor noise, numerical and input uncertainty); no candidate fitted "
+            "(--stop-if-within)";
+        which->pairStageReason =
+            "not run: every channel is within twice its validation uncertainty";
         if (!a.quiet) std::cout << "which: no candidate fitted (--stop-if-within)\n";
     } else if (!a.whereOnly && data.tests.size() >= 2) {
         diagnose::CalibrationOptions co;
@@ -458,8 +476,9 @@ int run(const Args& a) {
         const auto whichStart = std::chrono::steady_clock::now();
         if (!a.quiet)
             co.progress = [whichStart](const std::string& what, int number, int count) {
-                const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                               whichStart).count();
+                const double s =
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - whichStart)
+                        .count();
                 std::cout << "which: " << number << " of " << count << ", " << what << " ("
                           << fmt("%.0f s", s) << " so far)" << std::endl;
             };
@@ -505,9 +524,8 @@ int run(const Args& a) {
                 const diagnose::CandidateResult& b = which->candidates.front();
                 std::cout << "how far (" << b.effect
                           << ", every test when held out; before -> after):\n";
-                for (size_t k = 0; k < b.heldoutMetricsBefore.size() &&
-                                   k < b.heldoutMetricsAfter.size();
-                     ++k) {
+                for (size_t k = 0;
+                     k < b.heldoutMetricsBefore.size() && k < b.heldoutMetricsAfter.size(); ++k) {
                     const auto& m0 = b.heldoutMetricsBefore[k];
                     const auto& m1 = b.heldoutMetricsAfter[k];
                     const auto kind = diagnose::getChannelKind(m0.channel);
@@ -521,12 +539,13 @@ int run(const Args& a) {
                               << fmt("%.4g", m0.maxError / u) << " -> "
                               << fmt("%.4g", m1.maxError / u) << un << ", area metric "
                               << fmt("%.4g", m0.areaMetric / u) << " -> "
-                              << fmt("%.4g", m1.areaMetric / u) << un
-                              << "; validation uncertainty " << fmt("%.3g", uval / u) << un << "\n";
+                              << fmt("%.4g", m1.areaMetric / u) << un << "; validation uncertainty "
+                              << fmt("%.3g", uval / u) << un << "\n";
                 }
             }
             for (const auto& p : which->confusable)
-                std::cout << "  confusable on these data: " << p.first << " and " << p.second << "\n";
+                std::cout << "  confusable on these data: " << p.first << " and " << p.second
+                          << "\n";
             std::cout << "pairs: " << which->pairStageReason << "\n";
             for (const auto& p : which->pairs)
                 if (p.refined)
@@ -551,12 +570,14 @@ int run(const Args& a) {
     write("diagnosis.json", io::formatDiagnosisJson(info, where, which.get(), stiffness.get(),
                                                     curveWhich.get(), curveNotRun));
     if (which)
-        std::cout << "verdict: " << diagnose::describeVerdict(*which) << " (" << which->reason << ")\n";
-    else
-        std::cout << "verdict: not run (" << (a.whereOnly ? "--where-only" : "one test: no test to hold out")
+        std::cout << "verdict: " << diagnose::describeVerdict(*which) << " (" << which->reason
                   << ")\n";
-    std::cout << "diagnosis in " << out.string() << "/: diagnosis.json, residuals.csv, report.html ("
-              << simulations << " simulations, " << fmt("%.1f", info.seconds) << " s)\n";
+    else
+        std::cout << "verdict: not run ("
+                  << (a.whereOnly ? "--where-only" : "one test: no test to hold out") << ")\n";
+    std::cout << "diagnosis in " << out.string()
+              << "/: diagnosis.json, residuals.csv, report.html (" << simulations
+              << " simulations, " << fmt("%.1f", info.seconds) << " s)\n";
     return 0;
 }
 

@@ -48,7 +48,8 @@ fs::path makeCacheFile(const fs::path& dir, const diagnose::MeasuredData& data,
                        const std::string& effect, double value, const bags::LoadTestOptions& o) {
     std::ostringstream key;
     key.precision(17);
-    key << "bagsim " << bagsim::kVersion << "\n" << readText(data.scenarioFile) << "\n"
+    key << "bagsim " << bagsim::kVersion << "\n"
+        << readText(data.scenarioFile) << "\n"
         << effect << "=" << value << " block " << o.blockSize << " rate " << o.loadingRate
         << " peak " << o.peakForce << " T " << o.gas.temperature << " range " << o.stiffnessFrom
         << "-" << o.stiffnessTo << " step " << o.displacementStep << " unload " << o.unload
@@ -142,7 +143,8 @@ std::vector<bags::LoadTestResult> runCurves(const std::vector<CurveRun>& runs,
                       << ")\n";
         return r;
     };
-    const std::vector<bags::LoadTestResult> results = diagnose::runLoadTests(todo, simulate, o.threads);
+    const std::vector<bags::LoadTestResult> results =
+        diagnose::runLoadTests(todo, simulate, o.threads);
     for (size_t k = 0; k < which.size(); ++k) out[which[k]] = results[k];
     ran += static_cast<int>(todo.size());
     return out;
@@ -160,8 +162,7 @@ diagnose::StiffnessTable makeTable(const bags::LoadTestResult& r) {
     return t;
 }
 
-bags::LoadTestOptions makeCurveOptions(const io::LoadTestScenario& sc,
-                                       std::vector<double> masses) {
+bags::LoadTestOptions makeCurveOptions(const io::LoadTestScenario& sc, std::vector<double> masses) {
     bags::LoadTestOptions o = sc.options;
     std::sort(masses.rbegin(), masses.rend());  // let down from the largest, as the seed's test
     o.gasMasses = masses;
@@ -197,21 +198,24 @@ diagnose::StiffnessWhich runCurveWhich(const diagnose::MeasuredData& data,
     std::vector<diagnose::CurveCandidate> candidates;
     std::vector<diagnose::NotApplicable> notApplicable;
     for (const diagnose::Effect& e : diagnose::getEffects()) {
-        if (o.candidates.empty() ? !e.inLibrary
-                                 : std::find(o.candidates.begin(), o.candidates.end(), e.name) ==
-                                       o.candidates.end())
+        if (o.candidates.empty()
+                ? !e.inLibrary
+                : std::find(o.candidates.begin(), o.candidates.end(), e.name) == o.candidates.end())
             continue;
         diagnose::CurveCandidate c;
         c.effect = &e;
         c.roomTemperature = room;
         std::string why;
-        if (diagnose::actsOnStiffnessCurve(e, c.action, why)) candidates.push_back(c);
-        else notApplicable.push_back({e.name, why});
+        if (diagnose::actsOnStiffnessCurve(e, c.action, why))
+            candidates.push_back(c);
+        else
+            notApplicable.push_back({e.name, why});
     }
     if (used.size() < 3)
         throw std::invalid_argument(
             "the stiffness curve's which part needs three gas masses or more where the model "
-            "gives a stiffness; it gives one at " + std::to_string(used.size()));
+            "gives a stiffness; it gives one at " +
+            std::to_string(used.size()));
 
     // The runs: the dense curve (two let-downs, every other mass each, so that two can run at
     // once whatever --threads says), and bag-volume's grid at the used masses.
@@ -279,27 +283,31 @@ diagnose::StiffnessWhich runCurveWhich(const diagnose::MeasuredData& data,
                 s2 += (d - p.simulated) * (d - p.simulated), ++n;
         }
         validation = n ? std::sqrt(s2 / n) : 0.0;
-        what = "the model's stiffness let down through the dense curve's masses against its "
-               "curve at the measured masses: RMS over " + std::to_string(n) + " masses";
+        what =
+            "the model's stiffness let down through the dense curve's masses against its "
+            "curve at the measured masses: RMS over " +
+            std::to_string(n) + " masses";
     }
     const diagnose::StiffnessTable modelTable = makeTable(model);
     size_t next = shifts ? 2 : 0;
     for (diagnose::CurveCandidate& c : candidates) {
         switch (c.action) {
-        case diagnose::CurveAction::MassOffset:
-        case diagnose::CurveAction::MassScale:
-            c.tables = {dense};
-            c.simulations = 2;
-            break;
-        case diagnose::CurveAction::Grid:
-            c.values = volumes;
-            for (double v : volumes) {
-                if (v == 0.0 && modelIsZero) c.tables.push_back(modelTable);
-                else c.tables.push_back(makeTable(results[next++])), ++c.simulations;
-            }
-            break;
-        default:
-            c.tables = {modelTable};
+            case diagnose::CurveAction::MassOffset:
+            case diagnose::CurveAction::MassScale:
+                c.tables = {dense};
+                c.simulations = 2;
+                break;
+            case diagnose::CurveAction::Grid:
+                c.values = volumes;
+                for (double v : volumes) {
+                    if (v == 0.0 && modelIsZero)
+                        c.tables.push_back(modelTable);
+                    else
+                        c.tables.push_back(makeTable(results[next++])), ++c.simulations;
+                }
+                break;
+            default:
+                c.tables = {modelTable};
         }
     }
     diagnose::CalibrationOptions co;
@@ -328,14 +336,13 @@ void printCurveWhich(const diagnose::StiffnessWhich& w, std::ostream& out) {
                     ? " +- " + fmt("%.2g", c.parameterStdDev[0] / p.siPerUnit)
                     : std::string())
             << (p.unit.empty() ? "" : " " + p.unit) << " (fitted on all masses); per fold:";
-        for (const auto& f : c.folds)
-            out << " " << fmt("%.4g", f.parameters[0] / p.siPerUnit);
+        for (const auto& f : c.folds) out << " " << fmt("%.4g", f.parameters[0] / p.siPerUnit);
         out << "; interpolation error " << fmt("%.3g N/mm", interp * 1e-3) << "\n";
         if (!c.heldoutMetricsAfter.empty())
             out << "    held out: RMSE " << fmt("%.3g", c.heldoutMetricsBefore[0].rmse * 1e-3)
-                << " -> " << fmt("%.3g N/mm", c.heldoutMetricsAfter[0].rmse * 1e-3)
-                << ", largest " << fmt("%.3g", c.heldoutMetricsBefore[0].maxError * 1e-3)
-                << " -> " << fmt("%.3g N/mm", c.heldoutMetricsAfter[0].maxError * 1e-3) << "\n";
+                << " -> " << fmt("%.3g N/mm", c.heldoutMetricsAfter[0].rmse * 1e-3) << ", largest "
+                << fmt("%.3g", c.heldoutMetricsBefore[0].maxError * 1e-3) << " -> "
+                << fmt("%.3g N/mm", c.heldoutMetricsAfter[0].maxError * 1e-3) << "\n";
         else
             out << "    held out: a mass off the candidate's grid\n";
     }

@@ -15,12 +15,12 @@
 namespace bagsim::app {
 
 struct CurveRunOptions {
-    std::filesystem::path cache;           ///< the cache folder (created when needed)
-    int threads = 1;                       ///< curves run at once
-    double shiftStep = 0.125e-3;           ///< [kg] the dense curve's mass step
-    int volumePoints = 9;                  ///< bag-volume's grid over its bounds (odd: 0 in it)
-    std::vector<std::string> candidates;   ///< empty: the library
-    bool quiet = false;                    ///< no progress on stderr
+    std::filesystem::path cache;          ///< the cache folder (created when needed)
+    int threads = 1;                      ///< curves run at once
+    double shiftStep = 0.125e-3;          ///< [kg] the dense curve's mass step
+    int volumePoints = 9;                 ///< bag-volume's grid over its bounds (odd: 0 in it)
+    std::vector<std::string> candidates;  ///< empty: the library
+    bool quiet = false;                   ///< no progress on stderr
 };
 
 /// The model's curve at the measured masses, let down from the largest, loading only (found

@@ -74,8 +74,10 @@ double parseFinerMesh(const std::string& option, const std::string& text, double
         throw UsageError(option + " '" + text + "': " + ex.what() + "; " + valid);
     }
     if (!(h < written))
-        throw UsageError(option + " '" + text + "' is not finer than the scenario's "
-                         "airbag.mesh_size (" + io::formatSignificant(written, "mm") + "); " + valid);
+        throw UsageError(option + " '" + text +
+                         "' is not finer than the scenario's "
+                         "airbag.mesh_size (" +
+                         io::formatSignificant(written, "mm") + "); " + valid);
     if (!(h >= kMinFinerMesh)) throw UsageError(option + " '" + text + "' is too fine; " + valid);
     return h;
 }
@@ -96,8 +98,9 @@ void claimOutputFolder(const fs::path& dir, bool force, const std::vector<std::s
     std::error_code ec;
     if (fs::exists(dir, ec)) {
         if (!fs::is_directory(dir, ec))
-            throw io::InputError(dir.string(), 0, "",
-                                 "the output path exists and is not a folder; choose another --out");
+            throw io::InputError(
+                dir.string(), 0, "",
+                "the output path exists and is not a folder; choose another --out");
         if (!fs::is_empty(dir, ec)) {
             if (!force)
                 throw io::InputError(dir.string(), 0, "",
@@ -125,7 +128,8 @@ void claimOutputFolder(const fs::path& dir, bool force, const std::vector<std::s
     }
     fs::create_directories(dir, ec);
     if (!fs::is_directory(dir, ec))
-        throw io::InputError(dir.string(), 0, "", "cannot create the output folder (" + ec.message() + ")");
+        throw io::InputError(dir.string(), 0, "",
+                             "cannot create the output folder (" + ec.message() + ")");
 }
 
 void writeOutputFile(const fs::path& dir, const std::string& name, const std::string& text) {

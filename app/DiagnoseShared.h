@@ -61,6 +61,7 @@ namespace bagsim::app {
 
 /// Writes `name` into the output folder through a temporary file renamed into place.
 /// @throws std::runtime_error if it cannot be written.
-void writeOutputFile(const std::filesystem::path& dir, const std::string& name, const std::string& text);
+void writeOutputFile(const std::filesystem::path& dir, const std::string& name,
+                     const std::string& text);
 
 }  // namespace bagsim::app

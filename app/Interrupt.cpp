@@ -40,7 +40,9 @@ void throwIfInterrupted() {
 }
 
 std::string describeInterruptSignal(int sig) {
-    return sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP (its terminal closed)" : "the user (SIGINT)";
+    return sig == SIGTERM  ? "SIGTERM"
+           : sig == SIGHUP ? "SIGHUP (its terminal closed)"
+                           : "the user (SIGINT)";
 }
 
 int getInterruptExitCode(int sig) { return 128 + sig; }

@@ -44,7 +44,8 @@ diagnose::PatientChannels runCoSimulation(const io::ScenarioFile& file, const st
     const int err = posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
     if (err != 0)
-        throw std::runtime_error(std::string("cannot start the co-simulation (") + std::strerror(err) + ")");
+        throw std::runtime_error(std::string("cannot start the co-simulation (") +
+                                 std::strerror(err) + ")");
     int status = 0;
     while (waitpid(pid, &status, 0) < 0)
         if (errno != EINTR) throw std::runtime_error("lost the co-simulation's process");

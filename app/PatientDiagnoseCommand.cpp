@@ -47,8 +47,10 @@ std::vector<double> makeWindowEdges(const std::vector<diagnose::PatientTestCase>
     return e;
 }
 
-void printWhere(const diagnose::PatientComparison& c, const diagnose::WhereReport& w, std::ostream& out) {
-    out << "where: gap " << fmt("%.4f", w.gap) << " (RMS over the channels of RMSE / measured range)"
+void printWhere(const diagnose::PatientComparison& c, const diagnose::WhereReport& w,
+                std::ostream& out) {
+    out << "where: gap " << fmt("%.4f", w.gap)
+        << " (RMS over the channels of RMSE / measured range)"
         << (w.withinValidation ? ", within the validation uncertainty" : "") << "\n";
     for (const auto& ch : w.channels) {
         const diagnose::PatientChannelComparison* cc = c.find(ch.channel);
@@ -60,19 +62,21 @@ void printWhere(const diagnose::PatientComparison& c, const diagnose::WhereRepor
             << fmt("%.3g", ch.numerical / u) << un << ", share of gap "
             << fmt("%.0f %%", 100 * ch.shareOfGap) << "\n";
     }
-    out << "  largest shares of a channel's squared error (by region, bag, time window, test, subject):\n";
+    out << "  largest shares of a channel's squared error (by region, bag, time window, test, "
+           "subject):\n";
     for (const auto& r : w.regimes)
         if (r.regime != "all" && r.share >= 0.25)
             out << "    " << r.channel << ", " << r.regime << ": " << fmt("%.0f %%", 100 * r.share)
-                << " (bias " << fmt("%+.3g", r.bias / (c.find(r.channel) ? c.find(r.channel)->unitScale : 1.0))
+                << " (bias "
+                << fmt("%+.3g", r.bias / (c.find(r.channel) ? c.find(r.channel)->unitScale : 1.0))
                 << ")\n";
     out << "  signatures (bias, scale, lag):\n";
     for (const auto& s : w.signatures) {
         const diagnose::PatientChannelComparison* cc = c.find(s.channel);
         const std::string part = s.part.empty() ? "" : " " + s.part;
-        out << "    " << s.channel << part << ": bias " << fmt("%+.3g", s.bias / (cc ? cc->unitScale : 1.0))
-            << (cc ? " " + cc->unit : "") << ", scale " << fmt("%+.3f", s.scale) << ", lag "
-            << fmt("%.3f s", s.lag) << "\n";
+        out << "    " << s.channel << part << ": bias "
+            << fmt("%+.3g", s.bias / (cc ? cc->unitScale : 1.0)) << (cc ? " " + cc->unit : "")
+            << ", scale " << fmt("%+.3f", s.scale) << ", lag " << fmt("%.3f s", s.lag) << "\n";
     }
 }
 
@@ -84,7 +88,8 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     const io::PatientMeasuredScenario ms = io::readPatientMeasuredScenario(data);
     for (const std::string& n : a.candidates)
         if (!diagnose::findPatientEffect(n))
-            throw UsageError("--candidates: '" + n + "' is not an effect of the patient's library; valid: " +
+            throw UsageError("--candidates: '" + n +
+                             "' is not an effect of the patient's library; valid: " +
                              diagnose::listPatientEffectNames());
     if (a.windows < 2 && !a.whereOnly) throw UsageError("--windows must be 2 or more (the folds)");
     const fs::path out(a.out);
@@ -117,10 +122,15 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     } else {
         for (size_t t = 0; t < data.tests.size(); ++t) {
             const io::PatientMeasuredTestScenario& ts = ms.tests[t];
-            testRuns.push_back({ts.name, ts.name + "/", ts.file, ts.scenario.options.layout.gasMass});
+            testRuns.push_back(
+                {ts.name, ts.name + "/", ts.file, ts.scenario.options.layout.gasMass});
             // Each test's mat regions under its own patient (subjects differ in build).
-            cases.push_back({ts.name, data.tests[t].channels, {}, ts.scenario.options.layout.gasMass,
-                             data.tests[t].subject, makeMatRegions(ts.scenario)});
+            cases.push_back({ts.name,
+                             data.tests[t].channels,
+                             {},
+                             ts.scenario.options.layout.gasMass,
+                             data.tests[t].subject,
+                             makeMatRegions(ts.scenario)});
         }
     }
     std::vector<std::string> names, subjects;
@@ -135,16 +145,22 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
         // The numerical uncertainty: the same scenario at half the macro step.
         io::ScenarioFile halfFile = testRuns[t].file;
         halfFile.applyOverride("coupling.macro_step", formatHalfMacroStep(ms.scenario));
-        const diagnose::PatientChannels half = simulate(halfFile, testRuns[t].dir + "half-macro-step");
+        const diagnose::PatientChannels half =
+            simulate(halfFile, testRuns[t].dir + "half-macro-step");
         const diagnose::PatientComparison basePart =
             diagnose::comparePatient(cases[t].measured, cases[t].baseline, {}, regionsOf(t));
-        halfParts.push_back(diagnose::comparePatient(cases[t].measured, half, {}, regionsOf(t), &basePart));
+        halfParts.push_back(
+            diagnose::comparePatient(cases[t].measured, half, {}, regionsOf(t), &basePart));
     }
-    const std::vector<diagnose::PatientComparison> baseParts = diagnose::comparePatientTests(cases, regions);
-    const diagnose::PatientComparison base = diagnose::joinPatientComparisons(baseParts, names, subjects);
+    const std::vector<diagnose::PatientComparison> baseParts =
+        diagnose::comparePatientTests(cases, regions);
+    const diagnose::PatientComparison base =
+        diagnose::joinPatientComparisons(baseParts, names, subjects);
     if (base.channels.empty())
-        throw io::InputError(a.measured, 0, "", "no channel of the data has a simulated counterpart");
-    const diagnose::PatientComparison half = diagnose::joinPatientComparisons(halfParts, names, subjects);
+        throw io::InputError(a.measured, 0, "",
+                             "no channel of the data has a simulated counterpart");
+    const diagnose::PatientComparison half =
+        diagnose::joinPatientComparisons(halfParts, names, subjects);
     diagnose::PatientFolds folds;
     folds.windowEdges = makeWindowEdges(cases, std::max(2, a.windows));
     folds.tests = int(cases.size());
@@ -153,8 +169,8 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     const std::vector<double>& edges = folds.windowEdges;
     diagnose::WhereReport where;
     try {
-        where = diagnose::calcPatientWhere(base, diagnose::calcPatientSimulatedDifference(base, half),
-                                           edges, 2.0);
+        where = diagnose::calcPatientWhere(
+            base, diagnose::calcPatientSimulatedDifference(base, half), edges, 2.0);
     } catch (const std::domain_error& e) {  // a non-finite residual: the data's sample
         throw io::InputError(a.measured, 0, "", e.what());
     }
@@ -182,8 +198,8 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
                 diagnose::applyPatientInstrumentEffect(*e, b.parameters, inst);
                 std::vector<diagnose::PatientComparison> parts;
                 for (size_t t = 0; t < cases.size(); ++t)
-                    parts.push_back(diagnose::comparePatient(cases[t].measured, cases[t].baseline, inst,
-                                                             regionsOf(t), &baseParts[t]));
+                    parts.push_back(diagnose::comparePatient(cases[t].measured, cases[t].baseline,
+                                                             inst, regionsOf(t), &baseParts[t]));
                 fitted = std::make_unique<diagnose::PatientComparison>(
                     diagnose::joinPatientComparisons(parts, names, subjects));
             }
@@ -191,10 +207,11 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
         if (!a.quiet) {
             std::cout << "which: candidates ranked by the shrink of the held-out gap beyond the "
                          "validation uncertainty (leave one "
-                      << (folds.isBySubject() ? "subject" : folds.isByTest() ? "test" : "time window")
-                      << " out of " << folds.getCount()
-                      << "), less " << fmt("%g", co.parameterPenalty)
-                      << " per parameter:\n";
+                      << (folds.isBySubject() ? "subject"
+                          : folds.isByTest()  ? "test"
+                                              : "time window")
+                      << " out of " << folds.getCount() << "), less "
+                      << fmt("%g", co.parameterPenalty) << " per parameter:\n";
             for (const auto& c : which->candidates) {
                 const diagnose::Effect* e = diagnose::findPatientEffect(c.effect);
                 std::cout << "  " << c.effect << ": shrink " << fmt("%.1f %%", 100 * c.excessShrink)
@@ -210,14 +227,16 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
                     const auto& m1 = c.heldoutMetricsAfter[k];
                     const diagnose::PatientChannelComparison* cc = base.find(m0.channel);
                     const double u = cc ? cc->unitScale : 1.0;
-                    std::cout << "    held out, " << m0.channel << ": RMSE " << fmt("%.4g", m0.rmse / u)
-                              << " -> " << fmt("%.4g", m1.rmse / u) << " " << (cc ? cc->unit : "")
-                              << ", area metric " << fmt("%.4g", m0.areaMetric / u) << " -> "
+                    std::cout << "    held out, " << m0.channel << ": RMSE "
+                              << fmt("%.4g", m0.rmse / u) << " -> " << fmt("%.4g", m1.rmse / u)
+                              << " " << (cc ? cc->unit : "") << ", area metric "
+                              << fmt("%.4g", m0.areaMetric / u) << " -> "
                               << fmt("%.4g", m1.areaMetric / u) << "\n";
                 }
             }
             for (const auto& p : which->confusable)
-                std::cout << "  confusable on these data: " << p.first << " and " << p.second << "\n";
+                std::cout << "  confusable on these data: " << p.first << " and " << p.second
+                          << "\n";
         }
     }
     io::DiagnosisInfo info;
@@ -227,17 +246,21 @@ int runPatientDiagnosis(const PatientDiagnoseArgs& a) {
     info.commandLine = a.commandLine;
     info.simulations = simulations;
     info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    writeOutputFile(out, "residuals.csv", io::formatPatientResidualsCsv(base, ms.scenario.mat.columns));
-    writeOutputFile(out, "report.html",
-                    io::formatPatientDiagnosisReportHtml(info, base, where, which.get(), fitted.get()));
+    writeOutputFile(out, "residuals.csv",
+                    io::formatPatientResidualsCsv(base, ms.scenario.mat.columns));
+    writeOutputFile(
+        out, "report.html",
+        io::formatPatientDiagnosisReportHtml(info, base, where, which.get(), fitted.get()));
     writeOutputFile(out, "diagnosis.json",
                     io::formatPatientDiagnosisJson(info, base, where, which.get(), folds));
     if (which)
-        std::cout << "verdict: " << diagnose::describeVerdict(*which) << " (" << which->reason << ")\n";
+        std::cout << "verdict: " << diagnose::describeVerdict(*which) << " (" << which->reason
+                  << ")\n";
     else
         std::cout << "verdict: not run (--where-only)\n";
-    std::cout << "diagnosis in " << out.string() << "/: diagnosis.json, residuals.csv, report.html ("
-              << simulations << " co-simulations, " << fmt("%.1f", info.seconds) << " s)\n";
+    std::cout << "diagnosis in " << out.string()
+              << "/: diagnosis.json, residuals.csv, report.html (" << simulations
+              << " co-simulations, " << fmt("%.1f", info.seconds) << " s)\n";
     return 0;
 }
 

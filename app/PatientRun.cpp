@@ -129,8 +129,8 @@ int runPatientOnSupport(const io::ScenarioFile& file, const std::string& out, bo
           << (o.support.frictionLaw == body::SupportFrictionLaw::StickSlip
                   ? fmt(" (stick-slip, %g mm)", 1e3 * o.support.stickDistance)
                   : fmt(" (regularised, %g mm/s)", 1e3 * o.support.slipVelocity))
-          << "; settle time " << fmt("%g", o.settleTime) << " s, "
-          << r.steps << " integrator steps, " << fmt("%.2f", r.wallSeconds) << " s wall-clock\n"
+          << "; settle time " << fmt("%g", o.settleTime) << " s, " << r.steps
+          << " integrator steps, " << fmt("%.2f", r.wallSeconds) << " s wall-clock\n"
           << table.str();
         c.close();
         s.close();

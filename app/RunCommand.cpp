@@ -124,8 +124,9 @@ Args parseArgs(int argc, char** argv) {
         } else if (arg == "--out" || arg.rfind("--out=", 0) == 0) {
             a.out = value("--out");
             if (a.out.empty())
-                throw UsageError("--out needs a folder, not an empty path (without --out the "
-                                 "results go to out/NAME)");
+                throw UsageError(
+                    "--out needs a folder, not an empty path (without --out the "
+                    "results go to out/NAME)");
         } else if (arg == "--set" || arg.rfind("--set=", 0) == 0) {
             const std::string set = value("--set");
             // One value a key: a second would silently win.
@@ -157,7 +158,9 @@ Args parseArgs(int argc, char** argv) {
         }
     }
     if (!a.resume.empty()) {
-        if (a.force) throw UsageError("--resume continues the run in its folder; --force does not go with it");
+        if (a.force)
+            throw UsageError(
+                "--resume continues the run in its folder; --force does not go with it");
         if (!a.out.empty() && std::filesystem::path(a.out).lexically_normal() !=
                                   std::filesystem::path(a.resume).lexically_normal())
             throw UsageError("--resume " + a.resume + " writes into that folder; --out " + a.out +
@@ -165,11 +168,13 @@ Args parseArgs(int argc, char** argv) {
     }
     if (!a.fromRest.empty()) {
         if (!a.resume.empty())
-            throw UsageError("--resume continues a run with its own start; --from-rest does not go "
-                             "with it");
+            throw UsageError(
+                "--resume continues a run with its own start; --from-rest does not go "
+                "with it");
         if (!a.out.empty() && std::filesystem::path(a.out).lexically_normal() ==
                                   std::filesystem::path(a.fromRest).lexically_normal())
-            throw UsageError("--out " + a.out + " is the folder of the rest state; a run from "
+            throw UsageError("--out " + a.out +
+                             " is the folder of the rest state; a run from "
                              "rest writes into a folder of its own");
     }
     if (!a.help && a.scenario.empty() && a.resume.empty())
@@ -247,9 +252,9 @@ class Progress {
             std::chrono::duration<double>(std::chrono::steady_clock::now() - m_curveStart).count();
         // The library's stiffness rule, applied to the steps seen so far.
         std::string k = "k n/a";
-        const double slope = bags::calcRangeStiffness(m_curveSteps, m_options.stiffnessFrom,
-                                                      m_options.stiffnessTo)
-                                 .slope;
+        const double slope =
+            bags::calcRangeStiffness(m_curveSteps, m_options.stiffnessFrom, m_options.stiffnessTo)
+                .slope;
         if (std::isfinite(slope)) k = fmt("k = %.3f N/mm", 1e-3 * slope);
         if (m_tty) std::fprintf(stderr, "\r\033[K");
         std::fprintf(stderr,
@@ -291,7 +296,8 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
     }
     if (o.stepping == bags::AirbagSpec::Stepping::Dynamic) {
         out << "  (stabilised: none in the dynamic test; its film in time, docs/solver.md)\n";
-        out << "dynamic film (the block's pace, and the largest share of its work the film's kinetic\n"
+        out << "dynamic film (the block's pace, and the largest share of its work the film's "
+               "kinetic\n"
                "energy reached; limit "
             << fmt("%g", 100.0 * o.dynamic.kineticShareLimit) << " %):\n";
         for (const bags::LoadCurve& c : r.curves)
@@ -300,7 +306,8 @@ void printSummary(const bags::LoadTestResult& r, const bags::LoadTestOptions& o)
                 << fmt("%.2f %%", 100.0 * c.kineticShare)
                 << (c.quasiStatic ? "" : "  NOT QUASI-STATIC") << "\n";
     } else {
-        out << "  (stabilised: steps accepted with the stabilisation springs, and the largest share of\n"
+        out << "  (stabilised: steps accepted with the stabilisation springs, and the largest "
+               "share of\n"
                "   the block's work they held; docs/solver.md)\n";
     }
     for (const bags::LoadCurve& c : r.curves)
@@ -469,11 +476,10 @@ int runResume(const Args& args, const std::string& stopAfterText) {
     if (!std::filesystem::exists(cp, ec)) {
         if (!incomplete && std::filesystem::exists(dir / io::kResultsH5, ec))
             return refuse("the run there finished (no INCOMPLETE marker); nothing to resume");
-        return refuse(
-            "it holds no checkpoint (" + std::string(io::kCheckpointFile) +
-            "): only patient-on-array runs write one, every output.checkpoint_every of "
-            "simulated time (1 s by default, 0 s: none); a run stopped before its first "
-            "checkpoint must be run again");
+        return refuse("it holds no checkpoint (" + std::string(io::kCheckpointFile) +
+                      "): only patient-on-array runs write one, every output.checkpoint_every of "
+                      "simulated time (1 s by default, 0 s: none); a run stopped before its first "
+                      "checkpoint must be run again");
     }
     if (!incomplete)
         return refuse("the run there finished (no INCOMPLETE marker); nothing to resume");
@@ -489,15 +495,17 @@ int runResume(const Args& args, const std::string& stopAfterText) {
     try {
         const io::RunInfo folder = io::readRunInfo(dir.string());
         if (folder.scenarioText != header.scenarioText)
-            return refuse("its checkpoint was written by another run than the one whose results "
-                          "are there (the scenario differs: " +
-                          describeFirstDifference(folder.scenarioText, header.scenarioText) +
-                          "); the folder is left as it was");
+            return refuse(
+                "its checkpoint was written by another run than the one whose results "
+                "are there (the scenario differs: " +
+                describeFirstDifference(folder.scenarioText, header.scenarioText) +
+                "); the folder is left as it was");
         if (folder.overrides != header.overrides)
-            return refuse("its checkpoint was written by another run than the one whose results "
-                          "are there (overrides " + joinOverrides(header.overrides) +
-                          " in the checkpoint, " + joinOverrides(folder.overrides) +
-                          " in results.h5); the folder is left as it was");
+            return refuse(
+                "its checkpoint was written by another run than the one whose results "
+                "are there (overrides " +
+                joinOverrides(header.overrides) + " in the checkpoint, " +
+                joinOverrides(folder.overrides) + " in results.h5); the folder is left as it was");
     } catch (const std::exception& e) {
         return refuse(std::string("its results.h5 cannot be read (") + e.what() +
                       "), so the checkpoint cannot be checked against the run there; the folder "
@@ -518,7 +526,8 @@ int runResume(const Args& args, const std::string& stopAfterText) {
             return refuse(args.scenario + " is not the scenario the run was started with (" +
                           describeFirstDifference(given.getText(), header.scenarioText) +
                           "); --resume continues that run with its own scenario (give the "
-                          "folder alone), or run " + args.scenario + " into a new folder");
+                          "folder alone), or run " +
+                          args.scenario + " into a new folder");
     }
     if ((!args.scenario.empty() || !args.sets.empty()) && args.sets != header.overrides)
         return refuse("the overrides differ from the run's (" + joinOverrides(args.sets) +
@@ -529,7 +538,8 @@ int runResume(const Args& args, const std::string& stopAfterText) {
     control.commandLine = args.commandLine;
     control.resume = &reader;
     control.resumeModel = header.model;
-    if (!stopAfterText.empty()) control.stopAfter = io::parseQuantity(stopAfterText, io::Dimension::Time);
+    if (!stopAfterText.empty())
+        control.stopAfter = io::parseQuantity(stopAfterText, io::Dimension::Time);
     if (!args.quiet)
         std::cerr << "bagsim: resuming " << dir.string() << " at " << header.time
                   << " s (its last checkpoint) with its scenario " << header.scenarioFile
@@ -549,8 +559,9 @@ int runFromRest(const Args& args, const io::ScenarioFile& file, ArrayRunControl 
     };
     std::error_code ec;
     if (!std::filesystem::is_directory(dir, ec))
-        return refuse("no such folder; --from-rest takes the output folder of a patient-on-array "
-                      "run whose settle ended");
+        return refuse(
+            "no such folder; --from-rest takes the output folder of a patient-on-array "
+            "run whose settle ended");
     if (!std::filesystem::exists(path, ec))
         return refuse("it holds no rest state (" + std::string(io::kRestStateFile) +
                       "): a patient-on-array run writes one when its settle ends (run.settle_time "
@@ -717,8 +728,9 @@ int runRunCommand(int argc, char** argv) {
                           << "\n";
             const bags::FillScaleResult fs = io::applyBagSizing(sc);  // o is sc.options
             if (fillMass > 0.0)
-                std::cout << "airbag sized to a fill mass of " << io::formatQuantity(fillMass, "g", 3)
-                          << " (" << bags::getFillScalingName(sc.fillScaling) << " scale "
+                std::cout << "airbag sized to a fill mass of "
+                          << io::formatQuantity(fillMass, "g", 3) << " ("
+                          << bags::getFillScalingName(sc.fillScaling) << " scale "
                           << fmt("%.4f", fs.scale) << ", measured "
                           << io::formatQuantity(fs.measurement.fillMass, "g", 3) << ")";
             else
@@ -741,7 +753,8 @@ int runRunCommand(int argc, char** argv) {
             std::ofstream rig(outDir->getFile(io::kRigReadingsCsv));
             rig << io::formatRigReadingsCsv(result, sc.rig, o.loadingRate);
             if (!rig.flush())
-                throw std::runtime_error("cannot write " + outDir->getFile(io::kRigReadingsCsv).string());
+                throw std::runtime_error("cannot write " +
+                                         outDir->getFile(io::kRigReadingsCsv).string());
         }
         status = writer->finish(result);
     } catch (const Interrupted& e) {
@@ -772,20 +785,22 @@ int runRunCommand(int argc, char** argv) {
 
     printSummary(result, o);
     const std::string dir = outPath.string();
-    std::cout << "\nsolved in " << fmt("%.1f", result.seconds) << " s; " << writer->getNumSteps()
-              << " steps, " << writer->getNumFrames() << " frames saved\n"
-              << "results in " << dir << "/:\n"
-              << "  " << io::kResultsH5 << "             all curves, mesh and frames "
-              << "(docs/output-layout.md)\n"
-              << "  " << io::kResultsXdmf << "           open in ParaView: the deforming membrane\n"
-              << "  " << io::kLoadDisplacementCsv << "  gas_mass_g,displacement_mm,force_N,"
-              << "pressure_kPa,branch\n"
-              << "  " << io::kStiffnessCsv
-              << "          gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end\n";
+    std::cout
+        << "\nsolved in " << fmt("%.1f", result.seconds) << " s; " << writer->getNumSteps()
+        << " steps, " << writer->getNumFrames() << " frames saved\n"
+        << "results in " << dir << "/:\n"
+        << "  " << io::kResultsH5 << "             all curves, mesh and frames "
+        << "(docs/output-layout.md)\n"
+        << "  " << io::kResultsXdmf << "           open in ParaView: the deforming membrane\n"
+        << "  " << io::kLoadDisplacementCsv << "  gas_mass_g,displacement_mm,force_N,"
+        << "pressure_kPa,branch\n"
+        << "  " << io::kStiffnessCsv
+        << "          gas_mass_g,stiffness_N_per_mm,k_min_N_per_mm,k_max_N_per_mm,r2,stage,end\n";
     if (!sc.rig.isNone())
         std::cout << "  " << io::kRigReadingsCsv
                   << "       the instruments' readings with the scenario's rig effects\n";
-    if (std::filesystem::exists(outPath / io::kKOfMYaml))  // written by finish() when it has a branch
+    if (std::filesystem::exists(outPath /
+                                io::kKOfMYaml))  // written by finish() when it has a branch
         std::cout << "  " << io::kKOfMYaml
                   << "            k(m) and its inverse for a target-mass controller\n";
     if (status == "partial") {

@@ -96,8 +96,9 @@ Args parseArgs(int argc, char** argv) {
             v = words[++i];
         }
         if (name == "--out" && v.empty())
-            throw UsageError("--out needs a folder, not an empty path (without --out the study "
-                             "goes to out/NAME)");
+            throw UsageError(
+                "--out needs a folder, not an empty path (without --out the study "
+                "goes to out/NAME)");
         if (name == "--out")
             a.out = v;
         else if (name == "--jobs" || name == "-j")

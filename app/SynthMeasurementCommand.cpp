@@ -125,10 +125,12 @@ const char* kHelp =
     "  --sample-interval T (tilt and bag sensors, default 0.02 s), --mat-interval T (the\n"
     "  mat's frames, default 0.1 s).\n"
     "  --test NAME:KEY=VALUE[,KEY=VALUE]...  (repeatable) data of several tests instead of one\n"
-    "  record: each test is the scenario with its keys set (e.g. --test gas-4.0g:array.gas_mass=4.0g),\n"
+    "  record: each test is the scenario with its keys set (e.g. --test "
+    "gas-4.0g:array.gas_mass=4.0g),\n"
     "  the effect in every test, a truth co-simulation each (LABEL.truth-run/NAME/), noise\n"
     "  seed N + the test's index; the manifest lists the tests (docs/measured-data.md).\n"
-    "  --test NAME@SUBJECT:KEY=VALUE,...  the test of a subject (a patient; his build in the keys,\n"
+    "  --test NAME@SUBJECT:KEY=VALUE,...  the test of a subject (a patient; his build in the "
+    "keys,\n"
     "  e.g. --test woman@small-woman:patient.sex=female,patient.height=1.55m,patient.mass=50kg);\n"
     "  every test names one, at least two subjects; the diagnosis leaves one subject out.\n"
     "\n"
@@ -156,11 +158,16 @@ Args parseArgs(int argc, char** argv) {
     for (int i = 0; i < argc; ++i) {
         const std::string arg = argv[i];
         auto value = [&] { return takeOptionValue(argc, argv, i); };
-        if (arg == "--scenario") a.scenario = value();
-        else if (arg == "--effect") a.effect = value();
-        else if (arg == "--param") a.params.push_back(value());
-        else if (arg == "--noise") a.noise.push_back(value());
-        else if (arg == "--test") a.tests.push_back(value());
+        if (arg == "--scenario")
+            a.scenario = value();
+        else if (arg == "--effect")
+            a.effect = value();
+        else if (arg == "--param")
+            a.params.push_back(value());
+        else if (arg == "--noise")
+            a.noise.push_back(value());
+        else if (arg == "--test")
+            a.tests.push_back(value());
         else if (arg == "--seed") {
             const std::string v = value();
             char* end = nullptr;
@@ -168,35 +175,49 @@ Args parseArgs(int argc, char** argv) {
             if (v.empty() || *end || v[0] == '-')
                 throw UsageError("--seed '" + v + "' is not valid; valid: a whole number >= 0");
             a.seed = s;
-        } else if (arg == "--sample-interval") a.sampleInterval = value();
-        else if (arg == "--mat-interval") a.matInterval = value();
-        else if (arg == "--gas-mass-uncertainty") a.gasMassUncertainty = value();
-        else if (arg == "--room-temperature-uncertainty") a.roomTemperatureUncertainty = value();
-        else if (arg == "--truth-mesh") a.truthMesh = value();
-        else if (arg == "--out") a.out = value();
-        else if (arg == "--label-out") a.labelOut = value();
-        else if (arg == "--force") a.force = true;
-        else if (arg == "--bed-gauge") a.bedGauge = true;
-        else if (arg == "--quiet" || arg == "-q") a.quiet = true;
+        } else if (arg == "--sample-interval")
+            a.sampleInterval = value();
+        else if (arg == "--mat-interval")
+            a.matInterval = value();
+        else if (arg == "--gas-mass-uncertainty")
+            a.gasMassUncertainty = value();
+        else if (arg == "--room-temperature-uncertainty")
+            a.roomTemperatureUncertainty = value();
+        else if (arg == "--truth-mesh")
+            a.truthMesh = value();
+        else if (arg == "--out")
+            a.out = value();
+        else if (arg == "--label-out")
+            a.labelOut = value();
+        else if (arg == "--force")
+            a.force = true;
+        else if (arg == "--bed-gauge")
+            a.bedGauge = true;
+        else if (arg == "--quiet" || arg == "-q")
+            a.quiet = true;
         else
-            throw UsageError("unknown option '" + arg +
-                             "'; valid: --scenario, --effect, --param, --noise, --test, --seed, "
-                             "--sample-interval, --mat-interval, --gas-mass-uncertainty, "
-                             "--room-temperature-uncertainty, --truth-mesh, --bed-gauge, --out, --label-out, "
-                             "--force, --quiet, --help");
+            throw UsageError(
+                "unknown option '" + arg +
+                "'; valid: --scenario, --effect, --param, --noise, --test, --seed, "
+                "--sample-interval, --mat-interval, --gas-mass-uncertainty, "
+                "--room-temperature-uncertainty, --truth-mesh, --bed-gauge, --out, --label-out, "
+                "--force, --quiet, --help");
     }
-    if (a.scenario.empty()) throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
+    if (a.scenario.empty())
+        throw UsageError("--scenario is required (e.g. scenarios/tests/tiny-load-test.yaml)");
     if (a.effect.empty())
         throw UsageError("--effect is required; valid: none, " + diagnose::listEffectNames() +
-                         " (a patient-on-array scenario: " + diagnose::listPatientEffectNames() + ")");
+                         " (a patient-on-array scenario: " + diagnose::listPatientEffectNames() +
+                         ")");
     if (a.out.empty()) throw UsageError("--out DIR is required");
     if (a.labelOut.empty()) throw UsageError("--label-out FILE is required");
     if (fs::exists(a.labelOut) && !a.force)
         throw UsageError(a.labelOut + " exists; pass --force to replace it or choose another name");
     const fs::path lab = fs::absolute(a.labelOut).lexically_normal();
     if (lab.parent_path() == fs::absolute(a.out).lexically_normal())
-        throw UsageError("--label-out must not be inside --out: the measured data must not name "
-                         "the effect");
+        throw UsageError(
+            "--label-out must not be inside --out: the measured data must not name "
+            "the effect");
     return a;
 }
 
@@ -274,9 +295,10 @@ std::vector<std::vector<double>> parseParams(const std::vector<const diagnose::E
     for (size_t i = 0; i < effects.size(); ++i)
         for (size_t k = 0; k < v[i].size(); ++k) {
             const auto& p = effects[i]->parameters[k];
-            shown.push_back((effects.size() > 1 ? effects[i]->name + "." : std::string()) +
-                            p.name + ": " + fmt("%.6g", v[i][k] / p.siPerUnit) +
-                            (p.unit.empty() ? "" : " " + p.unit) + (seen[i][k] ? "" : "  # default"));
+            shown.push_back((effects.size() > 1 ? effects[i]->name + "." : std::string()) + p.name +
+                            ": " + fmt("%.6g", v[i][k] / p.siPerUnit) +
+                            (p.unit.empty() ? "" : " " + p.unit) +
+                            (seen[i][k] ? "" : "  # default"));
         }
     return v;
 }
@@ -351,8 +373,9 @@ double parseInterval(const std::string& option, const std::string& text) {
         if (!(v > 0.0)) throw std::invalid_argument("must be greater than 0 s");
         // A test's samples go as its length over the interval: 1e-9 s filled the memory.
         if (v < 1e-3)
-            throw std::invalid_argument("is finer than 1 ms, a 1 kHz logger (a 100 s test would "
-                                        "give over 100 000 rows a channel); valid: 1 ms to 60 s");
+            throw std::invalid_argument(
+                "is finer than 1 ms, a 1 kHz logger (a 100 s test would "
+                "give over 100 000 rows a channel); valid: 1 ms to 60 s");
         return v;
     } catch (const std::exception& e) {
         throw UsageError(option + " '" + text + "': " + e.what());
@@ -400,23 +423,28 @@ bool isPlainName(const std::string& n) {
 // scenario keys ("NAME@SUBJECT" alone: the scenario's own keys). A piece without '=' continues
 // the previous value (a value with a comma: {thickness: 20 mm, ...}).
 diagnose::PatientTest parseTestOption(const std::string& g) {
-    const std::string valid = "valid: NAME[@SUBJECT]:KEY=VALUE[,KEY=VALUE]..., e.g. --test "
-                              "gas-4.0g:array.gas_mass=4.0g or --test woman-4.5g@small-woman:"
-                              "patient.sex=female,patient.height=1.55m,patient.mass=50kg";
+    const std::string valid =
+        "valid: NAME[@SUBJECT]:KEY=VALUE[,KEY=VALUE]..., e.g. --test "
+        "gas-4.0g:array.gas_mass=4.0g or --test woman-4.5g@small-woman:"
+        "patient.sex=female,patient.height=1.55m,patient.mass=50kg";
     size_t colon = g.find(':');
     const size_t at = g.substr(0, colon).find('@');
     if (colon == std::string::npos && at != std::string::npos) colon = g.size();  // NAME@SUBJECT
-    if (colon == std::string::npos || colon == 0 || at == 0) throw UsageError("--test '" + g + "' has no name; " + valid);
+    if (colon == std::string::npos || colon == 0 || at == 0)
+        throw UsageError("--test '" + g + "' has no name; " + valid);
     diagnose::PatientTest t;
     t.name = g.substr(0, std::min(colon, at));
     if (!isPlainName(t.name))
-        throw UsageError("--test '" + g + "': '" + t.name + "' is not a test's name; valid: 1-64 letters, "
+        throw UsageError("--test '" + g + "': '" + t.name +
+                         "' is not a test's name; valid: 1-64 letters, "
                          "digits, '.', '-' and '_', not starting with '.' or '-'");
     if (at != std::string::npos) {
         t.subject = g.substr(at + 1, colon - at - 1);
         if (!isPlainName(t.subject))
-            throw UsageError("--test '" + g + "': '" + t.subject + "' is not a subject's name; valid: "
-                             "1-64 letters, digits, '.', '-' and '_', not starting with '.' or '-'");
+            throw UsageError(
+                "--test '" + g + "': '" + t.subject +
+                "' is not a subject's name; valid: "
+                "1-64 letters, digits, '.', '-' and '_', not starting with '.' or '-'");
     }
     if (colon == g.size()) return t;
     std::string rest = g.substr(colon + 1);
@@ -462,7 +490,8 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
                          {"tilt", io::Dimension::Angle, &so.tiltNoise},
                          {"pressure", io::Dimension::Pressure, &so.pressureNoise}});
     so.seed = a.seed;
-    so.sampleInterval = parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.02 s" : a.sampleInterval);
+    so.sampleInterval =
+        parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.02 s" : a.sampleInterval);
     so.matInterval = parseInterval("--mat-interval", a.matInterval);
 
     const io::PatientOnArrayScenario sc = io::readPatientOnArrayScenario(file);
@@ -479,12 +508,14 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
     // Subjects: one per test or none, and at least two (the diagnosis holds one out at a time).
     std::vector<std::string> subjects;
     for (const diagnose::PatientTest& t : tests)
-        if (!t.subject.empty() && std::find(subjects.begin(), subjects.end(), t.subject) == subjects.end())
+        if (!t.subject.empty() &&
+            std::find(subjects.begin(), subjects.end(), t.subject) == subjects.end())
             subjects.push_back(t.subject);
     for (const diagnose::PatientTest& t : tests)
         if (!subjects.empty() && t.subject.empty())
-            throw UsageError("--test '" + t.name + "' names no subject, another names '" + subjects.front() +
-                             "'; valid: NAME@SUBJECT:KEY=VALUE,... for every test, or no subject at all");
+            throw UsageError(
+                "--test '" + t.name + "' names no subject, another names '" + subjects.front() +
+                "'; valid: NAME@SUBJECT:KEY=VALUE,... for every test, or no subject at all");
     if (subjects.size() == 1)
         throw UsageError("every --test names the subject '" + subjects.front() +
                          "'; valid: at least two subjects (NAME@SUBJECT), or none");
@@ -523,8 +554,8 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
                                   io::formatSignificant(sc.options.coupling.macroStep, "ms") + ")";
     const fs::path out(a.out);
     claimOutputFolder(out, a.force,
-                      {io::kMeasuredManifest, "scenario.yaml", "mat.csv", "tilt.csv", "bag*-pressure.csv",
-                       "*-mat.csv", "*-tilt.csv"});
+                      {io::kMeasuredManifest, "scenario.yaml", "mat.csv", "tilt.csv",
+                       "bag*-pressure.csv", "*-mat.csv", "*-tilt.csv"});
     const std::string truthDir = a.labelOut + ".truth-run";
     if (several) {
         std::error_code ec;
@@ -533,7 +564,9 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
     if (!a.quiet)
         std::cerr << "bagsim synth-measurement: truth co-simulation of " << a.scenario << " ("
                   << fmt("%g s", sc.getEndTime()) << ", " << modelForm << ") in " << truthDir
-                  << (several ? "/<test>/ for " + std::to_string(tests.size()) + " tests" : std::string()) << "\n";
+                  << (several ? "/<test>/ for " + std::to_string(tests.size()) + " tests"
+                              : std::string())
+                  << "\n";
     const auto start = std::chrono::steady_clock::now();
     diagnose::PatientMeasurement data;
     std::string testLines;
@@ -545,42 +578,52 @@ int runPatient(const Args& a, const io::ScenarioFile& file) {
         st.seed = a.seed + t;  // each test its own noise
         tests[t].channels = diagnose::synthesizePatientChannels(run, inst, st);
         if (several) {
-            testLines += "  - {name: " + tests[t].name +
-                         (tests[t].subject.empty() ? std::string() : ", subject: " + tests[t].subject) +
-                         ", noise_seed: " + std::to_string(st.seed) + ", overrides: {";
+            testLines +=
+                "  - {name: " + tests[t].name +
+                (tests[t].subject.empty() ? std::string() : ", subject: " + tests[t].subject) +
+                ", noise_seed: " + std::to_string(st.seed) + ", overrides: {";
             for (size_t k = 0; k < tests[t].overrides.size(); ++k)
                 testLines += (k ? ", " : "") + tests[t].overrides[k].first + ": \"" +
                              tests[t].overrides[k].second + "\"";
             testLines += "}}\n";
         }
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (several) data.tests = tests;
-    else data.channels = tests.front().channels;
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (several)
+        data.tests = tests;
+    else
+        data.channels = tests.front().channels;
     data.protocol.settleTime = sc.settleTime;
     data.protocol.duration = sc.duration;
-    data.description = "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
-    io::writePatientMeasuredData(out.string(), data, file.getText(),
-                                 "# Measured data of a patient on the array (docs/measured-data.md), "
-                                 "synthesised by\n# bagsim synth-measurement from a truth "
-                                 "co-simulation of scenario.yaml.\n");
-    writeLabel(a, effects, shownParams,
-               "noise: {mat: " + fmt("%g", so.matNoise / bags::kPascalsPerMmHg) + " mmHg, tilt: " +
-                   fmt("%g", so.tiltNoise * 180.0 / 3.14159265358979323846) + " deg, pressure: " +
-                   fmt("%g", so.pressureNoise * 1e-3) + " kPa}\nseed: " + std::to_string(a.seed) +
-                   "\nsample_interval: " + fmt("%g", so.sampleInterval) + " s\nmat_interval: " +
-                   fmt("%g", so.matInterval) + " s\nmodel_form: \"" + modelForm +
-                   "\"\ntruth_run: " + truthDir + "\nscenario: " + a.scenario + "\n" +
-                   (subjects.empty() ? std::string() : "subjects: [" + joinNames(subjects) + "]\n") +
-                   (several ? "tests:\n" + testLines : std::string()));
+    data.description =
+        "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
+    io::writePatientMeasuredData(
+        out.string(), data, file.getText(),
+        "# Measured data of a patient on the array (docs/measured-data.md), "
+        "synthesised by\n# bagsim synth-measurement from a truth "
+        "co-simulation of scenario.yaml.\n");
+    writeLabel(
+        a, effects, shownParams,
+        "noise: {mat: " + fmt("%g", so.matNoise / bags::kPascalsPerMmHg) +
+            " mmHg, tilt: " + fmt("%g", so.tiltNoise * 180.0 / 3.14159265358979323846) +
+            " deg, pressure: " + fmt("%g", so.pressureNoise * 1e-3) + " kPa}\nseed: " +
+            std::to_string(a.seed) + "\nsample_interval: " + fmt("%g", so.sampleInterval) +
+            " s\nmat_interval: " + fmt("%g", so.matInterval) + " s\nmodel_form: \"" + modelForm +
+            "\"\ntruth_run: " + truthDir + "\nscenario: " + a.scenario + "\n" +
+            (subjects.empty() ? std::string() : "subjects: [" + joinNames(subjects) + "]\n") +
+            (several ? "tests:\n" + testLines : std::string()));
     size_t frames = 0, tilts = 0, bags = 0;
     for (const diagnose::PatientTest& t : tests)
-        frames += t.channels.mat.time.size(), tilts += t.channels.tilt.time.size(), bags += t.channels.bags.size();
+        frames += t.channels.mat.time.size(), tilts += t.channels.tilt.time.size(),
+            bags += t.channels.bags.size();
     std::cout << "measured data in " << a.out << "/: "
-              << (subjects.empty() ? std::string() : std::to_string(subjects.size()) + " subjects, ")
+              << (subjects.empty() ? std::string()
+                                   : std::to_string(subjects.size()) + " subjects, ")
               << (several ? std::to_string(tests.size()) + " tests, " : std::string()) << frames
-              << " mat frames, " << tilts << " tilt samples, " << bags << " bag sensors (truth co-simulation"
-              << (several ? "s " : " ") << fmt("%.1f", seconds) << " s); label in " << a.labelOut << "\n";
+              << " mat frames, " << tilts << " tilt samples, " << bags
+              << " bag sensors (truth co-simulation" << (several ? "s " : " ")
+              << fmt("%.1f", seconds) << " s); label in " << a.labelOut << "\n";
     return 0;
 }
 
@@ -602,7 +645,8 @@ StatedUncertainties parseStatedUncertainties(const Args& a, const std::vector<do
     if (!a.gasMassUncertainty.empty()) {
         const double least = *std::min_element(masses.begin(), masses.end());
         const double most = io::kMaxGasMassUncertaintyShare * least;
-        const std::string valid = "valid: 0 g to " + fmt("%g", 100 * io::kMaxGasMassUncertaintyShare) +
+        const std::string valid = "valid: 0 g to " +
+                                  fmt("%g", 100 * io::kMaxGasMassUncertaintyShare) +
                                   " % of the smallest gas mass (" + fmt("%.4g", most * 1e3) + " g)";
         try {
             s.massValue = io::parseQuantity(a.gasMassUncertainty, io::Dimension::Mass);
@@ -625,10 +669,12 @@ StatedUncertainties parseStatedUncertainties(const Args& a, const std::vector<do
         try {
             s.temperatureValue = io::parseQuantity(t.substr(0, k), io::Dimension::Dimensionless);
         } catch (const io::UnitError& ex) {
-            throw UsageError("--room-temperature-uncertainty '" + t + "': " + ex.what() + "; " + valid);
+            throw UsageError("--room-temperature-uncertainty '" + t + "': " + ex.what() + "; " +
+                             valid);
         }
         if (!(s.temperatureValue >= 0.0) || s.temperatureValue > io::kMaxRoomTemperatureUncertainty)
-            throw UsageError("--room-temperature-uncertainty '" + t + "' is out of range; " + valid);
+            throw UsageError("--room-temperature-uncertainty '" + t + "' is out of range; " +
+                             valid);
         s.temperature = true;
     }
     return s;
@@ -638,19 +684,23 @@ int run(const Args& a) {
     const io::ScenarioFile file = io::ScenarioFile::load(a.scenario);
     if (file.getRoot().getString("kind", "") == io::kPatientOnArrayKind) {
         if (!a.gasMassUncertainty.empty() || !a.roomTemperatureUncertainty.empty())
-            throw UsageError("--gas-mass-uncertainty and --room-temperature-uncertainty are for the "
-                             "rig's data (a patient-on-array scenario's manifest does not state them)");
+            throw UsageError(
+                "--gas-mass-uncertainty and --room-temperature-uncertainty are for the "
+                "rig's data (a patient-on-array scenario's manifest does not state them)");
         if (!a.truthMesh.empty())
-            throw UsageError("--truth-mesh is for the rig's data (a patient-on-array scenario's "
-                             "truth differs by its macro step)");
+            throw UsageError(
+                "--truth-mesh is for the rig's data (a patient-on-array scenario's "
+                "truth differs by its macro step)");
         if (a.bedGauge)
-            throw UsageError("--bed-gauge is for the rig's data (a patient lies on the array, "
-                             "which has no bed gauge)");
+            throw UsageError(
+                "--bed-gauge is for the rig's data (a patient lies on the array, "
+                "which has no bed gauge)");
         return runPatient(a, file);
     }
     if (!a.tests.empty())
-        throw UsageError("--test is for a patient-on-array scenario; the rig's scenario lists its gas "
-                         "masses (test.gas_masses)");
+        throw UsageError(
+            "--test is for a patient-on-array scenario; the rig's scenario lists its gas "
+            "masses (test.gas_masses)");
     // The effects and their parameters.
     const std::vector<const diagnose::Effect*> effects =
         parseEffects(a, diagnose::findEffect, diagnose::listEffectNames());
@@ -663,7 +713,8 @@ int run(const Args& a) {
     for (const std::string& n : a.noise)
         if (n.rfind("bed=", 0) == 0 && !a.bedGauge)
             throw UsageError("--noise '" + n + "': the bed gauge's noise needs --bed-gauge");
-    so.sampleInterval = parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.5 s" : a.sampleInterval);
+    so.sampleInterval =
+        parseInterval("--sample-interval", a.sampleInterval.empty() ? "0.5 s" : a.sampleInterval);
     try {
         so.validate();
     } catch (const std::exception& e) {
@@ -678,7 +729,7 @@ int run(const Args& a) {
                              "scenario without a rig section (the effect is chosen by --effect)");
     const std::vector<double> readings = sc.options.gasMasses;  // what the flowmeter reads
     const StatedUncertainties statedUncertainties = parseStatedUncertainties(a, readings);
-    const double roomTemperature = sc.options.gas.temperature;   // what the lab's thermometer reads
+    const double roomTemperature = sc.options.gas.temperature;  // what the lab's thermometer reads
     // The bag as the scenario sizes it (a fill mass's sizing, its volume change), as the
     // diagnosis will; the effects act on that bag (bag-volume scales it; a warmer gas does not
     // resize it).
@@ -707,8 +758,10 @@ int run(const Args& a) {
     // loaded to the force the load cell reads as the protocol's peak.
     const double peakReading = sc.options.peakForce;  // the protocol's, as the load cell reads it
     truth.peakForce = peakReading / (1.0 + rig.loadCellGain);
-    std::string modelForm = meshForm + "displacement step " + io::formatSignificant(0.5 * truth.displacementStep, "mm") +
-                            " (the scenario's " + io::formatSignificant(truth.displacementStep, "mm") + ")";
+    std::string modelForm = meshForm + "displacement step " +
+                            io::formatSignificant(0.5 * truth.displacementStep, "mm") +
+                            " (the scenario's " +
+                            io::formatSignificant(truth.displacementStep, "mm") + ")";
     truth.displacementStep *= 0.5;
     if (truth.imperfection.amplitude > 0.0) {
         // Another bag of the scenario's population; not one of the next few seeds, which the
@@ -729,7 +782,8 @@ int run(const Args& a) {
     const bags::LoadTestResult result = bags::runLoadTest(truth);
     for (const bags::LoadCurve& c : result.curves)
         if (c.failed)
-            throw std::runtime_error("the truth run's curve at " + io::formatQuantity(c.gasMass, "g", 3) +
+            throw std::runtime_error("the truth run's curve at " +
+                                     io::formatQuantity(c.gasMass, "g", 3) +
                                      " stopped: " + c.failure);
 
     diagnose::Protocol protocol;
@@ -742,14 +796,17 @@ int run(const Args& a) {
     diagnose::MeasuredData data =
         diagnose::synthesizeMeasurement(result.curves, readings, rig, protocol, so);
     statedUncertainties.applyTo(data);
-    data.description = "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
-    io::writeMeasuredData(out.string(), data, file.getText(),
-                          "# Measured data of the seed's rig (docs/measured-data.md), synthesised by\n"
-                          "# bagsim synth-measurement from a truth simulation of scenario.yaml.\n");
+    data.description =
+        "synthetic (bagsim synth-measurement, noise seed " + std::to_string(a.seed) + ")";
+    io::writeMeasuredData(
+        out.string(), data, file.getText(),
+        "# Measured data of the seed's rig (docs/measured-data.md), synthesised by\n"
+        "# bagsim synth-measurement from a truth simulation of scenario.yaml.\n");
 
     std::ostringstream lines;
-    lines << "noise: {displacement: " << fmt("%g", so.displacementNoise * 1e3) << " mm, force: "
-          << fmt("%g", so.forceNoise) << " N, pressure: " << fmt("%g", so.pressureNoise * 1e-3)
+    lines << "noise: {displacement: " << fmt("%g", so.displacementNoise * 1e3)
+          << " mm, force: " << fmt("%g", so.forceNoise)
+          << " N, pressure: " << fmt("%g", so.pressureNoise * 1e-3)
           << " kPa, mass: " << fmt("%g", so.massNoise * 1e3) << " g"
           << (so.bedGauge ? ", bed: " + fmt("%g", so.bedNoise * 1e3) + " mm" : std::string())
           << "}\n"
@@ -761,9 +818,9 @@ int run(const Args& a) {
     writeLabel(a, effects, shownParams, lines.str());
     size_t samples = 0;
     for (const auto& t : data.tests) samples += t.time.size();
-    std::cout << "measured data in " << a.out << "/: " << data.tests.size() << " tests, "
-              << samples << " machine samples (truth run " << fmt("%.1f", result.seconds)
-              << " s); label in " << a.labelOut << "\n";
+    std::cout << "measured data in " << a.out << "/: " << data.tests.size() << " tests, " << samples
+              << " machine samples (truth run " << fmt("%.1f", result.seconds) << " s); label in "
+              << a.labelOut << "\n";
     return 0;
 }
 

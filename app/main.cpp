@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
     if (cmd == "report") return bagsim::app::runReportCommand(argc - 2, argv + 2);
     if (cmd == "compare") return bagsim::app::runCompareCommand(argc - 2, argv + 2);
     std::cerr << "bagsim: unknown command '" << cmd
-              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose, study, report, compare (see bagsim --help)\n";
+              << "'; valid commands: run, body, fit-material, synth-measurement, diagnose, study, "
+                 "report, compare (see bagsim --help)\n";
     return 2;
 }

@@ -28,7 +28,8 @@ double millisecondsPerCall(int calls, const F& f) {
     for (int batch = 0; batch < 5; ++batch) {
         const auto t0 = Clock::now();
         for (int k = 0; k < calls; ++k) f();
-        best = std::min(best, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count() / calls);
+        best =
+            std::min(best, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count() / calls);
     }
     return best;
 }
@@ -39,8 +40,9 @@ int main(int argc, char** argv) {
     std::vector<double> sizesMm;
     for (int i = 1; i < argc; ++i) sizesMm.push_back(std::atof(argv[i]));
     if (sizesMm.empty()) sizesMm = {10.0, 5.0};
-    std::printf("mesh_mm tris hinges | membrane g / g+H [ms] | with bending g / g+H [ms] | "
-                "bending alone g / g+H [ms] | triplets membrane / bending\n");
+    std::printf(
+        "mesh_mm tris hinges | membrane g / g+H [ms] | with bending g / g+H [ms] | "
+        "bending alone g / g+H [ms] | triplets membrane / bending\n");
     for (double mm : sizesMm) {
         if (!(mm >= 2.0 && mm <= 50.0)) {
             std::fprintf(stderr, "bench_bending: mesh size %g is invalid; use 2 to 50 (mm)\n", mm);

@@ -81,10 +81,10 @@ cosim::CouplingProfile minus(const cosim::CouplingProfile& b, const cosim::Coupl
 }
 
 void printHeader() {
-    std::printf(
-        "%-13s %8s %9s %8s %6s %7s %7s %6s %6s %6s %6s %6s %6s %6s %6s %6s %8s %7s %7s\n", "window [s]",
-        "wall [s]", "wall/sim", "cpu/sim", "steps", "passes", "N/step", "body%", "bags%", "tang%", "T/step", "rest%", "wait%",
-        "skip%", "idle%", "N/adv", "F/W-1 %", "pelvis", "thorax");
+    std::printf("%-13s %8s %9s %8s %6s %7s %7s %6s %6s %6s %6s %6s %6s %6s %6s %6s %8s %7s %7s\n",
+                "window [s]", "wall [s]", "wall/sim", "cpu/sim", "steps", "passes", "N/step",
+                "body%", "bags%", "tang%", "T/step", "rest%", "wait%", "skip%", "idle%", "N/adv",
+                "F/W-1 %", "pelvis", "thorax");
 }
 
 // N/step: the bags' Newton iterations per macro step (all bags, all passes); wait%: share of the threads' time in the bags' sections spent waiting for another thread;
@@ -100,14 +100,14 @@ void printRow(const char* label, const Window& w, double force, double weight, d
     const double threadTime = p.threads * p.bagsSeconds;
     const long solved = p.advances - p.idleAdvances;
     std::printf(
-        "%-13s %8.2f %9.1f %8.1f %6d %7.2f %7.1f %6.1f %6.1f %6.1f %6.1f %6.1f %6.1f %6.1f %6.1f %6.2f %+8.3f %+7.2f "
+        "%-13s %8.2f %9.1f %8.1f %6d %7.2f %7.1f %6.1f %6.1f %6.1f %6.1f %6.1f %6.1f %6.1f %6.1f "
+        "%6.2f %+8.3f %+7.2f "
         "%+7.2f\n",
         label, w.wall, sim > 0 ? w.wall / sim : 0.0, sim > 0 ? w.cpu / sim : 0.0, p.steps,
         p.steps ? double(p.passes) / p.steps : 0.0,
         p.steps ? double(p.solverIterations) / p.steps : 0.0, 100.0 * p.bodySeconds / w.wall,
         100.0 * p.bagsSeconds / w.wall, 100.0 * p.tangentSeconds / std::max(1e-12, threadTime),
-        p.steps ? double(p.tangentRefreshes) / p.steps : 0.0,
-        100.0 * rest / w.wall,
+        p.steps ? double(p.tangentRefreshes) / p.steps : 0.0, 100.0 * rest / w.wall,
         threadTime > 0 ? 100.0 * (threadTime - p.bagBusySeconds) / threadTime : 0.0,
         p.advances + p.skipped ? 100.0 * p.skipped / (p.advances + p.skipped) : 0.0,
         p.advances ? 100.0 * p.idleAdvances / p.advances : 0.0,
@@ -183,13 +183,16 @@ int main(int argc, char** argv) {
         " threads %d;"
         " settle %g s, turn %g s\n  load average at start: %s\n",
         o.layout.rows, o.layout.columns, o.bag.geometry.meshSize * 1e3,
-        o.bag.selfContact ? "on" : "off", o.bag.warmStart ? "on" : "off", cosim::toString(o.coupling.scheme).c_str(),
+        o.bag.selfContact ? "on" : "off", o.bag.warmStart ? "on" : "off",
+        cosim::toString(o.coupling.scheme).c_str(),
         cosim::toString(o.coupling.acceleration).c_str(), o.coupling.macroStep * 1e3,
         o.coupling.threads, sc.settleTime, sc.duration, loadAverage().c_str());
     if (o.coupling.adaptive)
-        std::printf("  adaptive macro step: %.2f to %.1f ms, accuracy %g x the tolerance, %d passes aimed at\n",
-                    o.coupling.minMacroStep * 1e3, o.coupling.maxMacroStep * 1e3,
-                    o.coupling.stepAccuracy, o.coupling.targetPasses);
+        std::printf(
+            "  adaptive macro step: %.2f to %.1f ms, accuracy %g x the tolerance, %d passes aimed "
+            "at\n",
+            o.coupling.minMacroStep * 1e3, o.coupling.maxMacroStep * 1e3, o.coupling.stepAccuracy,
+            o.coupling.targetPasses);
 
     const double tBuild = now();
     cosim::PatientOnArray poa(sc.patient, sc.options);
@@ -242,17 +245,19 @@ int main(int argc, char** argv) {
             smallest = std::min(smallest, st.macroStep);
             largest = std::max(largest, st.macroStep);
             if (trace)
-                std::printf("step %.4f s dt %.2f ms passes %d cuts %d redone %d mismatch %.3g N of "
-                            "%.4g N, first pass %.3g N (tolerance %.3g N), %d Newton, F/W %+.4f %%, "
-                            "travel %.3g mm\n",
-                            tn, 1e3 * st.macroStep, st.iterations, st.cuts, st.redone, st.residual,
-                            st.wrenchNorm, st.firstResidual, st.tolerance, st.bagIterations,
-                            100.0 * (poa.calcBagForce() - weight) / weight, 1e3 * st.shapeTravel);
+                std::printf(
+                    "step %.4f s dt %.2f ms passes %d cuts %d redone %d mismatch %.3g N of "
+                    "%.4g N, first pass %.3g N (tolerance %.3g N), %d Newton, F/W %+.4f %%, "
+                    "travel %.3g mm\n",
+                    tn, 1e3 * st.macroStep, st.iterations, st.cuts, st.redone, st.residual,
+                    st.wrenchNorm, st.firstResidual, st.tolerance, st.bagIterations,
+                    100.0 * (poa.calcBagForce() - weight) / weight, 1e3 * st.shapeTravel);
             if (trace && st.firstWorstLink >= 0) {
                 // Where the step's miss was: the link (segment on bag) worst at the first and
                 // the last pass.
                 auto name = [&](int link) {
-                    if (size_t(link) >= poa.getPairs().size()) return "link " + std::to_string(link);
+                    if (size_t(link) >= poa.getPairs().size())
+                        return "link " + std::to_string(link);
                     const cosim::ShapeBagPair& pr = poa.getPairs()[size_t(link)];
                     return std::string(body::getSegmentName(body::Segment(pr.shape))) + " on bag " +
                            std::to_string(pr.bag);
@@ -290,16 +295,14 @@ int main(int argc, char** argv) {
     std::printf("phases:\n");
     printHeader();
     printRow("settle", phase[0], poa.calcBagForce(), weight, pelvis, thorax);
-    if (sc.duration > 0.0)
-        printRow("turn", phase[1], poa.calcBagForce(), weight, pelvis, thorax);
+    if (sc.duration > 0.0) printRow("turn", phase[1], poa.calcBagForce(), weight, pelvis, thorax);
 
     // The dearest bags over the whole run, and how evenly the bags' time could be shared.
     const cosim::CouplingProfile all = coupling.getProfile();
     std::vector<int> order(all.participantSeconds.size());
     std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
-        return all.participantSeconds[a] > all.participantSeconds[b];
-    });
+    std::sort(order.begin(), order.end(),
+              [&](int a, int b) { return all.participantSeconds[a] > all.participantSeconds[b]; });
     const double busy = all.bagBusySeconds;
     std::printf("bags: %.2f s busy over %.2f s of their sections on %d threads", busy,
                 all.bagsSeconds, all.threads);
@@ -312,13 +315,14 @@ int main(int argc, char** argv) {
         // A participant is one bag, or with array.neighbour_contact a module of bags.
         std::string arrayBags;
         for (int b : poa.getModules()[size_t(i)])
-            arrayBags += (arrayBags.empty() ? "" : " ") + std::to_string(poa.getBagIndices()[size_t(b)]);
+            arrayBags +=
+                (arrayBags.empty() ? "" : " ") + std::to_string(poa.getBagIndices()[size_t(b)]);
         std::printf("  participant %3d (array %s): %7.2f s, %6ld Newton iterations\n", i,
-                    arrayBags.c_str(), all.participantSeconds[i],
-                    all.participantIterations[i]);
+                    arrayBags.c_str(), all.participantSeconds[i], all.participantIterations[i]);
     }
-    std::printf("steps: %d committed (%.2f to %.2f ms), %d redone for accuracy, %d cut on failure\n",
-                coupling.getNumSteps(), 1e3 * smallest, 1e3 * largest, redone, cuts);
+    std::printf(
+        "steps: %d committed (%.2f to %.2f ms), %d redone for accuracy, %d cut on failure\n",
+        coupling.getNumSteps(), 1e3 * smallest, 1e3 * largest, redone, cuts);
     std::printf("  the bags carry %.2f N of his %.2f N (%+.3f %%); load average at end: %s\n",
                 poa.calcBagForce(), weight, 100.0 * (poa.calcBagForce() - weight) / weight,
                 loadAverage().c_str());

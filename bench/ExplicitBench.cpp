@@ -33,14 +33,22 @@ int main(int argc, char** argv) {
     while (first + 1 < argc && std::strncmp(argv[first], "--", 2) == 0) {
         const char* k = argv[first];
         const double v = std::atof(argv[first + 1]);
-        if (!std::strcmp(k, "--scale")) scale = v;
-        else if (!std::strcmp(k, "--mass-scale")) massScale = v;
-        else if (!std::strcmp(k, "--damping")) alpha = v;
-        else if (!std::strcmp(k, "--speed")) speed = v * 1e-3;
-        else if (!std::strcmp(k, "--travel")) travel = v * 1e-3;
-        else if (!std::strcmp(k, "--cfl")) cfl = v;
-        else if (!std::strcmp(k, "--every")) every = v * 1e-3;
-        else if (!std::strcmp(k, "--threads")) o.threads = static_cast<int>(v);
+        if (!std::strcmp(k, "--scale"))
+            scale = v;
+        else if (!std::strcmp(k, "--mass-scale"))
+            massScale = v;
+        else if (!std::strcmp(k, "--damping"))
+            alpha = v;
+        else if (!std::strcmp(k, "--speed"))
+            speed = v * 1e-3;
+        else if (!std::strcmp(k, "--travel"))
+            travel = v * 1e-3;
+        else if (!std::strcmp(k, "--cfl"))
+            cfl = v;
+        else if (!std::strcmp(k, "--every"))
+            every = v * 1e-3;
+        else if (!std::strcmp(k, "--threads"))
+            o.threads = static_cast<int>(v);
         else {
             std::fprintf(stderr, "bench_explicit: unknown option %s\n", k);
             return 2;
@@ -77,7 +85,8 @@ int main(int argc, char** argv) {
     bag.addShape(block, o.blockContact);
     const auto t0 = std::chrono::steady_clock::now();
     bag.inflate(gasMass);
-    const double tInflate = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double tInflate =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     const bags::MembraneModel& model = bag.getModel();
     Eigen::Matrix3Xd x = bag.getPositions();
@@ -96,24 +105,28 @@ int main(int argc, char** argv) {
     const Eigen::VectorXd area = mesh.calcNodalAreas();
     Eigen::VectorXd invMass(3 * nn);
     for (int i = 0; i < nn; ++i)
-        for (int c = 0; c < 3; ++c) invMass(3 * i + c) = 1.0 / (1150.0 * o.thickness * area(i) * massScale);
+        for (int c = 0; c < 3; ++c)
+            invMass(3 * i + c) = 1.0 / (1150.0 * o.thickness * area(i) * massScale);
     for (int d : model.getFixedDofs()) invMass(d) = 0.0;
     // Stable step: the membrane's dilatational wave (4 mu / rho) across the shortest edge, and
     // the contact penalty's nodal frequency.
     double minEdge = 1e9;
     for (int e = 0; e < mesh.getNumTris(); ++e)
         for (int k = 0; k < 3; ++k)
-            minEdge = std::min(minEdge, (mesh.X.col(mesh.tris(k, e)) - mesh.X.col(mesh.tris((k + 1) % 3, e))).norm());
+            minEdge = std::min(
+                minEdge,
+                (mesh.X.col(mesh.tris(k, e)) - mesh.X.col(mesh.tris((k + 1) % 3, e))).norm());
     const double rhoS = 1150.0 * o.thickness * massScale;  // kg/m^2
     const double mu = o.material->getInitialShearModulus();
     const double c = std::sqrt(4.0 * mu * o.thickness / rhoS);
     const double dtWave = minEdge / c;
     const double dtContact = 2.0 / std::sqrt(o.blockContact.pressurePenalty / rhoS);
     const double dt = cfl * std::min(dtWave, dtContact);
-    std::printf("mesh %.1f mm: %d nodes, shortest edge %.2f mm; mass scale %.0f; dt %.3g s "
-                "(wave %.3g, contact %.3g); damping %.3g /s; block %.1f mm/s; inflation %.2f s\n",
-                o.geometry.meshSize * 1e3, nn, minEdge * 1e3, massScale, dt, dtWave, dtContact,
-                alpha, speed * 1e3, tInflate);
+    std::printf(
+        "mesh %.1f mm: %d nodes, shortest edge %.2f mm; mass scale %.0f; dt %.3g s "
+        "(wave %.3g, contact %.3g); damping %.3g /s; block %.1f mm/s; inflation %.2f s\n",
+        o.geometry.meshSize * 1e3, nn, minEdge * 1e3, massScale, dt, dtWave, dtContact, alpha,
+        speed * 1e3, tInflate);
 
     Eigen::VectorXd v = Eigen::VectorXd::Zero(3 * nn);
     bags::EnergyAccumulator acc(nn);
@@ -146,10 +159,11 @@ int main(int argc, char** argv) {
             ke = 0.0;
             for (int i = 0; i < 3 * nn; ++i)
                 if (invMass(i) > 0.0) ke += 0.5 * v(i) * v(i) / invMass(i) / massScale;
-            std::printf("  d = %6.2f mm  F = %8.3f N  p = %7.3f kPa  KE(unscaled) %.3g J  "
-                        "cpu %.1f s\n",
-                        d * 1e3, f.z(), model.calcChamberGaugePressure(0, x) * 1e-3, ke,
-                        double(std::clock() - c0) / CLOCKS_PER_SEC);
+            std::printf(
+                "  d = %6.2f mm  F = %8.3f N  p = %7.3f kPa  KE(unscaled) %.3g J  "
+                "cpu %.1f s\n",
+                d * 1e3, f.z(), model.calcChamberGaugePressure(0, x) * 1e-3, ke,
+                double(std::clock() - c0) / CLOCKS_PER_SEC);
             std::fflush(stdout);
             nextSample += every;
         }
@@ -158,7 +172,8 @@ int main(int argc, char** argv) {
             return 1;
         }
     }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     std::printf("steps %ld, self-contact rebuilds %d, wall %.1f s, cpu %.1f s, %.3f ms/step\n",
                 steps, rebuilds, wall, double(std::clock() - c0) / CLOCKS_PER_SEC,
                 1e3 * wall / steps);

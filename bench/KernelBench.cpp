@@ -35,8 +35,7 @@ double millisecondsPerCall(int calls, const F& f) {
 int main(int argc, char** argv) {
     const double meshMm = argc > 1 ? std::atof(argv[1]) : 5.0;
     if (!(meshMm >= 2.0 && meshMm <= 50.0)) {
-        std::fprintf(stderr, "bench_kernels: mesh size %s is invalid; use 2 to 50 (mm)\n",
-                     argv[1]);
+        std::fprintf(stderr, "bench_kernels: mesh size %s is invalid; use 2 to 50 (mm)\n", argv[1]);
         return 2;
     }
     // The inflated shape: the load test's state before its first curve (4.5 g, taut).
@@ -51,12 +50,13 @@ int main(int argc, char** argv) {
     Eigen::Matrix3Xd x;
     bags::Mesh mesh;
     double pressure = 0.0;
-    bags::runLoadTest(o, [&](const bags::LoadStep& s, const bags::Mesh& m, const Eigen::Matrix3Xd& y) {
-        if (s.step != 0) return;
-        x = y;
-        mesh = m;
-        pressure = s.gaugePressure[0];
-    });
+    bags::runLoadTest(o,
+                      [&](const bags::LoadStep& s, const bags::Mesh& m, const Eigen::Matrix3Xd& y) {
+                          if (s.step != 0) return;
+                          x = y;
+                          mesh = m;
+                          pressure = s.gaugePressure[0];
+                      });
     // The membrane with the gas as a follower pressure at that state: the load test's mesh,
     // dofs and element terms, without its contacts (block, bed board, self contact) and gas
     // bodies. The contacts add node-diagonal blocks and, for self contact, a few couplings, so
@@ -70,7 +70,8 @@ int main(int argc, char** argv) {
         model.setChamberPressure(c, pressure);
     // `bending` as the second argument adds the film's plate bending stiffness.
     const bool bending = argc > 2 && std::strcmp(argv[2], "bending") == 0;
-    if (bending) model.setBendingStiffness(bags::calcPlateBendingStiffness(*o.material, o.thickness));
+    if (bending)
+        model.setBendingStiffness(bags::calcPlateBendingStiffness(*o.material, o.thickness));
     const int nn = mesh.getNumNodes();
     std::vector<int> map(3 * nn, 0);
     for (int d : model.getFixedDofs()) map[d] = -1;
@@ -152,7 +153,8 @@ int main(int argc, char** argv) {
             const double a = 0.5 * dyn.damping * h;
             const double keep = (1.0 - a) / (1.0 + a), push = h / (1.0 + a);
             for (int d = 0; d < 3 * nn; ++d) {
-                vs.data()[d] = invMass(d) > 0.0 ? keep * vs.data()[d] - push * invMass(d) * sacc.grad(d) : 0.0;
+                vs.data()[d] =
+                    invMass(d) > 0.0 ? keep * vs.data()[d] - push * invMass(d) * sacc.grad(d) : 0.0;
                 xs.data()[d] += h * vs.data()[d];
             }
         };
@@ -164,11 +166,11 @@ int main(int argc, char** argv) {
             tGeneral = std::min(tGeneral, millisecondsPerCall(100, generalStep));
             tKernel = std::min(tKernel, millisecondsPerCall(100, kernelStep));
         }
-        std::printf("explicit step, %s general %8.3f ms %6.0f ns/tri-step; kernel %8.3f ms %6.0f "
-                    "ns/tri-step; ratio %.2f\n",
-                    threads == 1 ? "1 thread " : "threads 0", tGeneral,
-                    1e6 * tGeneral / mesh.getNumTris(), tKernel, 1e6 * tKernel / mesh.getNumTris(),
-                    tGeneral / tKernel);
+        std::printf(
+            "explicit step, %s general %8.3f ms %6.0f ns/tri-step; kernel %8.3f ms %6.0f "
+            "ns/tri-step; ratio %.2f\n",
+            threads == 1 ? "1 thread " : "threads 0", tGeneral, 1e6 * tGeneral / mesh.getNumTris(),
+            tKernel, 1e6 * tKernel / mesh.getNumTris(), tGeneral / tKernel);
     }
     return 0;
 }

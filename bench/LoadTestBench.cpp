@@ -27,14 +27,14 @@
 #include <cstring>
 #include <stdexcept>
 
-
 // Force [N] at block travel d [m] on a curve's loading branch (linear between steps), NaN if
 // the branch does not reach d.
 double forceAt(const bags::LoadCurve& c, double d) {
     for (size_t i = 1; i < c.steps.size(); ++i) {
         const bags::LoadStep &a = c.steps[i - 1], &b = c.steps[i];
         if (!a.loading || !b.loading || b.displacement < d) continue;
-        return a.force + (b.force - a.force) * (d - a.displacement) / (b.displacement - a.displacement);
+        return a.force +
+               (b.force - a.force) * (d - a.displacement) / (b.displacement - a.displacement);
     }
     return std::nan("");
 }
@@ -115,7 +115,9 @@ int main(int argc, char** argv) {
             } else if (std::strcmp(val, "legacy") == 0) {
                 o.geometry.pattern = bags::MeshPattern::Legacy;
             } else {
-                std::fprintf(stderr, "bench_load_test: --pattern %s: valid are legacy, mirrored, crossed\n", val);
+                std::fprintf(stderr,
+                             "bench_load_test: --pattern %s: valid are legacy, mirrored, crossed\n",
+                             val);
                 return 2;
             }
         } else if (std::strcmp(key, "--fill-mass") == 0) {
@@ -152,38 +154,42 @@ int main(int argc, char** argv) {
     try {
         o.validate();
     } catch (const std::invalid_argument& e) {
-        std::fprintf(stderr, "bench_load_test: %s\nusage: bench_load_test [--step MM] MESH_MM "
-                             "[GAS_MASS_G ... | seed]\n", e.what());
+        std::fprintf(stderr,
+                     "bench_load_test: %s\nusage: bench_load_test [--step MM] MESH_MM "
+                     "[GAS_MASS_G ... | seed]\n",
+                     e.what());
         return 2;
     }
-    r = bags::runLoadTest(
-        o, [&](const bags::LoadStep& s, const bags::Mesh& m, const Eigen::Matrix3Xd&) {
-            nodes = m.getNumNodes();
-            tris = m.getNumTris();
-            ++steps;
-            if (s.loading) ++loadingSteps;
-            iterations += s.newtonIterations;
-            substeps += s.substeps;
-            if (verbose && o.stepping == bags::AirbagSpec::Stepping::Dynamic)
-                std::printf("    curve %d step %3d %s d = %7.3f mm F = %8.3f N substeps %6d "
-                            "KE %.3e J residual %.2e N t = %.1f s\n",
-                            s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3,
-                            s.force, s.substeps, s.kineticEnergy, s.residual,
-                            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                                .count());
-            else if (verbose)
-                std::printf("    curve %d step %3d %s d = %7.3f mm F = %8.3f N iterations %4d "
-                            "factorisations %3d residual %.2e N springs %.2e J t = %.1f s\n",
-                            s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3,
-                            s.force, s.newtonIterations, s.factorizations, s.residual, s.stabilizationEnergy,
-                            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                                .count());
-            if (tInflated < 0.0)
-                tInflated = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            if (s.curve == 1 && tFirst < 0.0)
-                tFirst = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        });
-    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r = bags::runLoadTest(o, [&](const bags::LoadStep& s, const bags::Mesh& m,
+                                 const Eigen::Matrix3Xd&) {
+        nodes = m.getNumNodes();
+        tris = m.getNumTris();
+        ++steps;
+        if (s.loading) ++loadingSteps;
+        iterations += s.newtonIterations;
+        substeps += s.substeps;
+        if (verbose && o.stepping == bags::AirbagSpec::Stepping::Dynamic)
+            std::printf(
+                "    curve %d step %3d %s d = %7.3f mm F = %8.3f N substeps %6d "
+                "KE %.3e J residual %.2e N t = %.1f s\n",
+                s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3, s.force,
+                s.substeps, s.kineticEnergy, s.residual,
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        else if (verbose)
+            std::printf(
+                "    curve %d step %3d %s d = %7.3f mm F = %8.3f N iterations %4d "
+                "factorisations %3d residual %.2e N springs %.2e J t = %.1f s\n",
+                s.curve, s.step, s.loading ? "load  " : "unload", s.displacement * 1e3, s.force,
+                s.newtonIterations, s.factorizations, s.residual, s.stabilizationEnergy,
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        if (tInflated < 0.0)
+            tInflated =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (s.curve == 1 && tFirst < 0.0)
+            tFirst = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    });
+    const double total =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     std::printf("mesh %.2f mm: %d nodes, %d triangles\n", meshMm, nodes, tris);
@@ -197,12 +203,12 @@ int main(int argc, char** argv) {
             }
         std::printf("  %.2f g: loading work %.4f J, springs/damping %.3g J (%.2g)\n",
                     c.gasMass * 1e3, work, held, work > 0 ? held / work : 0.0);
-        std::printf("  %.2f g: p0 %.2f kPa, %zu steps, k = %.3f N/mm, r2 = %.4f, F(5 mm) = %.2f N, "
-                    "stage %d, peak %s, springs' share %.2g%s%s\n",
-                    c.gasMass * 1e3, c.inflatedGaugePressure * 1e-3, c.steps.size(),
-                    c.stiffness * 1e-3, c.r2, forceAt(c, 5e-3), c.stage, c.reachedPeak ? "yes" : "no",
-                    c.stabilizationShare,
-                    c.failure.empty() ? "" : ", stopped: ", c.failure.c_str());
+        std::printf(
+            "  %.2f g: p0 %.2f kPa, %zu steps, k = %.3f N/mm, r2 = %.4f, F(5 mm) = %.2f N, "
+            "stage %d, peak %s, springs' share %.2g%s%s\n",
+            c.gasMass * 1e3, c.inflatedGaugePressure * 1e-3, c.steps.size(), c.stiffness * 1e-3,
+            c.r2, forceAt(c, 5e-3), c.stage, c.reachedPeak ? "yes" : "no", c.stabilizationShare,
+            c.failure.empty() ? "" : ", stopped: ", c.failure.c_str());
         if (c.blockSpeed > 0.0)
             std::printf("  %.2f g: dynamic, block %.2f mm/s, kinetic share %.2g%s\n",
                         c.gasMass * 1e3, c.blockSpeed * 1e3, c.kineticShare,
@@ -210,7 +216,8 @@ int main(int argc, char** argv) {
     }
     std::printf("steps %d (loading %d), Newton iterations %d, explicit sub-steps %ld\n", steps,
                 loadingSteps, iterations, substeps);
-    if (tFirst > 0) std::printf("inflation + first curve (loading and unloading): %.2f s\n", tFirst);
+    if (tFirst > 0)
+        std::printf("inflation + first curve (loading and unloading): %.2f s\n", tFirst);
     std::printf("inflation (flat panels to the first gas mass): %.2f s\n", tInflated);
     std::printf("total wall time: %.2f s\n", total);
     std::printf("peak resident memory: %.1f MB\n", ru.ru_maxrss / 1024.0);

@@ -30,8 +30,10 @@ int main(int argc, char** argv) {
     double gap = 5e-3, scale = 1.0;
     int first = 1;
     while (first + 1 < argc && std::strncmp(argv[first], "--", 2) == 0) {
-        if (!std::strcmp(argv[first], "--gap")) gap = std::atof(argv[first + 1]) * 1e-3;
-        else if (!std::strcmp(argv[first], "--scale")) scale = std::atof(argv[first + 1]);
+        if (!std::strcmp(argv[first], "--gap"))
+            gap = std::atof(argv[first + 1]) * 1e-3;
+        else if (!std::strcmp(argv[first], "--scale"))
+            scale = std::atof(argv[first + 1]);
         else {
             std::fprintf(stderr, "bench_neighbours: unknown option %s\n", argv[first]);
             return 2;
@@ -39,7 +41,8 @@ int main(int argc, char** argv) {
         first += 2;
     }
     if (argc < first + 2) {
-        std::fprintf(stderr, "usage: bench_neighbours [--gap MM] [--scale F] MESH_MM OWN_G [NEIGHBOUR_G]\n");
+        std::fprintf(
+            stderr, "usage: bench_neighbours [--gap MM] [--scale F] MESH_MM OWN_G [NEIGHBOUR_G]\n");
         return 2;
     }
     bags::LoadTestOptions o;
@@ -60,9 +63,9 @@ int main(int argc, char** argv) {
         bags::AirbagSpec spec = bags::makeAirbagSpec(o);
         spec.forceTolerance = 0.01;
         // Bag 0 is pressed; with 2 its neighbour is at +y, with 3 one on each side.
-        const std::vector<double> ys = n == 1 ? std::vector<double>{0.0}
-                                     : n == 2 ? std::vector<double>{0.0, pitch}
-                                              : std::vector<double>{0.0, -pitch, pitch};
+        const std::vector<double> ys = n == 1   ? std::vector<double>{0.0}
+                                       : n == 2 ? std::vector<double>{0.0, pitch}
+                                                : std::vector<double>{0.0, -pitch, pitch};
         for (double y : ys) spec.cluster.push_back(translation(bags::Vec3(0, y, 0)));
         bags::Airbag bag(spec);
         const auto [b0, e0] = bag.getBagNodes(0);
@@ -111,13 +114,14 @@ int main(int argc, char** argv) {
         const double k = m >= 2 ? (m * sxy - sx * sy) / (m * sxx - sx * sx) : 0.0;
         const double wall =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        std::printf("  %d bag%s: k 10-35 N = %.3f N/mm over %d points, F = %.2f N at %.0f mm, "
-                    "pressed bag %.2f kPa, neighbour force on it %.2f N (y), %d Newton "
-                    "iterations, %.1f s%s\n",
-                    n, n > 1 ? "s" : " ", k * 1e-3, m, force, travel * 1e3,
-                    bag.getChamberState(bag.getBagChambers(0).front()).gaugePressure * 1e-3,
-                    bag.calcNeighbourForce(0).y(), iterations, wall,
-                    ok ? "" : " (stopped: no convergence)");
+        std::printf(
+            "  %d bag%s: k 10-35 N = %.3f N/mm over %d points, F = %.2f N at %.0f mm, "
+            "pressed bag %.2f kPa, neighbour force on it %.2f N (y), %d Newton "
+            "iterations, %.1f s%s\n",
+            n, n > 1 ? "s" : " ", k * 1e-3, m, force, travel * 1e3,
+            bag.getChamberState(bag.getBagChambers(0).front()).gaugePressure * 1e-3,
+            bag.calcNeighbourForce(0).y(), iterations, wall,
+            ok ? "" : " (stopped: no convergence)");
         std::fflush(stdout);
     }
     return 0;

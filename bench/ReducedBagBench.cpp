@@ -450,8 +450,10 @@ int calibrate(const std::string& scenario, const std::string& out) {
             }
         miss /= std::max(1, steps);
         areaMiss /= std::max(1, areaSteps);
-        std::printf("  %.2f: %.3f, %.3f, %.3f (%d steps, %d mass-depth cells); mean ln(A/A_FE) by "
-                    "radius:", skirt, areaMiss, miss, spread, steps, count);
+        std::printf(
+            "  %.2f: %.3f, %.3f, %.3f (%d steps, %d mass-depth cells); mean ln(A/A_FE) by "
+            "radius:",
+            skirt, areaMiss, miss, spread, steps, count);
         for (const auto& [radius, sn] : byRadius)
             std::printf(" %.0f mm %+.3f", radius * 1e3, sn.first / std::max(1, sn.second));
         std::printf("\n");
@@ -463,8 +465,9 @@ int calibrate(const std::string& scenario, const std::string& out) {
     // footprint's area and the FE's own mean contact pressure over its gas pressure
     // (F_FE / (P_FE A_FE), A_FE the nodes in contact), over the taut masses and both places.
     {
-        std::printf("kappa by sphere radius (taut masses, both places; reduced area / FE's "
-                    "own contact area), at depths [mm]:\n        ");
+        std::printf(
+            "kappa by sphere radius (taut masses, both places; reduced area / FE's "
+            "own contact area), at depths [mm]:\n        ");
         for (double d : c.depths) std::printf(" %11.0f", d * 1e3);
         for (double radius : {0.04, 0.10, 0.22}) {
             std::printf("\n  %3.0f mm", radius * 1e3);
@@ -492,8 +495,10 @@ int calibrate(const std::string& scenario, const std::string& out) {
                         break;
                     }
                 }
-                if (n) std::printf(" %5.2f/%5.2f", sr / n, sf / n);
-                else std::printf("           -");
+                if (n)
+                    std::printf(" %5.2f/%5.2f", sr / n, sf / n);
+                else
+                    std::printf("           -");
             }
         }
         std::printf("\n");
@@ -576,7 +581,8 @@ int calibrate(const std::string& scenario, const std::string& out) {
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::string commit = shell("git rev-parse --short HEAD 2>/dev/null");
-    if (!shell("git status --porcelain --untracked-files=no -- . ':!data/reduced-bag' 2>/dev/null").empty())
+    if (!shell("git status --porcelain --untracked-files=no -- . ':!data/reduced-bag' 2>/dev/null")
+             .empty())
         commit += "+changes";
     std::ostringstream src;
     src << "bench_reduced_bag calibrate " << scenario << " " << out << "\n"
@@ -676,9 +682,8 @@ int validate(const std::string& scenario, const std::string& calPath) {
             c.name.c_str(), c.mass * 1e3, regime.c_str(), a.n,
             rows.empty() ? 0.0 : rows.back().forceFE, a.n ? 100 * std::sqrt(a.f2 / a.n) : 0.0,
             100 * a.fmax, a.n ? 1e-3 * std::sqrt(a.p2 / a.n) : 0.0,
-            a.n ? 100 * std::sqrt(a.pr2 / a.n) : 0.0, lastPeak,
-            a.np ? 100 * a.patch / a.np : 0.0, a.np ? 100 * std::sqrt(a.patch2 / a.np) : 0.0,
-            consistency);
+            a.n ? 100 * std::sqrt(a.pr2 / a.n) : 0.0, lastPeak, a.np ? 100 * a.patch / a.np : 0.0,
+            a.np ? 100 * std::sqrt(a.patch2 / a.np) : 0.0, consistency);
         Acc& g = regimes[regime];
         g.f2 += a.f2, g.p2 += a.p2, g.pr2 += a.pr2, g.n += a.n, g.fmax = std::max(g.fmax, a.fmax);
         g.patch += a.patch, g.patch2 += a.patch2, g.np += a.np;
@@ -785,10 +790,11 @@ int section(const std::string& scenario, char** a) {
     const Eigen::VectorXd p = bag.calcShapeContactPressure(s);
     const Eigen::Matrix3Xd& x = bag.getPositions();
     const Eigen::Isometry3d X = pose(c, rows.back().z);
-    std::printf("# gas %.4f kPa unloaded, %.4f kPa pressed; force %.3f N; shape origin %.2f %.2f "
-                "%.2f mm\n# node y0 z0 y z (mm, bag frame; 0: unloaded) x0 x p_kPa\n",
-                p0 * 1e-3, rows.back().pFE * 1e-3, rows.back().forceFE, X.translation().x() * 1e3,
-                X.translation().y() * 1e3, X.translation().z() * 1e3);
+    std::printf(
+        "# gas %.4f kPa unloaded, %.4f kPa pressed; force %.3f N; shape origin %.2f %.2f "
+        "%.2f mm\n# node y0 z0 y z (mm, bag frame; 0: unloaded) x0 x p_kPa\n",
+        p0 * 1e-3, rows.back().pFE * 1e-3, rows.back().forceFE, X.translation().x() * 1e3,
+        X.translation().y() * 1e3, X.translation().z() * 1e3);
     for (int n = 0; n < x.cols(); ++n)
         if (std::abs(x0s(0, n) - x0) <= 0.5 * spec.geometry.meshSize)
             std::printf("N %5d %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f %8.3f\n", n, x0s(1, n) * 1e3,
@@ -814,7 +820,8 @@ std::array<double, 2> measurePanelChange(const Case& c, const PressedBag& pb,
         for (int iy = 0; iy < cal.ny; ++iy) {
             const double px = cal.x0 + cal.pitch * ix, py = cal.y0 + cal.pitch * iy;
             if (std::abs(py) > 0.045 || !std::isfinite(h0(ix, iy) + h1(ix, iy))) continue;
-            if (shape->calcSignedDistance(Vec3(px, py, h1(ix, iy)), nullptr, nullptr) < 0.01) continue;
+            if (shape->calcSignedDistance(Vec3(px, py, h1(ix, iy)), nullptr, nullptr) < 0.01)
+                continue;
             const int k = px < g.calcApexX() ? 0 : 1;
             sum[k] += h1(ix, iy) - h0(ix, iy), ++n[k];
         }
@@ -832,19 +839,23 @@ int panels(const std::string& scenario, const std::string& calIn, const std::str
     bags::AirbagSpec spec = sc.options.bag;
     spec.solver.monitor = nullptr;
     if (std::ifstream(calOut)) {
-        std::fprintf(stderr, "bench_reduced_bag panels: %s exists; valid: a new file (nothing is "
-                             "overwritten)\n", calOut.c_str());
+        std::fprintf(stderr,
+                     "bench_reduced_bag panels: %s exists; valid: a new file (nothing is "
+                     "overwritten)\n",
+                     calOut.c_str());
         return 2;
     }
-    auto cal = std::make_shared<cosim::ReducedBagCalibration>(*io::readReducedBagCalibration(calIn));
+    auto cal =
+        std::make_shared<cosim::ReducedBagCalibration>(*io::readReducedBagCalibration(calIn));
     const bags::DoubleWedgeParams& g = spec.geometry;
     if (std::abs(cal->geometry.meshSize - g.meshSize) > 1e-9 ||
         std::abs(cal->geometry.longSide - g.longSide) > 1e-9) {
-        std::fprintf(stderr,
-                     "bench_reduced_bag panels: %s was made for a %.0f mm bag on a %.0f mm mesh, %s's "
-                     "bag is %.0f mm on a %.0f mm mesh; valid: the calibration of this bag\n",
-                     calIn.c_str(), cal->geometry.longSide * 1e3, cal->geometry.meshSize * 1e3,
-                     scenario.c_str(), g.longSide * 1e3, g.meshSize * 1e3);
+        std::fprintf(
+            stderr,
+            "bench_reduced_bag panels: %s was made for a %.0f mm bag on a %.0f mm mesh, %s's "
+            "bag is %.0f mm on a %.0f mm mesh; valid: the calibration of this bag\n",
+            calIn.c_str(), cal->geometry.longSide * 1e3, cal->geometry.meshSize * 1e3,
+            scenario.c_str(), g.longSide * 1e3, g.meshSize * 1e3);
         return 2;
     }
     const double apex = g.calcApexX(), travel = 0.02;
@@ -899,8 +910,10 @@ int footprint(const std::string& scenario, const std::string& calPath, char** a)
     const Eigen::Matrix3Xd& x = bag.getPositions();
     {
         const std::array<double, 2> m = measurePanelChange(c, pb, *cal, spec.geometry);
-        std::printf("# FE top away from the shape, mean change per 100 N: steep panel %+.2f mm, "
-                    "gentle panel %+.2f mm\n", 1e5 * m[0], 1e5 * m[1]);
+        std::printf(
+            "# FE top away from the shape, mean change per 100 N: steep panel %+.2f mm, "
+            "gentle panel %+.2f mm\n",
+            1e5 * m[0], 1e5 * m[1]);
     }
     std::printf("# FE: x_mm y_mm z_mm p_kPa area_cm2 (gas %.3f kPa, force %.2f N)\n",
                 rows.back().pFE * 1e-3, rows.back().forceFE);
@@ -978,8 +991,10 @@ int shear(const std::string& scenario, const std::string& calPath, char** a) {
             std::fprintf(stderr, "the FE bag did not reach %.1f mm\n", dz * 1e3);
             return 1;
         }
-    std::printf("travel_mm Fn_FE Ft_FE ratio_FE Fn_red Ft_red ratio_red (Ft along the travel, "
-                "against it positive; mu %.2f, reduced d %.1f mm)\n", mu, d * 1e3);
+    std::printf(
+        "travel_mm Fn_FE Ft_FE ratio_FE Fn_red Ft_red ratio_red (Ft along the travel, "
+        "against it positive; mu %.2f, reduced d %.1f mm)\n",
+        mu, d * 1e3);
     for (double t = 0.0; t <= travel + 1e-9; t += 0.0005) {
         Eigen::Isometry3d X = pose(c, z0 - depth);
         X.pretranslate(t * e);
@@ -989,8 +1004,8 @@ int shear(const std::string& scenario, const std::string& calPath, char** a) {
         }
         const Vec3 F = bag.calcShapeWrench(s).force, G = red.calcWrench(0).force;
         const double fn = F.z(), ft = -F.dot(e), gn = G.z(), gt = -G.dot(e);
-        std::printf("%5.1f %8.2f %8.2f %6.3f %8.2f %8.2f %6.3f\n", t * 1e3, fn, ft, ft / fn, gn,
-                    gt, gn > 0 ? gt / gn : 0.0);
+        std::printf("%5.1f %8.2f %8.2f %6.3f %8.2f %8.2f %6.3f\n", t * 1e3, fn, ft, ft / fn, gn, gt,
+                    gn > 0 ? gt / gn : 0.0);
     }
     return 0;
 }
@@ -1033,7 +1048,6 @@ int speed(const std::string& calPath) {
         int(bag.getPressurePoints().cols()), adv * 1e6, tan * 1e6, sum);
     return 0;
 }
-
 
 // --- A patient-on-array run read back: its bags.csv and the body's surface nodes at the shape
 // frames of its results.h5 (/shapes/body, docs/output-layout.md), for replay and fe-bag.
@@ -1248,9 +1262,10 @@ int lateral(const std::string& scenario, const std::string& calPath, const std::
         bags.push_back(dynamic_cast<cosim::ReducedBag*>(&poa.updBag(int(i))));
     const int columns = sc.options.layout.columns;
     const size_t npairs = poa.getPairs().size();
-    std::printf("lateral forces [N] (y across the bed, his left negative), roll moment M_x [N m] "
-                "about the run's centre of mass; d %.1f s/m, m %.2f kg\n",
-                damping, mass);
+    std::printf(
+        "lateral forces [N] (y across the bed, his left negative), roll moment M_x [N m] "
+        "about the run's centre of mass; d %.1f s/m, m %.2f kg\n",
+        damping, mass);
     std::map<long, std::vector<Eigen::Isometry3d>> poses;
     for (const auto& [tk, x] : frames) {
         std::vector<Eigen::Isometry3d>& X = poses[tk];
@@ -1278,8 +1293,8 @@ int lateral(const std::string& scenario, const std::string& calPath, const std::
         }
         const Vec3 c = com.at(tk);
         const double h1 = (tk - tp) * 1e-3, h2 = (tn - tk) * 1e-3;
-        const double ydd = 2.0 * ((com.at(tn).y() - c.y()) / h2 - (c.y() - com.at(tp).y()) / h1) /
-                           (h1 + h2);
+        const double ydd =
+            2.0 * ((com.at(tn).y() - c.y()) / h2 - (c.y() - com.at(tp).y()) / h1) / (h1 + h2);
         // per segment: Fz, Fy, Fy inside / skirt / column / board, M_x
         std::map<int, std::array<double, 7>> seg;
         std::vector<std::array<double, 2>> col(size_t(columns), {0.0, 0.0});
@@ -1288,7 +1303,8 @@ int lateral(const std::string& scenario, const std::string& calPath, const std::
         std::vector<double> redBag(bags.size(), 0.0);
         for (size_t k = 0; k < npairs; ++k) {
             const cosim::Link& L = poa.getLinks()[k];
-            redBag[size_t(L.participant)] += bags[size_t(L.participant)]->calcWrench(L.shape).force.z();
+            redBag[size_t(L.participant)] +=
+                bags[size_t(L.participant)]->calcWrench(L.shape).force.z();
         }
         for (size_t k = 0; k < npairs; ++k) {
             const cosim::Link& L = poa.getLinks()[k];
@@ -1312,21 +1328,23 @@ int lateral(const std::string& scenario, const std::string& calPath, const std::
             Fy += w.force.y(), Fz += w.force.z(), Mx += M.x();
             // the contact damping of the run: |F_s| scaled to the run's bag force
             const double scale = redBag[i] > 1e-9 ? ran.at(bag)[2] / redBag[i] : 0.0;
-            const double vy = (poses.at(tn)[k].translation().y() -
-                               poses.at(tp)[k].translation().y()) / (h1 + h2);
+            const double vy =
+                (poses.at(tn)[k].translation().y() - poses.at(tp)[k].translation().y()) / (h1 + h2);
             damp += damping * w.force.norm() * scale * vy;
         }
-        std::printf("%.2f run: m y'' %+6.1f + d sum|F|v_y %+6.1f = F_y %+6.1f (y %+6.1f mm)  "
-                    "reduced: F_y %+6.1f F_z %6.1f M_x %+6.1f; F_y inside %+6.1f skirt %+6.1f "
-                    "column %+6.1f board %+6.1f\n",
-                    tk * 1e-3, mass * ydd, damp, mass * ydd + damp, c.y() * 1e3, Fy, Fz, Mx,
-                    kinds[0], kinds[1], kinds[2], kinds[3]);
+        std::printf(
+            "%.2f run: m y'' %+6.1f + d sum|F|v_y %+6.1f = F_y %+6.1f (y %+6.1f mm)  "
+            "reduced: F_y %+6.1f F_z %6.1f M_x %+6.1f; F_y inside %+6.1f skirt %+6.1f "
+            "column %+6.1f board %+6.1f\n",
+            tk * 1e-3, mass * ydd, damp, mass * ydd + damp, c.y() * 1e3, Fy, Fz, Mx, kinds[0],
+            kinds[1], kinds[2], kinds[3]);
         for (const auto& [segment, a] : seg) {
             if (std::abs(a[1]) < 0.5 && std::abs(a[0]) < 5.0) continue;
-            std::printf("   %-12s F_z %6.1f F_y %+6.1f (inside %+6.1f skirt %+6.1f column %+6.1f "
-                        "board %+6.1f) M_x %+6.2f\n",
-                        body::getSegmentName(static_cast<body::Segment>(segment)), a[0], a[1],
-                        a[2], a[3], a[4], a[5], a[6]);
+            std::printf(
+                "   %-12s F_z %6.1f F_y %+6.1f (inside %+6.1f skirt %+6.1f column %+6.1f "
+                "board %+6.1f) M_x %+6.2f\n",
+                body::getSegmentName(static_cast<body::Segment>(segment)), a[0], a[1], a[2], a[3],
+                a[4], a[5], a[6]);
         }
         std::printf("   columns F_z/F_y:");
         for (int j = 0; j < columns; ++j)
@@ -1355,11 +1373,11 @@ Eigen::MatrixXd topAtMass(const cosim::ReducedBagCalibration& cal, double mass) 
 // slope along x. The free film keeps its unloaded curvature (K w = 0); a flat plate on a top
 // in equilibrium (-(R_x c^3 h_xx + R_y c h_yy) = 1) carries P over its contact.
 struct Membrane {
-    std::vector<int> ix, iy;            // the domain's nodes
-    Eigen::VectorXd h0, delta, w, r;    // unloaded top, obstacle depth, deflection [m]; r [N]
-    std::vector<int> owner;             // the shape whose surface bounds the node (-1: none)
+    std::vector<int> ix, iy;          // the domain's nodes
+    Eigen::VectorXd h0, delta, w, r;  // unloaded top, obstacle depth, deflection [m]; r [N]
+    std::vector<int> owner;           // the shape whose surface bounds the node (-1: none)
     std::vector<std::vector<std::pair<int, double>>> nb;  // neighbour (-1: the edge), k [m]
-    std::vector<int> held;              // nodes held at max(delta, 0): the apex ridge
+    std::vector<int> held;  // nodes held at max(delta, 0): the apex ridge
     /// The contact set's force: P a over the nodes of shape s whose film is within g0 of it,
     /// weighted 1 - gap / g0 (the pressure from the gas, the extent from the film).
     /// With R_x, R_y > 0 the pressure is P (1 + R_x c^3 s_xx + R_y c s_yy) (at least 0): the
@@ -1372,8 +1390,9 @@ struct Membrane {
             if (owner[size_t(i)] == s)
                 f += P * a * std::clamp(1.0 - (w[i] - delta[i]) / g0, 0.0, 1.0) *
                      (ramp > 0.0 ? std::clamp(delta[i] / ramp, 0.0, 1.0) : 1.0) *
-                     std::max(0.0, exactCurvature ? 1.0 + Rx * kx[i] + Ry * ky[i]
-                                                  : 1.0 + Rx * cx3[i] * sxx[i] + Ry * cy[i] * syy[i]);
+                     std::max(0.0, exactCurvature
+                                       ? 1.0 + Rx * kx[i] + Ry * ky[i]
+                                       : 1.0 + Rx * cx3[i] * sxx[i] + Ry * cy[i] * syy[i]);
         return f;
     }
     Eigen::VectorXd sxx, syy, cx3, cy;  // the shape's curvature over the node, the slope cosines
@@ -1390,13 +1409,16 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
     for (int ix = 0; ix < cal.nx; ++ix)
         for (int iy = 0; iy < cal.ny; ++iy) {
             const double x = cal.x0 + h * ix, y = cal.y0 + h * iy;
-            if (!std::isfinite(top(ix, iy)) || std::abs(y) >= seam || x <= 0.0 || x >= len) continue;
+            if (!std::isfinite(top(ix, iy)) || std::abs(y) >= seam || x <= 0.0 || x >= len)
+                continue;
             index(ix, iy) = int(m.ix.size());
             m.ix.push_back(ix), m.iy.push_back(iy);
         }
     const int n = int(m.ix.size());
-    m.h0.resize(n), m.delta.setConstant(n, -1.0), m.owner.assign(size_t(n), -1), m.nb.resize(size_t(n));
-    m.sxx.setZero(n), m.syy.setZero(n), m.cx3.setOnes(n), m.cy.setOnes(n), m.kx.setZero(n), m.ky.setZero(n);
+    m.h0.resize(n), m.delta.setConstant(n, -1.0), m.owner.assign(size_t(n), -1),
+        m.nb.resize(size_t(n));
+    m.sxx.setZero(n), m.syy.setZero(n), m.cx3.setOnes(n), m.cy.setOnes(n), m.kx.setZero(n),
+        m.ky.setZero(n);
     auto hAt = [&](int ix, int iy) {
         return (ix >= 0 && ix < cal.nx && iy >= 0 && iy < cal.ny) ? top(ix, iy) : std::nan("");
     };
@@ -1409,7 +1431,8 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
             return 1.0 / std::sqrt(1.0 + s * s);
         };
         const double cx = 0.5 * (cosX(ix - 1) + cosX(ix + 1));
-        for (const auto& [jx, jy] : {std::pair{ix - 1, iy}, {ix + 1, iy}, {ix, iy - 1}, {ix, iy + 1}}) {
+        for (const auto& [jx, jy] :
+             {std::pair{ix - 1, iy}, {ix + 1, iy}, {ix, iy - 1}, {ix, iy + 1}}) {
             const int j = (jx >= 0 && jx < cal.nx && jy >= 0 && jy < cal.ny) ? index(jx, jy) : -1;
             m.nb[size_t(i)].push_back({j, jy == iy ? Rx * std::pow(cosX(jx), 3) : Ry * cx});
         }
@@ -1442,7 +1465,8 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
                 const Vec3 pG = X_GB * Vec3(x, y, zl);
                 Vec3 nG;
                 shapes[s]->calcSignedDistance(pG, nullptr, &nG);
-                const Eigen::Matrix3d S = X_GB.linear().transpose() * shapes[s]->calcNormalDerivative(pG) * X_GB.linear();
+                const Eigen::Matrix3d S =
+                    X_GB.linear().transpose() * shapes[s]->calcNormalDerivative(pG) * X_GB.linear();
                 const Vec3 nB = X_GB.linear().transpose() * nG;
                 auto curv = [&](const Vec3& e) {
                     const Vec3 t = (e - e.dot(nB) * nB).normalized();
@@ -1459,7 +1483,8 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
         const int ix = m.ix[size_t(i)], iy = m.iy[size_t(i)];
         auto zAt = [&](int jx, int jy) {
             const int j = (jx >= 0 && jx < cal.nx && jy >= 0 && jy < cal.ny) ? index(jx, jy) : -1;
-            return (j >= 0 && m.owner[size_t(j)] == m.owner[size_t(i)]) ? m.h0[j] - m.delta[j] : std::nan("");
+            return (j >= 0 && m.owner[size_t(j)] == m.owner[size_t(i)]) ? m.h0[j] - m.delta[j]
+                                                                        : std::nan("");
         };
         const double z0 = m.h0[i] - m.delta[i];
         const double xx = (zAt(ix - 1, iy) - 2 * z0 + zAt(ix + 1, iy)) / (h * h);
@@ -1485,14 +1510,15 @@ Membrane solveMembrane(const cosim::ReducedBagCalibration& cal, const Eigen::Mat
     }
     m.r.setZero(n);
     for (int i = 0; i < n; ++i)
-        for (const auto& [j, k] : m.nb[size_t(i)]) m.r[i] += P * k * (m.w[i] - (j >= 0 ? m.w[j] : 0.0));
+        for (const auto& [j, k] : m.nb[size_t(i)])
+            m.r[i] += P * k * (m.w[i] - (j >= 0 ? m.w[j] : 0.0));
     return m;
 }
 
 // R_x, R_y from the unloaded top alone: least squares of -(R_x c^3 h_xx + R_y c h_yy) = 1 over
 // the domain's nodes with four neighbours, away from the apex ridge (15 mm) and its edges.
-std::pair<double, double> fitRadii(const cosim::ReducedBagCalibration& cal, const Eigen::MatrixXd& top,
-                                   double* rms) {
+std::pair<double, double> fitRadii(const cosim::ReducedBagCalibration& cal,
+                                   const Eigen::MatrixXd& top, double* rms) {
     const double h = cal.pitch, seam = 0.5 * cal.geometry.width, a = cal.geometry.calcApexX();
     Eigen::MatrixX2d A(0, 2);
     std::vector<std::array<double, 2>> rows;
@@ -1506,16 +1532,17 @@ std::pair<double, double> fitRadii(const cosim::ReducedBagCalibration& cal, cons
                          ym = top(ix, iy - 1), yp = top(ix, iy + 1);
             if (!std::isfinite(c0 + xm + xp + ym + yp)) continue;
             const double s = (xp - xm) / (2 * h), c = 1.0 / std::sqrt(1 + s * s);
-            rows.push_back({-std::pow(c, 3) * (xp - 2 * c0 + xm) / (h * h), -c * (yp - 2 * c0 + ym) / (h * h)});
+            rows.push_back({-std::pow(c, 3) * (xp - 2 * c0 + xm) / (h * h),
+                            -c * (yp - 2 * c0 + ym) / (h * h)});
         }
     A.resize(Eigen::Index(rows.size()), 2);
-    for (size_t k = 0; k < rows.size(); ++k) A(Eigen::Index(k), 0) = rows[k][0], A(Eigen::Index(k), 1) = rows[k][1];
+    for (size_t k = 0; k < rows.size(); ++k)
+        A(Eigen::Index(k), 0) = rows[k][0], A(Eigen::Index(k), 1) = rows[k][1];
     const Eigen::VectorXd b = Eigen::VectorXd::Ones(A.rows());
     const Eigen::Vector2d R = A.colPivHouseholderQr().solve(b);
     *rms = std::sqrt((A * R - b).squaredNorm() / double(A.rows()));
     return {R[0], R[1]};
 }
-
 
 // The footprint prototypes' cases: the calibration's spheres (4.5 g) and the validation's
 // taut shapes (4.25 and 5.25 g).
@@ -1548,10 +1575,15 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
     for (int k = 0; k < n; ++k) {
         double v[4] = {0, 0, 0, 0};
         char f[16] = "tension";
-        const int got = std::sscanf(a[k], "%lf,%lf,%lf,%15[a-z],%lf", &v[0], &v[1], &v[2], f, &v[3]);
+        const int got =
+            std::sscanf(a[k], "%lf,%lf,%lf,%15[a-z],%lf", &v[0], &v[1], &v[2], f, &v[3]);
         const std::string force = f;
-        if (got < 3 || (force != "tension" && force != "gas" && force != "film" && force != "shape")) {
-            std::fprintf(stderr, "bench_reduced_bag membrane: the set '%s' is not R_X,R_Y,K_R[,tension|gas|film|shape[,RAMP]] in mm\n", a[k]);
+        if (got < 3 ||
+            (force != "tension" && force != "gas" && force != "film" && force != "shape")) {
+            std::fprintf(stderr,
+                         "bench_reduced_bag membrane: the set '%s' is not "
+                         "R_X,R_Y,K_R[,tension|gas|film|shape[,RAMP]] in mm\n",
+                         a[k]);
             return 2;
         }
         sets.push_back({v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3, v[3] * 1e-3, force});
@@ -1563,7 +1595,8 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
         const Eigen::MatrixXd top0 = topAtMass(*cal, c.mass);
         std::printf("%s, %.2f g:\n  depth_mm F_FE F_red", c.name.c_str(), c.mass * 1e3);
         for (const Set& v : sets)
-            std::printf(" F(%g,%g,%g,%s,%g)", v.rx * 1e3, v.ry * 1e3, v.kr * 1e3, v.force.c_str(), v.ramp * 1e3);
+            std::printf(" F(%g,%g,%g,%s,%g)", v.rx * 1e3, v.ry * 1e3, v.kr * 1e3, v.force.c_str(),
+                        v.ramp * 1e3);
         std::printf("\n");
         std::vector<double> e2(sets.size(), 0.0);
         double eRed2 = 0.0;
@@ -1601,8 +1634,10 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
         totRed2[0] += eRed2, totN += m;
         std::fflush(stdout);
     }
-    std::printf("all cases, %d steps: reduced %.1f %%, membrane", totN, 100 * std::sqrt(totRed2[0] / totN));
-    for (size_t j = 0; j < sets.size(); ++j) std::printf(" %.1f %%", 100 * std::sqrt(tot2[j] / totN));
+    std::printf("all cases, %d steps: reduced %.1f %%, membrane", totN,
+                100 * std::sqrt(totRed2[0] / totN));
+    for (size_t j = 0; j < sets.size(); ++j)
+        std::printf(" %.1f %%", 100 * std::sqrt(tot2[j] / totN));
     std::printf("\n");
     return 0;
 }
@@ -1618,11 +1653,11 @@ int membraneCases(const std::string& scenario, const std::string& calPath, int n
 // of a shape beside a deep contact, and the gas takes its share through the tangent's dense
 // term. Linear: the film's geometry does not change with the load.
 struct Influence {
-    Eigen::Matrix3Xd x0;            // unloaded nodes [m]
-    Eigen::VectorXd area;           // nodal areas [m^2]
-    Eigen::MatrixXd C;              // over the free nodes `free` [m/N]
-    std::vector<int> free;          // node indices with a free vertical dof
-    double P0 = 0.0;                // unloaded gauge pressure [Pa]
+    Eigen::Matrix3Xd x0;    // unloaded nodes [m]
+    Eigen::VectorXd area;   // nodal areas [m^2]
+    Eigen::MatrixXd C;      // over the free nodes `free` [m/N]
+    std::vector<int> free;  // node indices with a free vertical dof
+    double P0 = 0.0;        // unloaded gauge pressure [Pa]
 };
 
 Influence buildInfluence(const bags::AirbagSpec& spec, double mass) {
@@ -1724,7 +1759,8 @@ int influence(const std::string& scenario, const std::string& calPath) {
             bag.commit();
             shape->setPose(pose(c, z0 - d));
             solveInfluence(in, *shape, 0.02, f);
-            std::printf("  %5.2f %6.2f %6.2f\n", d * 1e3, bag.calcShapeWrench(s).force.z(), f.sum());
+            std::printf("  %5.2f %6.2f %6.2f\n", d * 1e3, bag.calcShapeWrench(s).force.z(),
+                        f.sum());
         }
     }
     double eRed2All = 0, eInf2All = 0, pRed2All = 0, pInf2All = 0;
@@ -1734,9 +1770,10 @@ int influence(const std::string& scenario, const std::string& calPath) {
         if (!byMass.count(key)) {
             const auto t0 = std::chrono::steady_clock::now();
             byMass[key] = buildInfluence(spec, c.mass);
-            std::printf("influence at %.2f g: %d free nodes, P0 %.2f kPa, %.1f s\n", c.mass * 1e3,
-                        int(byMass[key].free.size()), byMass[key].P0 * 1e-3,
-                        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+            std::printf(
+                "influence at %.2f g: %d free nodes, P0 %.2f kPa, %.1f s\n", c.mass * 1e3,
+                int(byMass[key].free.size()), byMass[key].P0 * 1e-3,
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         }
         const Influence& in = byMass[key];
         std::vector<Row> rows = press(c, spec, sc.options.contact, cal);
@@ -1777,10 +1814,11 @@ int influence(const std::string& scenario, const std::string& calPath) {
         eRed2All += eRed2, eInf2All += eInf2, nAll += n;
         std::fflush(stdout);
     }
-    std::printf("all cases, %d steps: force rms reduced %.1f %%, influence %.1f %%; patch peak rms "
-                "reduced %.1f %%, influence %.1f %% (%d steps)\n",
-                nAll, 100 * std::sqrt(eRed2All / nAll), 100 * std::sqrt(eInf2All / nAll),
-                100 * std::sqrt(pRed2All / npAll), 100 * std::sqrt(pInf2All / npAll), npAll);
+    std::printf(
+        "all cases, %d steps: force rms reduced %.1f %%, influence %.1f %%; patch peak rms "
+        "reduced %.1f %%, influence %.1f %% (%d steps)\n",
+        nAll, 100 * std::sqrt(eRed2All / nAll), 100 * std::sqrt(eInf2All / nAll),
+        100 * std::sqrt(pRed2All / npAll), 100 * std::sqrt(pInf2All / npAll), npAll);
     return 0;
 }
 
@@ -1802,7 +1840,8 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
         const auto after = frames.lower_bound(k);
         std::fprintf(stderr, "%s/results.h5 has no shape frame at %.3f s; the nearest are at",
                      run.c_str(), t);
-        if (after != frames.begin()) std::fprintf(stderr, " %.3f s", std::prev(after)->first * 1e-3);
+        if (after != frames.begin())
+            std::fprintf(stderr, " %.3f s", std::prev(after)->first * 1e-3);
         if (after != frames.end()) std::fprintf(stderr, " %.3f s", after->first * 1e-3);
         std::fprintf(stderr, "\n");
         return 1;
@@ -1810,8 +1849,8 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
     std::vector<int> segs;
     for (const cosim::ShapeBagPair& p : poa.getPairs())
         if (p.bag == bagIndex &&
-            (segList == "all" || ("," + segList + ",").find("," + std::to_string(p.shape) + ",") !=
-                                     std::string::npos))
+            (segList == "all" ||
+             ("," + segList + ",").find("," + std::to_string(p.shape) + ",") != std::string::npos))
             segs.push_back(p.shape);
     const std::vector<cosim::ArrayBag> cells =
         cosim::makeArrayBags(sc.options.layout, sc.options.bag.geometry);
@@ -1830,7 +1869,8 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
     for (int seg : segs) {
         start.push_back(shapePoseOf(model, surf, frames.at(k0), seg));
         for (int k = 0; k < 2; ++k) {
-            auto s = cosim::makeBagShape(model.getContactShape(static_cast<body::Segment>(seg))).shape;
+            auto s =
+                cosim::makeBagShape(model.getContactShape(static_cast<body::Segment>(seg))).shape;
             s->setPose(lift(start.back(), 0.3));
             if (k == 0) {
                 bag.addShape(s, sc.options.contact);
@@ -1896,12 +1936,15 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
     for (int s : segs) std::printf(" %d", s);
     for (size_t i = 0; i < segs.size(); ++i) {
         // Each shape's pose at T1 in the bag frame: origin [mm] and its axes.
-        const Eigen::Isometry3d X = spec.X_GB.inverse() * shapePoseOf(model, surf, frames.at(k1), segs[i]);
+        const Eigen::Isometry3d X =
+            spec.X_GB.inverse() * shapePoseOf(model, surf, frames.at(k1), segs[i]);
         const Eigen::Matrix3d R = X.linear();
-        std::printf("\n  shape %d at T1, bag frame: origin %.0f %.0f %.0f mm, axes x (%.2f %.2f %.2f) "
-                    "y (%.2f %.2f %.2f) z (%.2f %.2f %.2f)", segs[i], X.translation().x() * 1e3,
-                    X.translation().y() * 1e3, X.translation().z() * 1e3, R(0, 0), R(1, 0), R(2, 0),
-                    R(0, 1), R(1, 1), R(2, 1), R(0, 2), R(1, 2), R(2, 2));
+        std::printf(
+            "\n  shape %d at T1, bag frame: origin %.0f %.0f %.0f mm, axes x (%.2f %.2f %.2f) "
+            "y (%.2f %.2f %.2f) z (%.2f %.2f %.2f)",
+            segs[i], X.translation().x() * 1e3, X.translation().y() * 1e3,
+            X.translation().z() * 1e3, R(0, 0), R(1, 0), R(2, 0), R(0, 1), R(1, 1), R(2, 1),
+            R(0, 2), R(1, 2), R(2, 2));
     }
     std::printf(
         "\ntime_s mass_g P_run_kPa F_run P_FE_kPa V_FE_L F_FE P_red_kPa F_red  "
@@ -1941,16 +1984,16 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
                     Vec3 cp, nrm;
                     feShapes[i]->calcContactGeometry(xn, &phi, &cp, &nrm, nullptr);
                     std::printf("N %d node %ld p %.0f A %.2f x %.1f %.1f %.1f n %.3f %.3f %.3f\n",
-                                segs[i], long(n), p[n], areas[n] * 1e4, xn.x() * 1e3,
-                                xn.y() * 1e3, xn.z() * 1e3, nrm.x(), nrm.y(), nrm.z());
+                                segs[i], long(n), p[n], areas[n] * 1e4, xn.x() * 1e3, xn.y() * 1e3,
+                                xn.z() * 1e3, nrm.x(), nrm.y(), nrm.z());
                 }
                 for (const cosim::ReducedBag::SampleForce& f : red.getSampleForces(int(i)))
-                    std::printf("S %d pt %d col %d delta %.2f blend %.3f qg %.0f qb %.0f "
-                                "c %.1f %.1f %.1f n %.3f %.3f %.3f f %.3f %.3f %.3f\n",
-                                segs[i], f.point, int(f.column), f.delta * 1e3, f.blend,
-                                f.gasPressure, f.boardPressure, f.c.x() * 1e3, f.c.y() * 1e3,
-                                f.c.z() * 1e3, f.n.x(), f.n.y(), f.n.z(), f.force.x(),
-                                f.force.y(), f.force.z());
+                    std::printf(
+                        "S %d pt %d col %d delta %.2f blend %.3f qg %.0f qb %.0f "
+                        "c %.1f %.1f %.1f n %.3f %.3f %.3f f %.3f %.3f %.3f\n",
+                        segs[i], f.point, int(f.column), f.delta * 1e3, f.blend, f.gasPressure,
+                        f.boardPressure, f.c.x() * 1e3, f.c.y() * 1e3, f.c.z() * 1e3, f.n.x(),
+                        f.n.y(), f.n.z(), f.force.x(), f.force.y(), f.force.z());
             }
         }
         if (memRx >= 0.0 && tk == k1) {
@@ -1959,8 +2002,9 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
             const Eigen::MatrixXd top0 = topAtMass(cal, mass);
             double rms = 0.0;
             const auto [fx, fy] = fitRadii(cal, top0, &rms);
-            std::printf("M unloaded top at %.3f g: R_x %.1f mm, R_y %.1f mm (rms of the fit %.2f)\n",
-                        mass * 1e3, fx * 1e3, fy * 1e3, rms);
+            std::printf(
+                "M unloaded top at %.3f g: R_x %.1f mm, R_y %.1f mm (rms of the fit %.2f)\n",
+                mass * 1e3, fx * 1e3, fy * 1e3, rms);
             const double Rx = memRx > 0 ? memRx : fx, Ry = memRy > 0 ? memRy : fy;
             const double P = bag.getChamberState(0).gaugePressure;
             const Membrane m = solveMembrane(cal, top0, spec.X_GB, feShapes, P, Rx, Ry, memKr);
@@ -1970,24 +2014,32 @@ int feBag(const std::string& scenario, const std::string& calPath, const std::st
             double vol = 0.0, rest = 0.0;
             for (Eigen::Index i = 0; i < m.w.size(); ++i) {
                 vol += cal.pitch * cal.pitch * m.w[i];
-                if (m.owner[size_t(i)] >= 0 && m.w[i] <= m.delta[i] + 1e-9) fz[size_t(m.owner[size_t(i)])] += m.r[i];
-                else rest += m.r[i];
+                if (m.owner[size_t(i)] >= 0 && m.w[i] <= m.delta[i] + 1e-9)
+                    fz[size_t(m.owner[size_t(i)])] += m.r[i];
+                else
+                    rest += m.r[i];
             }
-            std::printf("M R_x %.1f mm, R_y %.1f mm, k_r %.0f mm at %.2f kPa: film volume %.0f mL; "
-                        "Fz per shape", Rx * 1e3, Ry * 1e3, memKr * 1e3, P * 1e-3, vol * 1e6);
+            std::printf(
+                "M R_x %.1f mm, R_y %.1f mm, k_r %.0f mm at %.2f kPa: film volume %.0f mL; "
+                "Fz per shape",
+                Rx * 1e3, Ry * 1e3, memKr * 1e3, P * 1e-3, vol * 1e6);
             for (size_t i = 0; i < segs.size(); ++i) std::printf(" %d:%.1f", segs[i], fz[i]);
-            std::printf(" (free nodes %.2g N); contact set (gap to 1 mm): gas / film / shape", rest);
+            std::printf(" (free nodes %.2g N); contact set (gap to 1 mm): gas / film / shape",
+                        rest);
             for (size_t i = 0; i < segs.size(); ++i)
-                std::printf(" %d:%.1f/%.1f/%.1f", segs[i], m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3),
-                            m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp),
-                            m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp, true));
+                std::printf(
+                    " %d:%.1f/%.1f/%.1f", segs[i],
+                    m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3),
+                    m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp),
+                    m.setForce(int(i), P, cal.pitch * cal.pitch, 1e-3, Rx, Ry, memRamp, true));
             std::printf("\n");
             std::printf("M x_mm y_mm h0_mm delta_mm w_FE_mm w_mem_mm r_mem_N owner\n");
             for (Eigen::Index i = 0; i < m.w.size(); ++i) {
                 const int ix = m.ix[size_t(i)], iy = m.iy[size_t(i)];
-                std::printf("M %.0f %.0f %.1f %.1f %.2f %.2f %.2f %d\n", (cal.x0 + cal.pitch * ix) * 1e3,
-                            (cal.y0 + cal.pitch * iy) * 1e3, m.h0[i] * 1e3, m.delta[i] * 1e3,
-                            (m.h0[i] - hFE(ix, iy)) * 1e3, m.w[i] * 1e3, m.r[i],
+                std::printf("M %.0f %.0f %.1f %.1f %.2f %.2f %.2f %d\n",
+                            (cal.x0 + cal.pitch * ix) * 1e3, (cal.y0 + cal.pitch * iy) * 1e3,
+                            m.h0[i] * 1e3, m.delta[i] * 1e3, (m.h0[i] - hFE(ix, iy)) * 1e3,
+                            m.w[i] * 1e3, m.r[i],
                             m.owner[size_t(i)] >= 0 ? segs[size_t(m.owner[size_t(i)])] : -1);
             }
         }
@@ -2036,22 +2088,23 @@ int main(int argc, char** argv) {
         if (mode == "membrane" && argc >= 5)
             return membraneCases(argv[2], argv[3], argc - 4, argv + 4);
         if (mode == "fe-bag" && argc == 14 && std::string(argv[9]) == "membrane")
-            return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
-                         std::stod(argv[7]), std::stod(argv[8]), false, std::stod(argv[10]) * 1e-3,
+            return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6], std::stod(argv[7]),
+                         std::stod(argv[8]), false, std::stod(argv[10]) * 1e-3,
                          std::stod(argv[11]) * 1e-3, std::stod(argv[12]) * 1e-3,
                          std::stod(argv[13]) * 1e-3);
         if (mode == "fe-bag" && (argc == 9 || (argc == 10 && std::string(argv[9]) == "points")))
-            return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6],
-                         std::stod(argv[7]), std::stod(argv[8]), argc == 10);
-        std::cerr << "usage: bench_reduced_bag calibrate SCENARIO OUT | validate SCENARIO CAL | "
-                     "speed CAL | trace SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G | "
-                     "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM | "
-                     "replay SCENARIO CAL RUN_DIR | lateral SCENARIO CAL RUN_DIR T0 T1 | "
-                     "shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG "
-                     "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points | membrane "
-                     "R_X R_Y K_R RAMP] | membrane SCENARIO CAL R_X,R_Y,K_R[,FORCE[,RAMP]]... | section "
-                     "SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM | panels "
-                     "SCENARIO CAL_IN CAL_OUT | influence SCENARIO CAL\n";
+            return feBag(argv[2], argv[3], argv[4], std::stoi(argv[5]), argv[6], std::stod(argv[7]),
+                         std::stod(argv[8]), argc == 10);
+        std::cerr
+            << "usage: bench_reduced_bag calibrate SCENARIO OUT | validate SCENARIO CAL | "
+               "speed CAL | trace SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G | "
+               "footprint SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM | "
+               "replay SCENARIO CAL RUN_DIR | lateral SCENARIO CAL RUN_DIR T0 T1 | "
+               "shear SCENARIO CAL KIND SX SY SZ X Y TILT_DEG MASS_G DEPTH_MM MU DIR_DEG "
+               "TRAVEL_MM D_MM | fe-bag SCENARIO CAL RUN_DIR BAG SEGMENTS T0 T1 [points | membrane "
+               "R_X R_Y K_R RAMP] | membrane SCENARIO CAL R_X,R_Y,K_R[,FORCE[,RAMP]]... | section "
+               "SCENARIO KIND SX SY SZ X Y TILT_DEG MASS_G TRAVEL_MM SECTION_MM | panels "
+               "SCENARIO CAL_IN CAL_OUT | influence SCENARIO CAL\n";
         return 2;
     } catch (const io::InputError& e) {
         std::cerr << "bench_reduced_bag: error: " << e.what() << "\n";

@@ -36,11 +36,12 @@ bags::LoadTestOptions makeSeedRig(double meshMm) {
 
 void printScale(const bags::FillScaleResult& r, double target) {
     const bags::DoubleWedgeParams& g = r.geometry;
-    std::printf("fill %.3f g: s = %.4f -> long %.1f, short %.1f, width %.1f, height %.1f mm; "
-                "measured %.4f g (from p(m): %.4f g); %zu measurements, %.1f s\n",
-                target * 1e3, r.scale, g.longSide * 1e3, g.shortSide * 1e3, g.width * 1e3,
-                g.height * 1e3, r.measurement.fillMass * 1e3,
-                r.measurement.fillMassFromPressure * 1e3, r.scales.size(), r.seconds);
+    std::printf(
+        "fill %.3f g: s = %.4f -> long %.1f, short %.1f, width %.1f, height %.1f mm; "
+        "measured %.4f g (from p(m): %.4f g); %zu measurements, %.1f s\n",
+        target * 1e3, r.scale, g.longSide * 1e3, g.shortSide * 1e3, g.width * 1e3, g.height * 1e3,
+        r.measurement.fillMass * 1e3, r.measurement.fillMassFromPressure * 1e3, r.scales.size(),
+        r.seconds);
     for (size_t i = 0; i < r.scales.size(); ++i)
         std::printf("    s = %.5f: fill %.4f g\n", r.scales[i], r.fillMasses[i] * 1e3);
     const bags::FillMassMeasurement& m = r.measurement;
@@ -55,7 +56,8 @@ int main(int argc, char** argv) {
     try {
         if (argc > 1 && std::strcmp(argv[1], "--curves") == 0) {
             if (argc < 5) {
-                std::fprintf(stderr, "usage: bench_seed_reading --curves MESH_MM FILL_G GAS_MASS_G ...\n");
+                std::fprintf(stderr,
+                             "usage: bench_seed_reading --curves MESH_MM FILL_G GAS_MASS_G ...\n");
                 return 2;
             }
             bags::LoadTestOptions o = makeSeedRig(std::atof(argv[2]));
@@ -73,8 +75,8 @@ int main(int argc, char** argv) {
                 for (const bags::LoadStep& s : c.steps)
                     if (s.loading) fEnd = s.force, dEnd = s.displacement;
                 std::printf("%8.3f %10.3f %10.1f %12.3f %8.4f %9.1f at %.1f mm%s%s\n",
-                            c.gasMass * 1e3, c.inflatedGaugePressure * 1e-3,
-                            c.unloadedHeight * 1e3, c.stiffness * 1e-3, c.r2, fEnd, dEnd * 1e3,
+                            c.gasMass * 1e3, c.inflatedGaugePressure * 1e-3, c.unloadedHeight * 1e3,
+                            c.stiffness * 1e-3, c.r2, fEnd, dEnd * 1e3,
                             c.failure.empty() ? "" : "; ", c.failure.c_str());
             }
             std::printf("load test %.1f s\n", res.seconds);
@@ -107,7 +109,8 @@ int main(int argc, char** argv) {
             // The scaled bag at the fill mass and 0.1 g either side, unloaded.
             bags::LoadTestOptions o = rig;
             o.geometry = r.geometry;
-            o.gasMasses = {target + 0.1e-3, target + 0.05e-3, target, target - 0.05e-3, target - 0.1e-3};
+            o.gasMasses = {target + 0.1e-3, target + 0.05e-3, target, target - 0.05e-3,
+                           target - 0.1e-3};
             o.peakForce = 0.5;
             o.stiffnessFrom = 0.1;
             o.stiffnessTo = 0.4;
@@ -115,9 +118,9 @@ int main(int argc, char** argv) {
             o.polynomialOrder = 1;
             const bags::LoadTestResult res = bags::runLoadTest(o);
             for (const bags::LoadCurve& c : res.curves)
-                std::printf("    at %.3f g: %.4f L, gauge %.3f kPa, top %.1f mm\n",
-                            c.gasMass * 1e3, c.inflatedVolume * 1e3,
-                            c.inflatedGaugePressure * 1e-3, c.unloadedHeight * 1e3);
+                std::printf("    at %.3f g: %.4f L, gauge %.3f kPa, top %.1f mm\n", c.gasMass * 1e3,
+                            c.inflatedVolume * 1e3, c.inflatedGaugePressure * 1e-3,
+                            c.unloadedHeight * 1e3);
         }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "bench_seed_reading: %s\n", e.what());

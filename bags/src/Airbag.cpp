@@ -48,7 +48,8 @@ Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isome
 Eigen::Isometry3d perturbPose(const Eigen::Isometry3d& X, const Vec3& w, const Vec3& t) {
     Eigen::Isometry3d Y = X;
     const double angle = w.norm();
-    if (angle > 0.0) Y.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * X.linear();
+    if (angle > 0.0)
+        Y.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * X.linear();
     Y.translation() += t;
     return Y;
 }
@@ -75,7 +76,11 @@ void applyImperfection(Mesh& mesh, const Imperfection& imp) {
                    c = mesh.X.col(mesh.tris(2, e));
         Vec3 n = (b - a).cross(c - a);
         // Align with a fixed hemisphere so that the two sides of a shared wall do not cancel.
-        const int k = [&] { int i; n.cwiseAbs().maxCoeff(&i); return i; }();
+        const int k = [&] {
+            int i;
+            n.cwiseAbs().maxCoeff(&i);
+            return i;
+        }();
         if (n(k) < 0.0) n = -n;
         for (int v = 0; v < 3; ++v) normal.col(mesh.tris(v, e)) += n;
     }
@@ -120,8 +125,8 @@ void AirbagSpec::validate() const {
     require(density >= 0.0, "density", density, "use a density >= 0 kg/m^3");
     require(wrinklingResidual > 0.0 && wrinklingResidual < 0.1, "wrinklingResidual",
             wrinklingResidual, "use 0 < residual < 0.1 (e.g. 1e-3)");
-    require(bendingStiffness >= 0.0 && bendingStiffness < 1.0, "bendingStiffness",
-            bendingStiffness, "use 0 (a pure membrane) to 1 N m");
+    require(bendingStiffness >= 0.0 && bendingStiffness < 1.0, "bendingStiffness", bendingStiffness,
+            "use 0 (a pure membrane) to 1 N m");
     require(gravity.allFinite(), "gravity", gravity.norm(), "use a finite acceleration");
     gas.validate();
     prony.validate();
@@ -153,7 +158,8 @@ void AirbagSpec::validate() const {
         if (stepping == Stepping::Relaxed && gas.heatTimeConstant > 0.0)
             throw std::invalid_argument(
                 "airbag option 'stepping' = relaxed does not take the gas's heat exchange "
-                "(gas.heatTimeConstant = " + std::to_string(gas.heatTimeConstant) +
+                "(gas.heatTimeConstant = " +
+                std::to_string(gas.heatTimeConstant) +
                 " s); valid: quasi-static or dynamic stepping with it, or no heat exchange");
     }
     require(cluster.size() <= 64, "cluster", static_cast<double>(cluster.size()),
@@ -171,7 +177,8 @@ void AirbagSpec::validate() const {
     if (sharedAir && cluster.size() < 2)
         throw std::invalid_argument(
             "airbag option 'sharedAir' joins the air of a cluster's bags; it needs a cluster of "
-            "two or more bags (the cluster has " + std::to_string(cluster.size()) + ")");
+            "two or more bags (the cluster has " +
+            std::to_string(cluster.size()) + ")");
     solver.validate();
 }
 
@@ -185,7 +192,7 @@ struct Airbag::Snapshot {
     ViscousState viscous;  // the film's internal variables (empty without Prony terms)
     std::vector<Eigen::Isometry3d> poses;
     double time = 0.0;
-    Eigen::Matrix3Xd v;    // the film's velocity (dynamic stepping; empty: at rest)
+    Eigen::Matrix3Xd v;  // the film's velocity (dynamic stepping; empty: at rest)
     // The film's stable step over the root of its mass scale [s] (0: to be estimated) and the
     // steps advanced since it was estimated: part of the state, so that a step repeated from
     // a commit or a checkpoint is integrated with the same sub-steps.
@@ -391,12 +398,14 @@ struct Airbag::Impl {
             for (int g = 0; g < model->getNumGases(); ++g)
                 worst = std::max(worst, std::abs(model->getGas(g).calcTemperature(V[g]) - Tr));
             if (worst <= 1e-5) return;
-            for (int g = 0; g < model->getNumGases(); ++g) model->updGas(g).setTemperature(Tr, V[g]);
+            for (int g = 0; g < model->getNumGases(); ++g)
+                model->updGas(g).setTemperature(Tr, V[g]);
             SolveSummary sum;
             double stab = 0.0;
             if (self) self->updateCandidates(x);
             if (!trySolve(&sum, &stab, 3, spec.solver))
-                throw NumericalError("no convergence while the gas settles at the room's temperature");
+                throw NumericalError(
+                    "no convergence while the gas settles at the room's temperature");
         }
         throw NumericalError("the gas did not settle at the room's temperature in 40 passes");
     }
@@ -419,7 +428,8 @@ struct Airbag::Impl {
             for (int g = 0; g < n; ++g) {
                 const double T0 = start[g].calcTemperature(V0[g]);
                 target[g] = start[g].calcHeatStepTemperature(V0[g], T0, V1[g], dt);
-                worst = std::max(worst, std::abs(model->getGas(g).calcTemperature(V1[g]) - target[g]));
+                worst =
+                    std::max(worst, std::abs(model->getGas(g).calcTemperature(V1[g]) - target[g]));
             }
             if (worst <= 1e-5) return true;
             for (int g = 0; g < n; ++g) model->updGas(g).setTemperature(target[g], V1[g]);
@@ -601,7 +611,9 @@ struct Airbag::Impl {
             for (const Shape& s : shapes) s.contact->setFrictionSuppressed(true);
         Airbag::WrenchLinearisation lin;
         lin.pose.assign(which.size(), Eigen::Matrix<double, 6, 6>::Zero());
-        if (gas) lin.gas.assign(which.size(), Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, numBags));
+        if (gas)
+            lin.gas.assign(which.size(),
+                           Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, numBags));
         std::vector<int> pressing;  // indices into `which`
         for (size_t k = 0; k < which.size(); ++k)
             if (shapes.at(which[k]).contact->getNumActive(x) > 0) pressing.push_back(int(k));
@@ -609,7 +621,8 @@ struct Airbag::Impl {
         const int nPose = 6 * int(pressing.size());
         Eigen::MatrixXd B(3 * mesh.getNumNodes(), nPose + (gas ? numBags : 0));
         for (size_t j = 0; j < pressing.size(); ++j)
-            B.middleCols<6>(6 * j) = calcContactPoseDerivative(which[pressing[j]], &lin.pose[pressing[j]]);
+            B.middleCols<6>(6 * j) =
+                calcContactPoseDerivative(which[pressing[j]], &lin.pose[pressing[j]]);
         if (gas)
             for (int b = 0; b < numBags; ++b) B.col(nPose + b) = calcGasMassDerivative(b);
         Eigen::MatrixXd Y;
@@ -652,7 +665,8 @@ struct Airbag::Impl {
     std::vector<double> calcGasVolumes(int b, double* sum) const {
         std::vector<double> V(bagGases[b].size());
         *sum = 0.0;
-        for (size_t i = 0; i < V.size(); ++i) *sum += V[i] = model->calcGasVolume(bagGases[b][i], x, nullptr);
+        for (size_t i = 0; i < V.size(); ++i)
+            *sum += V[i] = model->calcGasVolume(bagGases[b][i], x, nullptr);
         return V;
     }
     // Takes every bag quasi-statically from its gas mass now to masses[b], the bags' masses
@@ -662,8 +676,8 @@ struct Airbag::Impl {
             // One body of air: its mass goes to the masses' sum.
             double to = 0.0;
             for (double mb : masses) to += mb;
-            solveRamp(totalMass(), to, [&](double m) { setBagGasMass(0, m); },
-                      "changing the gas mass");
+            solveRamp(
+                totalMass(), to, [&](double m) { setBagGasMass(0, m); }, "changing the gas mass");
             return;
         }
         std::vector<double> from(numBags);
@@ -673,14 +687,15 @@ struct Airbag::Impl {
             if (std::abs(masses[b] - from[b]) > std::abs(masses[ref] - from[ref])) ref = b;
         }
         const double span = masses[ref] - from[ref];
-        solveRamp(from[ref], masses[ref],
-                  [&](double m) {
-                      // The way along; span 0: no bag changes, every mass stays.
-                      const double f = span == 0.0 ? 1.0 : (m - from[ref]) / span;
-                      for (int b = 0; b < numBags; ++b)
-                          setBagGasMass(b, b == ref ? m : from[b] + f * (masses[b] - from[b]));
-                  },
-                  "changing the gas mass");
+        solveRamp(
+            from[ref], masses[ref],
+            [&](double m) {
+                // The way along; span 0: no bag changes, every mass stays.
+                const double f = span == 0.0 ? 1.0 : (m - from[ref]) / span;
+                for (int b = 0; b < numBags; ++b)
+                    setBagGasMass(b, b == ref ? m : from[b] + f * (masses[b] - from[b]));
+            },
+            "changing the gas mass");
     }
 
     // --- solving
@@ -910,7 +925,8 @@ struct Airbag::Impl {
             if (trySolve(&sum, &stab, 3, spec.solver) && recheckCandidates(&sum)) {
                 s = next;
                 solved = true;
-                if (sum.iterations < 8) ds = std::abs(2.0 * ds) < std::abs(dsMax) ? 2.0 * ds : dsMax;
+                if (sum.iterations < 8)
+                    ds = std::abs(2.0 * ds) < std::abs(dsMax) ? 2.0 * ds : dsMax;
             } else {
                 apply(s);
                 ds *= 0.5;
@@ -987,8 +1003,10 @@ struct Airbag::Impl {
                 for (int b = 0; b < numBags; ++b) addBagGasMass(b, calcGasInflow(b, dt));
                 leak(dt);
                 const bool heat = spec.gas.heatTimeConstant > 0.0 && dt > 0.0;
-                const std::vector<GasChamber> heatStart = heat ? copyGases() : std::vector<GasChamber>();
-                const std::vector<double> heatV0 = heat ? calcAllGasVolumes() : std::vector<double>();
+                const std::vector<GasChamber> heatStart =
+                    heat ? copyGases() : std::vector<GasChamber>();
+                const std::vector<double> heatV0 =
+                    heat ? calcAllGasVolumes() : std::vector<double>();
                 *warmed = warm && warmStart();
                 if (!*warmed) predict(before->poses);
                 if (self) self->updateCandidates(x);
@@ -1126,7 +1144,8 @@ struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
     // [Pa/m] the stiffest penalty per area that may press a node.
     static double maxContactPenalty(const Impl& m) {
         auto stiffest = [](const RigidContact::Options& o) {
-            return o.pressurePenalty * std::max(1.0, o.friction > 0.0 ? o.stickStiffnessRatio : 0.0);
+            return o.pressurePenalty *
+                   std::max(1.0, o.friction > 0.0 ? o.stickStiffnessRatio : 0.0);
         };
         double k = m.bedContact ? stiffest(m.spec.bedContact) : 0.0;
         for (const Shape& sh : m.shapes) k = std::max(k, stiffest(sh.contact->getOptions()));
@@ -1150,8 +1169,8 @@ struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
     // Asleep over dt: at rest, gas and film still (`still`), untouched before and after. Then
     // the shapes are at their targets, the time moved on and true returned; otherwise nothing
     // has changed.
-    static bool trySleep(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt,
-                         bool still, AdvanceSummary* out) {
+    static bool trySleep(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt, bool still,
+                         AdvanceSummary* out) {
         if (!(still && m.v.isZero(0.0) && isUntouched(m))) return false;
         for (size_t i = 0; i < m.shapes.size(); ++i) m.shapes[i].shape->setPose(m.shapes[i].target);
         if (isUntouched(m)) {
@@ -1215,18 +1234,19 @@ struct Airbag::Impl::DynamicStepper : Airbag::Impl::Stepper {
     }
 
     // n sub-steps of h from the current state; false (state unspecified) on a blow-up.
-    bool integrate(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt, long n,
-                   double h, AdvanceSummary* out) {
+    bool integrate(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt, long n, double h,
+                   AdvanceSummary* out) {
         (void)out;
-        const bool orifice = m.spec.connection == AirbagSpec::Connection::Orifice &&
-                             m.model->getNumGases() >= 2;
+        const bool orifice =
+            m.spec.connection == AirbagSpec::Connection::Orifice && m.model->getNumGases() >= 2;
         const bool heat = m.spec.gas.heatTimeConstant > 0.0;
         const int ng = m.model->getNumGases();
         std::vector<GasChamber> heatStart;
         std::vector<double> heatV0;
         try {
             for (long k = 0; k < n; ++k) {
-                const double s1 = k + 1 == n ? 1.0 : static_cast<double>(k + 1) / static_cast<double>(n);
+                const double s1 =
+                    k + 1 == n ? 1.0 : static_cast<double>(k + 1) / static_cast<double>(n);
                 for (size_t i = 0; i < m.shapes.size(); ++i)
                     m.shapes[i].shape->setPose(interpolatePose(from[i], m.shapes[i].target, s1));
                 // Gas over the sub-step at the volumes of its start.
@@ -1339,10 +1359,11 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
         const double pace = o.relaxPace * std::sqrt(1000.0 / o.massScale);
         double travel = 0.0;
         for (size_t i = 0; i < m.shapes.size(); ++i) {
-            const Eigen::AngleAxisd turn(Eigen::Matrix3d(m.shapes[i].target.linear() *
-                                                         from[i].linear().transpose()));
-            travel = std::max(travel, (m.shapes[i].target.translation() - from[i].translation()).norm() +
-                                          std::abs(turn.angle()) * reach);
+            const Eigen::AngleAxisd turn(
+                Eigen::Matrix3d(m.shapes[i].target.linear() * from[i].linear().transpose()));
+            travel =
+                std::max(travel, (m.shapes[i].target.translation() - from[i].translation()).norm() +
+                                     std::abs(turn.angle()) * reach);
         }
         // The way to a first touch is free: the ramp starts at the last fraction of the
         // travel at which no shape touches the film (bisection), so that a shape brought from
@@ -1350,7 +1371,9 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
         double s0 = 0.0;
         if (travel > 0.0 && isUntouched(m)) {
             double lo = 0.0, hi = 1.0;
-            for (int i = 0; i < 24 && (hi - lo) * travel > pace * perRoot * std::sqrt(o.massScale) * o.stepFraction; ++i) {
+            for (int i = 0; i < 24 && (hi - lo) * travel >
+                                          pace * perRoot * std::sqrt(o.massScale) * o.stepFraction;
+                 ++i) {
                 const double mid = 0.5 * (lo + hi);
                 for (size_t j = 0; j < m.shapes.size(); ++j)
                     m.shapes[j].shape->setPose(interpolatePose(from[j], m.shapes[j].target, mid));
@@ -1376,15 +1399,16 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
     // The step of dt relaxed in sub-steps of h, the shapes moved from fraction s0 of the way
     // to their poses in `ramp` sub-steps (at least one); then up to relaxSubsteps more. False
     // (state unspecified) if the film could not be evaluated.
-    bool relax(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt, double h,
-               double s0, double ramp, AdvanceSummary* out) {
+    bool relax(Impl& m, const std::vector<Eigen::Isometry3d>& from, double dt, double h, double s0,
+               double ramp, AdvanceSummary* out) {
         const DynamicOptions& o = m.spec.dynamics;
         const long nRamp = std::max(1L, static_cast<long>(std::ceil(ramp - 1e-9)));
         const double tol2 = m.spec.forceTolerance * m.spec.forceTolerance;
         try {
             for (int b = 0; b < m.numBags; ++b) m.addBagGasMass(b, m.calcGasInflow(b, dt));
             m.leak(dt);
-            if (m.spec.connection == AirbagSpec::Connection::Orifice && m.model->getNumGases() >= 2) {
+            if (m.spec.connection == AirbagSpec::Connection::Orifice &&
+                m.model->getNumGases() >= 2) {
                 const std::vector<GasChamber> start = m.copyGases();
                 m.moveGas(start, m.calcTransfer(start, dt));
             }
@@ -1405,7 +1429,8 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
                 SolveSummary ns;
                 bool ok = m.runNewton(xs, &ns, so);
                 for (int r = 0;
-                     ok && m.self && !m.self->isCandidateListValid(xs) && r < Impl::kRechecks; ++r) {
+                     ok && m.self && !m.self->isCandidateListValid(xs) && r < Impl::kRechecks;
+                     ++r) {
                     m.self->updateCandidates(xs);
                     ok = m.runNewton(xs, &ns, so);
                 }
@@ -1422,7 +1447,8 @@ struct Airbag::Impl::RelaxedStepper : Airbag::Impl::DynamicStepper {
                                                  : s0 + (1.0 - s0) * static_cast<double>(k) /
                                                             static_cast<double>(nRamp);
                     for (size_t i = 0; i < m.shapes.size(); ++i)
-                        m.shapes[i].shape->setPose(interpolatePose(from[i], m.shapes[i].target, s1));
+                        m.shapes[i].shape->setPose(
+                            interpolatePose(from[i], m.shapes[i].target, s1));
                 }
                 if (m.self && !m.self->isCandidateListValid(m.x)) m.self->updateCandidates(m.x);
                 r2 = m.film->calcForce(m.x, acc);
@@ -1489,7 +1515,8 @@ Airbag::Airbag(const AirbagSpec& spec) : m_impl(std::make_unique<Impl>()) {
     // A woven film's warp runs along the bag frame's x (the long side), or its z in a panel
     // across it (docs/materials.md#fabric-anisotropy).
     if (!material->isIsotropic())
-        m.model->setWarpAxes(spec.X_GB.linear() * Vec3::UnitX(), spec.X_GB.linear() * Vec3::UnitZ());
+        m.model->setWarpAxes(spec.X_GB.linear() * Vec3::UnitX(),
+                             spec.X_GB.linear() * Vec3::UnitZ());
     if (spec.density > 0.0 && spec.gravity.squaredNorm() > 0.0)
         m.model->setGravity(spec.density, spec.gravity);
     if (spec.bendingStiffness > 0.0) m.model->setBendingStiffness(spec.bendingStiffness);
@@ -1608,8 +1635,9 @@ void Airbag::inflate(const std::vector<double>& masses) {
 void Airbag::inflateToPressure(double gaugePressure) {
     Impl& m = *m_impl;
     if (!(gaugePressure > 0.0 && gaugePressure <= 1e6))
-        throw std::invalid_argument("Airbag::inflateToPressure: use a gauge pressure > 0 and "
-                                    "<= 1 MPa (e.g. 4 kPa)");
+        throw std::invalid_argument(
+            "Airbag::inflateToPressure: use a gauge pressure > 0 and "
+            "<= 1 MPa (e.g. 4 kPa)");
     if (m.inflated) throw std::logic_error("Airbag::inflateToPressure after the bag was inflated");
     rampAndSeal(std::vector<double>(m.numBags, gaugePressure));
     // The gas sealed at the ramp's end holds the film where the prescribed pressure did: the
@@ -1626,14 +1654,15 @@ void Airbag::rampAndSeal(std::vector<double> pTarget) {
     double pMax = 0.0;
     for (double p : pTarget) pMax = std::max(pMax, p);
     if (m.spec.sharedAir) pTarget.assign(m.numBags, pMax);  // one air: one pressure
-    m.solveRamp(0.0, pMax,
-                [&](double p) {
-                    for (int b = 0; b < m.numBags; ++b)
-                        for (int c : m.bagChambers[b])
-                            m.model->setChamberPressure(
-                                c, pTarget[b] == pMax ? p : p * (pTarget[b] / pMax));
-                },
-                "inflating the airbag");
+    m.solveRamp(
+        0.0, pMax,
+        [&](double p) {
+            for (int b = 0; b < m.numBags; ++b)
+                for (int c : m.bagChambers[b])
+                    m.model->setChamberPressure(c,
+                                                pTarget[b] == pMax ? p : p * (pTarget[b] / pMax));
+        },
+        "inflating the airbag");
     for (int c = 0; c < static_cast<int>(mesh.chambers.size()); ++c)
         m.model->setChamberPressure(c, 0.0);
     // Seal the gas that is in each bag at this pressure (one body per bag, or one per chamber
@@ -1734,9 +1763,12 @@ double Airbag::calcFittedRangeUse(double* stretch) const {
             double l1 = 1.0, l2 = 1.0;
             WrinklingMaterial::calcPrincipalStretches(C, &l1, &l2);
             double x = C.trace() + 1.0 / det - 3.0;  // I1 - 3, plane stress incompressible
-            const int state = tensionField ? tensionField->calcState(C) : 0;  // taut, wrinkled, slack
-            if (state == 2) x = 0.0;
-            else if (state == 1) x = l1 * l1 + 2.0 / l1 - 3.0;  // uniaxial at its largest stretch
+            const int state =
+                tensionField ? tensionField->calcState(C) : 0;  // taut, wrinkled, slack
+            if (state == 2)
+                x = 0.0;
+            else if (state == 1)
+                x = l1 * l1 + 2.0 / l1 - 3.0;  // uniaxial at its largest stretch
             if (x / limit > use) {
                 use = x / limit;
                 best = l1;

@@ -31,8 +31,8 @@ Mat3 skew(const Vec3& v) {
 double calcPlateBendingStiffness(double youngsModulus, double poisson, double thickness) {
     if (!(youngsModulus > 0.0) || !(poisson >= 0.0 && poisson < 1.0) || !(thickness > 0.0)) {
         std::ostringstream s;
-        s << "calcPlateBendingStiffness: need E > 0, 0 <= nu < 1, t > 0 (got E = "
-          << youngsModulus << " Pa, nu = " << poisson << ", t = " << thickness << " m)";
+        s << "calcPlateBendingStiffness: need E > 0, 0 <= nu < 1, t > 0 (got E = " << youngsModulus
+          << " Pa, nu = " << poisson << ", t = " << thickness << " m)";
         throw std::invalid_argument(s.str());
     }
     return youngsModulus * thickness * thickness * thickness / (12.0 * (1.0 - poisson * poisson));
@@ -103,8 +103,8 @@ void calcHingeDerivatives(const Vec3& e, const Vec3& a, const Vec3& b, const Vec
 
 }  // namespace
 
-double calcHingeAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3,
-                      Vec12* grad, Mat12* hess) {
+double calcHingeAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, Vec12* grad,
+                      Mat12* hess) {
     const Vec3 e = x1 - x0, a = x2 - x0, b = x3 - x0;
     const Vec3 NA = e.cross(a), NB = b.cross(e);
     const Vec3 nA = NA / std::sqrt(NA.squaredNorm()), nB = NB / std::sqrt(NB.squaredNorm());
@@ -149,7 +149,8 @@ DiscreteBending::DiscreteBending(const Mesh& mesh, const BendingOptions& options
     std::vector<std::array<double, 3>> triSign(nt, {0.0, 0.0, 0.0});
     auto addHinge = [&](const EdgeUse& A, const EdgeUse& B) {
         Hinge h;
-        const int x0 = mesh.tris((A.local + 1) % 3, A.tri), x1 = mesh.tris((A.local + 2) % 3, A.tri);
+        const int x0 = mesh.tris((A.local + 1) % 3, A.tri),
+                  x1 = mesh.tris((A.local + 2) % 3, A.tri);
         h.nodes = {x0, x1, mesh.tris(A.local, A.tri), mesh.tris(B.local, B.tri)};
         h.restAngle = calcHingeAngle(mesh.X.col(h.nodes[0]), mesh.X.col(h.nodes[1]),
                                      mesh.X.col(h.nodes[2]), mesh.X.col(h.nodes[3]));
@@ -205,8 +206,8 @@ DiscreteBending::DiscreteBending(const Mesh& mesh, const BendingOptions& options
                 // A D a_i a_j [nu + (1 - nu) (n_i . n_j)^2], a_i = |e_i| / (2 A).
                 const double li = edge[i].norm(), lj = edge[j].norm();
                 const double c = edge[i].dot(edge[j]) / (li * lj);
-                p.M(i, j) = D * li * lj / (4.0 * area) * (nu + (1.0 - nu) * c * c) *
-                            triSign[t][i] * triSign[t][j];
+                p.M(i, j) = D * li * lj / (4.0 * area) * (nu + (1.0 - nu) * c * c) * triSign[t][i] *
+                            triSign[t][j];
             }
         p.numNodes = 0;
         for (int i = 0; i < 3; ++i) {
@@ -294,7 +295,9 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
 #endif
     double* dth = dtheta.data();
     Vec12* gr = grad.data();
-#pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nh > 512) reduction(min : collapsed)
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (nthreads > 1 && nh > 512) \
+    reduction(min                                                                             \
+              : collapsed)
     for (int h = 0; h < nh; ++h) {
         const std::array<int, 4>& n = m_hinges[h].nodes;
         const Vec3 x0 = x.col(n[0]), x1 = x.col(n[1]), x2 = x.col(n[2]), x3 = x.col(n[3]);
@@ -307,8 +310,7 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
         }
         // The change from rest, on the branch nearest to it: a seam with a large rest angle
         // (the gentle side meets the base at 2.5 rad) may fold through +-pi continuously.
-        double d = calcHingeAngle(x0, x1, x2, x3, wantD ? &gr[h] : nullptr) -
-                   m_hinges[h].restAngle;
+        double d = calcHingeAngle(x0, x1, x2, x3, wantD ? &gr[h] : nullptr) - m_hinges[h].restAngle;
         if (d > M_PI) d -= 2.0 * M_PI;
         if (d <= -M_PI) d += 2.0 * M_PI;
         dth[h] = d;
@@ -384,7 +386,8 @@ void DiscreteBending::addEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
     for (size_t s = 0; s < m_blocks.size(); ++s) {
         const int a = m_blocks[s].first, b = m_blocks[s].second;
         for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) acc.hess.emplace_back(3 * a + i, 3 * b + j, blocks[s](i, j));
+            for (int j = 0; j < 3; ++j)
+                acc.hess.emplace_back(3 * a + i, 3 * b + j, blocks[s](i, j));
     }
 }
 

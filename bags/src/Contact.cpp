@@ -34,7 +34,7 @@ namespace {
 /// layer, the layer and the penalty in series.
 struct NormalLaw {
     double k;
-    double width;  // onsetGap [m]
+    double width;            // onsetGap [m]
     double area = 0.0;       // nodal reference area [m^2]
     double thickness = 0.0;  // tissue layer [m], 0: none
     double modulus = 0.0;    // [Pa]
@@ -157,10 +157,10 @@ TissueStress calcTissueStress(double c, double h, double E) {
 struct RigidContact::Impl {
     Options opt;
     const RigidShape* shape = nullptr;
-    int numNodes = 0;              // nodes of the mesh
-    std::vector<int> nodes;        // contact set
-    std::vector<double> area;      // nodal reference area [m^2] per contact node
-    std::vector<Vec3> anchor_S;    // friction anchor on the surface, shape frame
+    int numNodes = 0;            // nodes of the mesh
+    std::vector<int> nodes;      // contact set
+    std::vector<double> area;    // nodal reference area [m^2] per contact node
+    std::vector<Vec3> anchor_S;  // friction anchor on the surface, shape frame
     std::vector<char> hasAnchor;
     double slipLength = RigidContact::kMinSlipLength;  // [m] r = v_s dt of the regularised law
     bool frictionSuppressed = false;  // setFrictionSuppressed(): evaluate as frictionless
@@ -334,7 +334,8 @@ RigidContact::History RigidContact::getHistory() const {
 }
 
 void RigidContact::setHistory(const History& h) {
-    if (h.anchor_S.size() != m_impl->anchor_S.size() || h.hasAnchor.size() != m_impl->hasAnchor.size())
+    if (h.anchor_S.size() != m_impl->anchor_S.size() ||
+        h.hasAnchor.size() != m_impl->hasAnchor.size())
         throw std::invalid_argument("RigidContact::setHistory: history of another contact set");
     m_impl->anchor_S = h.anchor_S;
     m_impl->hasAnchor = h.hasAnchor;

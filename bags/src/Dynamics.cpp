@@ -38,11 +38,13 @@ FilmDynamics::FilmDynamics(const MembraneModel& model, double density,
         m_taut = std::make_unique<MembraneModel>(model.getMesh(), std::move(tautMaterial),
                                                  model.getThickness());
         m_taut->setWarpAxes(model.getWarpAxis(), model.getWarpFallback());
-        if (model.getBendingStiffness() > 0.0) m_taut->setBendingStiffness(model.getBendingStiffness());
+        if (model.getBendingStiffness() > 0.0)
+            m_taut->setBendingStiffness(model.getBendingStiffness());
         m_taut->setNumThreads(model.getNumThreads());
     }
     if (!(density > 0.0))
-        throw std::invalid_argument("FilmDynamics: the film needs a density > 0 kg/m^3 to move in time");
+        throw std::invalid_argument(
+            "FilmDynamics: the film needs a density > 0 kg/m^3 to move in time");
     const Mesh& mesh = model.getMesh();
     m_areaDensity = density * model.getThickness() * options.massScale;
     const Eigen::VectorXd area = mesh.calcNodalAreas();

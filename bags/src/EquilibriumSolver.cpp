@@ -45,8 +45,7 @@ void expandAdd(const Eigen::VectorXd& red, const std::vector<int>& map, double a
 // The gas bodies' dense rank-one tangent terms c g g^T over the free dofs: the columns of U
 // are the bodies' dV/dx [m^2], c their -dp/dV [Pa/m^3] (> 0).
 void calcGasTerms(const MembraneModel& model, const Eigen::Matrix3Xd& x,
-                  const std::vector<int>& map, int nfree, Eigen::MatrixXd& U,
-                  Eigen::VectorXd& c) {
+                  const std::vector<int>& map, int nfree, Eigen::MatrixXd& U, Eigen::VectorXd& c) {
     const int ng = model.getNumGases();
     U.resize(nfree, ng);
     c.resize(ng);
@@ -75,8 +74,8 @@ double energyAt(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
 // Applies (P + U C U^T)^-1 by Sherman-Morrison-Woodbury, P^-1 from the factorisation.
 struct WoodburySolve {
     const detail::SparseSpdSolver& P;
-    Eigen::MatrixXd PU;                       // P^-1 U
-    Eigen::LDLT<Eigen::MatrixXd> capacitance; // C^-1 + U^T P^-1 U
+    Eigen::MatrixXd PU;                        // P^-1 U
+    Eigen::LDLT<Eigen::MatrixXd> capacitance;  // C^-1 + U^T P^-1 U
     const Eigen::MatrixXd& U;
     WoodburySolve(const detail::SparseSpdSolver& p, const Eigen::MatrixXd& u,
                   const Eigen::VectorXd& c)
@@ -138,8 +137,10 @@ std::vector<std::vector<int>> makeNodeAdjacency(const Mesh& mesh) {
 // and the map from K's value slots to P's are made once per pattern of K; each call then
 // only gathers the values.
 class Sparsifier {
-public:
-    bool isFor(int patternId, int nfree) const { return m_pattern == patternId && m_nfree == nfree; }
+  public:
+    bool isFor(int patternId, int nfree) const {
+        return m_pattern == patternId && m_nfree == nfree;
+    }
     void build(const SpMat& K, const std::vector<int>& freeToNode,
                const std::vector<std::vector<int>>& adj, int patternId) {
         const int n = static_cast<int>(K.rows());
@@ -189,7 +190,7 @@ public:
     }
     int diagonalSlot(int i) const { return m_diag[i]; }
 
-private:
+  private:
     int find(int i, int j) const { return detail::findSlot(m_P, i, j); }
     SpMat m_P;
     std::vector<int> m_target, m_rowDiag, m_colDiag, m_diag;
@@ -202,8 +203,8 @@ private:
 struct SolverWorkspace::Impl {
     detail::SparseSpdSolver llt;
     detail::HessianAssembler assembler;
-    Sparsifier sparsifier;                      // the tangent without its wide couplings
-    std::vector<std::vector<int>> adjacency;   // node neighbours of the model's mesh
+    Sparsifier sparsifier;                    // the tangent without its wide couplings
+    std::vector<std::vector<int>> adjacency;  // node neighbours of the model's mesh
     const Mesh* adjacencyMesh = nullptr;
     int nfree = -1;
     bool valid = false;
@@ -228,12 +229,10 @@ namespace {
 // there, Nocedal & Wright's Algorithm 7.1, missed the square cushion's verification by
 // 4.3 %). The factorisation is reused while CG converges within maxKrylovIterations on it.
 // With P = K and no raise needed it is an exact (shifted) Newton solve.
-bool calcInexactNewtonDirection(const SpMat& K, const SpMat& P, bool wide,
-                                const Eigen::MatrixXd& U, const Eigen::VectorXd& cgas,
-                                const Eigen::VectorXd& r, double shift, double diagMean,
-                                double tolerance, const SolverOptions& options,
-                                SolverWorkspace::Impl& ws, SolveSummary& sum,
-                                Eigen::VectorXd& d) {
+bool calcInexactNewtonDirection(const SpMat& K, const SpMat& P, bool wide, const Eigen::MatrixXd& U,
+                                const Eigen::VectorXd& cgas, const Eigen::VectorXd& r, double shift,
+                                double diagMean, double tolerance, const SolverOptions& options,
+                                SolverWorkspace::Impl& ws, SolveSummary& sum, Eigen::VectorXd& d) {
     auto run = [&](int maxIt) {
         int kit = 0;
         const WoodburySolve M(ws.llt, U, cgas);
@@ -294,7 +293,7 @@ SolveSummary solveEquilibrium(const MembraneModel& model, Eigen::Matrix3Xd& x,
     double bestResidual = std::numeric_limits<double>::infinity();
     int sinceBest = 0;  // iterations since the residual last fell below its best by 1 %
 
-    EnergyAccumulator acc(nn);             // reused: its buffers keep their capacity
+    EnergyAccumulator acc(nn);  // reused: its buffers keep their capacity
     for (int it = 0; it <= options.maxIterations; ++it) {
         if (!x.allFinite()) throw NumericalError("non-finite nodal positions", -1, it);
         acc.resize(nn);
@@ -433,7 +432,8 @@ Eigen::MatrixXd solveTangent(const MembraneModel& model, const Eigen::Matrix3Xd&
     detail::HessianAssembler assembler;
     const SpMat& K = assembler.assemble(acc.hess, map, nfree);
     detail::SparseSpdSolver llt;
-    if (!llt.factorize(K)) throw NumericalError("solveTangent: the tangent is not positive definite");
+    if (!llt.factorize(K))
+        throw NumericalError("solveTangent: the tangent is not positive definite");
     Eigen::MatrixXd U;
     Eigen::VectorXd cgas;
     calcGasTerms(model, x, map, nfree, U, cgas);

@@ -27,10 +27,16 @@ namespace {
 inline double calcAtanReduced(double x) {
     const double z = x * x;
     const double p = ((((-8.750608600031904122785e-01 * z - 1.615753718733365076637e+01) * z -
-                        7.500855792314704667340e+01) * z - 1.228866684490136173410e+02) * z -
+                        7.500855792314704667340e+01) *
+                           z -
+                       1.228866684490136173410e+02) *
+                          z -
                       6.485021904942025371773e+01);
     const double q = (((((z + 2.485846490142306297962e+01) * z + 1.650270098316988542046e+02) * z +
-                        4.328810604912902668951e+02) * z + 4.853903996359136964868e+02) * z +
+                        4.328810604912902668951e+02) *
+                           z +
+                       4.853903996359136964868e+02) *
+                          z +
                       1.945506571482613964425e+02);
     return x * (z * p / q) + x;
 }
@@ -106,11 +112,11 @@ struct Polynomial {
 struct FilmForce::Law {
     enum Kind { Generic, Plain, TensionField } kind = Generic;
     const MembraneMaterial* material = nullptr;  // the whole law (Generic, and the branches')
-    Polynomial base;                              // Plain: the law; TensionField: its base
+    Polynomial base;                             // Plain: the law; TensionField: its base
     double residual = 0.0;
-    bool ownResidual = false;                     // the residual term has its own law
+    bool ownResidual = false;  // the residual term has its own law
     Polynomial residualLaw;
-    bool yarns = false;                           // fabric yarns on top of the matrix
+    bool yarns = false;  // fabric yarns on top of the matrix
     double kw = 0.0, kf = 0.0, aw1 = 0.0, aw2 = 0.0, af1 = 0.0, af2 = 0.0;
 
     explicit Law(const MembraneMaterial& m) : material(&m) {
@@ -216,8 +222,8 @@ struct FilmForce::Law {
     }
 
     template <bool E>
-    static void addYarn(double c1, double c2, double c3, double k, double a1, double a2,
-                        double* S, double* W) {
+    static void addYarn(double c1, double c2, double c3, double k, double a1, double a2, double* S,
+                        double* W) {
         if (!(k > 0.0)) return;
         const double Ey = 0.5 * (a1 * a1 * c1 + a2 * a2 * c2 + 2.0 * a1 * a2 * c3 - 1.0);
         if (!(Ey > 0.0)) return;
@@ -231,7 +237,8 @@ struct FilmForce::Law {
 FilmForce::FilmForce(const MembraneModel& model) : m_model(&model) {
     const Mesh& mesh = model.getMesh();
     const int nt = mesh.getNumTris(), nn = mesh.getNumNodes();
-    if (static_cast<int>(model.m_DmInv.size()) != nt || static_cast<int>(model.m_area0.size()) != nt)
+    if (static_cast<int>(model.m_DmInv.size()) != nt ||
+        static_cast<int>(model.m_area0.size()) != nt)
         throw std::invalid_argument("FilmForce: the model's element frames are not set");
     m_law = std::make_shared<const Law>(model.getMaterial());
 
@@ -318,8 +325,9 @@ FilmForce::FilmForce(const MembraneModel& model) : m_model(&model) {
         std::vector<std::vector<std::pair<int, double>>> rows(nh);
         for (const Triplet& t : b.calcHingeStiffness()) {
             auto& row = rows[t.row()];
-            auto it = std::find_if(row.begin(), row.end(),
-                                   [&](const std::pair<int, double>& p) { return p.first == t.col(); });
+            auto it = std::find_if(row.begin(), row.end(), [&](const std::pair<int, double>& p) {
+                return p.first == t.col();
+            });
             if (it == row.end())
                 row.emplace_back(t.col(), t.value());
             else
@@ -444,7 +452,8 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
             double* out = elemForce + 9 * static_cast<size_t>(e);
             double* u = triNormal + 3 * static_cast<size_t>(e);
             if (m_inChamber[e]) {
-                const Vec3 y0(x0[0], x0[1], x0[2]), y1(x1[0], x1[1], x1[2]), y2(x2[0], x2[1], x2[2]);
+                const Vec3 y0(x0[0], x0[1], x0[2]), y1(x1[0], x1[1], x1[2]),
+                    y2(x2[0], x2[1], x2[2]);
                 volume6[e] = y0.dot(y1.cross(y2));
             }
             if (nh > 0) {
@@ -532,8 +541,10 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
             const double iL2 = 1.0 / L2;
             double* shape = hingeShape + 3 * static_cast<size_t>(h);
             shape[0] = L;
-            shape[1] = ((x2[0] - x0[0]) * e[0] + (x2[1] - x0[1]) * e[1] + (x2[2] - x0[2]) * e[2]) * iL2;
-            shape[2] = ((x3[0] - x0[0]) * e[0] + (x3[1] - x0[1]) * e[1] + (x3[2] - x0[2]) * e[2]) * iL2;
+            shape[1] =
+                ((x2[0] - x0[0]) * e[0] + (x2[1] - x0[1]) * e[1] + (x2[2] - x0[2]) * e[2]) * iL2;
+            shape[2] =
+                ((x3[0] - x0[0]) * e[0] + (x3[1] - x0[1]) * e[1] + (x3[2] - x0[2]) * e[2]) * iL2;
         }
 
         // 3. The chambers' volumes in their fixed order, and their pressures.
@@ -634,9 +645,9 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
         }
     }
     if (badElement < nt)
-        throw NumericalError("membrane element " + std::to_string(badElement) +
-                                 " collapsed (det C <= 0)",
-                             -1, -1, badElement);
+        throw NumericalError(
+            "membrane element " + std::to_string(badElement) + " collapsed (det C <= 0)", -1, -1,
+            badElement);
     if (badGas) throw NumericalError("gas volume became non-positive");
 
     double energy = std::numeric_limits<double>::quiet_NaN();
@@ -656,9 +667,9 @@ void FilmForce::addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& ac
         }
     if (model.m_stabilization > 0.0) {
         for (int i = 0; i < nn; ++i) {
-            const double k = model.m_stabilization * model.m_nodalArea(i) *
-                             (model.m_stabilizationWeight.empty() ? 1.0
-                                                                  : model.m_stabilizationWeight[i]);
+            const double k =
+                model.m_stabilization * model.m_nodalArea(i) *
+                (model.m_stabilizationWeight.empty() ? 1.0 : model.m_stabilizationWeight[i]);
             if (k == 0.0) continue;
             const Vec3 d = x.col(i) - model.m_anchor.col(i);
             if (E) acc.energy += 0.5 * k * d.squaredNorm();

@@ -26,12 +26,11 @@ void GasOptions::validate() const {
             "use a positive absolute pressure in Pa (sea level: 1.01325e5)");
     require(polytropicIndex >= 1.0 && polytropicIndex <= 2.0, "polytropicIndex", polytropicIndex,
             "use 1 <= n <= 2 (1 isothermal, 1.4 adiabatic air)");
-    require(gamma > 1.0 && gamma <= 5.0 / 3.0, "gamma", gamma,
-            "use 1 < gamma <= 5/3 (air: 1.4)");
+    require(gamma > 1.0 && gamma <= 5.0 / 3.0, "gamma", gamma, "use 1 < gamma <= 5/3 (air: 1.4)");
     require(leakConductance >= 0.0 && leakConductance <= kMaxLeakConductance, "leakConductance",
             leakConductance, "use 0 (sealed) to 1e-9 kg/(s Pa) (1 mg/(s kPa))");
-    require(heatTimeConstant >= 0.0 && heatTimeConstant <= kMaxHeatTimeConstant,
-            "heatTimeConstant", heatTimeConstant,
+    require(heatTimeConstant >= 0.0 && heatTimeConstant <= kMaxHeatTimeConstant, "heatTimeConstant",
+            heatTimeConstant,
             "use 0 (the process as chosen) to 3600 s (the film's thermal time constant)");
     if (heatTimeConstant > 0.0 && process == Process::Polytropic)
         throw std::invalid_argument(
@@ -45,9 +44,12 @@ double GasOptions::getAmbientDensity() const {
 
 std::string toString(GasOptions::Process p) {
     switch (p) {
-        case GasOptions::Process::Isothermal: return "isothermal";
-        case GasOptions::Process::Adiabatic: return "adiabatic";
-        case GasOptions::Process::Polytropic: return "polytropic";
+        case GasOptions::Process::Isothermal:
+            return "isothermal";
+        case GasOptions::Process::Adiabatic:
+            return "adiabatic";
+        case GasOptions::Process::Polytropic:
+            return "polytropic";
     }
     return "unknown";
 }
@@ -56,9 +58,15 @@ GasChamber::GasChamber(const GasOptions& options, double mass) : m_options(optio
     options.validate();
     if (!(mass > 0.0)) throw std::invalid_argument("gas mass must be positive");
     switch (options.process) {
-        case GasOptions::Process::Isothermal: m_exponent = 1.0; break;
-        case GasOptions::Process::Adiabatic: m_exponent = options.gamma; break;
-        case GasOptions::Process::Polytropic: m_exponent = options.polytropicIndex; break;
+        case GasOptions::Process::Isothermal:
+            m_exponent = 1.0;
+            break;
+        case GasOptions::Process::Adiabatic:
+            m_exponent = options.gamma;
+            break;
+        case GasOptions::Process::Polytropic:
+            m_exponent = options.polytropicIndex;
+            break;
     }
     // With heat exchange the gas compresses adiabatically between its relaxations.
     if (options.heatTimeConstant > 0.0) m_exponent = options.gamma;
@@ -92,10 +100,11 @@ double GasChamber::calcPressureDerivative(double V) const {
 
 double GasChamber::calcWorkPotential(double V) const {
     const double c = m_pRef * std::pow(m_VRef, m_exponent);  // p V^n
-    const double g = m_exponent == 1.0 ? c * std::log(V / m_VRef)
-                                       : c * (std::pow(V, 1.0 - m_exponent) -
-                                              std::pow(m_VRef, 1.0 - m_exponent)) /
-                                             (1.0 - m_exponent);
+    const double g =
+        m_exponent == 1.0
+            ? c * std::log(V / m_VRef)
+            : c * (std::pow(V, 1.0 - m_exponent) - std::pow(m_VRef, 1.0 - m_exponent)) /
+                  (1.0 - m_exponent);
     return g - m_options.ambientPressure * (V - m_VRef);
 }
 

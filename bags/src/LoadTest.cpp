@@ -39,8 +39,8 @@ double calcTopUnderBlock(const Eigen::Matrix3Xd& x, const Vec3& centre, double h
 // The load test's one physical early end (io::isCurveFailed() reads its first words).
 std::string describeBottomedOut(double disp, double force) {
     std::ostringstream r;
-    r << "bottomed out: the block is within 2 mm of the bed board at block travel "
-      << disp * 1e3 << " mm (" << force << " N)";
+    r << "bottomed out: the block is within 2 mm of the bed board at block travel " << disp * 1e3
+      << " mm (" << force << " N)";
     return r.str();
 }
 
@@ -144,9 +144,14 @@ std::vector<Eigen::Isometry3d> calcNeighbourPoses(const LoadTestOptions& o) {
     const double px = g.longSide + o.neighbourGap;
     std::vector<Vec3> at;
     switch (o.neighbours) {
-        case N::None: return {};
-        case N::Pair: at = {Vec3(0, 0, 0), Vec3(0, py, 0)}; break;
-        case N::Row3: at = {Vec3(0, 0, 0), Vec3(0, -py, 0), Vec3(0, py, 0)}; break;
+        case N::None:
+            return {};
+        case N::Pair:
+            at = {Vec3(0, 0, 0), Vec3(0, py, 0)};
+            break;
+        case N::Row3:
+            at = {Vec3(0, 0, 0), Vec3(0, -py, 0), Vec3(0, py, 0)};
+            break;
         case N::Block3x3: {
             // The pressed bag (bag 0) at the origin, the block's other positions around it.
             const int pi = o.neighbourPressed[0], pj = o.neighbourPressed[1];
@@ -221,8 +226,8 @@ void LoadTestOptions::validate() const {
     require(residualTolerance >= 0.0 && residualTolerance <= 0.05, "residualTolerance",
             residualTolerance, "use a fraction of the peak force from 0 to 0.05 (e.g. 1e-3)");
     imperfection.validate();
-    require(bendingStiffness >= 0.0 && bendingStiffness < 1.0, "bendingStiffness",
-            bendingStiffness, "use 0 (a pure membrane) to 1 N m");
+    require(bendingStiffness >= 0.0 && bendingStiffness < 1.0, "bendingStiffness", bendingStiffness,
+            "use 0 (a pure membrane) to 1 N m");
     require(threads >= 0 && threads <= 256, "threads", threads, "use 0 (default) to 256");
     require(lowForceStepFactor >= 1.0 && lowForceStepFactor <= 20.0, "lowForceStepFactor",
             lowForceStepFactor, "use 1 (no larger steps) to 20");
@@ -279,8 +284,8 @@ void LoadTestOptions::validate() const {
         require(d.recordEvery > 0.0 && d.recordEvery <= displacementStep * 4.0,
                 "dynamic.recordEvery", d.recordEvery,
                 "use 0 < travel <= 4 displacement steps (e.g. 0.25 mm)");
-        require(d.kineticShareLimit > 0.0 && d.kineticShareLimit < 1.0,
-                "dynamic.kineticShareLimit", d.kineticShareLimit,
+        require(d.kineticShareLimit > 0.0 && d.kineticShareLimit < 1.0, "dynamic.kineticShareLimit",
+                d.kineticShareLimit,
                 "use a fraction 0 < share < 1 of the block's work (e.g. 0.01)");
         require(d.maxHalvings >= 0 && d.maxHalvings <= 6, "dynamic.maxHalvings", d.maxHalvings,
                 "use 0 to 6 halvings of the block speed");
@@ -317,8 +322,8 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
     // Per-bag gas masses of curve k: the pressed bag's, then its neighbours'.
     const int nBags = cluster ? static_cast<int>(calcNeighbourPoses(o).size()) : 1;
     auto bagMasses = [&](size_t k) {
-        std::vector<double> m(nBags, o.neighbourGasMass > 0.0 ? o.neighbourGasMass
-                                                               : o.gasMasses[k]);
+        std::vector<double> m(nBags,
+                              o.neighbourGasMass > 0.0 ? o.neighbourGasMass : o.gasMasses[k]);
         m[0] = o.gasMasses[k];
         return m;
     };
@@ -459,8 +464,8 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         auto snapOver = [&](double from, double tried, double dir, double limit,
                             AdvanceSummary* sum) {
             if (!o.stepOverSnaps) return -1.0;
-            const double to = stepOverSnap([&](double t) { return advance(t, sum); }, from,
-                                           tried, dir, limit, o.displacementStep);
+            const double to = stepOverSnap([&](double t) { return advance(t, sum); }, from, tried,
+                                           dir, limit, o.displacementStep);
             if (to >= 0.0) {
                 ++curve.snaps;
                 curve.snapTravel += std::abs(to - from);
@@ -491,7 +496,8 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
             // The block's pace over a stretch of travel ending `travel` past the last turn:
             // up to speed over rampTravel, halved `slower` times.
             auto setPace = [&](double travel) {
-                const double f = dy.rampTravel > 0.0 ? std::clamp(travel / dy.rampTravel, 1.0 / 16.0, 1.0) : 1.0;
+                const double f =
+                    dy.rampTravel > 0.0 ? std::clamp(travel / dy.rampTravel, 1.0 / 16.0, 1.0) : 1.0;
                 const double want = f * speed * std::ldexp(1.0, -slower);
                 if (want != pace) bag.setDynamicOptions(calcLoadTestDynamics(o, want));
                 pace = want;
@@ -516,8 +522,9 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 while (force < o.peakForce * (1.0 - 1e-3)) {
                     double step = dy.recordEvery;
                     if (stiffnessEstimate > 0.0 && force >= 0.5 * o.stiffnessFrom)
-                        step = std::min(step, std::max(0.2 * dy.recordEvery,
-                                                       1.05 * (o.peakForce - force) / stiffnessEstimate));
+                        step = std::min(step,
+                                        std::max(0.2 * dy.recordEvery,
+                                                 1.05 * (o.peakForce - force) / stiffnessEstimate));
                     step = std::min(step, maxDisp - disp);
                     if (step < 1e-6) {
                         curve.failure = describeBottomedOut(disp, force);
@@ -609,18 +616,19 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
         } else {
             // Loading: displacement control, adaptive, aiming the last step at the peak force.
             double ds = o.displacementStep, force = 0.0, stiffnessEstimate = 0.0, most = 0.0;
-            const double minStep = 5e-5;  // [m] smaller steps rarely rescue a slack curve
+            const double minStep = 5e-5;         // [m] smaller steps rarely rescue a slack curve
             const double maxDisp = top - 0.002;  // the block stops 2 mm above the bed board
             while (force < o.peakForce * (1.0 - 1e-3)) {
                 // Far below the stiffness range (a slack bag folding in under almost no force) the
                 // step may grow to lowForceStepFactor times the target, as long as the force it
                 // predicts stays below half the range's start.
                 const bool low = force < 0.25 * o.stiffnessFrom;
-                double step = std::min(ds, low ? o.lowForceStepFactor * o.displacementStep
-                                               : o.displacementStep);
+                double step = std::min(
+                    ds, low ? o.lowForceStepFactor * o.displacementStep : o.displacementStep);
                 if (low && stiffnessEstimate > 0.0)
-                    step = std::min(step, std::max(o.displacementStep,
-                                                   (0.5 * o.stiffnessFrom - force) / stiffnessEstimate));
+                    step = std::min(step,
+                                    std::max(o.displacementStep,
+                                             (0.5 * o.stiffnessFrom - force) / stiffnessEstimate));
                 if (stiffnessEstimate > 0.0)
                     step = std::min(step, 1.05 * (o.peakForce - force) / stiffnessEstimate);
                 step = std::max(step, minStep);
@@ -650,16 +658,18 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
                 const double kk = (force - prevForce) / step;
                 if (kk > 0.0) stiffnessEstimate = kk;
                 if (sum.newtonIterations < 6)
-                    ds = std::min(2.0 * step, (force < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
-                                                  o.displacementStep);
+                    ds = std::min(2.0 * step,
+                                  (force < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
+                                      o.displacementStep);
             }
             curve.reachedPeak = force >= o.peakForce * (1.0 - 1e-3);
             // Unloading: back up the same way until the block leaves the bag.
             ds = o.displacementStep;
             double unloadForce = force;
             while (o.unload && !curve.outsideEnvelope && disp > 0.0) {
-                const double cap = (unloadForce < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
-                                   o.displacementStep;
+                const double cap =
+                    (unloadForce < 0.25 * o.stiffnessFrom ? o.lowForceStepFactor : 1.0) *
+                    o.displacementStep;
                 double step = std::min({ds, cap, disp});
                 AdvanceSummary sum;
                 if (!advance(disp - step, &sum)) {
@@ -720,7 +730,8 @@ LoadTestResult runOneLoadTest(const LoadTestOptions& o, const LoadTestObserver& 
     // k(m) fit in the seed's units: k [N/mm] of m [g].
     std::vector<double> mg, kk;
     for (const LoadCurve& c : result.curves)
-        if (std::isfinite(c.stiffness)) mg.push_back(c.gasMass * 1e3), kk.push_back(c.stiffness * 1e-3);
+        if (std::isfinite(c.stiffness))
+            mg.push_back(c.gasMass * 1e3), kk.push_back(c.stiffness * 1e-3);
     if (static_cast<int>(mg.size()) > o.polynomialOrder)
         result.kFit = fitPolynomial(mg, kk, o.polynomialOrder);
     result.seconds =
@@ -766,7 +777,8 @@ LoadTestResult runLoadTest(const LoadTestOptions& o, const LoadTestObserver& obs
         for (int i = 0; i < n; ++i)
             if (!errors[i].empty())
                 throw NumericalError("ensemble bag with imperfection seed " +
-                                     std::to_string(o.imperfection.seed + 1 + i) + ": " + errors[i]);
+                                     std::to_string(o.imperfection.seed + 1 + i) + ": " +
+                                     errors[i]);
         for (size_t c = 0; c < result.curves.size(); ++c) {
             LoadCurve& curve = result.curves[c];
             curve.ensembleSize = o.ensemble;
@@ -806,7 +818,8 @@ void classifyStages(std::vector<LoadCurve>& curves, double linearR2) {
     // let out). Above it: stage 1 if the 10-35 N range is linear (r2 >= linearR2), else 2.
     double kMin = std::numeric_limits<double>::infinity(), mAtMin = 0.0;
     for (const LoadCurve& c : curves)
-        if (std::isfinite(c.stiffness) && c.stiffness < kMin) kMin = c.stiffness, mAtMin = c.gasMass;
+        if (std::isfinite(c.stiffness) && c.stiffness < kMin)
+            kMin = c.stiffness, mAtMin = c.gasMass;
     for (LoadCurve& c : curves) {
         if (!std::isfinite(c.stiffness)) {
             c.stage = 0;

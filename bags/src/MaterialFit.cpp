@@ -17,7 +17,6 @@ namespace bags {
 
 namespace {
 
-
 std::vector<std::string> splitCsv(const std::string& line) {
     std::vector<std::string> cells;
     std::string cell;
@@ -646,8 +645,8 @@ double calcYeohStableLimit(double C10, double C20, double C30) {
     const double x0 = calcYeohSlopeRoot(C10, C20, C30);
     const double le0 = std::sqrt(0.5 * (x0 + 3.0));
     if (std::isinf(limit) && le0 > 3.0)
-        limit = calcLimitFromRange(
-            calcStabilityRange(*raw, le0, std::max(1e-3, (le0 - 1.0) / 1e5)));
+        limit =
+            calcLimitFromRange(calcStabilityRange(*raw, le0, std::max(1e-3, (le0 - 1.0) / 1e5)));
     // Not reached by the argument above; kept so the limit is always finite with W1 > 0.
     if (!(limit < x0)) limit = 0.5 * x0;
     return limit;

@@ -215,8 +215,8 @@ namespace {
 
 // 6 V of chamber c at x by the divergence theorem over its signed boundary triangles; adds
 // scale * dV/dx into grad and scale * d2V/dx2 into hess when they are given.
-double sumChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x,
-                        Eigen::VectorXd* grad, std::vector<Triplet>* hess, double scale) {
+double sumChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x, Eigen::VectorXd* grad,
+                        std::vector<Triplet>* hess, double scale) {
     const ChamberBoundary& ch = mesh.chambers[c];
     const int nt = static_cast<int>(ch.tris.size());
     if (hess) {
@@ -270,7 +270,8 @@ double calcChamberVolume(const Mesh& mesh, int c, const Eigen::Matrix3Xd& x, Ene
     const bool wantH = acc && acc->wantHessian;
     if (wantG) checkGradientSize("calcChamberVolume: accumulator", acc->grad, x);
     const double V = sumChamberVolume(mesh, c, x, wantG ? &acc->grad : nullptr,
-                                      wantH ? &acc->hess : nullptr, scale) * (1.0 / 6.0);
+                                      wantH ? &acc->hess : nullptr, scale) *
+                     (1.0 / 6.0);
     if (acc) acc->energy += scale * V;
     return V;
 }

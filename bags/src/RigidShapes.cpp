@@ -36,8 +36,7 @@ double RigidShape::calcDistanceLowerBound(const Vec3& p_G) const {
     return (p_G - m_X_GS.translation()).norm() - R;
 }
 
-double LocalRigidShape::calcSignedDistance(const Vec3& p_G, Vec3* closest_G,
-                                           Vec3* normal_G) const {
+double LocalRigidShape::calcSignedDistance(const Vec3& p_G, Vec3* closest_G, Vec3* normal_G) const {
     double d;
     calcContactGeometry(p_G, &d, closest_G, normal_G, nullptr);
     return d;
@@ -66,13 +65,13 @@ void LocalRigidShape::calcContactGeometry(const Vec3& p_G, double* distance, Vec
 namespace {
 
 class Plane final : public LocalRigidShape {
-public:
+  public:
     std::string getName() const override { return "plane"; }
     double calcDistanceLowerBound(const Vec3& p_G) const override {
         return m_X_GS.linear().col(2).dot(p_G - m_X_GS.translation());
     }
 
-protected:
+  protected:
     void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dn) const override {
         d = p.z();
         c = Vec3(p.x(), p.y(), 0.0);
@@ -85,7 +84,7 @@ inline double signOf(double v) { return v < 0.0 ? -1.0 : 1.0; }
 
 /// Box = inner box (half extents h - r) Minkowski sphere of radius r; exact signed distance.
 class Box final : public LocalRigidShape {
-public:
+  public:
     Box(const Vec3& h, double r) : m_h(h), m_r(r), m_inner(h.array() - r) {}
     std::string getName() const override { return "box"; }
     double getBoundingRadius() const override { return m_h.norm(); }
@@ -99,7 +98,7 @@ public:
         return (m_h.array() + t).max(0.0).matrix().norm();
     }
 
-protected:
+  protected:
     void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dn) const override {
         const Vec3 q = p.cwiseAbs() - m_inner;  // > 0 where p lies beyond the inner box
         int iMax;
@@ -129,7 +128,7 @@ protected:
         }
     }
 
-private:
+  private:
     Vec3 m_h;
     double m_r;
     Vec3 m_inner;
@@ -137,12 +136,12 @@ private:
 
 /// Capsule: points within r of the segment z in [-L, L].
 class Capsule final : public LocalRigidShape {
-public:
+  public:
     Capsule(double r, double L) : m_r(r), m_L(L) {}
     std::string getName() const override { return "capsule"; }
     double getBoundingRadius() const override { return m_L + m_r; }
 
-protected:
+  protected:
     void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dn) const override {
         const double zc = std::clamp(p.z(), -m_L, m_L);
         const Vec3 q(p.x(), p.y(), p.z() - zc);
@@ -164,7 +163,7 @@ protected:
         }
     }
 
-private:
+  private:
     double m_r;
     double m_L;
 };
@@ -177,7 +176,7 @@ private:
 /// monotonically (and in one step when one axis dominates, as near an axis). Working in s keeps
 /// full relative precision of s + d_k near the pole, where points approach the short axis.
 class Ellipsoid final : public LocalRigidShape {
-public:
+  public:
     explicit Ellipsoid(const Vec3& a) : m_a(a) {
         m_a.minCoeff(&m_k);
         for (int i = 0; i < 3; ++i) m_dd[i] = m_a[i] * m_a[i] - m_a[m_k] * m_a[m_k];
@@ -198,7 +197,7 @@ public:
         return m_a.maxCoeff() * std::max(1.0, 1.0 + t / m_a[m_k]);
     }
 
-protected:
+  protected:
     void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dn) const override {
         const Vec3 y = p.cwiseAbs();
         const Vec3& a = m_a;
@@ -257,8 +256,7 @@ protected:
             Vec3 Minv;
             for (int i = 0; i < 3; ++i) Minv[i] = a[i] * a[i] / std::max(s + m_dd[i], sMin);
             const Vec3 Mm = Minv.cwiseProduct(m);
-            const Mat3 dxdp =
-                Mat3(Minv.asDiagonal()) - Mm * Mm.transpose() / m.dot(Mm);
+            const Mat3 dxdp = Mat3(Minv.asDiagonal()) - Mm * Mm.transpose() / m.dot(Mm);
             const Vec3 Adiag = a.cwiseProduct(a).cwiseInverse();
             const Mat3 P = Mat3::Identity() - n * n.transpose();
             const Mat3 J = P * Adiag.asDiagonal() * dxdp / mLen;
@@ -266,7 +264,7 @@ protected:
         }
     }
 
-private:
+  private:
     Vec3 m_a;
     Vec3 m_dd;  // a_i^2 - a_k^2
     int m_k = 0;

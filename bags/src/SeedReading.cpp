@@ -30,18 +30,24 @@ std::string grams(double kg) {
 
 const char* getFillScalingName(FillScaling scaling) {
     switch (scaling) {
-        case FillScaling::Profile: return "profile";
-        case FillScaling::Uniform: return "uniform";
-        case FillScaling::Height: return "height";
+        case FillScaling::Profile:
+            return "profile";
+        case FillScaling::Uniform:
+            return "uniform";
+        case FillScaling::Height:
+            return "height";
     }
     return "?";
 }
 
 int getFillScalingExponent(FillScaling scaling) {
     switch (scaling) {
-        case FillScaling::Profile: return 2;
-        case FillScaling::Uniform: return 3;
-        case FillScaling::Height: return 1;
+        case FillScaling::Profile:
+            return 2;
+        case FillScaling::Uniform:
+            return 3;
+        case FillScaling::Height:
+            return 1;
     }
     return 1;
 }
@@ -180,9 +186,8 @@ FillScaleResult findFillScale(const LoadTestOptions& rig, double targetFillMass,
     }
     std::ostringstream msg;
     msg << "fill mass: no scale within " << grams(options.tolerance) << " of "
-        << grams(targetFillMass) << " in " << options.maxEvaluations
-        << " measurements; last scale " << r.scales.back() << " gave "
-        << grams(r.fillMasses.back());
+        << grams(targetFillMass) << " in " << options.maxEvaluations << " measurements; last scale "
+        << r.scales.back() << " gave " << grams(r.fillMasses.back());
     throw std::runtime_error(msg.str());
 }
 

@@ -50,14 +50,19 @@ inline Mat3 skew(const Vec3& a) {
 enum class Region { Interior, Vertex0, Vertex1, Vertex2, Edge01, Edge12, Edge20 };
 
 /// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
-Region closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
-                              Vec3& q) {
+Region closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Vec3& q) {
     const Vec3 ab = b - a, ac = c - a, ap = p - a;
     const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-    if (d1 <= 0.0 && d2 <= 0.0) { q = a; return Region::Vertex0; }
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        q = a;
+        return Region::Vertex0;
+    }
     const Vec3 bp = p - b;
     const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-    if (d3 >= 0.0 && d4 <= d3) { q = b; return Region::Vertex1; }
+    if (d3 >= 0.0 && d4 <= d3) {
+        q = b;
+        return Region::Vertex1;
+    }
     const double vc = d1 * d4 - d3 * d2;
     if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
         q = a + d1 / (d1 - d3) * ab;
@@ -65,7 +70,10 @@ Region closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const
     }
     const Vec3 cp = p - c;
     const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-    if (d6 >= 0.0 && d5 <= d6) { q = c; return Region::Vertex2; }
+    if (d6 >= 0.0 && d5 <= d6) {
+        q = c;
+        return Region::Vertex2;
+    }
     const double vb = d5 * d2 - d1 * d6;
     if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
         q = a + d2 / (d2 - d6) * ac;
@@ -173,13 +181,29 @@ double facetDistance(const Vec3& p, const Vec3& x0, const Vec3& x1, const Vec3& 
     if (!(r > 1e-14 * scale)) return d;
     int a = -1, b = -1;
     switch (region) {
-        case Region::Vertex0: a = 0; break;
-        case Region::Vertex1: a = 1; break;
-        case Region::Vertex2: a = 2; break;
-        case Region::Edge01: a = 0; b = 1; break;
-        case Region::Edge12: a = 1; b = 2; break;
-        case Region::Edge20: a = 2; b = 0; break;
-        default: break;
+        case Region::Vertex0:
+            a = 0;
+            break;
+        case Region::Vertex1:
+            a = 1;
+            break;
+        case Region::Vertex2:
+            a = 2;
+            break;
+        case Region::Edge01:
+            a = 0;
+            b = 1;
+            break;
+        case Region::Edge12:
+            a = 1;
+            b = 2;
+            break;
+        case Region::Edge20:
+            a = 2;
+            b = 0;
+            break;
+        default:
+            break;
     }
     const Vec3 xs[3] = {x0, x1, x2};
     if (b < 0) {
@@ -236,7 +260,8 @@ struct Candidate {
 };
 
 inline std::uint64_t cellHash(std::int64_t i, std::int64_t j, std::int64_t k) {
-    return static_cast<std::uint64_t>(i) * 73856093ULL ^ static_cast<std::uint64_t>(j) * 19349663ULL ^
+    return static_cast<std::uint64_t>(i) * 73856093ULL ^
+           static_cast<std::uint64_t>(j) * 19349663ULL ^
            static_cast<std::uint64_t>(k) * 83492791ULL;
 }
 
@@ -263,13 +288,13 @@ struct SelfContact::Impl {
     Options opt;
     int numNodes = 0;
     Eigen::Matrix3Xi tris;
-    std::vector<double> k;          // penalty stiffness per node [N/m]
+    std::vector<double> k;           // penalty stiffness per node [N/m]
     std::vector<int> nbrStart, nbr;  // node neighbours (CSR)
     std::vector<Candidate> cands;    // sorted by (node, group, tri)
     Eigen::Matrix3Xd xUpdate;        // positions at the last updateCandidates()
     bool updated = false;
 
-    size_t maxGroup = 0;             // longest (node, group) run of cands
+    size_t maxGroup = 0;  // longest (node, group) run of cands
 
     /// Calls f(begin, end) for each (node, group) run [begin, end) of cands.
     template <class F>
@@ -412,8 +437,8 @@ void SelfContact::updateCandidates(const Eigen::Matrix3Xd& x) {
         const Vec3 p = x.col(v);
         for (int q = m.nbrStart[v]; q < m.nbrStart[v + 1]; ++q) nbrMark[m.nbr[q]] = v;
         nbrMark[v] = v;
-        const std::uint64_t b = cellHash(cellOf(p.x()), cellOf(p.y()), cellOf(p.z())) &
-                                (tableSize - 1);
+        const std::uint64_t b =
+            cellHash(cellOf(p.x()), cellOf(p.y()), cellOf(p.z())) & (tableSize - 1);
         const size_t first = m.cands.size();
         for (int e = count[b]; e < count[b + 1]; ++e) {
             const int t = entries[e];

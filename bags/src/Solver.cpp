@@ -56,7 +56,8 @@ void SolverOptions::validate() const {
         fail("relativeTolerance", relativeTolerance, "use 0 < tol < 1 (e.g. 1e-8)");
     if (!(absoluteTolerance > 0.0)) fail("absoluteTolerance", absoluteTolerance, "use > 0 N");
     if (maxIterations < 1) fail("maxIterations", maxIterations, "use at least 1");
-    if (!(pseudoTransientShift > 0.0)) fail("pseudoTransientShift", pseudoTransientShift, "use > 0");
+    if (!(pseudoTransientShift > 0.0))
+        fail("pseudoTransientShift", pseudoTransientShift, "use > 0");
     if (!(maxStep >= 0.0)) fail("maxStep", maxStep, "use >= 0 m (0: no limit)");
     if (maxKrylovIterations < 1) fail("maxKrylovIterations", maxKrylovIterations, "use >= 1");
     if (maxSparsifiedKrylovIterations < 1)
@@ -287,8 +288,8 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
     // merged in chunk order, so the roundoff is the same for any number of threads. Every
     // element writes its 81 Hessian triplets at a fixed place: the triplet sequence is the
     // same on every call (the solver reuses its scatter map).
-    const int nchunks = m_elementChunks > 0 ? std::min(m_elementChunks, std::max(1, nt))
-                                            : (nt > 4000 ? 16 : 1);
+    const int nchunks =
+        m_elementChunks > 0 ? std::min(m_elementChunks, std::max(1, nt)) : (nt > 4000 ? 16 : 1);
     std::vector<double> chunkEnergy(nchunks, 0.0);
     std::vector<Eigen::VectorXd> chunkGrad(nchunks > 1 && wantG ? nchunks : 0);
     const size_t hessBase = acc.hess.size();
@@ -380,9 +381,9 @@ void MembraneModel::addMembraneEnergy(const Eigen::Matrix3Xd& x, EnergyAccumulat
     if (invalid) {
         acc.energy = kInf;
         if (wantG || wantH)
-            throw NumericalError("membrane element " + std::to_string(badElement) +
-                                     " collapsed (det C <= 0)",
-                                 -1, -1, badElement);
+            throw NumericalError(
+                "membrane element " + std::to_string(badElement) + " collapsed (det C <= 0)", -1,
+                -1, badElement);
         return;
     }
     acc.energy += energy;
@@ -565,8 +566,9 @@ void MembraneModel::setViscousState(const ViscousState& state) {
     const int nt = m_mesh.getNumTris();
     const int nk = static_cast<int>(m_prony.terms.size());
     if (state.branchStrain.cols() != nt * nk || state.strain.cols() != nt)
-        throw std::invalid_argument("MembraneModel::setViscousState: the state is of another "
-                                    "mesh or Prony series");
+        throw std::invalid_argument(
+            "MembraneModel::setViscousState: the state is of another "
+            "mesh or Prony series");
     m_viscousState = state;
     // The potential of the step that ended here: q_i(C) = phi_i E(C) + c gives q_i at the
     // state's own strain, c = q_i - phi_i E.
@@ -617,9 +619,9 @@ Eigen::Vector3d MembraneModel::calcElementStress(const Eigen::Matrix3Xd& x, int 
     Eigen::Vector3d S;
     double w = m_material->calcEnergy(C, &S, nullptr);
     if (m_viscous && !addBranches(e, C, &w, &S, nullptr))
-        throw NumericalError("membrane element " + std::to_string(e) +
-                                 ": a viscous branch collapsed (det <= 0)",
-                             -1, -1, e);
+        throw NumericalError(
+            "membrane element " + std::to_string(e) + ": a viscous branch collapsed (det <= 0)", -1,
+            -1, e);
     return S;
 }
 

@@ -12,7 +12,7 @@
 namespace bags::detail {
 
 class SparseSpdSolver {
-public:
+  public:
     using Matrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
     SparseSpdSolver();
     ~SparseSpdSolver();
@@ -22,7 +22,8 @@ public:
     Eigen::MatrixXd solve(const Eigen::MatrixXd& B) const;
     int getNumFactorizations() const { return m_numFactorizations; }
     int getNumAnalyses() const { return m_numAnalyses; }
-private:
+
+  private:
     std::unique_ptr<Eigen::CholmodSimplicialLLT<Matrix, Eigen::Lower>> m_llt;
     std::uint64_t m_patternHash = 0;
     bool m_analyzed = false;
@@ -44,7 +45,7 @@ int findSlot(const SparseSpdSolver::Matrix& K, int i, int j);
 // the new entries: while the dofs stay the same the pattern only grows, so pairs that come
 // and go stop making new patterns. The diagonal is always stored.
 class HessianAssembler {
-public:
+  public:
     using Matrix = SparseSpdSolver::Matrix;
     const Matrix& assemble(const std::vector<Eigen::Triplet<double>>& trips,
                            const std::vector<int>& map, int nfree);
@@ -53,7 +54,7 @@ public:
     /// Sparsity patterns built so far (1 + the number of times the map was rebuilt).
     int getNumPatterns() const { return m_patterns; }
 
-private:
+  private:
     int find(int i, int j) const;
     bool mapSlots(const std::vector<Eigen::Triplet<double>>& trips, const std::vector<int>& map,
                   size_t from);

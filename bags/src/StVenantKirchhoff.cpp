@@ -7,7 +7,7 @@ namespace bags {
 namespace {
 
 class StVenantKirchhoff final : public MembraneMaterial {
-public:
+  public:
     StVenantKirchhoff(double E, double nu) : m_E(E), m_nu(nu) {
         if (!(E > 0.0)) throw std::invalid_argument("St. Venant-Kirchhoff: E must be positive");
         if (!(nu > -1.0 && nu < 0.5))
@@ -33,7 +33,8 @@ public:
     std::unique_ptr<MembraneMaterial> clone() const override {
         return std::make_unique<StVenantKirchhoff>(*this);
     }
-private:
+
+  private:
     double m_E, m_nu;
     Eigen::Matrix3d m_D;
 };

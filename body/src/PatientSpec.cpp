@@ -62,9 +62,7 @@ Sex parseSex(const std::string& name) {
     throw std::invalid_argument("patient.sex: '" + name + "' is not valid; use female or male");
 }
 
-double PatientSpec::getBodySurfaceArea() const {
-    return std::sqrt(height * 100.0 * mass / 3600.0);
-}
+double PatientSpec::getBodySurfaceArea() const { return std::sqrt(height * 100.0 * mass / 3600.0); }
 
 void PatientSpec::validate() const {
     if (sex != Sex::Female && sex != Sex::Male)

@@ -106,7 +106,8 @@ void PlaneSupport::setAnchors(SimTK::State& state, const std::vector<double>& an
     auto fail = [&](const std::string& why) {
         throw std::invalid_argument("PlaneSupport::setAnchors: " + why +
                                     "; valid: (patch index, x, y) triples, patches ascending "
-                                    "in [0, " + std::to_string(m_patchCount) + ")");
+                                    "in [0, " +
+                                    std::to_string(m_patchCount) + ")");
     };
     if (!m_anchorsIndex.isValid()) {
         if (!anchors.empty()) fail("anchors given to a support without the stick-slip law");
@@ -123,8 +124,8 @@ void PlaneSupport::setAnchors(SimTK::State& state, const std::vector<double>& an
         an.patch.push_back(int(k));
         an.a.emplace_back(anchors[i + 1], anchors[i + 2]);
     }
-    SimTK::Value<Anchors>::updDowncast(m_forces.updDiscreteVariable(state, m_anchorsIndex))
-        .upd() = std::move(an);
+    SimTK::Value<Anchors>::updDowncast(m_forces.updDiscreteVariable(state, m_anchorsIndex)).upd() =
+        std::move(an);
 }
 
 std::array<int, 2> PlaneSupport::countSlidingPatches(const SimTK::State& state) const {
@@ -144,9 +145,10 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
     const PlaneSupportOptions& o = m_options;
     const bool stick = m_anchorsIndex.isValid();
     const Anchors* anchors =
-        stick ? &SimTK::Value<Anchors>::downcast(m_forces.getDiscreteVariable(state, m_anchorsIndex))
-                     .get()
-              : nullptr;
+        stick
+            ? &SimTK::Value<Anchors>::downcast(m_forces.getDiscreteVariable(state, m_anchorsIndex))
+                   .get()
+            : nullptr;
     std::size_t cursor = 0;  // into anchors: the patches come in ascending index
     const double tau = o.damping / o.stiffness;
     const SimTK::Vec2 none(SimTK::NaN);
@@ -173,8 +175,7 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
             if (!stick) {
                 const double vt =
                     std::sqrt(v[0] * v[0] + v[1] * v[1] + o.slipVelocity * o.slipVelocity);
-                const SimTK::Vec3 F(-o.friction * fn * v[0] / vt, -o.friction * fn * v[1] / vt,
-                                    fn);
+                const SimTK::Vec3 F(-o.friction * fn * v[0] / vt, -o.friction * fn * v[1] / vt, fn);
                 visit(i, k, p, r_G, F, pressure, aProj, none);
                 continue;
             }
@@ -190,9 +191,10 @@ void PlaneSupport::forEachContact(const SimTK::State& state, Visit&& visit) cons
             const double ns = sv.norm();
             const double scale = o.friction * fn / std::max(ns, o.stickDistance);
             const SimTK::Vec3 F(-scale * sv[0], -scale * sv[1], fn);
-            const SimTK::Vec2 next =
-                ns > o.stickDistance ? SimTK::Vec2(x - (o.stickDistance / ns) * sv + tau * vt)
-                                     : std::isnan(a[0]) ? x : a;
+            const SimTK::Vec2 next = ns > o.stickDistance
+                                         ? SimTK::Vec2(x - (o.stickDistance / ns) * sv + tau * vt)
+                                     : std::isnan(a[0]) ? x
+                                                        : a;
             visit(i, k, p, r_G, F, pressure, aProj, next);
         }
     }
@@ -244,9 +246,8 @@ SupportLoad PlaneSupport::calcSupportLoad(const SimTK::State& state) const {
     const int nRegions = static_cast<int>(m_model.getRegions().size());
     load.regionForce.assign(nRegions, 0.0);
     load.regionPeakPressure.assign(nRegions, 0.0);
-    forEachContact(state, [&](int i, int, const Patch& p, const SimTK::Vec3&,
-                              const SimTK::Vec3& F, double pressure, double aProj,
-                              const SimTK::Vec2&) {
+    forEachContact(state, [&](int i, int, const Patch& p, const SimTK::Vec3&, const SimTK::Vec3& F,
+                              double pressure, double aProj, const SimTK::Vec2&) {
         load.force += F;
         load.contactArea += aProj;
         load.peakPressure = std::max(load.peakPressure, pressure);

@@ -40,9 +40,9 @@ void ArrayPneumaticsSpec::validate(int numBags) const {
     for (size_t i = 0; i < orifices.size(); ++i) {
         const BagOrifice& o = orifices[i];
         if (o.a < 0 || o.a >= numBags || o.b < 0 || o.b >= numBags || o.a == o.b)
-            throw std::invalid_argument("pneumatics orifice " + std::to_string(i) +
-                                        ": bags " + std::to_string(o.a) + " and " +
-                                        std::to_string(o.b) + "; valid: two different bags, 0 to " +
+            throw std::invalid_argument("pneumatics orifice " + std::to_string(i) + ": bags " +
+                                        std::to_string(o.a) + " and " + std::to_string(o.b) +
+                                        "; valid: two different bags, 0 to " +
                                         std::to_string(numBags - 1));
         o.orifice.validate();
     }
@@ -108,8 +108,8 @@ ArrayPneumatics::ArrayPneumatics(const ArrayPneumaticsSpec& spec, const bags::Ga
             lv.pressure = ch.bags.empty() ? gas.ambientPressure : p / double(ch.bags.size());
             ch.node = m_net.addVolume("line " + pc.name, lv);
             for (int b : ch.bags)
-                link(m_net.addOrifice("connector " + pc.name + " bag " + std::to_string(b),
-                                      ch.node, m_net.getBagNode(m_slot[b]), pc.connector),
+                link(m_net.addOrifice("connector " + pc.name + " bag " + std::to_string(b), ch.node,
+                                      m_net.getBagNode(m_slot[b]), pc.connector),
                      b, +1);
             ch.sensor = addSensor(ch.node);
         } else if (!ch.bags.empty()) {
@@ -118,7 +118,8 @@ ArrayPneumatics::ArrayPneumatics(const ArrayPneumaticsSpec& spec, const bags::Ga
             ch.sensor = m_bagSensor[m_slot[single]];
         }
         if (ch.node >= 0) {
-            ch.inflate = m_net.addValve("inflate " + pc.name, m_manifold, ch.node, pc.inflate, false);
+            ch.inflate =
+                m_net.addValve("inflate " + pc.name, m_manifold, ch.node, pc.inflate, false);
             ch.vent = m_net.addVent("vent " + pc.name, ch.node, pc.vent, false);
             link(ch.inflate, single, +1);
             link(ch.vent, single, -1);
@@ -244,7 +245,8 @@ void ArrayPneumatics::loadState(bags::StateReader& r) {
     m_net.loadState(r);
     r.pod(m_time);
     const auto n = r.pod<std::uint64_t>();
-    if (n != m_channels.size()) bags::StateReader::mismatch("pneumatic channels", n, m_channels.size());
+    if (n != m_channels.size())
+        bags::StateReader::mismatch("pneumatic channels", n, m_channels.size());
     for (Channel& c : m_channels) {
         const std::string name = r.str();
         if (name != c.name)

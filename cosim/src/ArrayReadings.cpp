@@ -140,8 +140,8 @@ double calcSegmentTilt(const PatientOnArray& poa, body::Segment segment) {
 }
 
 Eigen::Vector3d calcCentreOfMass(const PatientOnArray& poa) {
-    const SimTK::Vec3 c = poa.getModel().getMatter().calcSystemMassCenterLocationInGround(
-        poa.getBody().getState());
+    const SimTK::Vec3 c =
+        poa.getModel().getMatter().calcSystemMassCenterLocationInGround(poa.getBody().getState());
     return Eigen::Vector3d(c[0], c[1], c[2]);
 }
 
@@ -171,8 +171,8 @@ double calcFilmPassThrough(const bags::Mesh& film, const Eigen::Matrix3Xd& x,
                               c = x.col(film.tris(2, t));
         const Eigen::Vector3d centroid = (a + b + c) / 3.0;
         // Far triangles cannot hold a point inside (the bound is at most the distance).
-        const double reach = std::max({(a - centroid).norm(), (b - centroid).norm(),
-                                       (c - centroid).norm()});
+        const double reach =
+            std::max({(a - centroid).norm(), (b - centroid).norm(), (c - centroid).norm()});
         if (shape.calcDistanceLowerBound(centroid) > reach) continue;
         for (const Eigen::Vector3d& p :
              {centroid, Eigen::Vector3d(0.5 * (a + b)), Eigen::Vector3d(0.5 * (b + c)),
@@ -197,7 +197,8 @@ std::vector<PassThrough> calcPassThroughs(const PatientOnArray& poa) {
         if (!(d > o.depth)) continue;
         o.depth = d, o.segment = poa.getPairs()[i].shape, o.nodeDepth = 0.0;
         for (Eigen::Index n = 0; n < x.cols(); ++n)
-            o.nodeDepth = std::max(o.nodeDepth, -shape->calcSignedDistance(x.col(n), nullptr, nullptr));
+            o.nodeDepth =
+                std::max(o.nodeDepth, -shape->calcSignedDistance(x.col(n), nullptr, nullptr));
     }
     return out;
 }

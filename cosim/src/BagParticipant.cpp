@@ -65,7 +65,8 @@ std::vector<Mat6> BagParticipant::calcWrenchTangents(const std::vector<int>& sha
 
 Participant::WrenchLinearisation BagParticipant::calcWrenchLinearisation(
     const std::vector<int>& shapes) const {
-    bags::Airbag::WrenchLinearisation b = m_bag->calcShapeWrenchLinearisation(shapes, m_withoutFriction);
+    bags::Airbag::WrenchLinearisation b =
+        m_bag->calcShapeWrenchLinearisation(shapes, m_withoutFriction);
     if (b.filmHeld) ++m_filmHeldTangents;
     return {std::move(b.pose), std::move(b.gas)};
 }
@@ -90,9 +91,7 @@ int BagParticipant::getNumChambers() const { return m_bag->getNumChambers(); }
 bags::ChamberState BagParticipant::getChamberState(int chamber) const {
     return m_bag->getChamberState(chamber);
 }
-const Eigen::Matrix3Xd& BagParticipant::getPressurePoints() const {
-    return m_bag->getPositions();
-}
+const Eigen::Matrix3Xd& BagParticipant::getPressurePoints() const { return m_bag->getPositions(); }
 Eigen::VectorXd BagParticipant::getPressureAreas() const {
     if (m_areas.size() == 0) m_areas = m_bag->getMesh().calcNodalAreas();
     return m_areas;

@@ -60,7 +60,7 @@ struct BodyParticipant::Shape {
     Eigen::Isometry3d X0 = Eigen::Isometry3d::Identity();
     Vec6 rate = Vec6::Zero();  ///< the load's rate over the step [(N m, N)/s]
     double t0 = 0.0;           ///< [s] when the rate starts (the checkpoint's time)
-    bool loaded = false;  ///< W0, T or rate not zero; an unloaded shape adds nothing
+    bool loaded = false;       ///< W0, T or rate not zero; an unloaded shape adds nothing
 };
 
 namespace {
@@ -247,8 +247,8 @@ ShapeState BodyParticipant::getShapeState(int shape) const {
 
 ShapeWrench BodyParticipant::calcShapeLoad(int shape) const {
     const Shape& s = m_impl->shape(shape);
-    return ShapeWrench::fromVector(
-        calcLoad(s, calcShapePose(m_impl->matter(), m_impl->current, s), m_impl->current.getTime()));
+    return ShapeWrench::fromVector(calcLoad(s, calcShapePose(m_impl->matter(), m_impl->current, s),
+                                            m_impl->current.getTime()));
 }
 
 const SimTK::State& BodyParticipant::getState() const { return m_impl->current; }

@@ -101,8 +101,7 @@ void CouplingOptions::validate() const {
         if (targetPasses < 2) invalid("targetPasses", targetPasses, "2 or more");
         if (!(maxGrowth > 1.0 && maxGrowth <= 10.0))
             invalid("maxGrowth", maxGrowth, "1 < factor <= 10");
-        if (!(minCutStep > 0.0))
-            invalid("minCutStep", minCutStep, "a positive step [s]");
+        if (!(minCutStep > 0.0)) invalid("minCutStep", minCutStep, "a positive step [s]");
     }
     if (threads < 0) invalid("threads", threads, "0 (one per core) or more");
     if (!(skipTravel >= 0.0) || !std::isfinite(skipTravel))
@@ -130,7 +129,7 @@ struct Coupling::Impl {
     int stepsSinceBase = 0;
     double largestStep = 0.0;  // the macroStep the coupling was built with
     std::function<void(double, double)> beforeStep;
-    int goodInARow = 0;        // stepAdaptive(): successes at the current step
+    int goodInARow = 0;  // stepAdaptive(): successes at the current step
     int steps = 0;
     bool initialized = false;
     CouplingProfile profile;
@@ -189,8 +188,8 @@ struct Coupling::Impl {
     }
 
     // Rolls every side back and throws for the first participant that failed.
-    void throwIfFailed(const std::vector<std::exception_ptr>& errors, const std::vector<int>& failed,
-                       double dt) {
+    void throwIfFailed(const std::vector<std::exception_ptr>& errors,
+                       const std::vector<int>& failed, double dt) {
         for (size_t p = 0; p < errors.size(); ++p)
             if (errors[p] || failed[p]) {
                 rollbackAll();
@@ -280,9 +279,9 @@ struct Coupling::Impl {
                 std::vector<int> shapes;
                 for (int i : linksOf[p]) shapes.push_back(links[i].shape);
                 const Participant::WrenchLinearisation lp =
-                    options.gasTangent
-                        ? participants[p]->calcWrenchLinearisation(shapes)
-                        : Participant::WrenchLinearisation{participants[p]->calcWrenchTangents(shapes), {}};
+                    options.gasTangent ? participants[p]->calcWrenchLinearisation(shapes)
+                                       : Participant::WrenchLinearisation{
+                                             participants[p]->calcWrenchTangents(shapes), {}};
                 for (size_t k = 0; k < shapes.size(); ++k) {
                     t[linksOf[p][k]] = lp.pose.at(k);
                     g[linksOf[p][k]] = lp.gas.empty() ? GasDerivative(6, 0) : lp.gas.at(k);
@@ -316,7 +315,8 @@ struct Coupling::Impl {
             bool near = true;
             for (int i : linksOf[p]) {
                 const Eigen::Isometry3d X = body.getShapeState(links[i].bodyShape).X_GS;
-                const Eigen::AngleAxisd turn(Eigen::Matrix3d(X.linear() * X0[i].linear().transpose()));
+                const Eigen::AngleAxisd turn(
+                    Eigen::Matrix3d(X.linear() * X0[i].linear().transpose()));
                 const double travel = (X.translation() - X0[i].translation()).norm() +
                                       std::abs(turn.angle()) * links[i].reach;
                 near = near && travel <= options.skipTravel;
@@ -439,8 +439,7 @@ void Coupling::initialize() {
     m.advanceParticipants(0.0, m.W);
     m.T.assign(m.links.size(), Mat6::Zero());
     m.G.assign(m.links.size(), GasDerivative(6, 0));
-    if (m.isLinearised())
-        m.refreshTangents(std::vector<char>(m.participants.size(), 1), m.T, m.G);
+    if (m.isLinearised()) m.refreshTangents(std::vector<char>(m.participants.size(), 1), m.T, m.G);
     for (Participant* p : m.participants) p->commit();
     m.X0.resize(m.links.size());
     for (size_t i = 0; i < m.links.size(); ++i)
@@ -489,8 +488,8 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
                 if (m.G[i].cols() > 0 && m.G[i].cols() == dm.size()) gasRate[i] = m.G[i] * dm / dt;
         }
     std::vector<ShapeWrench> w, seen(nl);
-    std::vector<char> skip;          // participants left standing (skipTravel)
-    std::vector<double> firstMiss;   // per participant: the linearisation's miss, first pass
+    std::vector<char> skip;         // participants left standing (skipTravel)
+    std::vector<double> firstMiss;  // per participant: the linearisation's miss, first pass
     // The pass of least residual so far (the one kept if the step is kept unconverged), and
     // whether the pass under way is that pass again, taken after the last iteration.
     Eigen::VectorXd bestX;
@@ -567,8 +566,7 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
         }
         // The wrenches of a participant kept short of its equilibrium are resolved only to
         // the force it was kept with: the fixed point is sought to that too.
-        const double unresolved =
-            std::accumulate(m.unresolved.begin(), m.unresolved.end(), 0.0);
+        const double unresolved = std::accumulate(m.unresolved.begin(), m.unresolved.end(), 0.0);
         sum.unresolvedForce = std::max(sum.unresolvedForce, unresolved);
         const double tolerance =
             o.relativeTolerance * sum.wrenchNorm + o.absoluteTolerance + unresolved;
@@ -611,8 +609,8 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
             std::ostringstream s;
             s << "Coupling: the implicit iterations did not converge in " << o.maxIterations
               << " iterations at t = " << tEnd << " s (macro step " << m.steps
-              << "): |H(x) - x| = " << sum.residual << " N against a tolerance of "
-              << tolerance << " N; cut the macro step or raise maxIterations";
+              << "): |H(x) - x| = " << sum.residual << " N against a tolerance of " << tolerance
+              << " N; cut the macro step or raise maxIterations";
             throw bags::NumericalError(s.str(), tEnd - dt, m.steps);
         }
         x = m.accelerator->next(x, linearised ? Eigen::VectorXd(x + r) : Hx);
@@ -634,7 +632,8 @@ StepSummary Coupling::Impl::runStep(double t, double dt, double tEnd, bool judge
     if (linearised) {
         std::vector<char> which(np, 0);
         for (size_t p = 0; p < np; ++p)
-            which[p] = !skip[p] && (!(o.tangentTolerance > 0.0) || firstMiss[p] > o.tangentTolerance);
+            which[p] =
+                !skip[p] && (!(o.tangentTolerance > 0.0) || firstMiss[p] > o.tangentTolerance);
         m.refreshTangents(which, tangents, gasDerivatives);
     }
     m.body.commit();
@@ -722,8 +721,8 @@ StepSummary Coupling::stepFixed() {
     Impl& m = *m_impl;
     int cuts = 0;
     for (;;) {
-        m.lastResort = m.options.keepUnconverged &&
-                       0.5 * m.options.macroStep < m.options.minMacroStep;
+        m.lastResort =
+            m.options.keepUnconverged && 0.5 * m.options.macroStep < m.options.minMacroStep;
         try {
             StepSummary s = step();
             m.lastResort = false;
@@ -806,7 +805,8 @@ void Coupling::loadState(bags::StateReader& r) {
         m.X0[i] = r.pose();
         GasDerivative G;
         r.mat(G);
-        if (G.rows() != 6) bags::StateReader::mismatch("rows of a link's gas derivative", size_t(G.rows()), 6);
+        if (G.rows() != 6)
+            bags::StateReader::mismatch("rows of a link's gas derivative", size_t(G.rows()), 6);
         m.G[i] = G;
     }
     m.accelerator->loadState(r);

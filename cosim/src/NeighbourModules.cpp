@@ -60,9 +60,9 @@ double calcDepthInside(const Eigen::Matrix3Xd& xA, const bags::Mesh& filmB,
         for (const bags::ChamberBoundary& ch : filmB.chambers)
             for (size_t k = 0; k < ch.tris.size(); ++k) {
                 const int t = ch.tris[k];
-                const double w = solidAngle(xB.col(filmB.tris(0, t)) - p,
-                                            xB.col(filmB.tris(1, t)) - p,
-                                            xB.col(filmB.tris(2, t)) - p);
+                const double w =
+                    solidAngle(xB.col(filmB.tris(0, t)) - p, xB.col(filmB.tris(1, t)) - p,
+                               xB.col(filmB.tris(2, t)) - p);
                 omega += ch.signs[k] * w;
             }
         // Diaphragms between chambers appear once with each sign and cancel: the sum is the
@@ -70,9 +70,9 @@ double calcDepthInside(const Eigen::Matrix3Xd& xA, const bags::Mesh& filmB,
         if (!(std::abs(omega) > 2.0 * M_PI)) continue;
         double d = std::numeric_limits<double>::infinity();
         for (int t = 0; t < filmB.getNumTris(); ++t)
-            d = std::min(d, pointTriangleDistance(p, xB.col(filmB.tris(0, t)),
-                                                  xB.col(filmB.tris(1, t)),
-                                                  xB.col(filmB.tris(2, t))));
+            d = std::min(
+                d, pointTriangleDistance(p, xB.col(filmB.tris(0, t)), xB.col(filmB.tris(1, t)),
+                                         xB.col(filmB.tris(2, t))));
         depth = std::max(depth, d);
     }
     return depth;
@@ -80,8 +80,8 @@ double calcDepthInside(const Eigen::Matrix3Xd& xA, const bags::Mesh& filmB,
 
 }  // namespace
 
-double calcFilmOverlap(const bags::Mesh& filmA, const Eigen::Matrix3Xd& xA,
-                       const bags::Mesh& filmB, const Eigen::Matrix3Xd& xB) {
+double calcFilmOverlap(const bags::Mesh& filmA, const Eigen::Matrix3Xd& xA, const bags::Mesh& filmB,
+                       const Eigen::Matrix3Xd& xB) {
     if (xA.cols() != filmA.getNumNodes() || xB.cols() != filmB.getNumNodes())
         throw std::invalid_argument("calcFilmOverlap: positions and film differ in node count");
     const Eigen::AlignedBox3d a = boundingBox(xA), b = boundingBox(xB);
@@ -104,7 +104,8 @@ std::vector<std::vector<int>> findTouchingGroups(const std::vector<Eigen::Aligne
     const Eigen::Vector2d grow(2.0 * margin, 2.0 * margin);  // both boxes grown by margin
     for (int i = 0; i < n; ++i)
         for (int j = i + 1; j < n; ++j) {
-            const Eigen::AlignedBox2d bi(boxes[size_t(i)].min() - grow, boxes[size_t(i)].max() + grow);
+            const Eigen::AlignedBox2d bi(boxes[size_t(i)].min() - grow,
+                                         boxes[size_t(i)].max() + grow);
             if (!bi.intersects(boxes[size_t(j)])) continue;
             const int ri = root(i), rj = root(j);
             if (ri != rj) parent[size_t(std::max(ri, rj))] = std::min(ri, rj);
@@ -191,9 +192,7 @@ Eigen::VectorXd ModuleBag::calcContactPressure(int shape) const {
     return m_module.calcContactPressure(getModuleShape(shape)).segment(m_first, m_count);
 }
 bool ModuleBag::isSteady() const { return m_module.isSteady(); }
-void ModuleBag::setMassFlow(double massFlow) {
-    m_module.updAirbag().setMassFlow(m_bag, massFlow);
-}
+void ModuleBag::setMassFlow(double massFlow) { m_module.updAirbag().setMassFlow(m_bag, massFlow); }
 void ModuleBag::setTargetMass(double mass, double rate) {
     m_module.updAirbag().setTargetMass(m_bag, mass, rate);
 }
@@ -270,8 +269,7 @@ ArrayParticipants makeArrayParticipants(const std::vector<ArrayBag>& cells,
 }
 
 int ArrayParticipants::addShape(int bag, std::shared_ptr<bags::RigidShape> shape,
-                                const bags::RigidContact::Options& options,
-                                int* participantShape) {
+                                const bags::RigidContact::Options& options, int* participantShape) {
     BagParticipant& p = *participants.at(size_t(participantOf.at(size_t(bag))));
     if (auto* mb = dynamic_cast<ModuleBag*>(bags[size_t(bag)])) {
         const int s = p.updAirbag().addShape(std::move(shape), options, mb->getBagInModule());

@@ -31,9 +31,9 @@ void PatientOnArrayOptions::validate() const {
         reduced->validate();
         const bags::DoubleWedgeParams& c = reduced->geometry;
         const bags::DoubleWedgeParams& g = bag.geometry;
-        if (std::abs(c.longSide - g.longSide) > 1e-6 || std::abs(c.shortSide - g.shortSide) > 1e-6 ||
-            std::abs(c.width - g.width) > 1e-6 || std::abs(c.height - g.height) > 1e-6 ||
-            c.diaphragm != g.diaphragm)
+        if (std::abs(c.longSide - g.longSide) > 1e-6 ||
+            std::abs(c.shortSide - g.shortSide) > 1e-6 || std::abs(c.width - g.width) > 1e-6 ||
+            std::abs(c.height - g.height) > 1e-6 || c.diaphragm != g.diaphragm)
             throw std::invalid_argument(
                 "bag.calibration: made for another bag (sizes or diaphragm differ from the "
                 "scenario's bag reading); valid: a calibration of this bag");
@@ -55,7 +55,8 @@ void PatientOnArrayOptions::validate() const {
             getSegmentContact(body::Segment(s)).validate();
         }
     }
-    if (contact.friction > 0.0 && coupling.scheme == Scheme::Tangent && model == BagModel::FiniteElement)
+    if (contact.friction > 0.0 && coupling.scheme == Scheme::Tangent &&
+        model == BagModel::FiniteElement)
         throw std::invalid_argument(
             "coupling.scheme: tangent is not valid with body friction (bag.body_friction > 0): "
             "its one pass would hold the friction force from the step's start "
@@ -84,16 +85,16 @@ void PatientOnArrayOptions::validate() const {
 struct PatientOnArray::Impl {
     std::unique_ptr<body::BodyModel> model;
     std::unique_ptr<BodyParticipant> body;
-    ArrayParticipants fe;               // finite-element bags and modules
+    ArrayParticipants fe;  // finite-element bags and modules
     std::vector<std::unique_ptr<ReducedBag>> reducedBags;
-    std::vector<Bag*> participants;     // what the coupling advances
-    std::vector<Bag*> bags;             // per coupled bag: a participant or a ModuleBag
+    std::vector<Bag*> participants;         // what the coupling advances
+    std::vector<Bag*> bags;                 // per coupled bag: a participant or a ModuleBag
     std::vector<std::vector<int>> modules;  // per participant: its bags (positions in bags)
-    bool grouped = false;               // neighbourContact
-    std::vector<int> bagIndices;        // ArrayBag index per coupled bag
-    std::vector<ShapeBagPair> pairs;    // shape = segment
-    std::vector<int> pairBag;           // per pair: the bag's position in bags
-    std::vector<Link> links;            // per pair, in bag terms
+    bool grouped = false;                   // neighbourContact
+    std::vector<int> bagIndices;            // ArrayBag index per coupled bag
+    std::vector<ShapeBagPair> pairs;        // shape = segment
+    std::vector<int> pairBag;               // per pair: the bag's position in bags
+    std::vector<Link> links;                // per pair, in bag terms
     std::unique_ptr<Coupling> coupling;
     const body::PlaneSupport* board = nullptr;  // the body's bed board (owned by the model)
     double clearance = 0.0;
@@ -149,16 +150,15 @@ std::vector<int> findSegmentsOffArray(const body::PatientSpec& spec,
                                  findPairsAtPosture(model, state, cells, options.pairMargin));
 }
 
-PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
-                               const PatientOnArrayOptions& options)
+PatientOnArray::PatientOnArray(const body::PatientSpec& spec, const PatientOnArrayOptions& options)
     : m_impl(std::make_unique<Impl>()) {
     options.validate();
     Impl& m = *m_impl;
     m.model = std::make_unique<body::BodyModel>(spec, options.body);
     m.gravity = options.body.gravity;
     body::BodyModel& model = *m.model;
-    m.body = std::make_unique<BodyParticipant>(model.updSystem(), model.updForces(),
-                                               options.integrator);
+    m.body =
+        std::make_unique<BodyParticipant>(model.updSystem(), model.updForces(), options.integrator);
 
     if (options.boardContact) {
         m.board = &body::addPlaneSupport(model, options.board);
@@ -262,7 +262,8 @@ PatientOnArray::PatientOnArray(const body::PatientSpec& spec,
         for (size_t i = 0; i < masses.size(); ++i) m.reducedBags[i]->setGasMass(masses[i]);
     else
         m.fe.inflate(masses);
-    for (const Bag* bag : m.bags) m.restHeights.push_back(bag->getPressurePoints().row(2).transpose());
+    for (const Bag* bag : m.bags)
+        m.restHeights.push_back(bag->getPressurePoints().row(2).transpose());
 
     // The lowest clearance at which no node of a paired bag lies inside a shape (bisection to
     // 1e-6 m over [0, parked]).
@@ -370,9 +371,7 @@ const BodyParticipant& PatientOnArray::getBody() const { return *m_impl->body; }
 const Bag& PatientOnArray::getBag(int bag) const { return *m_impl->bags.at(size_t(bag)); }
 const std::vector<Link>& PatientOnArray::getLinks() const { return m_impl->links; }
 Bag& PatientOnArray::updBag(int bag) { return *m_impl->bags.at(size_t(bag)); }
-const std::vector<std::vector<int>>& PatientOnArray::getModules() const {
-    return m_impl->modules;
-}
+const std::vector<std::vector<int>>& PatientOnArray::getModules() const { return m_impl->modules; }
 
 std::vector<double> PatientOnArray::calcNeighbourOverlaps() const {
     const Impl& m = *m_impl;

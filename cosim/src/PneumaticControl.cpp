@@ -111,8 +111,10 @@ bool BandController::update(double measured, double target, double band, int cha
     const State before = m_state;
     switch (m_state) {
         case State::Holding:
-            if (measured < target - band) m_state = State::Filling;
-            else if (measured > target + band) m_state = State::Venting;
+            if (measured < target - band)
+                m_state = State::Filling;
+            else if (measured > target + band)
+                m_state = State::Venting;
             break;
         case State::Filling:
             if (measured >= target) m_state = State::Holding;
@@ -129,7 +131,10 @@ bool BandController::update(double measured, double target, double band, int cha
 // --------------------------------------------------------------------------- TargetController
 
 TargetController::TargetController(Quantity quantity, std::vector<Target> targets, double start)
-    : m_quantity(quantity), m_targets(std::move(targets)), m_band(m_targets.size()), m_start(start) {
+    : m_quantity(quantity),
+      m_targets(std::move(targets)),
+      m_band(m_targets.size()),
+      m_start(start) {
     for (const Target& t : m_targets) {
         const bool mass = quantity == Quantity::MassPerBag;
         if ((mass ? !(t.value > 0.0) : !std::isfinite(t.value)) || !(t.band >= 0.0))
@@ -160,13 +165,11 @@ void TargetController::update(const ControlInputs& in, ArrayPneumatics& p,
         const BandController::State before = m_band[i].getState();
         if (m_band[i].update(v, t.value, t.band, t.channel, p))
             events.push_back(
-                {in.time, std::string(mass ? "target mass" : "target pressure") + ": channel '" +
-                              p.getChannelName(t.channel) + "' " +
-                              stateText(m_band[i].getState()) + " at " +
-                              (mass ? "" : "sensor ") + text(v) + " (target " + text(t.value) +
-                              ")" +
-                              (before != BandController::State::Holding ? ": target reached"
-                                                                        : "")});
+                {in.time,
+                 std::string(mass ? "target mass" : "target pressure") + ": channel '" +
+                     p.getChannelName(t.channel) + "' " + stateText(m_band[i].getState()) + " at " +
+                     (mass ? "" : "sensor ") + text(v) + " (target " + text(t.value) + ")" +
+                     (before != BandController::State::Holding ? ": target reached" : "")});
     }
 }
 
@@ -193,7 +196,8 @@ double calcMassForStiffness(const std::vector<double>& m, const std::vector<doub
         if (!(m[i] > m[i - 1]) || !(dir * (k[i] - k[i - 1]) > 0.0))
             throw std::invalid_argument(
                 "k(m) table: masses must increase and the stiffness must rise (or fall) strictly "
-                "with them; row " + std::to_string(i) + " does not");
+                "with them; row " +
+                std::to_string(i) + " does not");
     const double lo = std::min(k.front(), k.back()), hi = std::max(k.front(), k.back());
     if (!(want >= lo && want <= hi))
         throw std::invalid_argument("k(m) table: stiffness " + fmt("%g N/mm", want * 1e-3) +
@@ -227,9 +231,9 @@ void TurnSpec::validate(int numChannels) const {
             "turn: start, hold, min mass and max pressure must be >= 0, the longest turn time "
             "and the band > 0");
     if (!(holdPressure >= 0.0 && holdPressure < 1e6) || !(pressureBand > 0.0))
-        throw std::invalid_argument("turn: the held pressure " + fmt("%g kPa", 1e-3 * holdPressure) +
-                                    " and its band " + fmt("%g kPa", 1e-3 * pressureBand) +
-                                    "; valid: 0 (sealed) to 1000 kPa, a band > 0");
+        throw std::invalid_argument(
+            "turn: the held pressure " + fmt("%g kPa", 1e-3 * holdPressure) + " and its band " +
+            fmt("%g kPa", 1e-3 * pressureBand) + "; valid: 0 (sealed) to 1000 kPa, a band > 0");
 }
 
 TurnController::TurnController(const TurnSpec& spec, int numChannels) : m_spec(spec) {
@@ -248,12 +252,11 @@ void TurnController::holdChannel(int c, double t, ArrayPneumatics& p,
     const double v = p.readChannelSensor(c);
     const BandController::State before = m_hold[c].getState();
     if (m_hold[c].update(v, m_spec.holdPressure, m_spec.pressureBand, c, p))
-        events.push_back({t, "zone held: channel '" + p.getChannelName(c) + "' " +
-                                 stateText(m_hold[c].getState()) + " at sensor " +
-                                 fmt("%.3f kPa", 1e-3 * v) + " (setpoint " +
-                                 fmt("%.3f kPa", 1e-3 * m_spec.holdPressure) + ")" +
-                                 (before != BandController::State::Holding ? ": setpoint reached"
-                                                                           : "")});
+        events.push_back(
+            {t, "zone held: channel '" + p.getChannelName(c) + "' " +
+                    stateText(m_hold[c].getState()) + " at sensor " + fmt("%.3f kPa", 1e-3 * v) +
+                    " (setpoint " + fmt("%.3f kPa", 1e-3 * m_spec.holdPressure) + ")" +
+                    (before != BandController::State::Holding ? ": setpoint reached" : "")});
 }
 
 void TurnController::holdOthers(double t, ArrayPneumatics& p, std::vector<ControlEvent>& events,
@@ -305,12 +308,12 @@ void TurnController::update(const ControlInputs& in, ArrayPneumatics& p,
                                      fmt("%+.2f deg", in.pelvisTilt * 180.0 / M_PI) + ")"});
         } else if (t - m_phaseStart >= m_spec.maxTurnTime - kEps) {
             events.push_back({t, "target tilt not reached in " + fmt("%g s", m_spec.maxTurnTime) +
-                                     " (pelvis " +
-                                     fmt("%+.2f deg", in.pelvisTilt * 180.0 / M_PI) + ")"});
+                                     " (pelvis " + fmt("%+.2f deg", in.pelvisTilt * 180.0 / M_PI) +
+                                     ")"});
         } else {
             for (int c : m_spec.inflate) {
-                const bool full = m_spec.maxPressure > 0.0 &&
-                                  p.readChannelSensor(c) >= m_spec.maxPressure;
+                const bool full =
+                    m_spec.maxPressure > 0.0 && p.readChannelSensor(c) >= m_spec.maxPressure;
                 if (full && p.isInflateOpen(c))
                     events.push_back({t, "turn: channel '" + p.getChannelName(c) +
                                              "' at its largest pressure, inflate closed"});
@@ -362,8 +365,7 @@ void TurnController::update(const ControlInputs& in, ArrayPneumatics& p,
             closeAll(p);
             m_phase = Phase::Done;
             events.push_back({t, isHeld() ? "back to supine (the turned zones at " +
-                                                fmt("%.3f kPa", 1e-3 * m_spec.holdPressure) +
-                                                ")"
+                                                fmt("%.3f kPa", 1e-3 * m_spec.holdPressure) + ")"
                                           : std::string("back to supine (initial masses "
                                                         "restored)")});
         }

@@ -67,7 +67,8 @@ Eigen::Vector3d calcAxisFadeGradient(const bags::RigidShape& shape, const Eigen:
         Eigen::Vector3d dp = Eigen::Vector3d::Zero();
         dp[i] = h;
         g[i] = (calcAxisFade(shape.calcNormalDerivative(p + dp)) -
-                calcAxisFade(shape.calcNormalDerivative(p - dp))) / (2.0 * h);
+                calcAxisFade(shape.calcNormalDerivative(p - dp))) /
+               (2.0 * h);
     }
     return g;
 }
@@ -123,8 +124,9 @@ void ReducedBagCalibration::validate() const {
         fail("envelope: depth, radii and tilt must be positive, radii ordered");
     if (!(panelSink >= 0.0 && panelSink < 1e-3) || !(panelLift >= 0.0 && panelLift < 1e-3) ||
         !(panelBlend > 0.0 && panelBlend < geometry.longSide))
-        fail("panel coupling: sink and lift must be in [0, 1e-3) m/N, the blend in (0, the long "
-             "side)");
+        fail(
+            "panel coupling: sink and lift must be in [0, 1e-3) m/N, the blend in (0, the long "
+            "side)");
 }
 
 void ReducedBagFriction::validate() const {
@@ -570,8 +572,8 @@ void ReducedBag::evaluate() {
                 // would push the limb down.
                 const double column = e.dot(smp.t - lo);
                 const double kc = curv.norm();
-                const double inward = std::min(column * std::max(-nrm.z(), kMinSlope),
-                                               kc > 1e-12 ? 0.5 / kc : 1e300);
+                const double inward =
+                    std::min(column * std::max(-nrm.z(), kMinSlope), kc > 1e-12 ? 0.5 / kc : 1e300);
                 Sample col = smp;
                 // The film's contact is the underside point itself, pressed along its normal
                 // by that depth. (Not the closest surface of the inward point: in a thin shape,
@@ -630,8 +632,8 @@ void ReducedBag::evaluate() {
             // Merge the two passes in grid order (each is ascending in the point).
             size_t ia = 0, ib = 0;
             while (ia < found.size() || ib < rim.size()) {
-                const bool takeA = ib == rim.size() ||
-                                   (ia < found.size() && found[ia].point < rim[ib].point);
+                const bool takeA =
+                    ib == rim.size() || (ia < found.size() && found[ia].point < rim[ib].point);
                 const Sample& smp = takeA ? found[ia++] : rim[ib++];
                 if (smp.delta > -skirt) r.samples.push_back(smp);
             }
@@ -891,8 +893,9 @@ Eigen::VectorXd ReducedBag::calcContactPressure(int shape) const {
     for (size_t k = 0; k < r.samples.size(); ++k) {
         const Sample& smp = r.samples[k];
         p[m_slotStart.at(size_t(shape)) + int(k)] =
-            smp.blend * smp.film * (kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
-                         calcBoardPressure(smp.c));
+            smp.blend * smp.film *
+            (kappa * m_cur.pressure * calcWeight(smp.delta, r.depth, nullptr, nullptr) +
+             calcBoardPressure(smp.c));
     }
     return p;
 }
@@ -930,8 +933,10 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
             const Sample& smp = r.samples[k];
             const double d = deltaOf(smp);
             if (d > 0.0)
-                dDepth += a * ((2.0 * d * s1 - s2) * smp.blend * dDeltaOf(smp) +
-                               (d * d * s1 - d * s2) * dBlend[k]) / (s1 * s1);
+                dDepth += a *
+                          ((2.0 * d * s1 - s2) * smp.blend * dDeltaOf(smp) +
+                           (d * d * s1 - d * s2) * dBlend[k]) /
+                          (s1 * s1);
         }
         return dDepth;
     };
@@ -954,7 +959,8 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
         if (smp.column > 0.0) {
             const Mat36 J = jacobian(smp.c);
             const double ne = smp.n.dot(e);
-            const Row6 dz = std::abs(ne) > kGrazing ? Row6(smp.n.transpose() * J / ne) : Row6::Zero();
+            const Row6 dz =
+                std::abs(ne) > kGrazing ? Row6(smp.n.transpose() * J / ne) : Row6::Zero();
             m.dc = e * dz;
             m.dn = -cross(smp.n) * Jtheta + smp.dndp * (m.dc - J);
             const double curvature = smp.dndp.norm();
@@ -1102,7 +1108,8 @@ Mat6 ReducedBag::calcWrenchTangent(int shape) const {
         } else {
             const double ns = r.slip.norm();
             const Vec3 sh = r.slip / ns;
-            df = -mu * (sh * dN + N / ns * (Eigen::Matrix3d::Identity() - sh * sh.transpose()) * dS);
+            df =
+                -mu * (sh * dN + N / ns * (Eigen::Matrix3d::Identity() - sh * sh.transpose()) * dS);
         }
         const Vec3& f = r.frictionForce;
         T.bottomRows<3>() += df;
@@ -1265,18 +1272,21 @@ void ReducedBag::saveState(bags::StateWriter& w) const {
     for (const Eigen::Isometry3d& X : m_committedPoses) w.pose(X);
     for (const Vec6& v : m_velocities) saveFixed(w, v);
     for (const Vec6& v : m_committedVelocities) saveFixed(w, v);
-    for (const Anchor& a : m_anchors) w.pod(a.on), saveFixed(w, a.onShape), saveFixed(w, a.inGround);
+    for (const Anchor& a : m_anchors)
+        w.pod(a.on), saveFixed(w, a.onShape), saveFixed(w, a.inGround);
     for (const ShapeResult& res : m_results) {
         w.pod(std::uint64_t(res.samples.size()));
         for (const Sample& smp : res.samples) {
             w.pod(smp.point), w.pod(smp.delta), w.pod(smp.blend);
-            w.pod(smp.film), saveFixed(w, smp.dFilm);  // (topDelta, topN: inputs of evaluate's share)
+            w.pod(smp.film),
+                saveFixed(w, smp.dFilm);  // (topDelta, topN: inputs of evaluate's share)
             saveFixed(w, smp.t), saveFixed(w, smp.c), saveFixed(w, smp.n), saveFixed(w, smp.dndp);
         }
         w.pod(std::uint64_t(res.chords.size()));
         for (const Chord& ch : res.chords) {
             w.pod(ch.point), w.pod(ch.topInside), w.pod(ch.onBoard), w.pod(ch.length);
-            w.pod(ch.share), w.pod(ch.sum), w.pod(ch.betaSum), w.pod(ch.hiBounds), w.pod(ch.loBounds);
+            w.pod(ch.share), w.pod(ch.sum), w.pod(ch.betaSum), w.pod(ch.hiBounds),
+                w.pod(ch.loBounds);
             saveFixed(w, ch.hi), saveFixed(w, ch.nhi), saveFixed(w, ch.lo), saveFixed(w, ch.nlo);
         }
         w.pod(res.volume), w.pod(res.depth), w.pod(res.area);
@@ -1297,7 +1307,8 @@ void ReducedBag::loadState(bags::StateReader& r) {
         r.pod(s->flow), r.pod(s->target), r.pod(s->rate);
     }
     const auto n = r.pod<std::uint64_t>();
-    if (n != m_poses.size()) bags::StateReader::mismatch("shapes of a reduced bag", n, m_poses.size());
+    if (n != m_poses.size())
+        bags::StateReader::mismatch("shapes of a reduced bag", n, m_poses.size());
     for (Eigen::Isometry3d& X : m_poses) X = r.pose();
     for (Eigen::Isometry3d& X : m_committedPoses) X = r.pose();
     for (Vec6& v : m_velocities) loadFixed(r, v);
@@ -1313,7 +1324,8 @@ void ReducedBag::loadState(bags::StateReader& r) {
         res.chords.resize(r.pod<std::uint64_t>());
         for (Chord& ch : res.chords) {
             r.pod(ch.point), r.pod(ch.topInside), r.pod(ch.onBoard), r.pod(ch.length);
-            r.pod(ch.share), r.pod(ch.sum), r.pod(ch.betaSum), r.pod(ch.hiBounds), r.pod(ch.loBounds);
+            r.pod(ch.share), r.pod(ch.sum), r.pod(ch.betaSum), r.pod(ch.hiBounds),
+                r.pod(ch.loBounds);
             loadFixed(r, ch.hi), loadFixed(r, ch.nhi), loadFixed(r, ch.lo), loadFixed(r, ch.nlo);
         }
         r.pod(res.volume), r.pod(res.depth), r.pod(res.area);

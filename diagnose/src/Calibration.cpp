@@ -231,7 +231,8 @@ class ParallelCentralCost : public ceres::CostFunction {
   public:
     ParallelCentralCost(Evaluator& e, const SampleSet& s, const GapScale& g, int threads,
                         double relativeStep)
-        : m_residual{&e, &s, g}, m_threads(e.changesTheBag() ? std::max(1, threads) : 1),
+        : m_residual{&e, &s, g},
+          m_threads(e.changesTheBag() ? std::max(1, threads) : 1),
           m_relativeStep(relativeStep) {
         mutable_parameter_block_sizes()->push_back(e.getParameterCount());
         set_num_residuals(s.count);
@@ -295,8 +296,8 @@ double calcCost(Evaluator& e, const double* x, const SampleSet& s, const GapScal
 }
 
 struct Fit {
-    std::vector<double> x;      // scaled
-    std::vector<double> sdX;    // scaled standard deviations (NaN if unknown)
+    std::vector<double> x;    // scaled
+    std::vector<double> sdX;  // scaled standard deviations (NaN if unknown)
     double cost = INFINITY;
 };
 
@@ -335,8 +336,7 @@ std::vector<double> calcScanCosts(Evaluator& e, const std::vector<std::vector<do
         for (const std::string& err : errors)
             if (!err.empty()) throw std::runtime_error(err);  // e.g. an interrupt
     } else {
-        for (size_t i = 0; i < points.size(); ++i)
-            costs[i] = calcCost(e, points[i].data(), s, g);
+        for (size_t i = 0; i < points.size(); ++i) costs[i] = calcCost(e, points[i].data(), s, g);
     }
     return costs;
 }
@@ -382,7 +382,8 @@ Fit calibrate(Evaluator& e, const std::vector<TestComparison>& baseline,
         // (n - p) (the residuals' own scatter, since the weights are ranges, not noise).
         ceres::Covariance::Options co;
         ceres::Covariance cov(co);
-        std::vector<std::pair<const double*, const double*>> blocks = {{fit.x.data(), fit.x.data()}};
+        std::vector<std::pair<const double*, const double*>> blocks = {
+            {fit.x.data(), fit.x.data()}};
         if (cov.Compute(blocks, &problem)) {
             std::vector<double> c(np * np);
             cov.GetCovarianceBlock(fit.x.data(), fit.x.data(), c.data());
@@ -589,8 +590,8 @@ void calibratePairs(WhichReport& report, const MeasuredData& data,
             for (int i = 0; i < n; ++i) all[i] = i;
             const std::vector<std::vector<double>> starts =
                 makePairStarts(e, a.parameters, b.parameters, o.gridPoints);
-            const std::vector<double> costs = calcScanCosts(e, starts, makeSamples(baseline, all),
-                                                            g, o);
+            const std::vector<double> costs =
+                calcScanCosts(e, starts, makeSamples(baseline, all), g, o);
             const size_t k = std::min_element(costs.begin(), costs.end()) - costs.begin();
             p.screenCost = costs[k];
             p.screenParameters = e.toValues(starts[k].data());
@@ -661,8 +662,8 @@ void addWhereFitsDiffer(WhichReport& r, const GapScale& g) {
                 const double u = g.getUncertainty(kind, a.test);
                 if (!(u > 0.0) || !(d[c] / u > most)) continue;
                 most = d[c] / u;
-                where = "the " + getChannelName(kind) + " of the " +
-                        fmt("%.3g", a.gasMass * 1e3) + " g test";
+                where = "the " + getChannelName(kind) + " of the " + fmt("%.3g", a.gasMass * 1e3) +
+                        " g test";
             }
         }
         if (most < 0.0) continue;
@@ -681,16 +682,16 @@ void addWhereFitsDiffer(WhichReport& r, const GapScale& g) {
 std::string listConfusableWith(const WhichReport& report, const std::string& effect) {
     std::string others;
     for (const auto& [a, b] : report.confusable)
-        if (a == effect || b == effect) others += (others.empty() ? "" : ", ") + (a == effect ? b : a);
+        if (a == effect || b == effect)
+            others += (others.empty() ? "" : ", ") + (a == effect ? b : a);
     return others;
 }
 
 void judgeCandidates(WhichReport& report, bool withinValidation, const std::string& noneReason,
                      const ChannelUncertainties& validation, const CalibrationOptions& o) {
-    std::stable_sort(report.candidates.begin(), report.candidates.end(),
-                     [](const CandidateResult& a, const CandidateResult& b) {
-                         return a.score > b.score;
-                     });
+    std::stable_sort(
+        report.candidates.begin(), report.candidates.end(),
+        [](const CandidateResult& a, const CandidateResult& b) { return a.score > b.score; });
     report.confusable = findConfusable(report.candidates, o.explainThreshold, validation);
     const CandidateResult* best = report.candidates.empty() ? nullptr : &report.candidates[0];
     report.verdictEffects.clear();
@@ -704,15 +705,16 @@ void judgeCandidates(WhichReport& report, bool withinValidation, const std::stri
                         fmt("%.0f", 100 * best->excessShrink) + " % (from " +
                         fmt("%.4f", best->excessBefore) + " to " + fmt("%.4f", best->excessAfter) +
                         "; the whole gap by " + fmt("%.0f", 100 * best->shrink) + " %, from " +
-                        fmt("%.4f", best->heldoutBefore) + " to " + fmt("%.4f", best->heldoutAfter) + ")";
+                        fmt("%.4f", best->heldoutBefore) + " to " +
+                        fmt("%.4f", best->heldoutAfter) + ")";
     } else {
         report.verdict = "unexplained";
-        report.reason = "no candidate shrinks the held-out gap beyond the validation "
-                        "uncertainty by " +
-                        fmt("%.0f", 100 * o.explainThreshold) + " % after its parameter penalty" +
-                        (best ? " (best: " + best->effect + ", " +
-                                    fmt("%.0f", 100 * best->excessShrink) + " %)"
-                              : std::string());
+        report.reason =
+            "no candidate shrinks the held-out gap beyond the validation "
+            "uncertainty by " +
+            fmt("%.0f", 100 * o.explainThreshold) + " % after its parameter penalty" +
+            (best ? " (best: " + best->effect + ", " + fmt("%.0f", 100 * best->excessShrink) + " %)"
+                  : std::string());
     }
 }
 
@@ -722,7 +724,8 @@ WhichReport calibrateCandidates(const MeasuredData& data, const bags::LoadTestOp
                                 const WhereReport& where, const Simulator& simulate,
                                 const CalibrationOptions& o) {
     const int n = static_cast<int>(data.tests.size());
-    if (n < 2) throw std::invalid_argument("the calibration needs two tests or more (one held out)");
+    if (n < 2)
+        throw std::invalid_argument("the calibration needs two tests or more (one held out)");
     const GapScale g = makeGapScale(where, baseline);
     if (!(g.force.range > 0.0) || !(g.pressure.range > 0.0))
         throw std::invalid_argument("the measured force and pressure must vary to be compared");

@@ -35,10 +35,14 @@ struct Branch {
 
 std::string getChannelName(ChannelKind c) {
     switch (c) {
-        case ChannelKind::Force: return "force";
-        case ChannelKind::Pressure: return "pressure";
-        case ChannelKind::Bed: return "bed";
-        default: return "mass";
+        case ChannelKind::Force:
+            return "force";
+        case ChannelKind::Pressure:
+            return "pressure";
+        case ChannelKind::Bed:
+            return "bed";
+        default:
+            return "mass";
     }
 }
 ChannelKind getChannelKind(const std::string& name) {
@@ -49,17 +53,24 @@ ChannelKind getChannelKind(const std::string& name) {
 }
 std::string getChannelUnit(ChannelKind c) {
     switch (c) {
-        case ChannelKind::Force: return "N";
-        case ChannelKind::Pressure: return "kPa";
-        case ChannelKind::Bed: return "mm";
-        default: return "g";
+        case ChannelKind::Force:
+            return "N";
+        case ChannelKind::Pressure:
+            return "kPa";
+        case ChannelKind::Bed:
+            return "mm";
+        default:
+            return "g";
     }
 }
 double getChannelUnitScale(ChannelKind c) {
     switch (c) {
-        case ChannelKind::Force: return 1.0;
-        case ChannelKind::Pressure: return 1e3;
-        default: return 1e-3;  // g, mm
+        case ChannelKind::Force:
+            return 1.0;
+        case ChannelKind::Pressure:
+            return 1e3;
+        default:
+            return 1e-3;  // g, mm
     }
 }
 
@@ -108,10 +119,10 @@ GapScale makeGapScale(const WhereReport& where, const std::vector<TestComparison
             if (k == ChannelKind::Mass) continue;
             auto at = [&](const std::vector<double>& v) { return c < v.size() ? v[c] : 0.0; };
             const double n = noise[getGapIndex(k)];
-            u[getGapIndex(k)] = std::sqrt(
-                n * n + std::pow(at(t.numericalUncertainty), 2) +
-                std::pow(at(t.inputUncertainty), 2) + std::pow(at(t.inputUncertaintyGasMass), 2) +
-                std::pow(at(t.inputUncertaintyTemperature), 2));
+            u[getGapIndex(k)] = std::sqrt(n * n + std::pow(at(t.numericalUncertainty), 2) +
+                                          std::pow(at(t.inputUncertainty), 2) +
+                                          std::pow(at(t.inputUncertaintyGasMass), 2) +
+                                          std::pow(at(t.inputUncertaintyTemperature), 2));
         }
         g.testUncertainty[t.test] = u;
     }
@@ -190,7 +201,8 @@ TestComparison compareTest(const MeasuredTest& test, int index, const bags::Load
         // would read it without its gain) times the bed's compliance.
         ChannelComparison b = startChannel(ChannelKind::Bed, test.bed);
         for (size_t i = 0; i < b.time.size(); ++i)
-            b.simulated.push_back(rig.bedCompliance * simAt(b.displacement[i], b.loading[i], false) /
+            b.simulated.push_back(rig.bedCompliance *
+                                  simAt(b.displacement[i], b.loading[i], false) /
                                   (1.0 + rig.loadCellGain));
         tc.channels.push_back(std::move(b));
     }
@@ -331,7 +343,8 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
             }
             it->second.push_back(res);
         };
-        double lo = INFINITY, hi = -INFINITY, travel = 0.0, numSum = 0.0, meshSum = 0.0, inSum = 0.0, sumSq = 0.0;
+        double lo = INFINITY, hi = -INFINITY, travel = 0.0, numSum = 0.0, meshSum = 0.0,
+               inSum = 0.0, sumSq = 0.0;
         double massSum = 0.0, tempSum = 0.0;  // the stated inputs' terms, weighted by samples
         long numN = 0, inN = 0, total = 0;
         std::vector<double> secondDifferences;
@@ -351,13 +364,16 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
                 add(mass, res);
                 add(ch.loading[i] ? "loading" : "unloading", res);
                 const double fi = ch.force[i];
-                add(fi < o.loadFrom   ? "load below " + fmt("%g N", o.loadFrom)
+                add(fi < o.loadFrom  ? "load below " + fmt("%g N", o.loadFrom)
                     : fi <= o.loadTo ? "load " + fmt("%g", o.loadFrom) + "-" + fmt("%g N", o.loadTo)
                                      : "load above " + fmt("%g N", o.loadTo),
                     res);
                 // Time windows: thirds of each test's record (drift, warming, settling).
                 const int third = span > 0.0 ? std::min(2, int(3.0 * (ch.time[i] - t0) / span)) : 0;
-                add("time " + std::string(third == 0 ? "first" : third == 1 ? "middle" : "last") +
+                add("time " +
+                        std::string(third == 0   ? "first"
+                                    : third == 1 ? "middle"
+                                                 : "last") +
                         " third",
                     res);
             }
@@ -424,7 +440,8 @@ WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptio
         r.channels.push_back(cs);
         if (kind != ChannelKind::Mass && cs.range > 0.0)
             nrmse2[c] = std::pow(cs.rmse / cs.range, 2), ++inGap;
-        for (const std::string& g : order) r.regimes.push_back(calcRegimeStats(name, g, regimes[g], sumSq));
+        for (const std::string& g : order)
+            r.regimes.push_back(calcRegimeStats(name, g, regimes[g], sumSq));
     }
     const double sum2 = std::accumulate(nrmse2.begin(), nrmse2.end(), 0.0);
     r.gap = inGap ? std::sqrt(sum2 / double(inGap)) : 0.0;

@@ -16,45 +16,53 @@ const std::vector<Effect>& getEffects() {
          {{"lag", "s", 1.0, 0.0, RigEffects::kMaxPressureLag, 3.0, "rig.pressure_sensor.lag"},
           {"offset", "kPa", 1e3, -RigEffects::kMaxPressureOffset, RigEffects::kMaxPressureOffset,
            100.0, "rig.pressure_sensor.offset"}},
-         false, true,
+         false,
+         true,
          "a reference gauge on the bag's own port read beside the sensor (its zero, and its lag "
          "at a step of pressure)"},
         {"flowmeter-bias",
          "the flowmeter reads the bag's gas mass plus an offset (the bag holds another mass)",
          {{"offset", "g", 1e-3, -RigEffects::kMaxFlowmeterOffset, RigEffects::kMaxFlowmeterOffset,
            0.1e-3, "rig.flowmeter.offset"}},
-         true, true,
+         true,
+         true,
          "the bag weighed full and empty (the gas mass it holds), or the flowmeter checked "
          "against a reference"},
         {"gas-temperature",
          "the gas is warmer or colder than the room the protocol states (pump, lights, sun)",
-         {{"offset", "K", 1.0, -15.0, 15.0, 5.0, "gas.temperature (the room temperature plus this)"}},
-         true, true,
+         {{"offset", "K", 1.0, -15.0, 15.0, 5.0,
+           "gas.temperature (the room temperature plus this)"}},
+         true,
+         true,
          "a thermometer in the bag's gas during the test"},
         {"machine-compliance",
          "the testing machine (frame, crosshead, load cell) yields in series with the block",
          {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxMachineCompliance, 0.1e-3,
            "rig.machine_stiffness (its inverse)"}},
-         false, true,
+         false,
+         true,
          "the block's travel read by a gauge on the block itself, beside the crosshead's"},
         {"block-friction",
          "Coulomb friction between the film and the block",
          {{"friction", "", 1.0, 0.0, 1.0, 0.5, "contact.block.friction"}},
-         true, true,
+         true,
+         true,
          "a test with a lubricated (PTFE-faced) block"},
         {"leakage",
          "gas leaks through seams and valves during the test (laminar: mass flow out in "
          "proportion to the gauge pressure)",
          {{"conductance", "mg/(s kPa)", 1e-9, 0.0, bags::GasOptions::kMaxLeakConductance, 0.05e-9,
            "gas.leak_conductance"}},
-         true, true,
+         true,
+         true,
          "a hold at a fixed displacement: the pressure falls with the leak and does not come back"},
         {"heat-exchange",
          "the gas compresses adiabatically and exchanges heat with the room through the film "
          "(Newton cooling with a time constant)",
          {{"time_constant", "s", 1.0, 0.0, kMaxHeatExchangeTimeConstant, 20.0,
            "gas.heat_time_constant"}},
-         true, true,
+         true,
+         true,
          "a hold at a fixed displacement: the pressure relaxes to the isothermal one while the "
          "gas mass stays"},
         {"bed-compliance",
@@ -62,7 +70,8 @@ const std::vector<Effect>& getEffects() {
          "compliance on the rig's data, unless a gauge under the board reads its sink)",
          {{"compliance", "mm/N", 1e-3, 0.0, RigEffects::kMaxBedCompliance, 0.1e-3,
            "rig.bed_stiffness (its inverse)"}},
-         false, true,
+         false,
+         true,
          "a gauge under the bed board (synth-measurement --bed-gauge)"},
         {"viscoelasticity",
          "the film relaxes (one Prony term on its stress): stiffer while pressed, softer while "
@@ -70,7 +79,8 @@ const std::vector<Effect>& getEffects() {
          {{"g", "", 1.0, 0.0, kMaxViscoelasticModulus, 0.2, "membrane.prony[0].g"},
           {"tau", "s", 1.0, kMinViscoelasticTime, kMaxViscoelasticTime, 20.0,
            "membrane.prony[0].tau"}},
-         true, true,
+         true,
+         true,
          "tests at two rates, or a hold at a fixed displacement: the force relaxes while the "
          "gas does not"},
         {"fabric-anisotropy",
@@ -79,7 +89,8 @@ const std::vector<Effect>& getEffects() {
          {{"yarn", "", 1.0, 0.0, kMaxYarnStiffnessRatio, 1.0,
            "membrane.anisotropy.warp and .weft (each this times the film's Young's modulus "
            "3 mu)"}},
-         true, true,
+         true,
+         true,
          "tensile strips of the film cut along the yarns and on the bias"},
         {"soft-tissue",
          "a compliant layer between the block and the film (soft tissue over bone, a pad on the "
@@ -90,21 +101,24 @@ const std::vector<Effect>& getEffects() {
            "contact.block.tissue.thickness"},
           {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 200e3,
            "contact.block.tissue.modulus"}},
-         true, true,
+         true,
+         true,
          "the block pressed bare, or a gauge on the block's face (the layer's compression)"},
         {"bag-volume",
          "the bag's volume (its fill mass) differs from the scenario's reading of it: a "
          "geometrically similar bag, every size times the cube root of 1 + volume",
          {{"volume", "", 1.0, -bags::kMaxVolumeChange, bags::kMaxVolumeChange, 0.05,
            "airbag.volume_change"}},
-         true, true,
+         true,
+         true,
          "the bag's sizes or its volume measured (water displacement)"},
         {"film-stiffness",
          "the film is stiffer or softer than the scenario states (its thickness or its modulus "
          "misstated): every membrane stress times 1 + change; its weight and bending as stated",
          {{"change", "", 1.0, -kMaxFilmStiffnessChange, kMaxFilmStiffnessChange, 0.1,
            "membrane.thickness (the stated one times 1 + this)"}},
-         true, true,
+         true,
+         true,
          "a tensile test of a strip of the bag's own film and its thickness measured (bagsim "
          "fit-material)"},
         {"load-cell-gain",
@@ -174,8 +188,9 @@ void applyEffect(const Effect& effect, const std::vector<double>& values,
     } else if (effect.name == "fabric-anisotropy") {
         // A balanced weave (840D nylon both ways): the same yarn stiffness along warp and weft.
         if (!options.material)
-            throw std::invalid_argument("effect 'fabric-anisotropy' needs the film's material "
-                                        "(load test option 'material' is not set)");
+            throw std::invalid_argument(
+                "effect 'fabric-anisotropy' needs the film's material "
+                "(load test option 'material' is not set)");
         const auto* fabric = dynamic_cast<const bags::FabricMaterial*>(options.material.get());
         const bags::MembraneMaterial& matrix = fabric ? fabric->getMatrix() : *options.material;
         bags::FabricAnisotropy yarns;

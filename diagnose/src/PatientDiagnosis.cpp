@@ -32,11 +32,12 @@ void checkBounds(const Effect& e, const std::vector<double>& v) {
                                     " parameter(s)");
     for (size_t i = 0; i < v.size(); ++i) {
         const EffectParameter& p = e.parameters[i];
-        if (!(v[i] >= p.lower - 1e-12 * std::fabs(p.lower) && v[i] <= p.upper + 1e-12 * std::fabs(p.upper)))
-            throw std::invalid_argument(e.name + "." + p.name + " " + fmt("%g", v[i] / p.siPerUnit) +
-                                        " " + p.unit + " is outside its bounds " +
-                                        fmt("%g", p.lower / p.siPerUnit) + " to " +
-                                        fmt("%g", p.upper / p.siPerUnit) + " " + p.unit);
+        if (!(v[i] >= p.lower - 1e-12 * std::fabs(p.lower) &&
+              v[i] <= p.upper + 1e-12 * std::fabs(p.upper)))
+            throw std::invalid_argument(
+                e.name + "." + p.name + " " + fmt("%g", v[i] / p.siPerUnit) + " " + p.unit +
+                " is outside its bounds " + fmt("%g", p.lower / p.siPerUnit) + " to " +
+                fmt("%g", p.upper / p.siPerUnit) + " " + p.unit);
     }
 }
 
@@ -51,7 +52,8 @@ std::pair<size_t, double> bracket(const std::vector<double>& x, double xq) {
 
 double interpolateFrame(const MatFrames& m, size_t sensel, const std::pair<size_t, double>& b) {
     if (m.time.size() < 2) return m.pressure.at(0)[sensel];
-    return b.second * m.pressure[b.first - 1][sensel] + (1.0 - b.second) * m.pressure[b.first][sensel];
+    return b.second * m.pressure[b.first - 1][sensel] +
+           (1.0 - b.second) * m.pressure[b.first][sensel];
 }
 
 int findWindow(const std::vector<double>& edges, double t) {
@@ -72,25 +74,30 @@ const std::vector<Effect>& getPatientEffects() {
          {{"lag", "s", 1.0, 0.0, PatientInstruments::kMaxBagSensorLag, 0.1, "(the bags' sensors)"},
           {"offset", "kPa", 1e3, -PatientInstruments::kMaxBagSensorOffset,
            PatientInstruments::kMaxBagSensorOffset, 0.5e3, "(the bags' sensors)"}},
-         false, true,
+         false,
+         true,
          "a reference gauge on a bag's own port read beside its sensor"},
         {kMatGain,
          "the pressure mat reads every sensel's pressure times 1 + gain (calibration, creep, "
          "temperature)",
          {{"gain", "", 1.0, -PatientInstruments::kMaxMatGain, PatientInstruments::kMaxMatGain, 0.1,
            "(the mat)"}},
-         false, true,
+         false,
+         true,
          "the mat calibrated under a known pressure (a bladder at a set pressure over it)"},
         {"film-friction",
          "Coulomb friction between his skin or sheet and the bags' films",
          {{"friction", "", 1.0, 0.0, 1.0, 0.4, "bag.body_friction"}},
-         true, true,
+         true,
+         true,
          "a slide test of his sheet on the film (the force that starts it sliding under a "
          "known load)"},
         {"gas-mass-bias",
          "the bags hold another gas mass than the one stated (filling, leaks before the record)",
-         {{"offset", "g", 1e-3, -0.5e-3, 0.5e-3, 0.2e-3, "array.gas_mass (the stated mass plus this)"}},
-         true, true,
+         {{"offset", "g", 1e-3, -0.5e-3, 0.5e-3, 0.2e-3,
+           "array.gas_mass (the stated mass plus this)"}},
+         true,
+         true,
          "the bags' gas masses metered as they are filled, or their pressures read with no one "
          "on them"},
         {"soft-tissue",
@@ -100,7 +107,8 @@ const std::vector<Effect>& getPatientEffects() {
          {{"thickness", "mm", 1e-3, 0.0, kMaxTissueThickness, 20e-3, "bag.body_tissue.thickness"},
           {"modulus", "kPa", 1e3, kMinTissueModulus, kMaxTissueModulus, 30e3,
            "bag.body_tissue.modulus"}},
-         true, true,
+         true,
+         true,
          "his tissue's thickness at the sites (ultrasound) and its stiffness (indentation)"},
     };
     return effects;
@@ -115,9 +123,12 @@ std::string listPatientEffectNames() { return listEffectNamesIn(getPatientEffect
 void applyPatientInstrumentEffect(const Effect& effect, const std::vector<double>& v,
                                   PatientInstruments& inst) {
     checkBounds(effect, v);
-    if (effect.name == kBagSensor) inst.bagSensorLag = v[0], inst.bagSensorOffset = v[1];
-    else if (effect.name == kMatGain) inst.matGain = v[0];
-    else throw std::invalid_argument(effect.name + " is not an instrument effect");
+    if (effect.name == kBagSensor)
+        inst.bagSensorLag = v[0], inst.bagSensorOffset = v[1];
+    else if (effect.name == kMatGain)
+        inst.matGain = v[0];
+    else
+        throw std::invalid_argument(effect.name + " is not an instrument effect");
 }
 
 std::vector<std::pair<std::string, std::string>> getPatientEffectOverrides(
@@ -132,8 +143,8 @@ std::vector<std::pair<std::string, std::string>> getPatientEffectOverrides(
         // The scenario's layer is at least 0.5 mm thick; thinner is the model as it is (the
         // scenario's own tissue: each site's published layer by default, or none).
         if (v[0] < 0.5e-3) return {};
-        return {{"bag.body_tissue", "{thickness: " + fmt("%.9g", v[0] * 1e3) + " mm, modulus: " +
-                                        fmt("%.9g", v[1] * 1e-3) + " kPa}"}};
+        return {{"bag.body_tissue", "{thickness: " + fmt("%.9g", v[0] * 1e3) +
+                                        " mm, modulus: " + fmt("%.9g", v[1] * 1e-3) + " kPa}"}};
     }
     throw std::invalid_argument(effect.name + " does not change the patient's response");
 }
@@ -160,7 +171,8 @@ void PatientSynthesisOptions::validate() const {
         if (!(n >= 0.0)) throw std::invalid_argument("a noise must be >= 0");
 }
 
-PatientChannels synthesizePatientChannels(const PatientChannels& run, const PatientInstruments& inst,
+PatientChannels synthesizePatientChannels(const PatientChannels& run,
+                                          const PatientInstruments& inst,
                                           const PatientSynthesisOptions& o) {
     o.validate();
     const PatientChannels r = readPatientInstruments(run, inst);
@@ -260,8 +272,9 @@ PatientComparison joinPatientComparisons(const std::vector<PatientComparison>& p
     if (out.testSubject.size() != parts.size()) out.subjects.clear(), out.testSubject.clear();
     for (size_t t = 0; t < parts.size(); ++t)
         for (const PatientChannelComparison& ch : parts[t].channels) {
-            auto it = std::find_if(out.channels.begin(), out.channels.end(),
-                                   [&](const PatientChannelComparison& c) { return c.name == ch.name; });
+            auto it =
+                std::find_if(out.channels.begin(), out.channels.end(),
+                             [&](const PatientChannelComparison& c) { return c.name == ch.name; });
             if (it == out.channels.end()) {
                 PatientChannelComparison c;
                 c.name = ch.name, c.unit = ch.unit, c.unitScale = ch.unitScale;
@@ -274,7 +287,8 @@ PatientComparison joinPatientComparisons(const std::vector<PatientComparison>& p
                 j.measured.push_back(ch.measured[i]);
                 j.simulated.push_back(ch.simulated[i]);
                 j.test.push_back(int(t));
-                if (!ch.frame.empty()) j.frame.push_back(ch.frame[i]), j.sensel.push_back(ch.sensel[i]);
+                if (!ch.frame.empty())
+                    j.frame.push_back(ch.frame[i]), j.sensel.push_back(ch.sensel[i]);
                 if (ch.part.empty()) continue;
                 const std::string& pn = ch.partNames.at(size_t(ch.part[i]));
                 auto p = std::find(j.partNames.begin(), j.partNames.end(), pn);
@@ -347,7 +361,8 @@ PatientComparison comparePatient(const PatientChannels& measured, const PatientC
     for (const BagPressureChannel& mb : measured.bags) {
         const auto it = std::find_if(r.bags.begin(), r.bags.end(),
                                      [&](const BagPressureChannel& b) { return b.bag == mb.bag; });
-        if (it == r.bags.end() || it->pressure.time.size() < 2) continue;  // not simulated: no one over it
+        if (it == r.bags.end() || it->pressure.time.size() < 2)
+            continue;  // not simulated: no one over it
         const int part = int(bc.partNames.size());
         bc.partNames.push_back("bag " + std::to_string(mb.bag));
         for (size_t i = 0; i < mb.pressure.time.size(); ++i) {
@@ -396,8 +411,8 @@ PatientChannelComparison selectTest(const PatientChannelComparison& ch, int test
 
 // One record's signatures of a channel: per bag, or of the channel (the mat: the lag of its
 // frame sums); `label` ("" or "test NAME") begins each signature's part.
-void addPatientSignatures(const PatientChannelComparison& ch, const std::string& label, double maxLag,
-                          std::vector<Signature>& out) {
+void addPatientSignatures(const PatientChannelComparison& ch, const std::string& label,
+                          double maxLag, std::vector<Signature>& out) {
     if (ch.time.empty()) return;
     auto partOf = [&](const std::string& p) {
         return label.empty() ? p : p.empty() ? label : label + ", " + p;
@@ -405,7 +420,8 @@ void addPatientSignatures(const PatientChannelComparison& ch, const std::string&
     if (ch.name == "bag-pressure") {
         for (const auto& idx : ch.partSeries()) {
             std::vector<double> t, m, s;
-            for (size_t i : idx) t.push_back(ch.time[i]), m.push_back(ch.measured[i]), s.push_back(ch.simulated[i]);
+            for (size_t i : idx)
+                t.push_back(ch.time[i]), m.push_back(ch.measured[i]), s.push_back(ch.simulated[i]);
             Signature sg = calcSeriesSignature(ch.name, t, m, s, maxLag);
             sg.test = ch.part[idx.front()];
             sg.part = partOf(ch.partNames.at(size_t(sg.test)));
@@ -458,7 +474,8 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
         std::vector<std::vector<double>> byPart(ch.partNames.size());
         std::vector<std::vector<double>> byWindow(edges.size() > 1 ? edges.size() - 1 : 1);
         for (size_t i = 0; i < res.size(); ++i) {
-            if (!ch.part.empty() && size_t(ch.part[i]) < byPart.size()) byPart[size_t(ch.part[i])].push_back(res[i]);
+            if (!ch.part.empty() && size_t(ch.part[i]) < byPart.size())
+                byPart[size_t(ch.part[i])].push_back(res[i]);
             byWindow[size_t(std::max(0, findWindow(edges, ch.time[i])))].push_back(res[i]);
         }
         r.regimes.push_back(calcRegimeStats(ch.name, "all", res, sumSq));
@@ -466,11 +483,11 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
             if (!byPart[p].empty())
                 r.regimes.push_back(calcRegimeStats(ch.name, ch.partNames[p], byPart[p], sumSq));
         for (size_t w = 0; w < byWindow.size(); ++w)
-            r.regimes.push_back(calcRegimeStats(
-                ch.name,
-                "time " + fmt("%.3g", edges.size() > 1 ? edges[w] : 0.0) + "-" +
-                    fmt("%.3g s", edges.size() > 1 ? edges[w + 1] : 0.0),
-                byWindow[w], sumSq));
+            r.regimes.push_back(
+                calcRegimeStats(ch.name,
+                                "time " + fmt("%.3g", edges.size() > 1 ? edges[w] : 0.0) + "-" +
+                                    fmt("%.3g s", edges.size() > 1 ? edges[w + 1] : 0.0),
+                                byWindow[w], sumSq));
         // By subject (when the tests name them), and by test when a subject has several tests.
         if (!c.subjects.empty()) {
             std::vector<std::vector<double>> bySubject(c.subjects.size());
@@ -478,14 +495,17 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
                 bySubject.at(size_t(c.testSubject.at(size_t(ch.getTest(i))))).push_back(res[i]);
             for (size_t s = 0; s < bySubject.size(); ++s)
                 if (!bySubject[s].empty())
-                    r.regimes.push_back(calcRegimeStats(ch.name, "subject " + c.subjects[s], bySubject[s], sumSq));
+                    r.regimes.push_back(
+                        calcRegimeStats(ch.name, "subject " + c.subjects[s], bySubject[s], sumSq));
         }
         if (c.tests.size() > 1 && c.tests.size() > c.subjects.size()) {
             std::vector<std::vector<double>> byTest(c.tests.size());
-            for (size_t i = 0; i < res.size(); ++i) byTest.at(size_t(ch.getTest(i))).push_back(res[i]);
+            for (size_t i = 0; i < res.size(); ++i)
+                byTest.at(size_t(ch.getTest(i))).push_back(res[i]);
             for (size_t t = 0; t < byTest.size(); ++t)
                 if (!byTest[t].empty())
-                    r.regimes.push_back(calcRegimeStats(ch.name, getTestLabel(c, t), byTest[t], sumSq));
+                    r.regimes.push_back(
+                        calcRegimeStats(ch.name, getTestLabel(c, t), byTest[t], sumSq));
         }
 
         // Noise: second differences of each part's (the mat: each sensel's) series.
@@ -516,7 +536,8 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
         // test's record).
         if (c.tests.size() > 1) {
             for (size_t t = 0; t < c.tests.size(); ++t)
-                addPatientSignatures(selectTest(ch, int(t)), getTestLabel(c, t), maxLag, r.signatures);
+                addPatientSignatures(selectTest(ch, int(t)), getTestLabel(c, t), maxLag,
+                                     r.signatures);
         } else {
             addPatientSignatures(ch, "", maxLag, r.signatures);
         }
@@ -524,7 +545,8 @@ WhereReport calcPatientWhere(const PatientComparison& c, const std::vector<doubl
     double sum2 = 0.0;
     for (double v : nrmse2) sum2 += v;
     r.gap = nrmse2.empty() ? 0.0 : std::sqrt(sum2 / double(nrmse2.size()));
-    for (size_t k = 0; k < r.channels.size(); ++k) r.channels[k].shareOfGap = sum2 > 0.0 ? nrmse2[k] / sum2 : 0.0;
+    for (size_t k = 0; k < r.channels.size(); ++k)
+        r.channels[k].shareOfGap = sum2 > 0.0 ? nrmse2[k] / sum2 : 0.0;
     r.withinValidation = true;
     for (const ChannelSummary& cs : r.channels)
         if (cs.rmse > kExplainedMultiple * cs.validation) r.withinValidation = false;
@@ -539,8 +561,8 @@ double calcPatientGap(const PatientComparison& c, const WhereReport& where,
     return calcPatientGap(c, where, folds, windows, beyond);
 }
 
-double calcPatientGap(const PatientComparison& c, const WhereReport& where, const PatientFolds& folds,
-                      const std::vector<int>& windows, bool beyond) {
+double calcPatientGap(const PatientComparison& c, const WhereReport& where,
+                      const PatientFolds& folds, const std::vector<int>& windows, bool beyond) {
     double sum = 0.0;
     int n = 0;
     for (const PatientChannelComparison& ch : c.channels) {
@@ -562,7 +584,8 @@ double calcPatientGap(const PatientComparison& c, const WhereReport& where, cons
         // what goes beyond that (an effect that makes it worse): a channel that hardly moves
         // (a supine patient's tilt) would otherwise weigh its noise, over few samples, by one
         // over its small range.
-        const double allowed = it->rmse <= 2.0 * it->validation ? 2.0 * it->validation : it->validation;
+        const double allowed =
+            it->rmse <= 2.0 * it->validation ? 2.0 * it->validation : it->validation;
         if (beyond) ms = std::max(0.0, ms - allowed * allowed);
         sum += ms / (it->range * it->range);
         ++n;
@@ -582,8 +605,13 @@ class PatientEvaluator {
     PatientEvaluator(const Effect& e, const std::vector<PatientTestCase>& tests,
                      const std::vector<PatientComparison>& baseParts, const MatRegions& regions,
                      const PatientTestSimulator& simulate)
-        : m_effect(e), m_tests(tests), m_baseParts(baseParts), m_regions(regions), m_simulate(simulate) {
-        for (const PatientTestCase& t : tests) m_names.push_back(t.name), m_subjects.push_back(t.subject);
+        : m_effect(e),
+          m_tests(tests),
+          m_baseParts(baseParts),
+          m_regions(regions),
+          m_simulate(simulate) {
+        for (const PatientTestCase& t : tests)
+            m_names.push_back(t.name), m_subjects.push_back(t.subject);
     }
 
     PatientComparison evaluate(const std::vector<double>& v) {
@@ -597,16 +625,20 @@ class PatientEvaluator {
         for (size_t t = 0; t < m_tests.size(); ++t) {
             const PatientTestCase& tc = m_tests[t];
             if (!m_effect.changesTheBag) {
-                parts.push_back(comparePatient(tc.measured, tc.baseline, inst, getRegions(tc), &m_baseParts[t]));
+                parts.push_back(comparePatient(tc.measured, tc.baseline, inst, getRegions(tc),
+                                               &m_baseParts[t]));
                 continue;
             }
             const auto overrides = getPatientEffectOverrides(m_effect, v, tc.statedGasMass);
             std::string label = m_effect.name;
             for (size_t i = 0; i < v.size(); ++i)
-                label += "-" + m_effect.parameters[i].name + fmt("%.4g", v[i] / m_effect.parameters[i].siPerUnit);
-            const PatientChannels run = overrides.empty() ? tc.baseline : m_simulate(int(t), overrides, label);
+                label += "-" + m_effect.parameters[i].name +
+                         fmt("%.4g", v[i] / m_effect.parameters[i].siPerUnit);
+            const PatientChannels run =
+                overrides.empty() ? tc.baseline : m_simulate(int(t), overrides, label);
             if (!overrides.empty()) ++m_runs;
-            parts.push_back(comparePatient(tc.measured, run, PatientInstruments(), getRegions(tc), &m_baseParts[t]));
+            parts.push_back(comparePatient(tc.measured, run, PatientInstruments(), getRegions(tc),
+                                           &m_baseParts[t]));
         }
         PatientComparison joined = joinPatientComparisons(parts, m_names, m_subjects);
         if (!m_effect.changesTheBag) return joined;  // cheap: not kept
@@ -688,14 +720,20 @@ PatientFit fitPatient(PatientEvaluator& e, const Effect& effect, const WhereRepo
         for (size_t i = 0; i < np; ++i) {
             const EffectParameter& p = effect.parameters[i];
             const double cell = (p.upper - p.lower) / double(points - 1);
-            double a = std::max(p.lower, best.values[i] - cell), b = std::min(p.upper, best.values[i] + cell);
+            double a = std::max(p.lower, best.values[i] - cell),
+                   b = std::min(p.upper, best.values[i] + cell);
             const double g = 0.5 * (std::sqrt(5.0) - 1.0);
             std::vector<double> v = best.values;
-            auto at = [&](double x) { v[i] = x; return cost(v); };
+            auto at = [&](double x) {
+                v[i] = x;
+                return cost(v);
+            };
             double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = at(x1), f2 = at(x2);
             for (int it = 0; it < 30; ++it) {
-                if (f1 < f2) b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = at(x1);
-                else a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = at(x2);
+                if (f1 < f2)
+                    b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = at(x1);
+                else
+                    a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = at(x2);
             }
             const double x = f1 < f2 ? x1 : x2, f = std::min(f1, f2);
             if (f < best.cost) best.values[i] = x, best.cost = f;
@@ -711,11 +749,13 @@ std::vector<PatientComparison> comparePatientTests(const std::vector<PatientTest
                                                    const MatRegions& regions) {
     std::vector<PatientComparison> out;
     for (const PatientTestCase& t : tests)
-        out.push_back(comparePatient(t.measured, t.baseline, {}, t.regions.names.empty() ? regions : t.regions));
+        out.push_back(comparePatient(t.measured, t.baseline, {},
+                                     t.regions.names.empty() ? regions : t.regions));
     return out;
 }
 
-WhichReport calibratePatientCandidates(const PatientChannels& measured, const PatientChannels& baseline,
+WhichReport calibratePatientCandidates(const PatientChannels& measured,
+                                       const PatientChannels& baseline,
                                        const PatientComparison& base, const WhereReport& where,
                                        const MatRegions& regions, const std::vector<double>& edges,
                                        double statedGasMass, const PatientSimulator& simulate,
@@ -723,15 +763,17 @@ WhichReport calibratePatientCandidates(const PatientChannels& measured, const Pa
     (void)base;  // the same comparison is made again from the baseline
     PatientFolds folds;
     folds.windowEdges = edges;
-    return calibratePatientCandidates({{"", measured, baseline, statedGasMass, "", {}}}, where, regions, folds,
-                                      [&](int, const std::vector<std::pair<std::string, std::string>>& ov,
-                                          const std::string& label) { return simulate(ov, label); },
-                                      o);
+    return calibratePatientCandidates(
+        {{"", measured, baseline, statedGasMass, "", {}}}, where, regions, folds,
+        [&](int, const std::vector<std::pair<std::string, std::string>>& ov,
+            const std::string& label) { return simulate(ov, label); },
+        o);
 }
 
 WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests,
                                        const WhereReport& where, const MatRegions& regions,
-                                       const PatientFolds& folds, const PatientTestSimulator& simulate,
+                                       const PatientFolds& folds,
+                                       const PatientTestSimulator& simulate,
                                        const PatientCalibrationOptions& o) {
     WhichReport report;
     if (tests.empty()) throw std::invalid_argument("no test to calibrate on");
@@ -746,25 +788,30 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
     } else {
         for (const std::string& n : o.candidates) {
             const Effect* e = findPatientEffect(n);
-            if (!e) throw std::invalid_argument("'" + n + "' is not an effect of the patient's library; valid: " +
-                                                listPatientEffectNames());
+            if (!e)
+                throw std::invalid_argument("'" + n +
+                                            "' is not an effect of the patient's library; valid: " +
+                                            listPatientEffectNames());
             candidates.push_back(e);
         }
     }
     if ((folds.isByTest() || folds.isBySubject()) && folds.tests != int(tests.size()))
-        throw std::invalid_argument("the folds name " + std::to_string(folds.tests) + " tests, the data " +
-                                    std::to_string(tests.size()));
+        throw std::invalid_argument("the folds name " + std::to_string(folds.tests) +
+                                    " tests, the data " + std::to_string(tests.size()));
     if (folds.isBySubject()) {
         if (folds.testSubject.size() != tests.size())
-            throw std::invalid_argument("the folds give " + std::to_string(folds.testSubject.size()) +
-                                        " tests a subject, the data have " + std::to_string(tests.size()));
+            throw std::invalid_argument(
+                "the folds give " + std::to_string(folds.testSubject.size()) +
+                " tests a subject, the data have " + std::to_string(tests.size()));
         for (int s : folds.testSubject)
             if (s < 0 || s >= int(folds.subjects.size()))
-                throw std::invalid_argument("a test's subject " + std::to_string(s) + " is not one of the " +
+                throw std::invalid_argument("a test's subject " + std::to_string(s) +
+                                            " is not one of the " +
                                             std::to_string(folds.subjects.size()) + " subjects");
     }
     const int nw = folds.getCount();
-    if (nw < 2) throw std::invalid_argument("the folds need two time windows, tests or subjects or more");
+    if (nw < 2)
+        throw std::invalid_argument("the folds need two time windows, tests or subjects or more");
     std::vector<int> all(static_cast<size_t>(nw), 0);
     for (int w = 0; w < nw; ++w) all[size_t(w)] = w;
 
@@ -794,7 +841,8 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
                     if (folds.findFold(ch, i) == h) {
                         hv[0].push_back(ch.measured[i]);
                         hv[1].push_back(ch.simulated[i]);
-                        hv[2].push_back(a && i < a->simulated.size() ? a->simulated[i] : ch.simulated[i]);
+                        hv[2].push_back(a && i < a->simulated.size() ? a->simulated[i]
+                                                                     : ch.simulated[i]);
                     }
             }
         }
@@ -816,8 +864,9 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
         }
         report.candidates.push_back(std::move(c));
     }
-    std::stable_sort(report.candidates.begin(), report.candidates.end(),
-                     [](const CandidateResult& a, const CandidateResult& b) { return a.score > b.score; });
+    std::stable_sort(
+        report.candidates.begin(), report.candidates.end(),
+        [](const CandidateResult& a, const CandidateResult& b) { return a.score > b.score; });
 
     // The verdict as the rig's single stage.
     ChannelUncertainties validation;
@@ -831,13 +880,15 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
     } else if (best && best->score >= o.explainThreshold) {
         report.verdict = best->effect;
         report.verdictEffects = {best->effect};
-        report.reason = best->effect + " shrinks the held-out gap beyond the validation uncertainty by " +
-                        fmt("%.0f", 100 * best->excessShrink) + " % (score " + fmt("%.3f", best->score) +
-                        ", at least " + fmt("%g", o.explainThreshold) + " needed)";
+        report.reason =
+            best->effect + " shrinks the held-out gap beyond the validation uncertainty by " +
+            fmt("%.0f", 100 * best->excessShrink) + " % (score " + fmt("%.3f", best->score) +
+            ", at least " + fmt("%g", o.explainThreshold) + " needed)";
     } else {
         report.verdict = "unexplained";
-        report.reason = best ? "the best candidate, " + best->effect + ", scores " + fmt("%.3f", best->score) +
-                                   " (at least " + fmt("%g", o.explainThreshold) + " needed)"
+        report.reason = best ? "the best candidate, " + best->effect + ", scores " +
+                                   fmt("%.3f", best->score) + " (at least " +
+                                   fmt("%g", o.explainThreshold) + " needed)"
                              : "no candidate applies to these channels";
     }
     qualifyVerdict(report, validation, getPatientEffects());

@@ -39,13 +39,14 @@ void RigEffects::validate() const {
             "use 0 to 30 s");
     require(std::fabs(pressureOffset) <= kMaxPressureOffset, "pressureOffset", pressureOffset,
             "use -5 to 5 kPa");
-    require(std::fabs(flowmeterOffset) <= kMaxFlowmeterOffset, "flowmeterOffset",
-            flowmeterOffset, "use -0.25 to 0.25 g");
+    require(std::fabs(flowmeterOffset) <= kMaxFlowmeterOffset, "flowmeterOffset", flowmeterOffset,
+            "use -0.25 to 0.25 g");
     require(machineCompliance >= 0.0 && machineCompliance <= kMaxMachineCompliance,
             "machineCompliance", machineCompliance,
             "use 0 (a rigid rig) to 2 mm/N (a rig stiffness of at least 0.5 N/mm)");
     require(bedCompliance >= 0.0 && bedCompliance <= kMaxBedCompliance, "bedCompliance",
-            bedCompliance, "use 0 (a rigid bed board) to 2 mm/N (a bed stiffness of at least 0.5 N/mm)");
+            bedCompliance,
+            "use 0 (a rigid bed board) to 2 mm/N (a bed stiffness of at least 0.5 N/mm)");
     require(std::fabs(loadCellGain) <= kMaxLoadCellGain, "loadCellGain", loadCellGain,
             "use -0.2 to 0.2 (the load cell reads the force times 1 + gain)");
 }

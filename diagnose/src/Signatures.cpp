@@ -27,7 +27,8 @@ double interpolateClamped(const std::vector<double>& x, const std::vector<double
 }
 
 void addSecondDifferences(const std::vector<double>& y, std::vector<double>& dd) {
-    for (size_t i = 1; i + 1 < y.size(); ++i) dd.push_back(std::fabs(y[i + 1] - 2.0 * y[i] + y[i - 1]));
+    for (size_t i = 1; i + 1 < y.size(); ++i)
+        dd.push_back(std::fabs(y[i + 1] - 2.0 * y[i] + y[i - 1]));
 }
 
 double calcNoise(std::vector<double> dd) {

@@ -22,8 +22,8 @@ constexpr int kScanPoints = 401;
 // The training masses' normalised residuals at `value`; false if the candidate gives no
 // stiffness at one of them (the value cannot be read off the grid).
 bool calcResiduals(const CurveCandidate& c, double value, const std::vector<double>& masses,
-                   const std::vector<double>& measured, const std::vector<int>& train,
-                   double range, std::vector<double>& r) {
+                   const std::vector<double>& measured, const std::vector<int>& train, double range,
+                   std::vector<double>& r) {
     r.clear();
     for (int i : train) {
         const double k = predictStiffness(c, value, masses[i]);
@@ -74,8 +74,10 @@ CurveFit fitCandidate(const CurveCandidate& c, const std::vector<double>& masses
     const double g = 0.5 * (std::sqrt(5.0) - 1.0);
     double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = cost(x1), f2 = cost(x2);
     for (int it = 0; it < 60 && b - a > 1e-9 * (hi - lo); ++it) {
-        if (f1 <= f2) b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = cost(x1);
-        else a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = cost(x2);
+        if (f1 <= f2)
+            b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = cost(x1);
+        else
+            a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = cost(x2);
     }
     // Taken only for a real gain: on a flat cost (the model as it is, exactly) roundoff would
     // move the value off the scan's point.
@@ -141,28 +143,29 @@ double calcLeaveOneOutInterpolationError(const StiffnessTable& t) {
 
 double predictStiffness(const CurveCandidate& c, double v, double m) {
     switch (c.action) {
-    case CurveAction::MassOffset:
-        return interpolateStiffness(c.tables.at(0), m - v);
-    case CurveAction::MassScale:
-        return interpolateStiffness(c.tables.at(0), m * (c.roomTemperature + v) / c.roomTemperature);
-    case CurveAction::Series: {
-        const double k = interpolateStiffness(c.tables.at(0), m);
-        return k / (1.0 + v * k);
-    }
-    case CurveAction::Gain:
-        return (1.0 + v) * interpolateStiffness(c.tables.at(0), m);
-    case CurveAction::Grid: {
-        const auto& x = c.values;
-        if (x.empty() || !(v >= x.front() - 1e-12) || !(v <= x.back() + 1e-12)) return kNaN;
-        size_t j = std::upper_bound(x.begin(), x.end(), v) - x.begin();
-        if (x.size() == 1) return interpolateStiffness(c.tables[0], m);
-        j = std::clamp<size_t>(j, 1, x.size() - 1);
-        if (std::fabs(v - x[j - 1]) <= 1e-12) return interpolateStiffness(c.tables[j - 1], m);
-        if (std::fabs(v - x[j]) <= 1e-12) return interpolateStiffness(c.tables[j], m);
-        const double w = (v - x[j - 1]) / (x[j] - x[j - 1]);
-        return (1.0 - w) * interpolateStiffness(c.tables[j - 1], m) +
-               w * interpolateStiffness(c.tables[j], m);
-    }
+        case CurveAction::MassOffset:
+            return interpolateStiffness(c.tables.at(0), m - v);
+        case CurveAction::MassScale:
+            return interpolateStiffness(c.tables.at(0),
+                                        m * (c.roomTemperature + v) / c.roomTemperature);
+        case CurveAction::Series: {
+            const double k = interpolateStiffness(c.tables.at(0), m);
+            return k / (1.0 + v * k);
+        }
+        case CurveAction::Gain:
+            return (1.0 + v) * interpolateStiffness(c.tables.at(0), m);
+        case CurveAction::Grid: {
+            const auto& x = c.values;
+            if (x.empty() || !(v >= x.front() - 1e-12) || !(v <= x.back() + 1e-12)) return kNaN;
+            size_t j = std::upper_bound(x.begin(), x.end(), v) - x.begin();
+            if (x.size() == 1) return interpolateStiffness(c.tables[0], m);
+            j = std::clamp<size_t>(j, 1, x.size() - 1);
+            if (std::fabs(v - x[j - 1]) <= 1e-12) return interpolateStiffness(c.tables[j - 1], m);
+            if (std::fabs(v - x[j]) <= 1e-12) return interpolateStiffness(c.tables[j], m);
+            const double w = (v - x[j - 1]) / (x[j] - x[j - 1]);
+            return (1.0 - w) * interpolateStiffness(c.tables[j - 1], m) +
+                   w * interpolateStiffness(c.tables[j], m);
+        }
     }
     return kNaN;
 }
@@ -187,22 +190,29 @@ double calcInterpolationError(const CurveCandidate& c) {
 
 bool actsOnStiffnessCurve(const Effect& e, CurveAction& action, std::string& whyNot) {
     const std::string& n = e.name;
-    if (n == "flowmeter-bias") action = CurveAction::MassOffset;
-    else if (n == "gas-temperature") action = CurveAction::MassScale;
-    else if (n == "bag-volume") action = CurveAction::Grid;
-    else if (n == "machine-compliance" || n == "bed-compliance") action = CurveAction::Series;
-    else if (n == "load-cell-gain") action = CurveAction::Gain;
+    if (n == "flowmeter-bias")
+        action = CurveAction::MassOffset;
+    else if (n == "gas-temperature")
+        action = CurveAction::MassScale;
+    else if (n == "bag-volume")
+        action = CurveAction::Grid;
+    else if (n == "machine-compliance" || n == "bed-compliance")
+        action = CurveAction::Series;
+    else if (n == "load-cell-gain")
+        action = CurveAction::Gain;
     else {
         if (n == "pressure-sensor")
             whyNot = "it acts on the pressure channel only; a stiffness curve has none";
         else if (n == "viscoelasticity" || n == "leakage" || n == "heat-exchange")
-            whyNot = "its signatures are over time (the loop, the rate, the pressure's fall); a "
-                     "loading-only stiffness at one rate holds none of them, and each trial value "
-                     "would be a full curve";
+            whyNot =
+                "its signatures are over time (the loop, the rate, the pressure's fall); a "
+                "loading-only stiffness at one rate holds none of them, and each trial value "
+                "would be a full curve";
         else
-            whyNot = "it changes the bag's response under the block in a way no grid of one "
-                     "curve re-reads: each trial value would be a full curve (not run on a "
-                     "stiffness curve)";
+            whyNot =
+                "it changes the bag's response under the block in a way no grid of one "
+                "curve re-reads: each trial value would be a full curve (not run on a "
+                "stiffness curve)";
         return false;
     }
     return true;
@@ -251,7 +261,8 @@ StiffnessWhich calibrateStiffnessCandidates(const StiffnessComparison& cmp,
             std::to_string(n));
     out.range = *std::max_element(measured.begin(), measured.end()) -
                 *std::min_element(measured.begin(), measured.end());
-    if (!(out.range > 0.0)) throw std::invalid_argument("the measured stiffness must vary to be compared");
+    if (!(out.range > 0.0))
+        throw std::invalid_argument("the measured stiffness must vary to be compared");
     double s2 = 0.0;
     for (int i = 0; i < n; ++i) s2 += (measured[i] - before[i]) * (measured[i] - before[i]);
     out.rmse = std::sqrt(s2 / n);

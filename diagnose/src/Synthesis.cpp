@@ -16,11 +16,12 @@ void SynthesisOptions::validate() const {
     };
     require(sampleInterval > 0.0 && sampleInterval <= 60.0, "sampleInterval", sampleInterval,
             "use 0 < interval <= 60 s");
-    for (const auto& [name, v] : {std::pair<const char*, double>{"displacementNoise", displacementNoise},
-                                  {"forceNoise", forceNoise},
-                                  {"pressureNoise", pressureNoise},
-                                  {"massNoise", massNoise},
-                                  {"bedNoise", bedNoise}})
+    for (const auto& [name, v] :
+         {std::pair<const char*, double>{"displacementNoise", displacementNoise},
+          {"forceNoise", forceNoise},
+          {"pressureNoise", pressureNoise},
+          {"massNoise", massNoise},
+          {"bedNoise", bedNoise}})
         require(v >= 0.0 && std::isfinite(v), name, v, "use a standard deviation >= 0");
 }
 
@@ -64,7 +65,8 @@ MeasuredData synthesizeMeasurement(const std::vector<bags::LoadCurve>& truth,
             t.pressure.time.push_back(ti);
             t.pressure.value.push_back(sensed[i * sub] + noise(o.pressureNoise));
             t.flowmeter.time.push_back(ti);
-            t.flowmeter.value.push_back(truth[k].gasMass + rig.flowmeterOffset + noise(o.massNoise));
+            t.flowmeter.value.push_back(truth[k].gasMass + rig.flowmeterOffset +
+                                        noise(o.massNoise));
             if (o.bedGauge) {
                 t.bed.time.push_back(ti);
                 t.bed.value.push_back(interpolate(mc.time, mc.bedSink, ti) + noise(o.bedNoise));

@@ -60,7 +60,8 @@ std::set<std::string> splitEffects(const std::string& explanation) {
     size_t from = 0;
     for (;;) {
         const size_t at = explanation.find(" + ", from);
-        out.insert(explanation.substr(from, at == std::string::npos ? std::string::npos : at - from));
+        out.insert(
+            explanation.substr(from, at == std::string::npos ? std::string::npos : at - from));
         if (at == std::string::npos) return out;
         from = at + 3;
     }
@@ -140,15 +141,19 @@ void qualifyVerdict(WhichReport& r, const ChannelUncertainties& validation,
 
     std::string head = (r.explained == "partly" ? "partly explained by " : "explained by ") + names;
     if (!r.rivals.empty())
-        head += " (these data do not tell them apart: their shrinks of the held-out gap beyond "
-                "the uncertainty are within " + fmt("%g", kRivalMargin) + ")";
+        head +=
+            " (these data do not tell them apart: their shrinks of the held-out gap beyond "
+            "the uncertainty are within " +
+            fmt("%g", kRivalMargin) + ")";
     if (std::isfinite(r.residualRatio))
         head += ": held out, " + std::string(pair ? "the pair" : best) + " leaves the " +
                 r.residualChannel + " at " + fmt("%.3g", r.residualRatio) +
                 " times its validation uncertainty (" +
                 (r.residualRatio <= kExplainedMultiple ? "within " : "beyond ") +
                 fmt("%g", kExplainedMultiple) + " times" +
-                (r.residualRatio <= kExplainedMultiple ? ")" : ": a residual remains that it does not explain)");
+                (r.residualRatio <= kExplainedMultiple
+                     ? ")"
+                     : ": a residual remains that it does not explain)");
     else if (!r.residualChannel.empty())
         head += ": held out, the " + r.residualChannel + "'s residual is not a finite number";
     else

@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kMmHg = bags::kPascalsPerMmHg;  // [Pa]
+constexpr double kMmHg = bags::kPascalsPerMmHg;                  // [Pa]
 constexpr double kThresholdMmHg = cosim::kRiskPressure / kMmHg;  // capillary closing, 32 mmHg
 // The colour scale's top [mmHg] at most: as a clinical mat's display, it resolves the range
 // around 32 mmHg; higher sensels take the top colour (the captions give the true peaks).
@@ -723,7 +723,8 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
         const Curves immersion =
             hasImmersion ? collect(run.regions, "region", "immersion_mm") : Curves{};
         const bool hasRisk = run.regions.find("area_above_32_cm2") >= 0;
-        const Curves risk = hasRisk ? collect(run.regions, "region", "area_above_32_cm2") : Curves{};
+        const Curves risk =
+            hasRisk ? collect(run.regions, "region", "area_above_32_cm2") : Curves{};
         struct R {
             std::string name;
             double max, at, area, force, patch, immersion, risk;
@@ -769,8 +770,8 @@ std::string formatArrayReportHtml(const fs::path& runDir) {
                 os << "<tr><td>" << escape(r.name) << "</td><td class='n'>" << num(r.max, "%.1f")
                    << " mmHg</td><td class='n'>" << formatTime(r.at) << "</td><td class='n'>";
                 if (hasPatch) os << num(r.patch, "%.1f") << " mmHg</td><td class='n'>";
-                os << num(r.area, "%.1f") << " cm&#178;</td><td class='n'>"
-                   << num(r.force, "%.1f") << " N</td>";
+                os << num(r.area, "%.1f") << " cm&#178;</td><td class='n'>" << num(r.force, "%.1f")
+                   << " N</td>";
                 if (hasRisk) os << "<td class='n'>" << num(r.risk, "%.1f") << " cm&#178;</td>";
                 if (hasImmersion) os << "<td class='n'>" << num(r.immersion, "%.1f") << " mm</td>";
                 os << "</tr>";

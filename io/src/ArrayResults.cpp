@@ -39,8 +39,8 @@ struct ArrayResultsWriter::Impl {
     int frames = 0;
     // The shapes for ParaView (setShapes()).
     struct ShapeSet {
-        std::string name;      ///< "bags", "body"
-        std::string group;     ///< the cell attribute's name: "bag", "segment"
+        std::string name;   ///< "bags", "body"
+        std::string group;  ///< the cell attribute's name: "bag", "segment"
         Eigen::Index nodes = 0, triangles = 0;
     };
     std::vector<ShapeSet> shapeSets;
@@ -55,7 +55,8 @@ struct ArrayResultsWriter::Impl {
         for (std::ofstream* f : {&regions, &bags, &tilt, &body, &events, &pneumatics}) f->flush();
         if (!regions || !bags || !tilt || !body || !events || !pneumatics)
             throw std::runtime_error("cannot write the CSV files in " + dir.getPath().string());
-        if (file.isValid()) h5::check(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "cannot flush results");
+        if (file.isValid())
+            h5::check(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "cannot flush results");
         lastFlush = std::chrono::steady_clock::now();
     }
     void close() {
@@ -102,8 +103,8 @@ void ArrayResultsWriter::Impl::writeXdmf() const {
           << "        <Attribute Name=\"pressure_Pa\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
           << "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"1 " << C << " " << R
           << "\" Type=\"HyperSlab\">\n"
-          << "            <DataItem Dimensions=\"3 3\" Format=\"XML\">" << f << " 0 0 1 1 1 1 "
-          << C << " " << R << "</DataItem>\n"
+          << "            <DataItem Dimensions=\"3 3\" Format=\"XML\">" << f << " 0 0 1 1 1 1 " << C
+          << " " << R << "</DataItem>\n"
           << "            <DataItem Dimensions=\"" << N << " " << C << " " << R
           << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << kResultsH5
           << ":/mat/pressure</DataItem>\n"
@@ -122,14 +123,16 @@ void ArrayResultsWriter::Impl::writeXdmf() const {
             x << "      <Grid Name=\"" << set.name << " " << f << "\" GridType=\"Uniform\">\n"
               << "        <Time Value=\"" << fmt("%.9g", shapeTimes[f]) << "\"/>\n"
               << "        <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << T << "\">\n"
-              << "          <DataItem Dimensions=\"" << T << " 3\" NumberType=\"Int\" Format=\"HDF\">"
-              << at << "/triangles</DataItem>\n"
+              << "          <DataItem Dimensions=\"" << T
+              << " 3\" NumberType=\"Int\" Format=\"HDF\">" << at << "/triangles</DataItem>\n"
               << "        </Topology>\n"
               << "        <Geometry GeometryType=\"XYZ\">\n"
-              << "          <DataItem Dimensions=\"" << P << " 3\" NumberType=\"Float\" Precision=\"4\" "
+              << "          <DataItem Dimensions=\"" << P
+              << " 3\" NumberType=\"Float\" Precision=\"4\" "
               << "Format=\"HDF\">" << at << "/positions/" << f << "</DataItem>\n"
               << "        </Geometry>\n"
-              << "        <Attribute Name=\"" << set.group << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+              << "        <Attribute Name=\"" << set.group
+              << "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
               << "          <DataItem Dimensions=\"" << T << "\" NumberType=\"Int\" Format=\"HDF\">"
               << at << "/" << set.group << "</DataItem>\n"
               << "        </Attribute>\n"
@@ -160,9 +163,10 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const RunInfo& info
     h5::setAttribute(g, "columns", mat.columns);
     h5::setAttribute(g, "origin", std::vector<double>{mat.origin.x(), mat.origin.y()});
     h5::setAttribute(g, "size", std::vector<double>{mat.size.x(), mat.size.y()});
-    h5::setAttribute(g, "layout", std::string("pressure[frame][column (bed y)][row (bed x)]; "
-                                              "sensel (r, c) centred at origin + ((r + 1/2) "
-                                              "size_x / rows, (c + 1/2) size_y / columns)"));
+    h5::setAttribute(g, "layout",
+                     std::string("pressure[frame][column (bed y)][row (bed x)]; "
+                                 "sensel (r, c) centred at origin + ((r + 1/2) "
+                                 "size_x / rows, (c + 1/2) size_y / columns)"));
     d.matTime = h5::GrowingDataset(g, "time", H5T_NATIVE_DOUBLE, {}, 256, "s");
     d.matPressure = h5::GrowingDataset(g, "pressure", H5T_NATIVE_DOUBLE,
                                        {hsize_t(mat.columns), hsize_t(mat.rows)}, 8, "Pa");
@@ -222,8 +226,7 @@ void ArrayResultsWriter::setShapes(const cosim::SurfaceMesh& bags, const cosim::
 
 bool ArrayResultsWriter::wantsShapes(double time) const {
     const Impl& d = *m_impl;
-    return !d.shapeSets.empty() &&
-           (time >= d.nextShape - 1e-9 || time >= d.shapeEnd - 1e-9);
+    return !d.shapeSets.empty() && (time >= d.nextShape - 1e-9 || time >= d.shapeEnd - 1e-9);
 }
 
 void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
@@ -234,9 +237,9 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
         const Eigen::Matrix3Xd* x[2] = {f.bagNodes, f.bodyNodes};
         for (size_t k = 0; k < d.shapeSets.size(); ++k) {
             if (x[k]->cols() != d.shapeSets[k].nodes)
-                throw std::invalid_argument("ArrayResultsWriter::addFrame: " +
-                                            d.shapeSets[k].name + " has " +
-                                            std::to_string(x[k]->cols()) + " nodes, its mesh " +
+                throw std::invalid_argument("ArrayResultsWriter::addFrame: " + d.shapeSets[k].name +
+                                            " has " + std::to_string(x[k]->cols()) +
+                                            " nodes, its mesh " +
                                             std::to_string(d.shapeSets[k].nodes));
             const Eigen::Matrix3Xf xf = x[k]->cast<float>();
             h5::Handle g = h5::openGroup(d.shapesGroup.get(), d.shapeSets[k].name + "/positions");
@@ -244,21 +247,22 @@ void ArrayResultsWriter::addFrame(const ArrayFrame& f) {
         }
         d.shapeTime.append(&f.time);
         d.shapeTimes.push_back(f.time);
-        while (d.nextShape <= f.time + 1e-9) d.nextShape += d.shapeInterval > 0 ? d.shapeInterval : 1e300;
+        while (d.nextShape <= f.time + 1e-9)
+            d.nextShape += d.shapeInterval > 0 ? d.shapeInterval : 1e300;
     }
     const std::string t = fmt("%.4f", f.time);
     for (const cosim::RegionLoad& r : f.regions) {
         if (!(r.peakPressure > 0.0)) continue;
         d.regions << t << "," << r.name << "," << fmt("%.3f", r.peakPressure / kMmHg) << ","
-                  << fmt("%.3f", r.meanPressure / kMmHg) << "," << fmt("%.4f", r.area * 1e4)
-                  << "," << fmt("%.5f", r.force) << "," << fmt("%.3f", r.patchPeakPressure / kMmHg)
-                  << "," << (std::isnan(r.immersion) ? "" : fmt("%.2f", r.immersion * 1e3)) << ","
+                  << fmt("%.3f", r.meanPressure / kMmHg) << "," << fmt("%.4f", r.area * 1e4) << ","
+                  << fmt("%.5f", r.force) << "," << fmt("%.3f", r.patchPeakPressure / kMmHg) << ","
+                  << (std::isnan(r.immersion) ? "" : fmt("%.2f", r.immersion * 1e3)) << ","
                   << fmt("%.4f", r.areaAtRisk * 1e4) << "\n";
     }
     for (const cosim::BagReading& b : f.bags)
         d.bags << t << "," << b.bag << "," << fmt("%.6f", b.gasMass * 1e3) << ","
-               << fmt("%.5f", b.gaugePressure * 1e-3) << "," << fmt("%.6f", b.volume * 1e3)
-               << "," << fmt("%.5f", b.force) << "," << fmt("%.3f", b.overlap * 1e3) << ","
+               << fmt("%.5f", b.gaugePressure * 1e-3) << "," << fmt("%.6f", b.volume * 1e3) << ","
+               << fmt("%.5f", b.force) << "," << fmt("%.3f", b.overlap * 1e3) << ","
                << (std::isfinite(b.innerHeight) ? fmt("%.2f", b.innerHeight * 1e3) : "") << "\n";
     d.tilt << t << "," << fmt("%.4f", f.pelvisTilt * 180.0 / kPi) << ","
            << fmt("%.4f", f.thoraxTilt * 180.0 / kPi) << "\n";
@@ -326,8 +330,8 @@ std::string ArrayResultsWriter::writeVerdict(const std::vector<VerdictRow>& rows
     csv << kVerdictHeader << "\n";
     for (const VerdictRow& r : rows) {
         const std::string value = std::isfinite(r.value) ? fmt("%.6g", r.value) : "";
-        csv << quoteCsvCell(r.check) << "," << r.status << "," << value << "," << quoteCsvCell(r.unit)
-            << "," << quoteCsvCell(r.detail) << "\n";
+        csv << quoteCsvCell(r.check) << "," << r.status << "," << value << ","
+            << quoteCsvCell(r.unit) << "," << quoteCsvCell(r.detail) << "\n";
         char line[512];
         std::snprintf(line, sizeof line, "  %-7s  %-34s %10s %-5s  %s\n", r.status.c_str(),
                       r.check.c_str(), value.c_str(), r.unit.c_str(), r.detail.c_str());
@@ -343,8 +347,8 @@ std::string ArrayResultsWriter::writeVerdict(const std::vector<VerdictRow>& rows
 int ArrayResultsWriter::getNumFrames() const { return m_impl->frames; }
 
 namespace {
-constexpr const char* kCsvNames[] = {kRegionsCsv, kBagsCsv, kTiltCsv, kBodyCsv, kEventsCsv,
-                                     kPneumaticsCsv};
+constexpr const char* kCsvNames[] = {kRegionsCsv, kBagsCsv,   kTiltCsv,
+                                     kBodyCsv,    kEventsCsv, kPneumaticsCsv};
 }
 
 void ArrayResultsWriter::saveState(bags::StateWriter& w) {
@@ -401,13 +405,14 @@ ArrayResultsWriter::ArrayResultsWriter(const OutputDir& dir, const cosim::Pressu
         std::error_code ec;
         const auto size = std::filesystem::file_size(path, ec);
         if (ec || size < std::uintmax_t(sizes[k]))
-            throw std::runtime_error(path.string() + " is " +
-                                     (ec ? std::string("missing") : "shorter than at the checkpoint") +
-                                     "; the run cannot be resumed from this folder");
+            throw std::runtime_error(
+                path.string() + " is " +
+                (ec ? std::string("missing") : "shorter than at the checkpoint") +
+                "; the run cannot be resumed from this folder");
     }
     // A folder written by a bagsim whose files had other columns cannot take this one's rows.
-    for (const auto& [name, header] : {std::pair{kRegionsCsv, kRegionsHeader},
-                                       std::pair{kBagsCsv, kBagsHeader}}) {
+    for (const auto& [name, header] :
+         {std::pair{kRegionsCsv, kRegionsHeader}, std::pair{kBagsCsv, kBagsHeader}}) {
         std::ifstream in(dir.getFile(name));
         std::string line;
         std::getline(in, line);

@@ -43,9 +43,9 @@ std::string fmtNumber(double v) {
 void checkBetween(const ScenarioNode& s, const std::string& key, double v, double lo, double hi,
                   const std::string& unit, const std::string& why = "") {
     if (v >= lo && v <= hi && std::isfinite(v)) return;
-    const std::string range = std::isinf(hi) ? ">= " + fmtUnit(lo, unit)
-                                             : "in [" + fmtUnit(lo, unit) + ", " +
-                                                   fmtUnit(hi, unit) + "]";
+    const std::string range = std::isinf(hi)
+                                  ? ">= " + fmtUnit(lo, unit)
+                                  : "in [" + fmtUnit(lo, unit) + ", " + fmtUnit(hi, unit) + "]";
     s.fail(key, fmtUnit(v, unit) + " is not valid; valid: " + range +
                     (why.empty() ? "" : " (" + why + ")"));
 }
@@ -147,7 +147,8 @@ void readBodyTissue(const ScenarioNode& bag, PatientOnArrayScenario& sc) {
     const ScenarioNode t = bag.get("body_tissue");
     if (t.isScalar()) {
         const std::string v = t.asChoice({"published", "none"});
-        if (v == "published" && reduced) bag.fail("body_tissue", "published" + std::string(reducedWhy));
+        if (v == "published" && reduced)
+            bag.fail("body_tissue", "published" + std::string(reducedWhy));
         if (v == "published") sc.options.segmentTissue = body::makeSegmentTissue(perSite);
         return;  // none: bare shapes (contact has no layer)
     }
@@ -180,8 +181,8 @@ void readBodyTissue(const ScenarioNode& bag, PatientOnArrayScenario& sc) {
 void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::string& fileName) {
     s.checkKeys({}, {"reading", "mesh_size", "self_contact", "diaphragm", "force_tolerance",
                      "contact_penalty", "body_friction", "friction_law", "slip_velocity",
-                     "body_tissue", "model", "calibration", "bending_stiffness",
-                     "stick_distance", "film_damping", "stepping", "dynamic"});
+                     "body_tissue", "model", "calibration", "bending_stiffness", "stick_distance",
+                     "film_damping", "stepping", "dynamic"});
     bags::AirbagSpec& b = sc.options.bag;
     bags::DoubleWedgeParams& g = b.geometry;
     sc.bagReading = s.getChoice("reading", {"literal", "fill-2.8g"}, "literal");
@@ -199,8 +200,7 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     b.selfContact = s.getBool("self_contact", false);
     b.forceTolerance = s.getQuantity("force_tolerance", D::Force, 1e-4);
     checkBetween(s, "force_tolerance", b.forceTolerance, 1e-6, 1.0, "N");
-    sc.options.contact.pressurePenalty =
-        s.getQuantity("contact_penalty", D::StiffnessPerArea, 1e8);
+    sc.options.contact.pressurePenalty = s.getQuantity("contact_penalty", D::StiffnessPerArea, 1e8);
     checkBetween(s, "contact_penalty", sc.options.contact.pressurePenalty, 1e5, 1e10, "Pa/m");
     // Coulomb friction of the body's shapes on the films (skin or sheet on the bags' nylon or
     // TPU film). 0, frictionless, is the default: every figure measured before the key came
@@ -212,13 +212,16 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
                                     "(skin or cotton on a fabric or film: 0.3-0.5)");
     // How the friction force follows the slip (docs/contact.md#contact-law): the elastic stick
     // spring capped at mu f_n, or Coulomb regularised by the slip rate over the step.
-    const std::string law = s.getChoice("friction_law", {"stick-slip", "regularised"}, "stick-slip");
+    const std::string law =
+        s.getChoice("friction_law", {"stick-slip", "regularised"}, "stick-slip");
     sc.options.contact.frictionLaw = law == "regularised"
                                          ? bags::RigidContact::FrictionLaw::Regularised
                                          : bags::RigidContact::FrictionLaw::StickSlip;
     if (s.has("slip_velocity") && law != "regularised")
-        s.fail("slip_velocity", "is the regularised law's; valid only with friction_law: "
-                                "regularised (this file's law: " + law + ")");
+        s.fail("slip_velocity",
+               "is the regularised law's; valid only with friction_law: "
+               "regularised (this file's law: " +
+                   law + ")");
     sc.options.contact.slipVelocity =
         s.getQuantity("slip_velocity", D::Velocity, sc.options.contact.slipVelocity);
     checkBetween(s, "slip_velocity", sc.options.contact.slipVelocity, 1e-5, 1.0, "mm/s",
@@ -279,8 +282,9 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
     const bool reduced = sc.options.model == cosim::PatientOnArrayOptions::BagModel::Reduced;
     if (s.has("stick_distance")) {
         if (!reduced)
-            s.fail("stick_distance", "is the reduced bag's (model: reduced); the finite-element "
-                                     "bag's film takes hold node by node");
+            s.fail("stick_distance",
+                   "is the reduced bag's (model: reduced); the finite-element "
+                   "bag's film takes hold node by node");
         sc.options.reducedFriction.stickDistance = s.getQuantity("stick_distance", D::Length);
         checkBetween(s, "stick_distance", sc.options.reducedFriction.stickDistance, 1e-4, 0.05,
                      "mm");
@@ -290,19 +294,21 @@ void readBag(const ScenarioNode& s, PatientOnArrayScenario& sc, const std::strin
                "is the finite-element bag's (how its film is stepped); the reduced bag has no "
                "film: leave it out, or model: finite-element");
     if (reduced && s.has("film_damping"))
-        s.fail("film_damping", "is the finite-element bag's (its slack film's damper); the "
-                               "reduced bag has no film to damp: leave it out, or model: "
-                               "finite-element");
+        s.fail("film_damping",
+               "is the finite-element bag's (its slack film's damper); the "
+               "reduced bag has no film to damp: leave it out, or model: "
+               "finite-element");
     if (!reduced && b.stepping != bags::AirbagSpec::Stepping::QuasiStatic && b.damping > 0.0)
         s.fail("film_damping",
                "is the quasi-static stepping's damped steps; the " +
                    std::string(b.stepping == bags::AirbagSpec::Stepping::Relaxed ? "relaxed"
-                                                                                : "dynamic") +
+                                                                                 : "dynamic") +
                    " stepping takes no damper: leave it out, or "
                    "'stepping: quasi-static' beside it");
     if (reduced && s.has("friction_law") && law != "stick-slip")
-        s.fail("friction_law", law + " is not valid with model: reduced; valid: stick-slip "
-                                     "(the reduced bag's one law)");
+        s.fail("friction_law", law +
+                                   " is not valid with model: reduced; valid: stick-slip "
+                                   "(the reduced bag's one law)");
     readBodyTissue(s, sc);
 }
 
@@ -332,7 +338,8 @@ double readCellPressure(const ScenarioNode& s, const std::string& key,
     }
 }
 
-double readMassAtPressure(const ScenarioNode& s, const std::string& key, const bags::AirbagSpec& bag,
+double readMassAtPressure(const ScenarioNode& s, const std::string& key,
+                          const bags::AirbagSpec& bag,
                           std::vector<std::pair<double, double>>& known,
                           const body::PatientSpec& patient, bool* fromBody) {
     const double p = readCellPressure(s, key, patient, fromBody);
@@ -366,11 +373,11 @@ void checkPlausibleGas(const ScenarioNode& s, const std::string& key, double mas
 }
 
 void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
-    s.checkKeys({"rows", "columns"},
-                {"gas_mass", "pressure", "row_pitch", "column_pitch", "centre", "orientation", "mirror_columns",
-                 "groups", "board_contact", "board_friction_law", "board_stick_distance",
-                 "board_slip_velocity", "neighbour_contact",
-                 "neighbour_margin"});
+    s.checkKeys(
+        {"rows", "columns"},
+        {"gas_mass", "pressure", "row_pitch", "column_pitch", "centre", "orientation",
+         "mirror_columns", "groups", "board_contact", "board_friction_law", "board_stick_distance",
+         "board_slip_velocity", "neighbour_contact", "neighbour_margin"});
     cosim::ArrayLayout& a = sc.options.layout;
     a.rows = s.get("rows").asInteger();
     a.columns = s.get("columns").asInteger();
@@ -457,8 +464,9 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
     if (s.has("groups")) {
         const ScenarioNode gs = s.get("groups");
         if (!gs.isSequence())
-            s.fail("groups", "must be a list of groups, e.g. - {name: left, columns: [0], "
-                             "gas_mass: 4.5 g}");
+            s.fail("groups",
+                   "must be a list of groups, e.g. - {name: left, columns: [0], "
+                   "gas_mass: 4.5 g}");
         for (const ScenarioNode& e : gs.getElements()) {
             e.checkKeys({"name"}, {"rows", "columns", "gas_mass", "pressure"});
             cosim::BagGroup g;
@@ -468,8 +476,8 @@ void readArray(const ScenarioNode& s, PatientOnArrayScenario& sc) {
             if (e.has("gas_mass") && e.has("pressure"))
                 e.fail("pressure", "and gas_mass both set the group's fill; valid: one of them");
             if (e.has("pressure")) {
-                g.gasMass = readMassAtPressure(e, "pressure", sc.options.bag, known, sc.patient,
-                                               &fromBody);
+                g.gasMass =
+                    readMassAtPressure(e, "pressure", sc.options.bag, known, sc.patient, &fromBody);
                 if (fromBody) sc.fillFromBody = cosim::calcCellPressureForBody(sc.patient);
             } else {
                 g.gasMass = e.getQuantity("gas_mass", D::Mass, a.gasMass);
@@ -487,8 +495,9 @@ void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
     if (!root.has("gas")) return;
     const ScenarioNode gs = root.get("gas");
     if (!gs.isSequence())
-        root.fail("gas", "must be a list of commands, e.g. - {at: 0 s, group: right, target: "
-                         "5.5 g, rate: 0.05 g/s}");
+        root.fail("gas",
+                  "must be a list of commands, e.g. - {at: 0 s, group: right, target: "
+                  "5.5 g, rate: 0.05 g/s}");
     const cosim::ArrayLayout& a = sc.options.layout;
     const int numBags = a.rows * a.columns;
     std::vector<std::string> groupNames;
@@ -499,22 +508,24 @@ void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
         GasCommandText text;
         std::vector<int> bags;
         if (e.has("group") == e.has("bags"))
-            e.fail("name the bags with either 'group' (one of array.groups) or 'bags' (a list of "
-                   "bag indices, row x columns + column), not both or neither");
+            e.fail(
+                "name the bags with either 'group' (one of array.groups) or 'bags' (a list of "
+                "bag indices, row x columns + column), not both or neither");
         if (e.has("group")) {
             if (groupNames.empty())
-                e.fail("group", "the array has no groups; define them in array.groups, or use "
-                                "'bags: [...]'");
+                e.fail("group",
+                       "the array has no groups; define them in array.groups, or use "
+                       "'bags: [...]'");
             const std::string name = e.getChoice("group", groupNames);
-            const int gi = int(std::find(groupNames.begin(), groupNames.end(), name) -
-                               groupNames.begin());
+            const int gi =
+                int(std::find(groupNames.begin(), groupNames.end(), name) - groupNames.begin());
             for (const cosim::ArrayBag& b : cosim::makeArrayBags(a, sc.options.bag.geometry))
                 if (b.group == gi) bags.push_back(b.index);
             text.who = "group '" + name + "'";
         } else {
             bags = readIndices(e, "bags", numBags, "bag");
-            if (bags.empty()) e.fail("bags", "is empty; valid: bag indices 0 to " +
-                                                 std::to_string(numBags - 1));
+            if (bags.empty())
+                e.fail("bags", "is empty; valid: bag indices 0 to " + std::to_string(numBags - 1));
             text.who = "bags";
             for (size_t i = 0; i < bags.size(); ++i)
                 text.who += (i ? ", " : " ") + std::to_string(bags[i]);
@@ -529,8 +540,9 @@ void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
                              fmtUnit(sc.duration, "s"));
         c.time = sc.settleTime + text.at;
         if (e.has("target") == e.has("flow"))
-            e.fail("give either 'target' (a gas mass per bag, with 'rate') or 'flow' (a mass "
-                   "flow into each bag, negative out), not both or neither");
+            e.fail(
+                "give either 'target' (a gas mass per bag, with 'rate') or 'flow' (a mass "
+                "flow into each bag, negative out), not both or neither");
         if (e.has("target")) {
             c.kind = cosim::GasCommand::Kind::Target;
             c.targetMass = e.getQuantity("target", D::Mass);
@@ -539,14 +551,14 @@ void readGas(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             sc.options.neighbourMass = std::max(sc.options.neighbourMass, c.targetMass);
             checkPositive(e, "target", c.targetMass, "g");
             if (!e.has("rate"))
-                e.fail("rate", "missing: a target is reached at a stated mass flow, e.g. rate: "
-                               "0.05 g/s");
+                e.fail("rate",
+                       "missing: a target is reached at a stated mass flow, e.g. rate: "
+                       "0.05 g/s");
             c.rate = e.getQuantity("rate", D::MassFlow);
             checkPositive(e, "rate", c.rate, "g/s");
             text.what = "target " + fmtUnit(c.targetMass, "g") + " at " + fmtUnit(c.rate, "g/s");
         } else {
-            if (e.has("rate"))
-                e.fail("rate", "only applies with 'target'; a flow is its own rate");
+            if (e.has("rate")) e.fail("rate", "only applies with 'target'; a flow is its own rate");
             c.kind = cosim::GasCommand::Kind::Flow;
             c.massFlow = e.getQuantity("flow", D::MassFlow);
             if (!std::isfinite(c.massFlow)) e.fail("flow", "must be finite");
@@ -576,8 +588,9 @@ void readMacroStep(const ScenarioNode& s, cosim::CouplingOptions& c) {
     if (!c.adaptive) {
         for (const char* key : {"max_macro_step", "step_accuracy"})
             if (s.has(key))
-                s.fail(key, "only applies with macro_step: adaptive; valid: leave it out or "
-                            "set macro_step: adaptive");
+                s.fail(key,
+                       "only applies with macro_step: adaptive; valid: leave it out or "
+                       "set macro_step: adaptive");
         try {
             c.macroStep = s.getQuantity("macro_step", D::Time, 0.01);
         } catch (const InputError&) {
@@ -597,7 +610,7 @@ void readMacroStep(const ScenarioNode& s, cosim::CouplingOptions& c) {
     checkBetween(s, "min_macro_step", c.minMacroStep, 1e-7, c.maxMacroStep, "ms",
                  "at most max_macro_step");
     c.macroStep = c.minMacroStep;  // the first step: grown while the steps are accurate
-    c.minCutStep = 1e-5;  // a failing step is halved as far as a fixed one may be
+    c.minCutStep = 1e-5;           // a failing step is halved as far as a fixed one may be
     c.stepAccuracy = s.getNumber("step_accuracy", 1000.0);
     if (!(c.stepAccuracy >= 0.1 && c.stepAccuracy <= 1e4))
         s.fail("step_accuracy", fmtNumber(c.stepAccuracy) +
@@ -607,18 +620,18 @@ void readMacroStep(const ScenarioNode& s, cosim::CouplingOptions& c) {
 
 void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     s.checkKeys({}, {"scheme", "acceleration", "macro_step", "min_macro_step", "max_macro_step",
-                     "step_accuracy", "relative_tolerance", "absolute_tolerance",
-                     "max_iterations", "threads", "body_accuracy", "tangent_tolerance",
-                     "skip_travel", "gas_tangent", "keep_unconverged", "accept_residual"});
+                     "step_accuracy", "relative_tolerance", "absolute_tolerance", "max_iterations",
+                     "threads", "body_accuracy", "tangent_tolerance", "skip_travel", "gas_tangent",
+                     "keep_unconverged", "accept_residual"});
     cosim::CouplingOptions& c = o.coupling;
     // The defaults follow the bag model. Reduced bags: the tangent scheme (the implicit one
     // stops where a shape's overlap jumps, docs/reduced-bag.md#in-the-turn) and the body's
     // integrator at 1e-4 (2.2 times fewer steps than 1e-6, the tilts within 0.04 deg: far
     // inside the reduced bag's own errors, docs/performance.md#the-reduced-bag).
     const bool reduced = o.model == cosim::PatientOnArrayOptions::BagModel::Reduced;
-    c.scheme = cosim::parseScheme(s.getChoice(
-        "scheme", {"explicit", "implicit", "tangent", "tangent-implicit"},
-        reduced ? "tangent" : "implicit"));
+    c.scheme = cosim::parseScheme(
+        s.getChoice("scheme", {"explicit", "implicit", "tangent", "tangent-implicit"},
+                    reduced ? "tangent" : "implicit"));
     c.acceleration = cosim::parseAcceleration(
         s.getChoice("acceleration", {"constant", "aitken", "iqn-ils"}, "iqn-ils"));
     readMacroStep(s, c);
@@ -629,9 +642,11 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     checkBetween(s, "absolute_tolerance", c.absoluteTolerance, 1e-6, 10.0, "N");
     if (!(c.absoluteTolerance > o.bag.forceTolerance))
         s.fail("absolute_tolerance",
-               fmtUnit(c.absoluteTolerance, "N") + " is not above the bags' own solve "
-               "tolerance bag.force_tolerance (" + fmtUnit(o.bag.forceTolerance, "N") +
-               "): a bag's wrench is no more exact than that; valid: above it");
+               fmtUnit(c.absoluteTolerance, "N") +
+                   " is not above the bags' own solve "
+                   "tolerance bag.force_tolerance (" +
+                   fmtUnit(o.bag.forceTolerance, "N") +
+                   "): a bag's wrench is no more exact than that; valid: above it");
     c.maxIterations = s.getInteger("max_iterations", 50);
     if (c.maxIterations < 1 || c.maxIterations > 1000)
         s.fail("max_iterations", std::to_string(c.maxIterations) + "; valid: 1 to 1000");
@@ -656,7 +671,6 @@ void readCoupling(const ScenarioNode& s, cosim::PatientOnArrayOptions& o) {
     if (!(o.integrator.accuracy > 0.0 && o.integrator.accuracy < 1e-2))
         s.fail("body_accuracy", "must lie between 0 and 0.01, e.g. 1e-6");
 }
-
 
 // --------------------------------------------------------------------------------- pneumatics
 
@@ -701,8 +715,9 @@ void readThermal(const ScenarioNode& s, pneumatics::VolumeSpec& v) {
     }
     for (const char* k : {"heat_transfer", "wall_area"})
         if (!s.has(k))
-            s.fail(k, "missing: thermal: heat-exchange needs heat_transfer (W/(m^2 K), e.g. 10) "
-                      "and wall_area (e.g. 100 cm^2)");
+            s.fail(k,
+                   "missing: thermal: heat-exchange needs heat_transfer (W/(m^2 K), e.g. 10) "
+                   "and wall_area (e.g. 100 cm^2)");
     // [W/(m^2 K)]: io::Units has no unit for it, so a plain number in W/(m^2 K).
     v.heatTransferCoefficient = s.getNumber("heat_transfer");
     if (!(v.heatTransferCoefficient >= 0.0 && v.heatTransferCoefficient <= 1e4))
@@ -723,8 +738,9 @@ int findChannel(const ScenarioNode& s, const std::string& key,
 void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
     if (!root.has("pneumatics")) return;
     if (root.has("gas"))
-        root.fail("gas", "a scenario with a pneumatics section moves its gas through the valves "
-                         "(control:); remove the gas list, or the pneumatics section");
+        root.fail("gas",
+                  "a scenario with a pneumatics section moves its gas through the valves "
+                  "(control:); remove the gas list, or the pneumatics section");
     const ScenarioNode s = root.getSection("pneumatics");
     s.checkKeys({}, {"pump", "manifold", "valves", "line", "sensor", "channels", "orifices",
                      "max_substep"});
@@ -753,23 +769,28 @@ void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             const ScenarioNode rise = e.getElements()[0], flow = e.getElements()[1];
             const double dp = rise.asQuantity(D::Pressure), q = flow.asQuantity(D::MassFlow);
             if (!(dp >= 0.0))
-                rise.fail("the pressure rise " + rise.asString() + " is below 0 kPa; valid: 0 kPa "
+                rise.fail("the pressure rise " + rise.asString() +
+                          " is below 0 kPa; valid: 0 kPa "
                           "(the free-flow point) or more");
             if (!(q >= 0.0))
-                flow.fail("the mass flow " + flow.asString() + " is below 0 g/s; valid: 0 g/s or more");
+                flow.fail("the mass flow " + flow.asString() +
+                          " is below 0 g/s; valid: 0 g/s or more");
             if (!p.pump.pressureRise.empty() && !(dp > p.pump.pressureRise.back()))
-                rise.fail("the pressure rise " + rise.asString() + " is not above the point "
+                rise.fail("the pressure rise " + rise.asString() +
+                          " is not above the point "
                           "before's; valid: points in increasing pressure rise, e.g. [[0 kPa, "
                           "8 g/s], [60 kPa, 5 g/s], [120 kPa, 0 g/s]]");
             if (!p.pump.massFlow.empty() && q > p.pump.massFlow.back())
-                flow.fail("the mass flow " + flow.asString() + " is above the point before's; "
+                flow.fail("the mass flow " + flow.asString() +
+                          " is above the point before's; "
                           "valid: a pump delivers less as the pressure it works against rises");
             p.pump.pressureRise.push_back(dp);
             p.pump.massFlow.push_back(q);
         }
         if (p.pump.massFlow.back() != 0.0)
             c.getElements().back().getElements()[1].fail(
-                "the last point's mass flow is " + c.getElements().back().getElements()[1].asString() +
+                "the last point's mass flow is " +
+                c.getElements().back().getElements()[1].asString() +
                 "; valid: 0 g/s, the last point is the pump's shut-off pressure");
         try {
             p.pump.validate("pump curve");
@@ -811,8 +832,7 @@ void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
     p.network.maxSubstep = s.getQuantity("max_substep", D::Time, 1e-3);
     checkBetween(s, "max_substep", p.network.maxSubstep, 1e-6, 0.1, "ms");
 
-    const std::vector<cosim::ArrayBag> arrayBags =
-        cosim::makeArrayBags(a, sc.options.bag.geometry);
+    const std::vector<cosim::ArrayBag> arrayBags = cosim::makeArrayBags(a, sc.options.bag.geometry);
     auto groupBags = [&](int gi) {
         std::vector<int> out;
         for (const cosim::ArrayBag& b : arrayBags)
@@ -824,8 +844,9 @@ void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
     if (!s.has("channels")) {
         // One channel per group of the array.
         if (a.groups.empty())
-            s.fail("channels", "missing: the array has no groups to give a channel each; list "
-                               "the channels, e.g. - {group: left} or - {bags: [3]}");
+            s.fail("channels",
+                   "missing: the array has no groups to give a channel each; list "
+                   "the channels, e.g. - {group: left} or - {bags: [3]}");
         for (size_t g = 0; g < a.groups.size(); ++g) {
             cosim::PneumaticChannel c;
             c.name = a.groups[g].name;
@@ -844,8 +865,9 @@ void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             e.checkKeys({}, {"name", "group", "bags", "inflate", "vent", "line_volume"});
             cosim::PneumaticChannel c;
             if (e.has("group") == e.has("bags"))
-                e.fail("name the channel's bags with either 'group' (one of array.groups) or "
-                       "'bags' (bag indices), not both or neither");
+                e.fail(
+                    "name the channel's bags with either 'group' (one of array.groups) or "
+                    "'bags' (bag indices), not both or neither");
             if (e.has("group")) {
                 if (groupNames.empty())
                     e.fail("group", "the array has no groups; define them in array.groups");
@@ -855,8 +877,8 @@ void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             } else {
                 c.bags = readIndices(e, "bags", numBags, "bag");
                 if (c.bags.empty())
-                    e.fail("bags", "is empty; valid: bag indices 0 to " +
-                                       std::to_string(numBags - 1));
+                    e.fail("bags",
+                           "is empty; valid: bag indices 0 to " + std::to_string(numBags - 1));
                 c.name = "bags";
                 for (int b : c.bags) c.name += " " + std::to_string(b);
             }
@@ -864,8 +886,8 @@ void readPneumatics(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             c.inflate = e.has("inflate") ? readValve(e.getSection("inflate"), inflate) : inflate;
             c.vent = e.has("vent") ? readValve(e.getSection("vent"), vent) : vent;
             // One bag: the valves on the bag unless a line is asked for.
-            c.lineVolume = e.getQuantity("line_volume", D::Volume,
-                                         c.bags.size() == 1 ? 0.0 : lineVolume);
+            c.lineVolume =
+                e.getQuantity("line_volume", D::Volume, c.bags.size() == 1 ? 0.0 : lineVolume);
             checkBetween(e, "line_volume", c.lineVolume, c.bags.size() == 1 ? 0.0 : 1e-7, 0.01,
                          "mL", "a channel of several bags needs a line");
             c.connector = connector;
@@ -933,8 +955,9 @@ int readOpenClosed(const ScenarioNode& e, const std::string& key) {
 void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
     if (!root.has("control")) return;
     if (!sc.hasPneumatics)
-        root.fail("control", "a controller commands the valves of the pneumatics section; add "
-                             "one (docs/scenario-reference.md#pneumatics)");
+        root.fail("control",
+                  "a controller commands the valves of the pneumatics section; add "
+                  "one (docs/scenario-reference.md#pneumatics)");
     const ScenarioNode s = root.getSection("control");
     const cosim::ArrayPneumaticsSpec& p = sc.pneumatics;
     const int nc = int(p.channels.size());
@@ -953,8 +976,9 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             checkBetween(s, "period", period, 0.0, 3600.0, "s", "0 s: not repeated");
             const ScenarioNode cs = s.get("commands");
             if (!cs.isSequence() || cs.getElements().empty())
-                s.fail("commands", "must be a list of valve states, e.g. - {at: 0 s, channel: "
-                                   "right, inflate: open, vent: closed}");
+                s.fail("commands",
+                       "must be a list of valve states, e.g. - {at: 0 s, channel: "
+                       "right, inflate: open, vent: closed}");
             std::vector<cosim::ValveCommand> cmds;
             for (const ScenarioNode& e : cs.getElements()) {
                 e.checkKeys({"channel"}, {"at", "inflate", "vent"});
@@ -971,17 +995,13 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
                 c.channel = findChannel(e, "channel", p);
                 c.inflate = readOpenClosed(e, "inflate");
                 c.vent = readOpenClosed(e, "vent");
-                if (c.inflate < 0 && c.vent < 0)
-                    e.fail("give inflate and/or vent: open or closed");
+                if (c.inflate < 0 && c.vent < 0) e.fail("give inflate and/or vent: open or closed");
                 cmds.push_back(c);
-                sc.controlText.push_back("from " + fmtUnit(c.time, "s") + ": '" +
-                                         p.channels[c.channel].name + "'" +
-                                         (c.inflate >= 0 ? std::string(" inflate ") +
-                                                               (c.inflate ? "open" : "closed")
-                                                         : "") +
-                                         (c.vent >= 0 ? std::string(" vent ") +
-                                                            (c.vent ? "open" : "closed")
-                                                      : ""));
+                sc.controlText.push_back(
+                    "from " + fmtUnit(c.time, "s") + ": '" + p.channels[c.channel].name + "'" +
+                    (c.inflate >= 0 ? std::string(" inflate ") + (c.inflate ? "open" : "closed")
+                                    : "") +
+                    (c.vent >= 0 ? std::string(" vent ") + (c.vent ? "open" : "closed") : ""));
             }
             if (period > 0.0) sc.controlText.push_back("repeated every " + fmtUnit(period, "s"));
             sc.controller = std::make_shared<cosim::ValveSchedule>(cmds, t0, period, nc);
@@ -991,8 +1011,9 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             std::vector<double> km, kk;
             if (s.has("k_of_m")) {
                 const ScenarioNode t = s.get("k_of_m");
-                const char* example = "must be a list of [gas mass, stiffness] rows, e.g. "
-                                      "[[3.0 g, 0.9 N/mm], [3.5 g, 1.6 N/mm], [4.5 g, 3.2 N/mm]]";
+                const char* example =
+                    "must be a list of [gas mass, stiffness] rows, e.g. "
+                    "[[3.0 g, 0.9 N/mm], [3.5 g, 1.6 N/mm], [4.5 g, 3.2 N/mm]]";
                 if (!t.isSequence() || t.getElements().size() < 2) s.fail("k_of_m", example);
                 for (const ScenarioNode& e : t.getElements()) {
                     if (!e.isSequence() || e.getElements().size() != 2) e.fail(example);
@@ -1006,7 +1027,8 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
                 }
             }
             const ScenarioNode ts = s.get("targets");
-            if (!ts.isSequence()) s.fail("targets", "must be a list, e.g. - {channel: right, mass: 5 g}");
+            if (!ts.isSequence())
+                s.fail("targets", "must be a list, e.g. - {channel: right, mass: 5 g}");
             std::vector<cosim::TargetController::Target> targets;
             for (const ScenarioNode& e : ts.getElements()) {
                 e.checkKeys({"channel"}, {"mass", "stiffness", "band"});
@@ -1080,9 +1102,9 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             sc.controller = std::make_shared<cosim::TargetController>(
                 cosim::TargetController::Quantity::Pressure, targets, t0 + at);
         } else {
-            s.checkKeys({"kind", "tilt"}, {"at", "inflate", "vent", "hold", "max_turn_time",
-                                           "min_mass", "max_pressure", "band", "pressure",
-                                           "pressure_band"});
+            s.checkKeys({"kind", "tilt"},
+                        {"at", "inflate", "vent", "hold", "max_turn_time", "min_mass",
+                         "max_pressure", "band", "pressure", "pressure_band"});
             cosim::TurnSpec t;
             t.start = t0 + readAt(s);
             t.inflate = readChannelList(s, "inflate", p);
@@ -1104,9 +1126,10 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
             bool fromBody = false;
             if (s.has("pressure")) {
                 if (s.has("band"))
-                    s.fail("band", "is the mass band of a return to the start's masses; with "
-                                   "control.pressure the turn returns to the pressure within "
-                                   "pressure_band (valid: pressure_band, or no pressure)");
+                    s.fail("band",
+                           "is the mass band of a return to the start's masses; with "
+                           "control.pressure the turn returns to the pressure within "
+                           "pressure_band (valid: pressure_band, or no pressure)");
                 t.holdPressure = readCellPressure(s, "pressure", sc.patient, &fromBody);
                 checkBetween(s, "pressure", t.holdPressure, 200.0, 100e3, "kPa", "gauge");
                 t.pressureBand = s.getQuantity("pressure_band", D::Pressure, 0.3e3);
@@ -1123,9 +1146,8 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
                                      (in.empty() ? "none" : in) + ", vent " +
                                      (out.empty() ? "none" : out) + " to a pelvis tilt of " +
                                      fmtUnit(t.tilt, "deg") + ", hold " + fmtUnit(t.hold, "s") +
-                                     (t.holdPressure > 0.0
-                                          ? ", then back to the zones' setpoint"
-                                          : ", then back to the initial masses"));
+                                     (t.holdPressure > 0.0 ? ", then back to the zones' setpoint"
+                                                           : ", then back to the initial masses"));
             if (t.holdPressure > 0.0)
                 sc.controlText.push_back(
                     "every zone held at " + fmtUnit(t.holdPressure, "kPa") + " gauge (band " +
@@ -1144,9 +1166,8 @@ void readControl(const ScenarioNode& root, PatientOnArrayScenario& sc) {
 
 PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     const ScenarioNode root = file.getRoot();
-    root.checkKeys({"kind", "patient", "array"},
-                   {"name", "description", "bag", "gas", "coupling", "run", "mat", "output",
-                    "pneumatics", "control"});
+    root.checkKeys({"kind", "patient", "array"}, {"name", "description", "bag", "gas", "coupling",
+                                                  "run", "mat", "output", "pneumatics", "control"});
     root.getChoice("kind", {kPatientOnArrayKind});
     PatientOnArrayScenario sc;
     sc.name = root.getString("name", file.getStem());
@@ -1216,8 +1237,8 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
         const double frames = std::floor(sc.getEndTime() / sc.outputInterval) + 2.0;
         const double bytes = frames * double(sc.mat.rows) * double(sc.mat.columns) * 8.0;
         if (bytes > kMaxMatFrameBytes) {
-            const double every = sc.getEndTime() /
-                                 (kMaxMatFrameBytes / (8.0 * sc.mat.rows * sc.mat.columns) - 2.0);
+            const double every =
+                sc.getEndTime() / (kMaxMatFrameBytes / (8.0 * sc.mat.rows * sc.mat.columns) - 2.0);
             const ScenarioNode& at = out.has("every") ? out : mat;
             at.fail(out.has("every") ? "every" : "rows",
                     fmtUnit(sc.outputInterval, "ms") + " over " + fmtUnit(sc.getEndTime(), "s") +
@@ -1225,7 +1246,8 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
                         std::to_string(sc.mat.columns) + " sensels writes about " +
                         fmtNumber(std::round(bytes / 1e9)) +
                         " GB of frames; at most 4 GiB are allowed; valid: output.every at least " +
-                        fmtNumber(std::ceil(every * 1e3)) + " ms, or fewer sensels "
+                        fmtNumber(std::ceil(every * 1e3)) +
+                        " ms, or fewer sensels "
                         "(docs/scenario-reference.md#limits)");
         }
     }
@@ -1242,8 +1264,8 @@ PatientOnArrayScenario readPatientOnArrayScenario(const ScenarioFile& file) {
     // A patient (partly) off the array: named at patient.position.
     const std::vector<int> off = cosim::findSegmentsOffArray(sc.patient, sc.options);
     if (!off.empty()) {
-        const cosim::PressureMatOptions extent = cosim::makeArrayMatOptions(
-            sc.options.layout, sc.options.bag.geometry, 1, 1);
+        const cosim::PressureMatOptions extent =
+            cosim::makeArrayMatOptions(sc.options.layout, sc.options.bag.geometry, 1, 1);
         std::ostringstream s;
         s << "no bag of the array lies under his ";
         for (size_t i = 0; i < off.size(); ++i)

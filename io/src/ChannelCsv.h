@@ -63,7 +63,8 @@ inline std::pair<std::string, std::string> splitHeader(const std::string& h) {
         if (p != std::string::npos) {
             const char close = open == '[' ? ']' : ')';
             const size_t q = h.find(close, p);
-            return {trim(h.substr(0, p)), trim(h.substr(p + 1, q == std::string::npos ? q : q - p - 1))};
+            return {trim(h.substr(0, p)),
+                    trim(h.substr(p + 1, q == std::string::npos ? q : q - p - 1))};
         }
     }
     const size_t u = h.rfind('_');  // the unit follows the last '_': gas_mass_g

@@ -44,10 +44,10 @@ std::string formatPairParameters(const diagnose::PairResult& p, const std::vecto
 }
 
 std::string formatMetric(const diagnose::GapMetrics& g) {
-    return "{\"rmse\": " + num(inUnit(g.channel, g.rmse)) + ", \"mean_error\": " +
-           num(inUnit(g.channel, g.meanError)) + ", \"max_error\": " +
-           num(inUnit(g.channel, g.maxError)) + ", \"area_validation_metric\": " +
-           num(inUnit(g.channel, g.areaMetric)) + "}";
+    return "{\"rmse\": " + num(inUnit(g.channel, g.rmse)) +
+           ", \"mean_error\": " + num(inUnit(g.channel, g.meanError)) +
+           ", \"max_error\": " + num(inUnit(g.channel, g.maxError)) +
+           ", \"area_validation_metric\": " + num(inUnit(g.channel, g.areaMetric)) + "}";
 }
 
 // Per channel, before and after, over every test when held out; with the channel's
@@ -60,8 +60,8 @@ std::string formatMetrics(const diagnose::CandidateResult& c, const diagnose::Wh
         double uval = NAN;
         for (const auto& ch : w.channels)
             if (ch.channel == b.channel) uval = ch.validation;
-        os << (i ? ", " : "") << str(b.channel) << ": {\"unit\": "
-           << str(diagnose::getChannelUnit(getChannelKind(b.channel)))
+        os << (i ? ", " : "") << str(b.channel)
+           << ": {\"unit\": " << str(diagnose::getChannelUnit(getChannelKind(b.channel)))
            << ", \"samples\": " << b.samples
            << ", \"validation_uncertainty\": " << num(inUnit(b.channel, uval))
            << ", \"before\": " << formatMetric(b) << ", \"after\": "
@@ -84,15 +84,16 @@ std::string formatStiffness(const diagnose::StiffnessComparison& k) {
         const auto& r = k.regimes[i];
         os << (i ? ", " : "") << "{\"regime\": " << str(r.regime) << ", \"points\": " << r.points
            << ", \"rmse\": " << num(r.rmse * 1e-3) << ", \"bias\": " << num(r.bias * 1e-3)
-           << ", \"relative\": " << num(r.relative, "%.4f") << ", \"share\": "
-           << num(r.share, "%.4f") << "}";
+           << ", \"relative\": " << num(r.relative, "%.4f")
+           << ", \"share\": " << num(r.share, "%.4f") << "}";
     }
     os << "],\n    \"points\": [";
     for (size_t i = 0; i < k.points.size(); ++i) {
         const auto& p = k.points[i];
         os << (i ? ",\n      " : "\n      ") << "{\"gas_mass_g\": " << num(p.gasMass * 1e3)
-           << ", \"measured\": " << num(p.measured * 1e-3) << ", \"simulated\": "
-           << num(p.simulated * 1e-3) << ", \"measured_stage\": " << p.measuredStage
+           << ", \"measured\": " << num(p.measured * 1e-3)
+           << ", \"simulated\": " << num(p.simulated * 1e-3)
+           << ", \"measured_stage\": " << p.measuredStage
            << ", \"simulated_stage\": " << p.simulatedStage << ", \"note\": " << str(p.note) << "}";
     }
     return os.str() + "]}";
@@ -105,7 +106,8 @@ std::string formatCurveWhich(const diagnose::StiffnessWhich& w) {
     std::vector<std::string> masses;
     for (double m : w.gasMasses) masses.push_back(num(m * 1e3) + " g");
     os << "{\"unit\": \"N/mm\", \"gas_masses_g\": [";
-    for (size_t i = 0; i < w.gasMasses.size(); ++i) os << (i ? ", " : "") << num(w.gasMasses[i] * 1e3);
+    for (size_t i = 0; i < w.gasMasses.size(); ++i)
+        os << (i ? ", " : "") << num(w.gasMasses[i] * 1e3);
     os << "], \"range\": " << num(w.range * 1e-3) << ", \"rmse\": " << num(w.rmse * 1e-3)
        << ", \"validation_uncertainty\": " << num(w.validation * 1e-3)
        << ", \"validation_uncertainty_is\": " << str(w.validationWhat)
@@ -120,12 +122,14 @@ std::string formatCurveWhich(const diagnose::StiffnessWhich& w) {
         os << "      {\"rank\": " << i + 1 << ", \"effect\": " << str(c.effect)
            << ", \"parameters\": " << formatParameters(e, c.parameters, &c.parameterStdDev) << ", "
            << formatGaps(c) << ", \"simulations\": " << c.simulations
-           << ", \"interpolation_error\": " << num(interp * 1e-3) << ",\n       \"heldout_metrics\": {";
+           << ", \"interpolation_error\": " << num(interp * 1e-3)
+           << ",\n       \"heldout_metrics\": {";
         if (!c.heldoutMetricsBefore.empty()) {
             const auto& b = c.heldoutMetricsBefore[0];
             auto metric = [](const diagnose::GapMetrics& g) {
-                return "{\"rmse\": " + num(g.rmse * 1e-3) + ", \"mean_error\": " +
-                       num(g.meanError * 1e-3) + ", \"max_error\": " + num(g.maxError * 1e-3) +
+                return "{\"rmse\": " + num(g.rmse * 1e-3) +
+                       ", \"mean_error\": " + num(g.meanError * 1e-3) +
+                       ", \"max_error\": " + num(g.maxError * 1e-3) +
                        ", \"area_validation_metric\": " + num(g.areaMetric * 1e-3) + "}";
             };
             os << "\"stiffness\": {\"unit\": \"N/mm\", \"samples\": " << b.samples
@@ -148,7 +152,8 @@ std::string formatCurveWhich(const diagnose::StiffnessWhich& w) {
     os << "],\n    \"same_on_a_curve\": [";
     for (size_t i = 0; i < w.identical.size(); ++i)
         os << (i ? ", " : "") << "{\"effects\": [" << str(w.identical[i].first.first) << ", "
-           << str(w.identical[i].first.second) << "], \"why\": " << str(w.identical[i].second) << "}";
+           << str(w.identical[i].first.second) << "], \"why\": " << str(w.identical[i].second)
+           << "}";
     os << "],\n    \"not_applicable\": [";
     for (size_t i = 0; i < w.notApplicable.size(); ++i)
         os << (i ? ",\n      " : "\n      ") << "{\"effect\": " << str(w.notApplicable[i].effect)
@@ -168,10 +173,10 @@ std::string formatStatedInputs(const diagnose::WhereReport& w) {
     for (size_t i = 0; i < w.statedInputs.size(); ++i) {
         const auto& s = w.statedInputs[i];
         const bool mass = s.input == diagnose::ProtocolInput::GasMass;
-        os << (i ? ",\n      " : "\n      ") << "{\"input\": "
-           << str(diagnose::getProtocolInputName(s.input)) << ", \"stated\": "
-           << (s.stated ? "true" : "false") << ", \"unit\": " << str(mass ? "g" : "K")
-           << ", \"standard_uncertainty\": [";
+        os << (i ? ",\n      " : "\n      ")
+           << "{\"input\": " << str(diagnose::getProtocolInputName(s.input))
+           << ", \"stated\": " << (s.stated ? "true" : "false")
+           << ", \"unit\": " << str(mass ? "g" : "K") << ", \"standard_uncertainty\": [";
         for (size_t k = 0; k < s.values.size(); ++k)
             os << (k ? ", " : "") << num(s.values[k] * (mass ? 1e3 : 1.0));
         os << "], \"per\": " << str(mass ? "test" : "protocol")
@@ -214,20 +219,26 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
        << "  \"seconds\": " << num(info.seconds, "%.1f") << ",\n";
     if (stiffness) {
         os << "  \"stiffness\": " << formatStiffness(*stiffness) << ",\n";
-        if (curveWhich) os << "  \"stiffness_which\": " << formatCurveWhich(*curveWhich) << ",\n";
-        else os << "  \"stiffness_which\": null,\n  \"stiffness_which_not_run\": " << str(curveNotRun) << ",\n";
+        if (curveWhich)
+            os << "  \"stiffness_which\": " << formatCurveWhich(*curveWhich) << ",\n";
+        else
+            os << "  \"stiffness_which\": null,\n  \"stiffness_which_not_run\": "
+               << str(curveNotRun) << ",\n";
     }
     if (w.channels.empty()) {
         os << "  \"where\": null,\n";
         if (curveWhich) {
-            os << "  \"verdict\": " << str(curveWhich->which.verdict) << ",\n  \"verdict_effects\": [";
+            os << "  \"verdict\": " << str(curveWhich->which.verdict)
+               << ",\n  \"verdict_effects\": [";
             for (size_t i = 0; i < curveWhich->which.verdictEffects.size(); ++i)
                 os << (i ? ", " : "") << str(curveWhich->which.verdictEffects[i]);
-            os << "],\n  " << formatVerdictQualifiers(curveWhich->which) << ",\n  \"reason\": "
-               << str("the stiffness curve's: " + curveWhich->which.reason) << "\n}\n";
+            os << "],\n  " << formatVerdictQualifiers(curveWhich->which)
+               << ",\n  \"reason\": " << str("the stiffness curve's: " + curveWhich->which.reason)
+               << "\n}\n";
         } else {
             os << "  \"verdict\": null,\n  \"reason\": "
-               << str("which effect: not run (" + (curveNotRun.empty() ? std::string("--where-only") : curveNotRun) + ")")
+               << str("which effect: not run (" +
+                      (curveNotRun.empty() ? std::string("--where-only") : curveNotRun) + ")")
                << "\n}\n";
         }
         return os.str();
@@ -238,16 +249,16 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
        << ",\n    \"channels\": [\n";
     for (size_t i = 0; i < w.channels.size(); ++i) {
         const auto& c = w.channels[i];
-        os << "      {\"channel\": " << str(c.channel) << ", \"unit\": "
-           << str(diagnose::getChannelUnit(getChannelKind(c.channel))) << ", \"rmse\": "
-           << num(inUnit(c.channel, c.rmse)) << ", \"range\": " << num(inUnit(c.channel, c.range))
+        os << "      {\"channel\": " << str(c.channel)
+           << ", \"unit\": " << str(diagnose::getChannelUnit(getChannelKind(c.channel)))
+           << ", \"rmse\": " << num(inUnit(c.channel, c.rmse))
+           << ", \"range\": " << num(inUnit(c.channel, c.range))
            << ", \"noise\": " << num(inUnit(c.channel, c.noise))
            << ", \"numerical_uncertainty\": " << num(inUnit(c.channel, c.numerical))
            << ", \"numerical_uncertainty_mesh\": " << num(inUnit(c.channel, c.numericalMesh))
            << ", \"input_uncertainty\": " << num(inUnit(c.channel, c.input))
            << ", \"input_uncertainty_gas_mass\": " << num(inUnit(c.channel, c.inputGasMass))
-           << ", \"input_uncertainty_temperature\": "
-           << num(inUnit(c.channel, c.inputTemperature))
+           << ", \"input_uncertainty_temperature\": " << num(inUnit(c.channel, c.inputTemperature))
            << ", \"validation_uncertainty\": " << num(inUnit(c.channel, c.validation))
            << ", \"share_of_gap\": " << num(c.shareOfGap, "%.4f") << "}"
            << (i + 1 < w.channels.size() ? "," : "") << "\n";
@@ -267,12 +278,12 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
     for (size_t i = 0; i < w.signatures.size(); ++i) {
         const auto& s = w.signatures[i];
         os << "      {\"channel\": " << str(s.channel) << ", \"test\": " << s.test + 1
-           << ", \"gas_mass_g\": " << num(s.gasMass * 1e3) << ", \"bias\": "
-           << num(inUnit(s.channel, s.bias)) << ", \"scale\": " << num(s.scale, "%.4f")
-           << ", \"lag_s\": " << num(s.lag, "%.3f") << ", \"lag_correlation\": "
-           << num(s.lagCorrelation, "%.4f") << ", \"loop_area_measured\": "
-           << num(inUnit(s.channel, s.loopAreaMeasured) * 1e3) << ", \"loop_area_simulated\": "
-           << num(inUnit(s.channel, s.loopAreaSimulated) * 1e3)
+           << ", \"gas_mass_g\": " << num(s.gasMass * 1e3)
+           << ", \"bias\": " << num(inUnit(s.channel, s.bias))
+           << ", \"scale\": " << num(s.scale, "%.4f") << ", \"lag_s\": " << num(s.lag, "%.3f")
+           << ", \"lag_correlation\": " << num(s.lagCorrelation, "%.4f")
+           << ", \"loop_area_measured\": " << num(inUnit(s.channel, s.loopAreaMeasured) * 1e3)
+           << ", \"loop_area_simulated\": " << num(inUnit(s.channel, s.loopAreaSimulated) * 1e3)
            << ", \"loop_area_unit\": "
            << str(diagnose::getChannelUnit(getChannelKind(s.channel)) + " mm")
            << ", \"drift_per_s\": " << num(inUnit(s.channel, s.drift)) << "}"
@@ -338,10 +349,11 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
         os << "]},\n  \"verdict\": " << str(which->verdict) << ",\n  \"verdict_effects\": [";
         for (size_t i = 0; i < which->verdictEffects.size(); ++i)
             os << (i ? ", " : "") << str(which->verdictEffects[i]);
-        os << "],\n  " << formatVerdictQualifiers(*which) << ",\n  \"reason\": "
-           << str(which->reason) << "\n";
+        os << "],\n  " << formatVerdictQualifiers(*which)
+           << ",\n  \"reason\": " << str(which->reason) << "\n";
     } else {
-        os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run (--where-only or one test)\"\n";
+        os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run (--where-only or one "
+              "test)\"\n";
     }
     os << "}\n";
     return os.str();
@@ -349,7 +361,8 @@ std::string formatDiagnosisJson(const DiagnosisInfo& info, const diagnose::Where
 
 std::string formatResidualsCsv(const std::vector<diagnose::TestComparison>& tests) {
     std::ostringstream os;
-    os << "test,gas_mass_g,channel,unit,time_s,displacement_mm,branch,measured,simulated,residual\n";
+    os << "test,gas_mass_g,channel,unit,time_s,displacement_mm,branch,measured,simulated,"
+          "residual\n";
     for (const auto& t : tests)
         for (const auto& ch : t.channels) {
             const std::string name = diagnose::getChannelName(ch.kind);
@@ -357,8 +370,9 @@ std::string formatResidualsCsv(const std::vector<diagnose::TestComparison>& test
             for (size_t i = 0; i < ch.measured.size(); ++i)
                 os << t.test + 1 << "," << num(t.gasMass * 1e3) << "," << name << ","
                    << diagnose::getChannelUnit(ch.kind) << "," << num(ch.time[i]) << ","
-                   << num(ch.displacement[i] * 1e3) << "," << (ch.loading[i] ? "loading" : "unloading")
-                   << "," << num(ch.measured[i] / u) << "," << num(ch.simulated[i] / u) << ","
+                   << num(ch.displacement[i] * 1e3) << ","
+                   << (ch.loading[i] ? "loading" : "unloading") << "," << num(ch.measured[i] / u)
+                   << "," << num(ch.simulated[i] / u) << ","
                    << num((ch.measured[i] - ch.simulated[i]) / u) << "\n";
         }
     return os.str();

@@ -63,7 +63,8 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
        << esc(info.scenarioFile) << "; " << esc(info.program) << "; " << info.simulations
        << " simulations, " << num(info.seconds, "%.1f") << " s. See docs/diagnosis.md.</p>";
     if (which)
-        os << "<h2>Verdict: " << esc(diagnose::describeVerdict(*which)) << "</h2><p>" << esc(which->reason) << "</p>";
+        os << "<h2>Verdict: " << esc(diagnose::describeVerdict(*which)) << "</h2><p>"
+           << esc(which->reason) << "</p>";
     os << "<h2>Where</h2><p>Gap " << num(w.gap) << " (" << esc(diagnose::describeGap(w)) << ")"
        << (w.withinValidation ? ", within the validation uncertainty" : "")
        << ".</p><table><tr><th>channel</th><th>RMSE</th><th>range</th><th>noise</th>"
@@ -89,7 +90,7 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
     for (size_t i = 0; i < w.statedInputs.size(); ++i)
         os << (i ? "; " : "")
            << (w.statedInputs[i].input == diagnose::ProtocolInput::GasMass ? "gas mass "
-                                                                          : "room temperature ")
+                                                                           : "room temperature ")
            << esc(formatStatedInput(w.statedInputs[i]));
     os << ".</p><table><tr><th>channel, regime</th><th>samples</th><th>RMSE</th><th>bias</th>"
        << "<th>share of the channel's squared error</th></tr>";
@@ -166,8 +167,8 @@ std::string formatDiagnosisReportHtml(const DiagnosisInfo& info,
                 s.push_back(makeSeries(best->fitted[t].channels[c], false, byTime,
                                        "with " + best->effect, "#06c"));
             const std::string unit = diagnose::getChannelUnit(ch.kind);
-            os << plot("test " + std::to_string(t + 1) + " (" + mass + "): " +
-                           diagnose::getChannelName(ch.kind),
+            os << plot("test " + std::to_string(t + 1) + " (" + mass +
+                           "): " + diagnose::getChannelName(ch.kind),
                        byTime ? "time [s]" : "displacement [mm]",
                        diagnose::getChannelName(ch.kind) + " [" + unit + "]", s);
             // The residuals over time, before and after.

@@ -24,10 +24,14 @@ inline std::string num(double v, const char* f = "%.6g") {
 inline std::string str(const std::string& s) {
     std::string o = "\"";
     for (char c : s) {
-        if (c == '"' || c == '\\') o += '\\', o += c;
-        else if (c == '\n') o += "\\n";
-        else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
-        else o += c;
+        if (c == '"' || c == '\\')
+            o += '\\', o += c;
+        else if (c == '\n')
+            o += "\\n";
+        else if (static_cast<unsigned char>(c) < 0x20)
+            o += ' ';
+        else
+            o += c;
     }
     return o + "\"";
 }
@@ -53,11 +57,10 @@ inline std::string formatVerdictQualifiers(const diagnose::WhichReport& w) {
     std::string rivals;
     for (const std::string& r : w.rivals) rivals += (rivals.empty() ? "" : ", ") + str(r);
     return "\"explained\": " + (w.explained.empty() ? std::string("null") : str(w.explained)) +
-           ", \"residual_ratio\": " + num(w.residualRatio, "%.4g") +
-           ", \"residual_channel\": " +
+           ", \"residual_ratio\": " + num(w.residualRatio, "%.4g") + ", \"residual_channel\": " +
            (w.residualChannel.empty() ? std::string("null") : str(w.residualChannel)) +
-           ", \"rivals\": [" + rivals + "], \"tell_apart\": " +
-           (w.tellApart.empty() ? std::string("null") : str(w.tellApart));
+           ", \"rivals\": [" + rivals +
+           "], \"tell_apart\": " + (w.tellApart.empty() ? std::string("null") : str(w.tellApart));
 }
 
 // The held-out gaps of a candidate or pair: before and after, whole and beyond the
@@ -75,17 +78,19 @@ inline std::string formatGaps(const diagnose::CandidateResult& c) {
 // Per fold: the test (or time window, or subject: heldOutKey) held out, counted from 1 or by
 // name, what `more` adds about it (", \"key\": value"; null: nothing), the parameters fitted
 // without it, the gaps before and after.
-inline std::string formatFolds(const diagnose::CandidateResult& c,
-                               const std::function<std::string(const std::vector<double>&)>& parameters,
-                               const char* heldOutKey = "held_out_test",
-                               const std::vector<std::string>* heldOutNames = nullptr,
-                               const std::function<std::string(int)>& more = nullptr) {
+inline std::string formatFolds(
+    const diagnose::CandidateResult& c,
+    const std::function<std::string(const std::vector<double>&)>& parameters,
+    const char* heldOutKey = "held_out_test",
+    const std::vector<std::string>* heldOutNames = nullptr,
+    const std::function<std::string(int)>& more = nullptr) {
     std::ostringstream os;
     os << "[";
     for (size_t k = 0; k < c.folds.size(); ++k) {
         const auto& f = c.folds[k];
         os << (k ? ", " : "") << "{" << str(heldOutKey) << ": "
-           << (heldOutNames ? str(heldOutNames->at(size_t(f.heldOut))) : std::to_string(f.heldOut + 1))
+           << (heldOutNames ? str(heldOutNames->at(size_t(f.heldOut)))
+                            : std::to_string(f.heldOut + 1))
            << (more ? more(f.heldOut) : std::string())
            << ", \"parameters\": " << parameters(f.parameters) << ", \"before\": " << num(f.before)
            << ", \"after\": " << num(f.after) << ", \"excess_before\": " << num(f.excessBefore)

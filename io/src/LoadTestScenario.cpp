@@ -163,11 +163,10 @@ const std::vector<KeyAlias>& getAliases() {
 
 void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
     bags::DoubleWedgeParams& g = o.geometry;
-    s.checkKeys(
-        {"long_side", "short_side", "width", "height"},
-        {"mesh_size", "mesh_pattern", "diaphragm", "bond_base", "connection", "orifice_diameter",
-         "discharge_coefficient", "fill_mass", "fill_scaling", "volume_change", "imperfection",
-         "neighbours"});
+    s.checkKeys({"long_side", "short_side", "width", "height"},
+                {"mesh_size", "mesh_pattern", "diaphragm", "bond_base", "connection",
+                 "orifice_diameter", "discharge_coefficient", "fill_mass", "fill_scaling",
+                 "volume_change", "imperfection", "neighbours"});
     g.longSide = s.getQuantity("long_side", D::Length);
     g.shortSide = s.getQuantity("short_side", D::Length);
     g.width = s.getQuantity("width", D::Length);
@@ -207,8 +206,9 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
             s.fail(key, std::string("only applies to connection: orifice (connection is ") +
                             connection + ")");
     if (connection == "orifice" && !g.diaphragm)
-        s.fail("connection", "orifice needs two chambers: set diaphragm: true, or use "
-                             "connection: open");
+        s.fail("connection",
+               "orifice needs two chambers: set diaphragm: true, or use "
+               "connection: open");
     o.orifice.diameter = s.getQuantity("orifice_diameter", D::Length, o.orifice.diameter);
     o.orifice.dischargeCoefficient =
         s.getNumber("discharge_coefficient", o.orifice.dischargeCoefficient);
@@ -225,8 +225,7 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
         checkRange(imp, "amplitude", o.imperfection.amplitude, 0, true, 0.01, true, "mm",
                    "0 (the perfect bag) to 10 mm, e.g. 0.5 mm");
         const int seed = imp.getInteger("seed", 1);
-        if (seed < 0)
-            imp.fail("seed", std::to_string(seed) + " must be a whole number >= 0");
+        if (seed < 0) imp.fail("seed", std::to_string(seed) + " must be a whole number >= 0");
         o.imperfection.seed = static_cast<std::uint64_t>(seed);
     }
 
@@ -252,8 +251,8 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
         }
         if (nb.has("pressed")) {
             const ScenarioNode pr = nb.get("pressed");
-            const std::vector<ScenarioNode> e = pr.isSequence() ? pr.getElements()
-                                                                : std::vector<ScenarioNode>();
+            const std::vector<ScenarioNode> e =
+                pr.isSequence() ? pr.getElements() : std::vector<ScenarioNode>();
             const char* valid =
                 "two whole numbers [along, across], each -1, 0 or 1: where in the 3 x 3 block "
                 "the pressed bag stands ([0, 0] the middle, [1, 1] the corner at +x +y)";
@@ -264,14 +263,16 @@ void readAirbag(const ScenarioNode& s, bags::LoadTestOptions& o) {
                 o.neighbourPressed[k] = v;
             }
             if (o.neighbours != N::Block3x3 && o.neighbourPressed != std::array<int, 2>{0, 0})
-                nb.fail("pressed", "needs layout: block3x3 (the other layouts press their "
-                                   "middle bag); use [0, 0] or leave it out");
+                nb.fail("pressed",
+                        "needs layout: block3x3 (the other layouts press their "
+                        "middle bag); use [0, 0] or leave it out");
         }
         // With layout none there is no neighbour to share air with: read, checked, unused.
         o.neighbourSharedAir = nb.getBool("shared_air", false);
         if (o.neighbours != N::None && connection == "orifice")
-            s.fail("connection", "orifice is not supported with neighbours (one gas body per "
-                                 "bag); use connection: open");
+            s.fail("connection",
+                   "orifice is not supported with neighbours (one gas body per "
+                   "bag); use connection: open");
     }
 }
 
@@ -301,11 +302,12 @@ void readFillMass(const ScenarioNode& s, LoadTestScenario& sc) {
         s.getChoice("fill_scaling", {"profile", "uniform", "height"}, "profile");
     if (!s.has("fill_mass")) {
         if (s.has("fill_scaling"))
-            s.fail("fill_scaling", "only applies with fill_mass (the gas mass that just fills "
-                                   "the inflated bag, e.g. fill_mass: 2.8 g)");
+            s.fail("fill_scaling",
+                   "only applies with fill_mass (the gas mass that just fills "
+                   "the inflated bag, e.g. fill_mass: 2.8 g)");
         return;
     }
-    sc.fillScaling = scaling == "uniform" ? bags::FillScaling::Uniform
+    sc.fillScaling = scaling == "uniform"  ? bags::FillScaling::Uniform
                      : scaling == "height" ? bags::FillScaling::Height
                                            : bags::FillScaling::Profile;
     sc.fillMass = s.getQuantity("fill_mass", D::Mass);
@@ -317,26 +319,26 @@ void readFillMass(const ScenarioNode& s, LoadTestScenario& sc) {
     const double lo = 0.5, hi = 1.5;
     if (!(s0 >= lo && s0 <= hi)) {
         auto massAt = [&](double f) {
-            return fmt(std::round(toUnit(sc.fillMass * std::pow(f / s0,
-                                                         bags::getFillScalingExponent(
-                                                             sc.fillScaling)),
+            return fmt(std::round(toUnit(sc.fillMass *
+                                             std::pow(f / s0,
+                                                      bags::getFillScalingExponent(sc.fillScaling)),
                                          "g") *
                                   100) /
                        100) +
                    " g";
         };
-        s.fail("fill_mass", shown(s, "fill_mass") + " would scale the " + scaling +
-                                " by about " + fmt(std::round(s0 * 100) / 100) +
-                                "; valid: a scale from " + fmt(lo) + " to " + fmt(hi) +
-                                ", i.e. a fill mass from about " + massAt(lo) + " to " +
-                                massAt(hi) + " for these sizes");
+        s.fail("fill_mass", shown(s, "fill_mass") + " would scale the " + scaling + " by about " +
+                                fmt(std::round(s0 * 100) / 100) + "; valid: a scale from " +
+                                fmt(lo) + " to " + fmt(hi) + ", i.e. a fill mass from about " +
+                                massAt(lo) + " to " + massAt(hi) + " for these sizes");
     }
     const bags::DoubleWedgeParams g =
         bags::scaleDoubleWedge(sc.options.geometry, sc.fillScaling, s0);
     const double smallest = std::min({g.longSide, g.shortSide, g.width, g.height});
     if (g.meshSize > 0.5 * smallest)
-        s.fail("mesh_size", shown(s, "mesh_size") + " must be at most half the smallest "
-                            "dimension of the scaled airbag (about " +
+        s.fail("mesh_size", shown(s, "mesh_size") +
+                                " must be at most half the smallest "
+                                "dimension of the scaled airbag (about " +
                                 fmt(std::round(toUnit(0.5 * smallest, "mm"))) + " mm)");
 }
 
@@ -375,8 +377,8 @@ bags::PronySeries readProny(const ScenarioNode& s) {
         term.tau = t.getQuantity("tau", D::Time);
         checkRange(t, "g", term.g, 0, true, 1, false, "",
                    "the term's relative modulus (of the instantaneous modulus)");
-        checkRange(t, "tau", term.tau, bags::PronySeries::kMinTau, true,
-                   bags::PronySeries::kMaxTau, true, "s", "the term's relaxation time");
+        checkRange(t, "tau", term.tau, bags::PronySeries::kMinTau, true, bags::PronySeries::kMaxTau,
+                   true, "s", "the term's relaxation time");
         sum += term.g;
         if (!(sum <= bags::PronySeries::kMaxSum))
             t.fail("g", "brings the sum of the relative moduli to " + fmt(sum) +
@@ -397,10 +399,10 @@ bags::FabricAnisotropy readAnisotropy(const ScenarioNode& s) {
     y.weftModulus = a.getQuantity("weft", D::Pressure);
     y.angle = a.getQuantity("angle", D::Angle, 0.0);
     const std::string why = "the yarns' tangent modulus in Green strain; 0: none";
-    checkRange(a, "warp", y.warpModulus, 0, true, bags::FabricAnisotropy::kMaxModulus, true,
-               "MPa", why);
-    checkRange(a, "weft", y.weftModulus, 0, true, bags::FabricAnisotropy::kMaxModulus, true,
-               "MPa", why);
+    checkRange(a, "warp", y.warpModulus, 0, true, bags::FabricAnisotropy::kMaxModulus, true, "MPa",
+               why);
+    checkRange(a, "weft", y.weftModulus, 0, true, bags::FabricAnisotropy::kMaxModulus, true, "MPa",
+               why);
     checkRange(a, "angle", y.angle, -0.5 * M_PI, true, 0.5 * M_PI, true, "deg",
                "the warp's angle from its panel's reference direction");
     return y;
@@ -416,9 +418,8 @@ void readMembrane(const ScenarioNode& s, bags::LoadTestOptions& o) {
                 allConstants.push_back(c);
     }
     std::vector<std::string> optional = allConstants;
-    optional.insert(optional.end(),
-                    {"density", "wrinkling_residual", "extrapolation", "bending_stiffness",
-                     "prony", "anisotropy"});
+    optional.insert(optional.end(), {"density", "wrinkling_residual", "extrapolation",
+                                     "bending_stiffness", "prony", "anisotropy"});
     s.checkKeys({"model", "thickness"}, optional);
     const std::string model = s.getChoice("model", modelNames);
     // Beyond the stable range a Yeoh continues linearly in I1 (default) or as its polynomial.
@@ -589,9 +590,9 @@ std::vector<double> readGasMasses(const ScenarioNode& s) {
 }
 
 void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
-    s.checkKeys({"gas_masses"}, {"block", "rate", "peak_force", "unload", "displacement_step",
-                                 "stiffness_range", "polynomial_order", "gravity", "ensemble",
-                                 "step_over_snaps"});
+    s.checkKeys({"gas_masses"},
+                {"block", "rate", "peak_force", "unload", "displacement_step", "stiffness_range",
+                 "polynomial_order", "gravity", "ensemble", "step_over_snaps"});
     o.gasMasses = readGasMasses(s);
     o.blockSize = s.getQuantity("block", D::Length, o.blockSize);
     o.loadingRate = s.getQuantity("rate", D::Velocity, o.loadingRate);
@@ -603,8 +604,8 @@ void readTest(const ScenarioNode& s, bags::LoadTestOptions& o) {
     o.ensemble = s.getInteger("ensemble", o.ensemble);
     o.stepOverSnaps = s.getBool("step_over_snaps", o.stepOverSnaps);
     if (o.ensemble < 1 || o.ensemble > 64)
-        s.fail("ensemble", std::to_string(o.ensemble) +
-                               " must be from 1 (one bag) to 64 imperfection seeds");
+        s.fail("ensemble",
+               std::to_string(o.ensemble) + " must be from 1 (one bag) to 64 imperfection seeds");
     checkRange(s, "block", o.blockSize, 0, false, o.geometry.longSide, true, "mm",
                "at most the airbag's long side");
     checkRange(s, "rate", o.loadingRate, 0, false, kInf, false, "mm/min");
@@ -705,9 +706,9 @@ void readSolver(const ScenarioNode& s, bags::LoadTestOptions& lo) {
     double& stabilization = lo.stabilization;
     double& damping = lo.damping;
     double& residualTolerance = lo.residualTolerance;
-    s.checkKeys({}, {"relative_tolerance", "absolute_tolerance", "max_iterations",
-                     "pseudo_transient_shift", "stabilization", "damping",
-                     "residual_tolerance", "stepping", "dynamic"});
+    s.checkKeys(
+        {}, {"relative_tolerance", "absolute_tolerance", "max_iterations", "pseudo_transient_shift",
+             "stabilization", "damping", "residual_tolerance", "stepping", "dynamic"});
     lo.stepping = readStepping(s, lo.stepping);
     if (s.has("dynamic")) readDynamic(s.getSection("dynamic"), lo.dynamic);
     o.relativeTolerance = s.getNumber("relative_tolerance", o.relativeTolerance);
@@ -754,14 +755,13 @@ void readRig(const ScenarioNode& s, diagnose::RigEffects& r) {
     if (s.has("machine_stiffness")) {
         const double k = s.getQuantity("machine_stiffness", D::Stiffness);
         checkRange(s, "machine_stiffness", k, 1.0 / diagnose::RigEffects::kMaxMachineCompliance,
-                   true, kInf, false, "N/mm",
-                   "the testing machine in series with the block");
+                   true, kInf, false, "N/mm", "the testing machine in series with the block");
         r.machineCompliance = 1.0 / k;
     }
     if (s.has("bed_stiffness")) {
         const double k = s.getQuantity("bed_stiffness", D::Stiffness);
-        checkRange(s, "bed_stiffness", k, 1.0 / diagnose::RigEffects::kMaxBedCompliance, true,
-                   kInf, false, "N/mm", "the spring under the bed board, in series with the bag");
+        checkRange(s, "bed_stiffness", k, 1.0 / diagnose::RigEffects::kMaxBedCompliance, true, kInf,
+                   false, "N/mm", "the spring under the bed board, in series with the bag");
         r.bedCompliance = 1.0 / k;
     }
     r.loadCellGain = s.getNumber("load_cell_gain", 0.0);
@@ -901,7 +901,8 @@ double calcMostPlausibleGasMass(const bags::DoubleWedgeParams& g, const bags::Ga
 }
 
 std::string describeTooMuchGas(double mass, double most) {
-    return fmt(toUnit(mass, "g")) + " g is more gas than this bag can hold: it would fill its "
+    return fmt(toUnit(mass, "g")) +
+           " g is more gas than this bag can hold: it would fill its "
            "unstretched volume at over 1 MPa gauge (a film bag bursts far below; the seed's is "
            "at about 20 kPa with 4.5 g); valid: at most " +
            fmt(std::floor(toUnit(most, "g") * 10) / 10) + " g";
@@ -992,8 +993,9 @@ bags::AirbagSpec::Stepping readStepping(const ScenarioNode& s, bags::AirbagSpec:
         current = c == "dynamic" ? S::Dynamic : c == "relaxed" ? S::Relaxed : S::QuasiStatic;
     }
     if (s.has("dynamic") && current == S::QuasiStatic)
-        s.fail("dynamic", "these settings of the film in time need 'stepping: dynamic' or "
-                          "'stepping: relaxed' beside them");
+        s.fail("dynamic",
+               "these settings of the film in time need 'stepping: dynamic' or "
+               "'stepping: relaxed' beside them");
     return current;
 }
 

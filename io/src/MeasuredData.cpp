@@ -24,8 +24,8 @@ namespace {
 
 using csv::fmt;
 using csv::listUnits;
-using csv::nextDataLine;
 using csv::lower;
+using csv::nextDataLine;
 using csv::splitCsv;
 using csv::splitHeader;
 using csv::trim;
@@ -47,10 +47,10 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
     std::string expected;
     for (const ChannelColumn& c : columns)
         if (!c.optional)
-            expected += (expected.empty() ? "" : ",") + c.name +
-                        (c.dimension == Dimension::Dimensionless
-                             ? std::string()
-                             : "_" + getUnits(c.dimension)[0].symbol);
+            expected +=
+                (expected.empty() ? "" : ",") + c.name +
+                (c.dimension == Dimension::Dimensionless ? std::string()
+                                                         : "_" + getUnits(c.dimension)[0].symbol);
 
     std::vector<int> index(columns.size(), -1);  // file column of each wanted column
     std::vector<double> factor(columns.size()), offset(columns.size());
@@ -71,12 +71,13 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
                     const std::string col =
                         "column " + std::to_string(c + 1) + " '" + cells[c] + "': ";
                     if (index[w] >= 0)
-                        fail(lineNo, col + "a second '" + want.name + "' column (the first is column " +
+                        fail(lineNo, col + "a second '" + want.name +
+                                         "' column (the first is column " +
                                          std::to_string(index[w] + 1) + "); keep one");
                     if (want.dimension == Dimension::Dimensionless) {
                         if (!unit.empty())
-                            fail(lineNo, col + "a plain number takes no unit; valid: '" +
-                                             want.name + "'");
+                            fail(lineNo,
+                                 col + "a plain number takes no unit; valid: '" + want.name + "'");
                         index[w] = static_cast<int>(c), factor[w] = 1.0, offset[w] = 0.0;
                         continue;
                     }
@@ -88,8 +89,8 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
                     const UnitInfo* u = findUnit(unit);
                     if (!u || u->dimension != want.dimension)
                         fail(lineNo, col + "'" + unit + "' is not a unit of " +
-                                         getDimensionName(want.dimension) + "; valid: " +
-                                         listUnits(want.dimension));
+                                         getDimensionName(want.dimension) +
+                                         "; valid: " + listUnits(want.dimension));
                     index[w] = static_cast<int>(c);
                     factor[w] = u->factor;
                     offset[w] = u->offset;
@@ -103,8 +104,7 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
         }
         if (cells.size() != header.size())
             fail(lineNo, "has " + std::to_string(cells.size()) + " cells; the header (line " +
-                             std::to_string(headerLine) + ") has " +
-                             std::to_string(header.size()));
+                             std::to_string(headerLine) + ") has " + std::to_string(header.size()));
         for (size_t w = 0; w < columns.size(); ++w) {
             const int c = index[w];
             if (c < 0) continue;  // an optional column the file does not have
@@ -134,8 +134,8 @@ std::vector<std::vector<double>> readChannelCsv(const std::string& path,
         fail(0, "no header line; valid: a header with the columns " + expected +
                     " then one row per sample");
     if (out[0].size() < 2)
-        fail(0, "has " + std::to_string(out[0].size()) +
-                    " data row(s); valid: at least two samples");
+        fail(0,
+             "has " + std::to_string(out[0].size()) + " data row(s); valid: at least two samples");
     return out;
 }
 
@@ -150,11 +150,13 @@ ScenarioFile readManifest(const std::string& folder) {
                              std::string(kMeasuredManifest) + " (docs/measured-data.md)");
     const fs::path manifest = dir / kMeasuredManifest;
     if (!fs::exists(manifest, ec))
-        throw InputError(folder, 0, "",
-                         std::string("holds no ") + kMeasuredManifest +
-                             "; a measured-data folder needs this manifest (docs/measured-data.md)");
+        throw InputError(
+            folder, 0, "",
+            std::string("holds no ") + kMeasuredManifest +
+                "; a measured-data folder needs this manifest (docs/measured-data.md)");
     const std::string mname = manifest.string();
-    return ScenarioFile::parse(readInputFile(mname, kMaxScenarioBytes, "measured-data manifest"), mname);
+    return ScenarioFile::parse(readInputFile(mname, kMaxScenarioBytes, "measured-data manifest"),
+                               mname);
 }
 
 std::string readManifestScenario(const ScenarioNode& root, const std::string& folder,
@@ -167,7 +169,8 @@ std::string readManifestScenario(const ScenarioNode& root, const std::string& fo
     const fs::path sp = fs::path(scen).is_absolute() ? fs::path(scen) : fs::path(folder) / scen;
     std::error_code ec;
     if (!fs::is_regular_file(sp, ec))
-        root.fail("scenario", "\"" + scen + "\": no such file (" + sp.string() + "); valid: " + what +
+        root.fail("scenario", "\"" + scen + "\": no such file (" + sp.string() +
+                                  "); valid: " + what +
                                   " the data correspond to, relative to the folder or absolute");
     return sp.string();
 }
@@ -181,8 +184,9 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
     const ScenarioNode root = file.getRoot();
     root.checkKeys({"format", "scenario", "protocol"}, {"description", "tests", "stiffness"});
     if (!root.has("tests") && !root.has("stiffness"))
-        root.fail("lists no 'tests' and no 'stiffness'; valid: a 'tests' list (one entry per gas "
-                  "mass), a 'stiffness' curve file, or both (docs/measured-data.md)");
+        root.fail(
+            "lists no 'tests' and no 'stiffness'; valid: a 'tests' list (one entry per gas "
+            "mass), a 'stiffness' curve file, or both (docs/measured-data.md)");
     diagnose::MeasuredData data;
     data.folder = folder;
     data.description = root.getString("description", "");
@@ -233,8 +237,8 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
                     {"gas_mass_uncertainty", "bed"});
         if (withBed > 0 && !e.has("bed"))
             e.fail("this test has no 'bed' channel while " + std::to_string(withBed) +
-                                   " other test(s) have one; valid: a bed gauge's file for "
-                                   "every test or for none (docs/measured-data.md)");
+                   " other test(s) have one; valid: a bed gauge's file for "
+                   "every test or for none (docs/measured-data.md)");
         diagnose::MeasuredTest t;
         t.gasMass = e.getQuantity("gas_mass", Dimension::Mass);
         if (!(t.gasMass > 0.0)) e.fail("gas_mass", "must be greater than zero");
@@ -243,17 +247,18 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
             const bool own = e.has("gas_mass_uncertainty");
             if (own || massUncertaintyForAll) {
                 const ScenarioNode& at = own ? e : p;
-                t.gasMassUncertainty =
-                    own ? e.getQuantity("gas_mass_uncertainty", Dimension::Mass) : massUncertaintyAll;
+                t.gasMassUncertainty = own ? e.getQuantity("gas_mass_uncertainty", Dimension::Mass)
+                                           : massUncertaintyAll;
                 t.gasMassUncertaintyStated = true;
                 const double most = kMaxGasMassUncertaintyShare * t.gasMass;
                 if (!(t.gasMassUncertainty >= 0.0) || t.gasMassUncertainty > most)
-                    at.fail("gas_mass_uncertainty",
-                            formatMass(t.gasMassUncertainty) + " is out of range" +
-                                (own ? std::string() : " for the test of " + formatMass(t.gasMass)) +
-                                "; valid: 0 g to " + fmt("%g", 100 * kMaxGasMassUncertaintyShare) +
-                                " % of the test's gas mass (" + formatMass(most) +
-                                "), a standard uncertainty of the flowmeter's reading");
+                    at.fail(
+                        "gas_mass_uncertainty",
+                        formatMass(t.gasMassUncertainty) + " is out of range" +
+                            (own ? std::string() : " for the test of " + formatMass(t.gasMass)) +
+                            "; valid: 0 g to " + fmt("%g", 100 * kMaxGasMassUncertaintyShare) +
+                            " % of the test's gas mass (" + formatMass(most) +
+                            "), a standard uncertainty of the flowmeter's reading");
             }
         }
         auto channelPath = [&](const char* key) {
@@ -284,7 +289,8 @@ diagnose::MeasuredData readMeasuredData(const std::string& folder) {
         t.flowmeter = {cols[0], cols[1]};
         if (e.has("bed")) {
             const std::string bed = channelPath("bed");
-            cols = readChannelCsv(bed, bed, {{"time", Dimension::Time}, {"sink", Dimension::Length}});
+            cols =
+                readChannelCsv(bed, bed, {{"time", Dimension::Time}, {"sink", Dimension::Length}});
             t.bed = {cols[0], cols[1]};
         }
 
@@ -332,7 +338,8 @@ void readStiffnessChannel(const ScenarioNode& root, const fs::path& dir,
     k.stiffness = cols[1];
     // The file's line of data row i (the reader skips comments and blank lines).
     auto rowLine = [&](size_t row) {
-        std::istringstream text(readInputFile(data.stiffnessFile, kMaxChannelBytes, "channel file"));
+        std::istringstream text(
+            readInputFile(data.stiffnessFile, kMaxChannelBytes, "channel file"));
         std::string line;
         int lineNo = 0;
         size_t seen = 0;
@@ -388,8 +395,10 @@ LoadTestScenario readMeasuredScenario(const diagnose::MeasuredData& data) {
     } catch (const InputError& e) {
         // An error at a key the protocol set is the protocol's: say so at the manifest.
         static const std::vector<std::pair<std::string, std::string>> keys = {
-            {"test.gas_masses", "tests"},         {"test.block", "protocol.block"},
-            {"test.rate", "protocol.rate"},       {"test.peak_force", "protocol.peak_force"},
+            {"test.gas_masses", "tests"},
+            {"test.block", "protocol.block"},
+            {"test.rate", "protocol.rate"},
+            {"test.peak_force", "protocol.peak_force"},
             {"gas.temperature", "protocol.room_temperature"},
             {"test.stiffness_range", "protocol.peak_force"},
             {"test.polynomial_order", "tests"}};
@@ -403,13 +412,13 @@ LoadTestScenario readMeasuredScenario(const diagnose::MeasuredData& data) {
                 int line = root.getLine(section);
                 if (key.find('.') != std::string::npos)
                     line = root.getSection(section).getLine(key.substr(key.find('.') + 1));
-                throw InputError(manifest, line, key,
-                                 "the scenario " + data.scenarioFile +
-                                     " cannot run this protocol: " + e.getMessage() +
-                                     (e.getWhere().rfind("--set", 0) == 0
-                                          ? std::string()
-                                          : " (at " + e.getWhere() + ":" +
-                                                std::to_string(e.getLine()) + ")"));
+                throw InputError(
+                    manifest, line, key,
+                    "the scenario " + data.scenarioFile +
+                        " cannot run this protocol: " + e.getMessage() +
+                        (e.getWhere().rfind("--set", 0) == 0
+                             ? std::string()
+                             : " (at " + e.getWhere() + ":" + std::to_string(e.getLine()) + ")"));
             }
         throw;
     }
@@ -469,8 +478,8 @@ std::vector<std::string> writeMeasuredData(const std::string& folder,
                << "\n";
         fc << "time_s,mass_g\n";
         for (size_t k = 0; k < t.flowmeter.time.size(); ++k)
-            fc << fmt("%.3f", t.flowmeter.time[k]) << ","
-               << fmt("%.5f", t.flowmeter.value[k] * 1e3) << "\n";
+            fc << fmt("%.3f", t.flowmeter.time[k]) << "," << fmt("%.5f", t.flowmeter.value[k] * 1e3)
+               << "\n";
         write(stem + "-machine.csv", mc.str());
         write(stem + "-pressure.csv", pc.str());
         write(stem + "-flowmeter.csv", fc.str());
@@ -478,7 +487,8 @@ std::vector<std::string> writeMeasuredData(const std::string& folder,
             std::ostringstream bc;
             bc << "time_s,sink_mm\n";
             for (size_t k = 0; k < t.bed.time.size(); ++k)
-                bc << fmt("%.3f", t.bed.time[k]) << "," << fmt("%.5f", t.bed.value[k] * 1e3) << "\n";
+                bc << fmt("%.3f", t.bed.time[k]) << "," << fmt("%.5f", t.bed.value[k] * 1e3)
+                   << "\n";
             write(stem + "-bed.csv", bc.str());
         }
     }
@@ -496,9 +506,10 @@ std::string formatRigReadingsCsv(const bags::LoadTestResult& result,
         // The gas mass as the flowmeter reads it.
         const std::string m = fmt("%.6g", (c.gasMass + rig.flowmeterOffset) * 1e3);
         for (size_t i = 0; i < mc.time.size(); ++i)
-            os << m << "," << fmt("%.6g", mc.time[i]) << "," << fmt("%.6g", mc.displacement[i] * 1e3)
-               << "," << fmt("%.6g", mc.force[i]) << "," << fmt("%.6g", p[i] * 1e-3) << ","
-               << (mc.loading[i] ? "loading" : "unloading") << "\n";
+            os << m << "," << fmt("%.6g", mc.time[i]) << ","
+               << fmt("%.6g", mc.displacement[i] * 1e3) << "," << fmt("%.6g", mc.force[i]) << ","
+               << fmt("%.6g", p[i] * 1e-3) << "," << (mc.loading[i] ? "loading" : "unloading")
+               << "\n";
     }
     return os.str();
 }

@@ -17,7 +17,8 @@ using json::num;
 using json::str;
 
 // The reporting unit and its SI value of a channel of the comparison ("" and 1 if unknown).
-std::pair<std::string, double> getUnit(const diagnose::PatientComparison& c, const std::string& name) {
+std::pair<std::string, double> getUnit(const diagnose::PatientComparison& c,
+                                       const std::string& name) {
     const diagnose::PatientChannelComparison* ch = c.find(name);
     return ch ? std::make_pair(ch->unit, ch->unitScale) : std::make_pair(std::string(), 1.0);
 }
@@ -26,8 +27,8 @@ std::string esc(const std::string& s) { return svg::escape(s); }
 
 // Per frame (mat: the sum over the compared sensels) or per sample, in the channel's unit:
 // x time [s], y measured and simulated, for the part `part` (-1: all) of the test `test`.
-void makeTimeSeries(const diagnose::PatientChannelComparison& ch, int part, int test, svg::Series& m,
-                    svg::Series& s) {
+void makeTimeSeries(const diagnose::PatientChannelComparison& ch, int part, int test,
+                    svg::Series& m, svg::Series& s) {
     std::map<double, std::pair<double, double>> at;
     for (size_t i = 0; i < ch.time.size(); ++i) {
         if (part >= 0 && ch.part[i] != part) continue;
@@ -44,12 +45,15 @@ void makeTimeSeries(const diagnose::PatientChannelComparison& ch, int part, int 
 
 }  // namespace
 
-std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose::PatientComparison& c,
+std::string formatPatientDiagnosisJson(const DiagnosisInfo& info,
+                                       const diagnose::PatientComparison& c,
                                        const diagnose::WhereReport& w,
                                        const diagnose::WhichReport* which,
                                        const diagnose::PatientFolds& folds) {
     const std::vector<double>& edges = folds.windowEdges;
-    auto in = [&](const std::string& channel, double v) { return num(v / getUnit(c, channel).second); };
+    auto in = [&](const std::string& channel, double v) {
+        return num(v / getUnit(c, channel).second);
+    };
     std::ostringstream os;
     os << "{\n  \"format\": \"bagsim diagnosis 1\",\n  \"kind\": \"patient-on-array\",\n"
        << "  \"measured\": " << str(info.measuredFolder) << ",\n"
@@ -73,9 +77,12 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
     for (size_t i = 0; i < w.channels.size(); ++i) {
         const auto& ch = w.channels[i];
         const diagnose::PatientChannelComparison* cc = c.find(ch.channel);
-        os << "      {\"channel\": " << str(ch.channel) << ", \"unit\": " << str(getUnit(c, ch.channel).first)
-           << ", \"samples\": " << (cc ? cc->time.size() : 0) << ", \"rmse\": " << in(ch.channel, ch.rmse)
-           << ", \"range\": " << in(ch.channel, ch.range) << ", \"noise\": " << in(ch.channel, ch.noise)
+        os << "      {\"channel\": " << str(ch.channel)
+           << ", \"unit\": " << str(getUnit(c, ch.channel).first)
+           << ", \"samples\": " << (cc ? cc->time.size() : 0)
+           << ", \"rmse\": " << in(ch.channel, ch.rmse)
+           << ", \"range\": " << in(ch.channel, ch.range)
+           << ", \"noise\": " << in(ch.channel, ch.noise)
            << ", \"numerical_uncertainty\": " << in(ch.channel, ch.numerical)
            << ", \"validation_uncertainty\": " << in(ch.channel, ch.validation)
            << ", \"share_of_gap\": " << num(ch.shareOfGap, "%.4f") << "}"
@@ -86,9 +93,10 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
         const auto& r = w.regimes[i];
         os << "      {\"channel\": " << str(r.channel) << ", \"regime\": " << str(r.regime)
            << ", \"samples\": " << r.samples << ", \"rmse\": " << in(r.channel, r.rmse)
-           << ", \"bias\": " << in(r.channel, r.bias) << ", \"max_error\": " << in(r.channel, r.maxError)
-           << ", \"share\": " << num(r.share, "%.4f") << "}" << (i + 1 < w.regimes.size() ? "," : "")
-           << "\n";
+           << ", \"bias\": " << in(r.channel, r.bias)
+           << ", \"max_error\": " << in(r.channel, r.maxError)
+           << ", \"share\": " << num(r.share, "%.4f") << "}"
+           << (i + 1 < w.regimes.size() ? "," : "") << "\n";
     }
     os << "    ],\n    \"signatures\": [\n";
     for (size_t i = 0; i < w.signatures.size(); ++i) {
@@ -96,8 +104,9 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
         const std::string part = s.part.empty() ? "all" : s.part;
         os << "      {\"channel\": " << str(s.channel) << ", \"part\": " << str(part)
            << ", \"bias\": " << in(s.channel, s.bias) << ", \"scale\": " << num(s.scale, "%.4f")
-           << ", \"lag_s\": " << num(s.lag, "%.4f") << ", \"lag_correlation\": "
-           << num(s.lagCorrelation, "%.4f") << ", \"drift_per_s\": " << in(s.channel, s.drift) << "}"
+           << ", \"lag_s\": " << num(s.lag, "%.4f")
+           << ", \"lag_correlation\": " << num(s.lagCorrelation, "%.4f")
+           << ", \"drift_per_s\": " << in(s.channel, s.drift) << "}"
            << (i + 1 < w.signatures.size() ? "," : "") << "\n";
     }
     os << "    ]\n  }";
@@ -107,7 +116,8 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
         heldOutTests = [&](int fold) {
             std::string s = ", \"held_out_tests\": [";
             const std::vector<int> t = folds.getFoldTests(fold);
-            for (size_t k = 0; k < t.size(); ++k) s += (k ? ", " : "") + str(c.tests.at(size_t(t[k])));
+            for (size_t k = 0; k < t.size(); ++k)
+                s += (k ? ", " : "") + str(c.tests.at(size_t(t[k])));
             return s + "]";
         };
     if (which) {
@@ -116,28 +126,36 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
             const auto& k = which->candidates[i];
             const diagnose::Effect* e = diagnose::findPatientEffect(k.effect);
             os << "    {\"rank\": " << i + 1 << ", \"effect\": " << str(k.effect)
-               << ", \"parameters\": " << json::formatParameters(e, k.parameters, &k.parameterStdDev)
-               << ", " << json::formatGaps(k) << ", \"simulations\": " << k.simulations
+               << ", \"parameters\": "
+               << json::formatParameters(e, k.parameters, &k.parameterStdDev) << ", "
+               << json::formatGaps(k) << ", \"simulations\": " << k.simulations
                << ",\n     \"heldout_metrics\": {";
             for (size_t m = 0; m < k.heldoutMetricsBefore.size(); ++m) {
                 const diagnose::GapMetrics& b = k.heldoutMetricsBefore[m];
                 const diagnose::GapMetrics& a = k.heldoutMetricsAfter[m];
                 auto metric = [&](const diagnose::GapMetrics& g) {
-                    return "{\"rmse\": " + in(g.channel, g.rmse) + ", \"mean_error\": " +
-                           in(g.channel, g.meanError) + ", \"max_error\": " + in(g.channel, g.maxError) +
+                    return "{\"rmse\": " + in(g.channel, g.rmse) +
+                           ", \"mean_error\": " + in(g.channel, g.meanError) +
+                           ", \"max_error\": " + in(g.channel, g.maxError) +
                            ", \"area_validation_metric\": " + in(g.channel, g.areaMetric) + "}";
                 };
-                os << (m ? ", " : "") << str(b.channel) << ": {\"unit\": " << str(getUnit(c, b.channel).first)
+                os << (m ? ", " : "") << str(b.channel)
+                   << ": {\"unit\": " << str(getUnit(c, b.channel).first)
                    << ", \"samples\": " << b.samples << ", \"before\": " << metric(b)
                    << ", \"after\": " << metric(a) << "}";
             }
             os << "},\n     \"folds\": "
                << json::formatFolds(
-                      k, [&](const std::vector<double>& v) { return json::formatParameters(e, v, nullptr); },
+                      k,
+                      [&](const std::vector<double>& v) {
+                          return json::formatParameters(e, v, nullptr);
+                      },
                       folds.isBySubject() ? "held_out_subject"
                       : folds.isByTest()  ? "held_out_test"
                                           : "held_out_window",
-                      folds.isBySubject() ? &folds.subjects : folds.isByTest() ? &c.tests : nullptr,
+                      folds.isBySubject() ? &folds.subjects
+                      : folds.isByTest()  ? &c.tests
+                                          : nullptr,
                       heldOutTests)
                << "}" << (i + 1 < which->candidates.size() ? "," : "") << "\n";
         }
@@ -148,10 +166,11 @@ std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose
         os << "],\n  \"verdict\": " << str(which->verdict) << ",\n  \"verdict_effects\": [";
         for (size_t i = 0; i < which->verdictEffects.size(); ++i)
             os << (i ? ", " : "") << str(which->verdictEffects[i]);
-        os << "],\n  " << json::formatVerdictQualifiers(*which) << ",\n  \"reason\": "
-           << str(which->reason) << "\n}\n";
+        os << "],\n  " << json::formatVerdictQualifiers(*which)
+           << ",\n  \"reason\": " << str(which->reason) << "\n}\n";
     } else {
-        os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run (--where-only)\"\n}\n";
+        os << ",\n  \"verdict\": null,\n  \"reason\": \"which effect: not run "
+              "(--where-only)\"\n}\n";
     }
     return os.str();
 }
@@ -163,7 +182,8 @@ std::string formatPatientResidualsCsv(const diagnose::PatientComparison& c, int 
        << "channel,unit,part,time_s,sensel_row,sensel_column,measured,simulated,residual\n";
     for (const diagnose::PatientChannelComparison& ch : c.channels)
         for (size_t i = 0; i < ch.time.size(); ++i) {
-            if (subjects) os << c.subjects.at(size_t(c.testSubject.at(size_t(ch.getTest(i))))) << ",";
+            if (subjects)
+                os << c.subjects.at(size_t(c.testSubject.at(size_t(ch.getTest(i))))) << ",";
             if (tests) os << c.tests.at(size_t(ch.getTest(i))) << ",";
             os << ch.name << "," << ch.unit << ","
                << (ch.part.empty() ? std::string() : ch.partNames.at(size_t(ch.part[i]))) << ","
@@ -194,7 +214,8 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
        << " against " << esc(info.scenarioFile) << " (" << esc(info.program) << ", "
        << info.simulations << " co-simulations, " << svg::num(info.seconds, "%.0f") << " s)</p>\n";
     if (which)
-        os << "<h2>Verdict: " << esc(diagnose::describeVerdict(*which)) << "</h2>\n<p>" << esc(which->reason) << "</p>\n";
+        os << "<h2>Verdict: " << esc(diagnose::describeVerdict(*which)) << "</h2>\n<p>"
+           << esc(which->reason) << "</p>\n";
     os << "<h2>Where</h2>\n<p>gap " << svg::num(w.gap, "%.4f")
        << " (RMS over the channels of RMSE / measured range)"
        << (w.withinValidation ? ", within the validation uncertainty" : "") << "</p>\n"
@@ -203,18 +224,20 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
     for (const auto& ch : w.channels) {
         const auto [unit, scale] = getUnit(c, ch.channel);
         auto v = [&](double x) { return svg::num(x / scale, "%.4g") + " " + unit; };
-        os << "<tr><td>" << esc(ch.channel) << "</td><td>" << v(ch.rmse) << "</td><td>" << v(ch.range)
-           << "</td><td>" << v(ch.noise) << "</td><td>" << v(ch.numerical) << "</td><td>"
-           << v(ch.validation) << "</td><td>" << svg::num(100 * ch.shareOfGap, "%.0f") << " %</td></tr>\n";
+        os << "<tr><td>" << esc(ch.channel) << "</td><td>" << v(ch.rmse) << "</td><td>"
+           << v(ch.range) << "</td><td>" << v(ch.noise) << "</td><td>" << v(ch.numerical)
+           << "</td><td>" << v(ch.validation) << "</td><td>"
+           << svg::num(100 * ch.shareOfGap, "%.0f") << " %</td></tr>\n";
     }
     os << "</table>\n<table><tr><th>channel, regime</th><th>samples</th><th>RMSE</th><th>bias</th>"
           "<th>largest</th><th>share</th></tr>\n";
     for (const auto& r : w.regimes) {
         const auto [unit, scale] = getUnit(c, r.channel);
-        os << "<tr><td>" << esc(r.channel + ", " + r.regime) << "</td><td>" << r.samples << "</td><td>"
-           << svg::num(r.rmse / scale, "%.4g") << " " << unit << "</td><td>"
-           << svg::num(r.bias / scale, "%.4g") << "</td><td>" << svg::num(r.maxError / scale, "%.4g")
-           << "</td><td>" << svg::num(100 * r.share, "%.0f") << " %</td></tr>\n";
+        os << "<tr><td>" << esc(r.channel + ", " + r.regime) << "</td><td>" << r.samples
+           << "</td><td>" << svg::num(r.rmse / scale, "%.4g") << " " << unit << "</td><td>"
+           << svg::num(r.bias / scale, "%.4g") << "</td><td>"
+           << svg::num(r.maxError / scale, "%.4g") << "</td><td>" << svg::num(100 * r.share, "%.0f")
+           << " %</td></tr>\n";
     }
     os << "</table>\n<table><tr><th>signature</th><th>bias</th><th>scale</th><th>lag [s]</th>"
           "<th>drift [/s]</th></tr>\n";
@@ -224,20 +247,26 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
         const std::string part = s.part.empty() ? "" : ", " + s.part;
         os << "<tr><td>" << esc(s.channel + part) << "</td><td>" << svg::num(s.bias / scale, "%.4g")
            << " " << (cc ? cc->unit : "") << "</td><td>" << svg::num(s.scale, "%.4f") << "</td><td>"
-           << svg::num(s.lag, "%.3f") << "</td><td>" << svg::num(s.drift / scale, "%.4g") << "</td></tr>\n";
+           << svg::num(s.lag, "%.3f") << "</td><td>" << svg::num(s.drift / scale, "%.4g")
+           << "</td></tr>\n";
     }
     os << "</table>\n";
     const bool bySubject = !c.subjects.empty(), byTest = c.tests.size() > 1;
     if (which) {
         os << "<h2>Which</h2>\n<p>Each candidate fitted on all "
-           << (bySubject ? "subjects" : byTest ? "tests" : "time windows")
+           << (bySubject ? "subjects"
+               : byTest  ? "tests"
+                         : "time windows")
            << " but one and judged on the one left out, in turn"
            << (bySubject ? " (leave one subject out: all tests of the subject)"
                : byTest  ? " (leave one test out)"
                          : "")
            << ".</p>\n"
            << "<table><tr><th>effect</th><th>parameters (all "
-           << (bySubject ? "subjects" : byTest ? "tests" : "windows") << ")</th>"
+           << (bySubject ? "subjects"
+               : byTest  ? "tests"
+                         : "windows")
+           << ")</th>"
               "<th>held-out gap before</th><th>after</th><th>shrink beyond u_val</th><th>score</th>"
               "<th>co-simulations</th></tr>\n";
         for (const auto& k : which->candidates) {
@@ -248,8 +277,9 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
                           svg::num(k.parameters[i] / e->parameters[i].siPerUnit, "%.4g") + " " +
                           e->parameters[i].unit;
             os << "<tr><td>" << esc(k.effect) << "</td><td>" << esc(params) << "</td><td>"
-               << svg::num(k.heldoutBefore, "%.4g") << "</td><td>" << svg::num(k.heldoutAfter, "%.4g")
-               << "</td><td>" << svg::num(100 * k.excessShrink, "%.1f") << " %</td><td>"
+               << svg::num(k.heldoutBefore, "%.4g") << "</td><td>"
+               << svg::num(k.heldoutAfter, "%.4g") << "</td><td>"
+               << svg::num(100 * k.excessShrink, "%.1f") << " %</td><td>"
                << svg::num(k.score, "%.3f") << "</td><td>" << k.simulations << "</td></tr>\n";
         }
         os << "</table>\n";
@@ -270,7 +300,8 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
             os << "<h3>subject " << esc(c.subjects.at(size_t(shownSubject))) << "</h3>\n";
         }
         for (const diagnose::PatientChannelComparison& ch : c.channels) {
-            const int parts = ch.name == "bag-pressure" ? int(std::min<size_t>(ch.partNames.size(), 6)) : 1;
+            const int parts =
+                ch.name == "bag-pressure" ? int(std::min<size_t>(ch.partNames.size(), 6)) : 1;
             for (int p = 0; p < parts; ++p) {
                 const int part = ch.name == "bag-pressure" ? p : -1;
                 svg::Series m, s, f;
@@ -279,7 +310,8 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
                 makeTimeSeries(ch, part, t, m, s);
                 if (m.x.empty()) continue;
                 std::vector<svg::Series> series = {s, m};
-                const diagnose::PatientChannelComparison* fc = fitted ? fitted->find(ch.name) : nullptr;
+                const diagnose::PatientChannelComparison* fc =
+                    fitted ? fitted->find(ch.name) : nullptr;
                 if (fc) {
                     svg::Series fm, fs;
                     makeTimeSeries(*fc, part, t, fm, fs);
@@ -288,9 +320,11 @@ std::string formatPatientDiagnosisReportHtml(const DiagnosisInfo& info,
                 }
                 svg::PlotOptions o;
                 const std::string subject =
-                    bySubject ? "subject " + c.subjects.at(size_t(c.testSubject.at(size_t(t)))) + ", " : "";
-                o.title = subject + (byTest ? "test " + c.tests[size_t(t)] + ": " : std::string()) + ch.name +
-                          (part >= 0 ? ", " + ch.partNames[size_t(part)] : "");
+                    bySubject
+                        ? "subject " + c.subjects.at(size_t(c.testSubject.at(size_t(t)))) + ", "
+                        : "";
+                o.title = subject + (byTest ? "test " + c.tests[size_t(t)] + ": " : std::string()) +
+                          ch.name + (part >= 0 ? ", " + ch.partNames[size_t(part)] : "");
                 o.xLabel = "time [s]";
                 o.yLabel = (ch.name == "mat" ? "sum of sensels [" : "[") + ch.unit + "]";
                 o.width = 460;

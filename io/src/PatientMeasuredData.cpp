@@ -43,7 +43,8 @@ double parseCell(const std::string& cell, const std::string& file, int line,
     char* end = nullptr;
     const double v = std::strtod(cell.c_str(), &end);
     if (cell.empty() || end != cell.c_str() + cell.size())
-        throw InputError(file, line, "", where + ": '" + cell + "' is not a number; valid: " + valid);
+        throw InputError(file, line, "",
+                         where + ": '" + cell + "' is not a number; valid: " + valid);
     if (!std::isfinite(v))
         throw InputError(file, line, "",
                          where + ": '" + cell + "' is not a finite number (" +
@@ -58,17 +59,18 @@ double parseCell(const std::string& cell, const std::string& file, int line,
                                  const std::string& section, const std::string& key,
                                  const std::string& message) {
     const std::string manifest = (fs::path(data.folder) / kMeasuredManifest).string();
-    const ScenarioFile m = ScenarioFile::parse(readInputFile(manifest, kMaxScenarioBytes,
-                                                             "measured-data manifest"),
-                                               manifest);
+    const ScenarioFile m = ScenarioFile::parse(
+        readInputFile(manifest, kMaxScenarioBytes, "measured-data manifest"), manifest);
     ScenarioNode owner = m.getRoot();
     if (test >= 0) owner = owner.get("tests").getElements().at(size_t(test));
-    if (key.empty() || !owner.has(section) || !owner.getSection(section).has(key)) owner.fail(section, message);
+    if (key.empty() || !owner.has(section) || !owner.getSection(section).has(key))
+        owner.fail(section, message);
     owner.getSection(section).fail(key, message);
     throw InputError(manifest, 0, section + "." + key, message);  // not reached
 }
-[[noreturn]] void failAtManifest(const diagnose::PatientMeasurement& data, const std::string& section,
-                                 const std::string& key, const std::string& message) {
+[[noreturn]] void failAtManifest(const diagnose::PatientMeasurement& data,
+                                 const std::string& section, const std::string& key,
+                                 const std::string& message) {
     failAtManifest(data, -1, section, key, message);
 }
 
@@ -113,7 +115,8 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
         if (row != m.rows)
             fail(line, frameName() + " (line " + std::to_string(lastTimeLine) + ") has " +
                            std::to_string(row) + " rows; valid: " + std::to_string(m.rows) +
-                           " rows of " + std::to_string(m.columns) + " pressures (the 'rows' line)");
+                           " rows of " + std::to_string(m.columns) +
+                           " pressures (the 'rows' line)");
         m.pressure.push_back(frame);
     };
     std::string t;
@@ -123,7 +126,8 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
         if (step < 2) {
             const char* want = step == 0 ? "rows" : "columns";
             if (first != want || cells.size() != 2)
-                fail(lineNo, "'" + t + "' where the line " + want + ",N was expected; valid: " + layout);
+                fail(lineNo,
+                     "'" + t + "' where the line " + want + ",N was expected; valid: " + layout);
             const double v = parseCell(cells[1], shownName, lineNo, std::string("'") + want + "'",
                                        "a whole number of sensels, 1 to 1024");
             if (v != std::floor(v) || v < 1 || v > kMaxMatSide)
@@ -153,15 +157,17 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
             const UnitInfo* u = findUnit(unit);
             if (!u || u->dimension != Dimension::Time)
                 fail(lineNo, "'" + cells[0] + "': " +
-                                 (unit.empty() ? std::string("no unit") : "'" + unit + "' is not a unit of a time") +
+                                 (unit.empty() ? std::string("no unit")
+                                               : "'" + unit + "' is not a unit of a time") +
                                  "; valid: time_<unit>, e.g. time_s or \"time [ms]\" (units: " +
                                  csv::listUnits(Dimension::Time) + ")");
             closeFrame(lineNo);
-            const double v = parseCell(cells[1], shownName, lineNo, "the frame's time",
-                                       "a finite time");
+            const double v =
+                parseCell(cells[1], shownName, lineNo, "the frame's time", "a finite time");
             const double si = v * u->factor;
             if (!m.time.empty() && !(si > m.time.back()))
-                fail(lineNo, "the frame's time " + cells[1] + " is not after the previous frame's (line " +
+                fail(lineNo, "the frame's time " + cells[1] +
+                                 " is not after the previous frame's (line " +
                                  std::to_string(lastTimeLine) + ") " +
                                  fmt("%.9g", m.time.back() / u->factor) +
                                  "; valid: frames in strictly increasing time");
@@ -176,19 +182,19 @@ diagnose::MatFrames readMatFramesCsv(const std::string& path, const std::string&
                              "time_s,T then the frame's rows");
         if (row >= m.rows)
             fail(lineNo, frameName() + " (line " + std::to_string(lastTimeLine) + "): a row " +
-                             std::to_string(row + 1) + " beyond the mat's " + std::to_string(m.rows) +
-                             " rows; valid: " + std::to_string(m.rows) +
+                             std::to_string(row + 1) + " beyond the mat's " +
+                             std::to_string(m.rows) + " rows; valid: " + std::to_string(m.rows) +
                              " rows, then the next frame's time line");
         if (int(cells.size()) != m.columns)
             fail(lineNo, frameName() + ", row " + std::to_string(row + 1) + ": has " +
                              std::to_string(cells.size()) + " cells; valid: " +
                              std::to_string(m.columns) + " pressures (the 'columns' line)");
         for (int c = 0; c < m.columns; ++c) {
-            const double v = parseCell(cells[size_t(c)], shownName, lineNo,
-                                       frameName() + ", row " + std::to_string(row + 1) +
-                                           ", column " + std::to_string(c + 1),
-                                       "a finite pressure in " + unitSymbol +
-                                           " (0 where the sensel reads nothing)");
+            const double v = parseCell(
+                cells[size_t(c)], shownName, lineNo,
+                frameName() + ", row " + std::to_string(row + 1) + ", column " +
+                    std::to_string(c + 1),
+                "a finite pressure in " + unitSymbol + " (0 where the sensel reads nothing)");
             frame[size_t(row) * size_t(m.columns) + size_t(c)] = v * unitFactor;
         }
         ++row;
@@ -210,8 +216,9 @@ diagnose::PatientChannels readChannelsSection(const ScenarioNode& owner, const f
     const ScenarioNode ch = owner.getSection("channels");
     ch.checkKeys({}, {"mat", "tilt", "bag_pressures"});
     if (!ch.has("mat") && !ch.has("tilt"))
-        owner.fail("channels", "names no 'mat' and no 'tilt'; valid: a pressure mat's file, a tilt "
-                               "sensor's file, or both (bag_pressures optional)");
+        owner.fail("channels",
+                   "names no 'mat' and no 'tilt'; valid: a pressure mat's file, a tilt "
+                   "sensor's file, or both (bag_pressures optional)");
     auto channelPath = [&](const ScenarioNode& node, const char* key) {
         const std::string name = node.getString(key);
         const fs::path f = fs::path(name).is_absolute() ? fs::path(name) : dir / name;
@@ -247,10 +254,12 @@ diagnose::PatientChannels readChannelsSection(const ScenarioNode& owner, const f
             e.checkKeys({"bag", "file"}, {});
             const double b = e.getNumber("bag");
             if (b != std::floor(b) || b < 0)
-                e.fail("bag", fmt("%g", b) + " is not a bag; valid: the bag's index in the array "
-                                             "(row x columns + column, from 0; bags.csv's 'bag')");
+                e.fail("bag", fmt("%g", b) +
+                                  " is not a bag; valid: the bag's index in the array "
+                                  "(row x columns + column, from 0; bags.csv's 'bag')");
             if (!seen.insert(int(b)).second)
-                e.fail("bag", "bag " + fmt("%g", b) + " is listed twice; valid: one sensor file per bag");
+                e.fail("bag",
+                       "bag " + fmt("%g", b) + " is listed twice; valid: one sensor file per bag");
             diagnose::BagPressureChannel s;
             s.bag = int(b);
             s.file = channelPath(e, "file");
@@ -290,13 +299,15 @@ void checkSubjects(const ScenarioNode& list, const std::vector<diagnose::Patient
     if (!named) return;
     for (size_t i = 0; i < tests.size(); ++i)
         if (tests[i].subject.empty())
-            nodes[i].fail("subject",
-                          "the test \"" + tests[i].name + "\" names no subject, the test \"" +
-                              tests[first].name + "\" (line " +
-                              std::to_string(nodes[first].getLine("subject")) + ") names \"" +
-                              tests[first].subject + "\"; valid: a subject for every test (the "
-                              "patient measured, e.g. subject: " + tests[first].subject +
-                              "), or for none (docs/measured-data.md#several-subjects)");
+            nodes[i].fail("subject", "the test \"" + tests[i].name +
+                                         "\" names no subject, the test \"" + tests[first].name +
+                                         "\" (line " +
+                                         std::to_string(nodes[first].getLine("subject")) +
+                                         ") names \"" + tests[first].subject +
+                                         "\"; valid: a subject for every test (the "
+                                         "patient measured, e.g. subject: " +
+                                         tests[first].subject +
+                                         "), or for none (docs/measured-data.md#several-subjects)");
     for (size_t i = 1; i < tests.size(); ++i)
         if (tests[i].subject != tests[0].subject) return;
     nodes[0].fail("subject", "every test names the subject \"" + tests[0].subject +
@@ -313,15 +324,19 @@ std::vector<diagnose::PatientTest> readTestsSection(const ScenarioNode& root, co
         diagnose::PatientTest test;
         test.name = t.getString("name");
         if (!isTestName(test.name))
-            t.fail("name", "\"" + test.name + "\" is not a test's name; valid: 1-64 letters, digits, "
-                           "'.', '-' and '_', not starting with '.' or '-' (it names the test's "
-                           "co-simulations' folders), e.g. gas-4.0g");
+            t.fail("name",
+                   "\"" + test.name +
+                       "\" is not a test's name; valid: 1-64 letters, digits, "
+                       "'.', '-' and '_', not starting with '.' or '-' (it names the test's "
+                       "co-simulations' folders), e.g. gas-4.0g");
         if (t.has("subject")) {
             test.subject = t.getString("subject");
             if (!isTestName(test.subject))
-                t.fail("subject", "\"" + test.subject + "\" is not a subject's name; valid: 1-64 "
-                                  "letters, digits, '.', '-' and '_', not starting with '.' or '-' "
-                                  "(as a test's name), e.g. subject-2");
+                t.fail("subject",
+                       "\"" + test.subject +
+                           "\" is not a subject's name; valid: 1-64 "
+                           "letters, digits, '.', '-' and '_', not starting with '.' or '-' "
+                           "(as a test's name), e.g. subject-2");
         }
         const auto [it, added] = names.emplace(test.name, t.getLine("name"));
         if (!added)
@@ -330,13 +345,15 @@ std::vector<diagnose::PatientTest> readTestsSection(const ScenarioNode& root, co
         if (t.has("overrides")) {
             const ScenarioNode o = t.getSection("overrides");
             if (!o.isMap() && !o.isNull())
-                t.fail("overrides", "must be a section of scenario keys and values, e.g. "
-                                    "{array.gas_mass: 4.0 g}");
+                t.fail("overrides",
+                       "must be a section of scenario keys and values, e.g. "
+                       "{array.gas_mass: 4.0 g}");
             for (auto kv = o.getYaml().begin(); o.isMap() && kv != o.getYaml().end(); ++kv) {
                 const std::string key = kv->first.as<std::string>();
                 if (isProtocolKey(key))
-                    o.fail(key, "a test cannot change '" + key + "'; valid: any other scenario key "
-                                "(the protocol's settle_time and duration are every test's)");
+                    o.fail(key, "a test cannot change '" + key +
+                                    "'; valid: any other scenario key "
+                                    "(the protocol's settle_time and duration are every test's)");
                 std::string value;
                 if (kv->second.IsScalar()) {
                     value = kv->second.Scalar();
@@ -352,8 +369,9 @@ std::vector<diagnose::PatientTest> readTestsSection(const ScenarioNode& root, co
         tests.push_back(std::move(test));
     }
     if (tests.empty())
-        root.fail("tests", "is an empty list; valid: one entry per test, each with a name, its "
-                           "overrides and its channels (docs/measured-data.md#several-tests)");
+        root.fail("tests",
+                  "is an empty list; valid: one entry per test, each with a name, its "
+                  "overrides and its channels (docs/measured-data.md#several-tests)");
     checkSubjects(list, tests);
     return tests;
 }
@@ -368,7 +386,8 @@ diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder) 
     diagnose::PatientMeasurement data;
     data.folder = folder;
     data.description = root.getString("description", "");
-    data.scenarioFile = manifest::readManifestScenario(root, folder, "the patient-on-array scenario");
+    data.scenarioFile =
+        manifest::readManifestScenario(root, folder, "the patient-on-array scenario");
 
     const ScenarioNode p = root.getSection("protocol");
     p.checkKeys({"kind"}, {"settle_time", "duration"});
@@ -380,14 +399,18 @@ diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder) 
         (std::string(key) == "duration" ? data.protocol.duration : data.protocol.settleTime) = v;
     }
     if (root.has("channels") && root.has("tests"))
-        root.fail("tests", "the manifest has both 'channels' and 'tests'; valid: 'channels' for one "
-                           "record, or 'tests' (a list, each test with its own channels)");
+        root.fail("tests",
+                  "the manifest has both 'channels' and 'tests'; valid: 'channels' for one "
+                  "record, or 'tests' (a list, each test with its own channels)");
     if (!root.has("channels") && !root.has("tests"))
-        root.fail("channels", "the manifest has neither 'channels' nor 'tests'; valid: 'channels' "
-                              "for one record, or 'tests', a list of records each with its "
-                              "'name', 'overrides' and 'channels' (docs/measured-data.md)");
-    if (root.has("channels")) data.channels = readChannelsSection(root, dir);
-    else data.tests = readTestsSection(root, dir);
+        root.fail("channels",
+                  "the manifest has neither 'channels' nor 'tests'; valid: 'channels' "
+                  "for one record, or 'tests', a list of records each with its "
+                  "'name', 'overrides' and 'channels' (docs/measured-data.md)");
+    if (root.has("channels"))
+        data.channels = readChannelsSection(root, dir);
+    else
+        data.tests = readTestsSection(root, dir);
     return data;
 }
 
@@ -407,22 +430,25 @@ void checkAgainstScenario(const diagnose::PatientMeasurement& data, int test,
     for (const diagnose::BagPressureChannel& b : c.bags)
         if (b.bag >= nbags)
             failAtManifest(data, test, "channels", "bag_pressures",
-                           "bag " + std::to_string(b.bag) + " (" + b.file + ") is not in the array of " +
-                               std::to_string(nbags) + " bags; valid: 0 to " +
-                               std::to_string(nbags - 1));
+                           "bag " + std::to_string(b.bag) + " (" + b.file +
+                               ") is not in the array of " + std::to_string(nbags) +
+                               " bags; valid: 0 to " + std::to_string(nbags - 1));
     const double end = sc.getEndTime() + 1e-9;
-    auto checkSpan = [&](const std::vector<double>& t, const std::string& key, const std::string& f) {
+    auto checkSpan = [&](const std::vector<double>& t, const std::string& key,
+                         const std::string& f) {
         if (t.empty()) return;
         if (t.front() < -1e-9 || t.back() > end)
             failAtManifest(data, test, "channels", key,
-                           f + " runs from " + fmt("%g", t.front()) + " s to " + fmt("%g", t.back()) +
+                           f + " runs from " + fmt("%g", t.front()) + " s to " +
+                               fmt("%g", t.back()) +
                                " s; valid: samples from the release (0 s) to the run's end, " +
                                fmt("%g s", sc.getEndTime()) +
                                " (run.settle_time + run.duration, with the protocol's)");
     };
     checkSpan(c.mat.time, "mat", c.matFile);
     checkSpan(c.tilt.time, "tilt", c.tiltFile);
-    for (const diagnose::BagPressureChannel& b : c.bags) checkSpan(b.pressure.time, "bag_pressures", b.file);
+    for (const diagnose::BagPressureChannel& b : c.bags)
+        checkSpan(b.pressure.time, "bag_pressures", b.file);
 }
 
 }  // namespace
@@ -435,7 +461,8 @@ PatientMeasuredScenario readPatientMeasuredScenario(const diagnose::PatientMeasu
                        "the scenario " + data.scenarioFile + " is of kind '" + kind +
                            "'; valid: a patient-on-array scenario (docs/scenario-reference.md)");
     const diagnose::PatientProtocol& pr = data.protocol;
-    if (pr.settleTime >= 0.0) file.applyOverride("run.settle_time", fmt("%.9g", pr.settleTime) + " s");
+    if (pr.settleTime >= 0.0)
+        file.applyOverride("run.settle_time", fmt("%.9g", pr.settleTime) + " s");
     if (pr.duration >= 0.0) file.applyOverride("run.duration", fmt("%.9g", pr.duration) + " s");
     PatientOnArrayScenario sc;
     try {
@@ -476,20 +503,24 @@ namespace {
 
 // One record's channel files, named with `prefix` ("" or "<test>-"), and its `channels` section
 // of the manifest indented by `indent`.
-void writeChannels(const fs::path& dir, const std::string& prefix, const diagnose::PatientChannels& c,
-                   const std::string& indent, std::ostringstream& m, std::vector<std::string>& names) {
+void writeChannels(const fs::path& dir, const std::string& prefix,
+                   const diagnose::PatientChannels& c, const std::string& indent,
+                   std::ostringstream& m, std::vector<std::string>& names) {
     m << indent << "channels:\n";
     if (!c.mat.empty()) {
         std::ostringstream o;
-        o << "# pressure mat export: " << c.mat.rows << " rows along the bed (row 1 at the foot end) x "
-          << c.mat.columns << " columns across (column 1 at his left)\n"
+        o << "# pressure mat export: " << c.mat.rows
+          << " rows along the bed (row 1 at the foot end) x " << c.mat.columns
+          << " columns across (column 1 at his left)\n"
           << "rows," << c.mat.rows << "\ncolumns," << c.mat.columns << "\nunit,mmHg\n";
         for (size_t f = 0; f < c.mat.time.size(); ++f) {
             o << "time_s," << fmt("%.4f", c.mat.time[f]) << "\n";
             for (int r = 0; r < c.mat.rows; ++r) {
                 for (int k = 0; k < c.mat.columns; ++k)
                     o << (k ? "," : "")
-                      << fmt("%.2f", c.mat.pressure[f][size_t(r) * size_t(c.mat.columns) + size_t(k)] / kMmHg);
+                      << fmt("%.2f",
+                             c.mat.pressure[f][size_t(r) * size_t(c.mat.columns) + size_t(k)] /
+                                 kMmHg);
                 o << "\n";
             }
         }
@@ -596,11 +627,11 @@ diagnose::PatientChannels readArrayRunChannels(const fs::path& runDir) {
     } catch (const std::exception& e) {
         throw InputError(h5path.string(), 0, "", e.what());
     }
-    const std::string help = "a patient-on-array results folder holds results.h5, tilt.csv and "
-                             "bags.csv (docs/output-layout.md#patient-on-array)";
-    const report::CsvTable tilt =
-        report::readCsvTable(runDir / "tilt.csv", {"time_s", "pelvis_tilt_deg", "thorax_tilt_deg"},
-                             false, help);
+    const std::string help =
+        "a patient-on-array results folder holds results.h5, tilt.csv and "
+        "bags.csv (docs/output-layout.md#patient-on-array)";
+    const report::CsvTable tilt = report::readCsvTable(
+        runDir / "tilt.csv", {"time_s", "pelvis_tilt_deg", "thorax_tilt_deg"}, false, help);
     for (size_t r = 0; r < tilt.rows.size(); ++r) {
         const double t = tilt.number(r, 0);
         if (!out.tilt.time.empty() && !(t > out.tilt.time.back())) continue;  // a repeated time
@@ -608,8 +639,8 @@ diagnose::PatientChannels readArrayRunChannels(const fs::path& runDir) {
         out.tilt.pelvis.push_back(tilt.number(r, 1) * kPi / 180.0);
         out.tilt.thorax.push_back(tilt.number(r, 2) * kPi / 180.0);
     }
-    const report::CsvTable bags =
-        report::readCsvTable(runDir / "bags.csv", {"time_s", "bag", "mass_g", "pressure_kPa"}, false, help);
+    const report::CsvTable bags = report::readCsvTable(
+        runDir / "bags.csv", {"time_s", "bag", "mass_g", "pressure_kPa"}, false, help);
     std::map<int, diagnose::BagPressureChannel> byBag;
     for (size_t r = 0; r < bags.rows.size(); ++r) {
         const int b = int(bags.number(r, 1));

@@ -83,8 +83,7 @@ void checkScenarioName(const ScenarioNode& root, const std::string& name) {
                               "'.', '_' and '-' only");
     // out/. and out/.. are not a folder of the run's own (out/.. is where bagsim was started).
     if (name.find_first_not_of('.') == std::string::npos)
-        root.fail("name", "\"" + name +
-                              "\" names the output folder out/" + name +
+        root.fail("name", "\"" + name + "\" names the output folder out/" + name +
                               ", which is not a folder of its own; valid: a name with a letter "
                               "or digit, e.g. supine-75kg");
 }
@@ -185,9 +184,8 @@ PatientOnSupportScenario readPatientOnSupportScenario(const ScenarioFile& file) 
     body::SettleOptions& o = sc.settle;
     const ScenarioNode sup = root.getSection("support", false);
     if (!sup.isNull()) {
-        sup.checkKeys(
-            {}, {"height", "stiffness", "damping", "friction", "friction_law", "slip_velocity",
-                 "stick_distance", "sample_spacing"});
+        sup.checkKeys({}, {"height", "stiffness", "damping", "friction", "friction_law",
+                           "slip_velocity", "stick_distance", "sample_spacing"});
         body::PlaneSupportOptions& so = o.support;
         so.height = sup.getQuantity("height", D::Length, so.height);
         so.stiffness = sup.getQuantity("stiffness", D::StiffnessPerArea, so.stiffness);

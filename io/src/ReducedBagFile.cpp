@@ -146,7 +146,8 @@ std::shared_ptr<const cosim::ReducedBagCalibration> readReducedBagCalibration(
         } else {
             r.fail(rec,
                    "unknown record; valid: source, geometry, gas, board_penalty, rim_width, skirt, "
-                   "panel_coupling, grid, depths, mass, top, pressure_factor, volume_factor, envelope");
+                   "panel_coupling, grid, depths, mass, top, pressure_factor, volume_factor, "
+                   "envelope");
         }
     }
     r.line = 0;
@@ -229,8 +230,7 @@ void writeReducedBagCalibration(const std::string& path, const cosim::ReducedBag
       << "skirt " << c.skirt << "\n";
     if (c.panelSink > 0.0 || c.panelLift > 0.0)
         f << "panel_coupling " << c.panelSink << " " << c.panelLift << " " << c.panelBlend << "\n";
-    f
-      << "envelope " << c.depthMax << " " << c.radiusMin << " " << c.radiusMax << " " << c.tiltMax
+    f << "envelope " << c.depthMax << " " << c.radiusMin << " " << c.radiusMax << " " << c.tiltMax
       << "\n"
       << "grid " << c.nx << " " << c.ny << " " << c.x0 << " " << c.y0 << " " << c.pitch << "\n"
       << "depths";

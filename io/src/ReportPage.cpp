@@ -118,7 +118,8 @@ std::string formatStatusCell(const std::string& status) {
     if (s == "ok") return "<td class='ok'>&#10004; ok</td>";
     if (s == "warning" || s == "partial")
         return "<td class='warning'>&#9888; " + svg::escape(s) + "</td>";
-    if (s == "fail" || s == "failed") return "<td class='fail'>&#10008; " + svg::escape(s) + "</td>";
+    if (s == "fail" || s == "failed")
+        return "<td class='fail'>&#10008; " + svg::escape(s) + "</td>";
     return "<td class='na'>" + svg::escape(status.empty() ? "n/a" : status) + "</td>";
 }
 
@@ -160,8 +161,8 @@ std::string drawColourBar(const ColourBar& b) {
     }
     double y = top + h + 14;
     for (const auto& [fill, text] : b.swatches) {
-        os << "<rect x='" << x << "' y='" << y << "' width='" << w << "' height='12' fill='"
-           << fill << "' stroke='#888'/><text x='" << x + w + 6 << "' y='" << y + 10 << "'>"
+        os << "<rect x='" << x << "' y='" << y << "' width='" << w << "' height='12' fill='" << fill
+           << "' stroke='#888'/><text x='" << x + w + 6 << "' y='" << y + 10 << "'>"
            << svg::escape(text) << "</text>";
         y += 18;
     }

@@ -53,9 +53,9 @@ std::string formatStatusCell(const std::string& status);
 /// A vertical colour scale (viridis from lo to hi) as its own <svg class='colourbar'>.
 struct ColourBar {
     double lo = 0.0, hi = 1.0;
-    std::string label;               ///< above the scale, with its unit: "pressure [mmHg]"
-    std::string title;               ///< hover text
-    bool saturatedTop = false;       ///< the top tick reads ">= hi"
+    std::string label;          ///< above the scale, with its unit: "pressure [mmHg]"
+    std::string title;          ///< hover text
+    bool saturatedTop = false;  ///< the top tick reads ">= hi"
     double ref = std::numeric_limits<double>::quiet_NaN();  ///< a marked value (e.g. 32 mmHg)
     std::string refLabel;
     /// Boxes under the scale: (fill colour, text), e.g. ("#fff", "below 0.5").

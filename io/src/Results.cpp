@@ -35,12 +35,14 @@ std::string getUtcTimestamp() {
 std::vector<std::pair<double, double>> findInvertibleKOfM(const bags::LoadTestResult& result) {
     std::vector<const bags::LoadCurve*> curves;
     for (const bags::LoadCurve& c : result.curves) curves.push_back(&c);
-    std::sort(curves.begin(), curves.end(),
-              [](const bags::LoadCurve* a, const bags::LoadCurve* b) { return a->gasMass > b->gasMass; });
+    std::sort(curves.begin(), curves.end(), [](const bags::LoadCurve* a, const bags::LoadCurve* b) {
+        return a->gasMass > b->gasMass;
+    });
     std::vector<std::pair<double, double>> km;
     for (const bags::LoadCurve* c : curves) {
         if (!c->reachedPeak || !std::isfinite(c->stiffness) || !(c->stiffness > 0.0)) break;
-        if (!km.empty() && !(c->stiffness < km.back().second && c->gasMass < km.back().first)) break;
+        if (!km.empty() && !(c->stiffness < km.back().second && c->gasMass < km.back().first))
+            break;
         km.emplace_back(c->gasMass, c->stiffness);
     }
     if (km.size() < 2) return {};
@@ -53,13 +55,11 @@ std::vector<std::pair<double, double>> findInvertibleKOfM(const bags::LoadTestRe
 namespace {
 
 // Files a run writes; --force removes them first so no stale result survives a failed rerun.
-const char* const kOwnedFiles[] = {kResultsH5,      kResultsXdmf,      kLoadDisplacementCsv,
-                                   kStiffnessCsv,   kRigReadingsCsv,   "results.xdmf.tmp",
-                                   "regions.csv",   "bags.csv",        "tilt.csv",
-                                   "report.html",   "report.html.tmp", "summary.txt",
-                                   "verdict.csv",   "events.csv",      "body.csv",
-                                   "pneumatics.csv", kKOfMYaml,       kCheckpointFile,
-                                   "checkpoint.bin.tmp"};
+const char* const kOwnedFiles[] = {
+    kResultsH5,         kResultsXdmf,  kLoadDisplacementCsv, kStiffnessCsv,       kRigReadingsCsv,
+    "results.xdmf.tmp", "regions.csv", "bags.csv",           "tilt.csv",          "report.html",
+    "report.html.tmp",  "summary.txt", "verdict.csv",        "events.csv",        "body.csv",
+    "pneumatics.csv",   kKOfMYaml,     kCheckpointFile,      "checkpoint.bin.tmp"};
 
 }  // namespace
 
@@ -321,8 +321,7 @@ CurveData& LoadTestWriter::Impl::getCurve(const bags::LoadStep& s) {
         c.stabilization =
             h5::GrowingDataset(g, "stabilization_energy", H5T_NATIVE_DOUBLE, {}, 256, "J");
         c.residual = h5::GrowingDataset(g, "residual", H5T_NATIVE_DOUBLE, {}, 256, "N");
-        c.kineticEnergy =
-            h5::GrowingDataset(g, "kinetic_energy", H5T_NATIVE_DOUBLE, {}, 256, "J");
+        c.kineticEnergy = h5::GrowingDataset(g, "kinetic_energy", H5T_NATIVE_DOUBLE, {}, 256, "J");
         c.pressure =
             h5::GrowingDataset(g, "gauge_pressure", H5T_NATIVE_DOUBLE, {chambers}, 256, "Pa");
         c.volume = h5::GrowingDataset(g, "volume", H5T_NATIVE_DOUBLE, {chambers}, 256, "m^3");
@@ -631,7 +630,8 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
         for (size_t i = 0; i < n; ++i)
             out << fmtG(mass[i] * 1e3, 6) << ',' << fmtG(stiffness[i] * 1e-3) << ','
                 << fmtG(r.curves[i].stiffnessMin * 1e-3) << ','
-                << fmtG(r.curves[i].stiffnessMax * 1e-3) << ',' << fmtG(r2[i], 6) << ',' << stage[i] << ',' << getCurveEnd(r.curves[i]) << '\n';
+                << fmtG(r.curves[i].stiffnessMax * 1e-3) << ',' << fmtG(r2[i], 6) << ',' << stage[i]
+                << ',' << getCurveEnd(r.curves[i]) << '\n';
         if (!out) throw std::runtime_error("cannot write " + d.dir.getFile(kStiffnessCsv).string());
     }
 
@@ -639,9 +639,12 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
     const std::vector<std::pair<double, double>> km = findInvertibleKOfM(r);
     if (km.size() >= 2) {
         std::ofstream out(d.dir.getFile(kKOfMYaml), std::ios::trunc);
-        out << "# k(m) of this run's bag, the stiffness of stiffness.csv on its taut branch: from the\n"
-               "# highest gas mass down while the stiffness falls, curves that reached their peak. Paste\n"
-               "# under 'control:' of a patient-on-array scenario with kind target-mass, whose targets\n"
+        out << "# k(m) of this run's bag, the stiffness of stiffness.csv on its taut branch: from "
+               "the\n"
+               "# highest gas mass down while the stiffness falls, curves that reached their peak. "
+               "Paste\n"
+               "# under 'control:' of a patient-on-array scenario with kind target-mass, whose "
+               "targets\n"
                "# may then give a stiffness (docs/scenario-reference.md).\n"
                "k_of_m: [";
         for (size_t i = 0; i < km.size(); ++i)
@@ -666,7 +669,8 @@ std::string LoadTestWriter::finish(const bags::LoadTestResult& r) {
     const std::string message =
         numFailed > 0 ? std::to_string(numFailed) + " of " + std::to_string(n) +
                             " curves stopped on a numerical failure or outside the model's "
-                            "envelope (" + failures + ")"
+                            "envelope (" +
+                            failures + ")"
                       : std::string("");
     h5::setAttribute(d.meta.get(), "status", status);
     h5::setAttribute(d.meta.get(), "message", message);

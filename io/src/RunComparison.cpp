@@ -25,8 +25,9 @@ long timeKey(double t) { return std::lround(t * 1e4); }
 
 using csv::fmt;
 
-const char* kHelp = "a patient-on-array results folder (bagsim run --out DIR) holds tilt.csv and "
-                    "regions.csv";
+const char* kHelp =
+    "a patient-on-array results folder (bagsim run --out DIR) holds tilt.csv and "
+    "regions.csv";
 
 // Tilt rows by time key: (pelvis, thorax) [rad].
 std::map<long, std::pair<double, double>> readTilt(const fs::path& dir) {
@@ -35,7 +36,8 @@ std::map<long, std::pair<double, double>> readTilt(const fs::path& dir) {
     const int ct = t.find("time_s"), cp = t.find("pelvis_tilt_deg"), cq = t.find("thorax_tilt_deg");
     std::map<long, std::pair<double, double>> out;
     for (size_t r = 0; r < t.rows.size(); ++r)
-        out[timeKey(t.number(r, ct))] = {fromUnit(t.number(r, cp), "deg"), fromUnit(t.number(r, cq), "deg")};
+        out[timeKey(t.number(r, ct))] = {fromUnit(t.number(r, cp), "deg"),
+                                         fromUnit(t.number(r, cq), "deg")};
     return out;
 }
 
@@ -51,7 +53,8 @@ std::map<long, std::map<std::string, RegionRow>> readRegions(const fs::path& dir
               cp = t.find("patch_peak_mmHg");
     std::map<long, std::map<std::string, RegionRow>> out;
     for (size_t r = 0; r < t.rows.size(); ++r)
-        out[timeKey(t.number(r, ct))][t.text(r, cr)] = {t.number(r, cf), fromUnit(t.number(r, cp), "mmHg")};
+        out[timeKey(t.number(r, ct))][t.text(r, cr)] = {t.number(r, cf),
+                                                        fromUnit(t.number(r, cp), "mmHg")};
     return out;
 }
 
@@ -76,18 +79,20 @@ std::vector<std::string> RunComparison::whyNotJudged() const {
     if (!referenceIncomplete.empty()) why.push_back("the reference is an unfinished run");
     if (!runIncomplete.empty()) why.push_back("the run is an unfinished run");
     if (tiltRows < referenceTiltRows)
-        why.push_back("the run lacks " + std::to_string(referenceTiltRows - tiltRows) + " of the reference's " +
-                      std::to_string(referenceTiltRows) + " tilt rows");
+        why.push_back("the run lacks " + std::to_string(referenceTiltRows - tiltRows) +
+                      " of the reference's " + std::to_string(referenceTiltRows) + " tilt rows");
     if (tiltRowsNotFinite > 0)
         why.push_back(std::to_string(tiltRowsNotFinite) + " tilt rows are not finite numbers");
     if (!missingTimes.empty())
-        why.push_back(std::to_string(missingTimes.size()) + " asked-for moments are not output times of both runs");
+        why.push_back(std::to_string(missingTimes.size()) +
+                      " asked-for moments are not output times of both runs");
     if (overall.regions == 0) why.push_back("no region was judged");
     return why;
 }
 
 bool RunComparison::meetsTargets() const {
-    return whyNotJudged().empty() && tiltRowsWithin == tiltRows && overall.within == overall.regions;
+    return whyNotJudged().empty() && tiltRowsWithin == tiltRows &&
+           overall.within == overall.regions;
 }
 
 RunComparison compareRuns(const fs::path& reference, const fs::path& run,
@@ -200,7 +205,8 @@ RunComparison compareRuns(const fs::path& reference, const fs::path& run,
         for (const auto& [name, ref] : r->second) {
             if (!(ref.force >= options.minForce) || !(ref.peak > 0.0)) continue;
             RegionPeak p;
-            p.time = k * 1e-4, p.region = name, p.referenceForce = ref.force, p.reference = ref.peak;
+            p.time = k * 1e-4, p.region = name, p.referenceForce = ref.force,
+            p.reference = ref.peak;
             const auto it = run_.find(name);
             p.run = it == run_.end() ? 0.0 : it->second.peak;
             c.peaks.push_back(p);
@@ -223,10 +229,12 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
     const double tolDeg = toUnit(c.options.tiltTolerance, "deg");
     const double tolPc = 100.0 * c.options.peakTolerance;
     o << c.run.string() << " against " << c.reference.string() << "\n";
-    for (const auto& [what, status] : {std::pair<const char*, const std::string&>{"the reference", c.referenceIncomplete},
-                                       {"the run", c.runIncomplete}})
+    for (const auto& [what, status] :
+         {std::pair<const char*, const std::string&>{"the reference", c.referenceIncomplete},
+          {"the run", c.runIncomplete}})
         if (!status.empty())
-            o << "NOTE: " << what << " is an incomplete run (its INCOMPLETE marker: status " << status
+            o << "NOTE: " << what << " is an incomplete run (its INCOMPLETE marker: status "
+              << status
               << "); its rows so far are compared, but its last one (it may be half-written)\n";
     o << "\n";
     o << "tilt (run - reference), " << c.tiltRows << " rows from " << fmt("%g s", c.firstTime)
@@ -234,10 +242,11 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
     if (c.tiltRows < c.referenceTiltRows)
         o << " (the reference has " << c.referenceTiltRows << "; the run lacks the others)";
     o << ":\n";
-    for (const auto& [name, d] : {std::pair<const char*, const TiltDifference&>{"pelvis", c.pelvis},
-                                  {"thorax", c.thorax}})
+    for (const auto& [name, d] :
+         {std::pair<const char*, const TiltDifference&>{"pelvis", c.pelvis}, {"thorax", c.thorax}})
         o << "  " << name << ": largest " << fmt("%+.2f deg", toUnit(d.largest, "deg")) << " at "
-          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", toUnit(d.rms, "deg")) << "\n";
+          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", toUnit(d.rms, "deg"))
+          << "\n";
     o << "  within " << fmt("%g deg", tolDeg) << ": " << c.tiltRowsWithin << " of " << c.tiltRows
       << " rows (both segments)";
     if (c.tiltRowsNotFinite > 0) o << "; " << c.tiltRowsNotFinite << " rows not finite numbers";
@@ -248,7 +257,8 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
          {std::pair<const char*, const TiltDifference&>{"pelvis", c.pelvisSinceFirst},
           {"thorax", c.thoraxSinceFirst}})
         o << "  " << name << ": largest " << fmt("%+.2f deg", toUnit(d.largest, "deg")) << " at "
-          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", toUnit(d.rms, "deg")) << "\n";
+          << fmt("%g s", d.largestTime) << ", rms " << fmt("%.2f deg", toUnit(d.rms, "deg"))
+          << "\n";
     o << "  within " << fmt("%g deg", tolDeg) << ": " << c.tiltRowsWithinSinceFirst << " of "
       << c.tiltRows - c.tiltRowsNotFinite << " rows (both segments)\n\n";
     o << "region patch peaks (20 cm^2, regions.csv), the regions carrying at least "
@@ -257,7 +267,8 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
     auto line = [&](const std::string& when, const RegionPeakSummary& s) {
         char buf[160];
         if (s.regions == 0)
-            std::snprintf(buf, sizeof buf, "  %-10s %7d   -         -         -\n", when.c_str(), 0);
+            std::snprintf(buf, sizeof buf, "  %-10s %7d   -         -         -\n", when.c_str(),
+                          0);
         else
             std::snprintf(buf, sizeof buf, "  %-10s %7d   %+6.1f %%  %6.1f %%  %d\n", when.c_str(),
                           s.regions, 100 * s.mean, 100 * s.rms, s.within);
@@ -272,8 +283,8 @@ std::string formatRunComparison(const RunComparison& c, bool detail) {
         for (const RegionPeak& p : c.peaks) {
             char buf[200];
             std::snprintf(buf, sizeof buf, "  %-10s %-16s %6.1f mmHg %6.1f mmHg %+6.1f %%%s\n",
-                          fmt("%g s", p.time).c_str(), p.region.c_str(), toUnit(p.reference, "mmHg"),
-                          toUnit(p.run, "mmHg"), 100 * p.error(),
+                          fmt("%g s", p.time).c_str(), p.region.c_str(),
+                          toUnit(p.reference, "mmHg"), toUnit(p.run, "mmHg"), 100 * p.error(),
                           std::abs(p.error()) <= c.options.peakTolerance ? "" : "  *");
             o << buf;
         }
@@ -305,8 +316,8 @@ std::string formatRegionPeaksCsv(const RunComparison& c) {
     for (const RegionPeak& p : c.peaks) {
         char buf[200];
         std::snprintf(buf, sizeof buf, "%.4f,%s,%.3f,%.3f,%.3f,%.2f,%d\n", p.time, p.region.c_str(),
-                      p.referenceForce, toUnit(p.reference, "mmHg"), toUnit(p.run, "mmHg"), 100 * p.error(),
-                      std::abs(p.error()) <= c.options.peakTolerance ? 1 : 0);
+                      p.referenceForce, toUnit(p.reference, "mmHg"), toUnit(p.run, "mmHg"),
+                      100 * p.error(), std::abs(p.error()) <= c.options.peakTolerance ? 1 : 0);
         o << buf;
     }
     return o.str();

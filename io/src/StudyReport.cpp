@@ -47,7 +47,7 @@ bool parseNumber(const std::string& cell, double* v) {
 /// The unit a results column's name ends in ("stiffness_N_per_mm" -> "N/mm"), "" if none.
 std::pair<std::string, std::string> splitUnit(const std::string& column) {
     static const std::pair<const char*, const char*> kTails[] = {
-        {"_N_per_mm", "N/mm"}, {"_g_per_s", "g/s"}, {"_kPa", "kPa"}, {"_mmHg", "mmHg"},
+        {"_N_per_mm", "N/mm"}, {"_g_per_s", "g/s"},  {"_kPa", "kPa"}, {"_mmHg", "mmHg"},
         {"_Pa", "Pa"},         {"_cm2", "cm\u00b2"}, {"_deg", "deg"}, {"_percent", "%"},
         {"_N", "N"},           {"_mm", "mm"},        {"_kg", "kg"},   {"_g", "g"},
         {"_s", "s"},           {"_m", "m"},          {"_l", "l"},     {"_J", "J"}};
@@ -117,7 +117,7 @@ struct Parameter {
     std::string key, unit;
     int column = -1;
     bool numeric = true;
-    std::vector<double> values;  ///< per row (NaN if not numeric)
+    std::vector<double> values;         ///< per row (NaN if not numeric)
     std::vector<std::string> distinct;  ///< cell texts in first-seen order
 };
 
@@ -125,7 +125,7 @@ struct Output {
     std::string name;  ///< the table's column
     int column = -1;
     bool numeric = false;
-    std::string label, unit;   ///< "stiffness (min)", "N/mm"
+    std::string label, unit;     ///< "stiffness (min)", "N/mm"
     std::vector<double> values;  ///< per row, NaN where empty
     std::string getAxis() const { return unit.empty() ? label : label + " [" + unit + "]"; }
 };
@@ -133,8 +133,7 @@ struct Output {
 struct Study {
     fs::path dir;
     CsvTable table;
-    int caseColumn = -1, keyColumn = -1, statusColumn = -1, reasonColumn = -1,
-        secondsColumn = -1;
+    int caseColumn = -1, keyColumn = -1, statusColumn = -1, reasonColumn = -1, secondsColumn = -1;
     std::vector<Parameter> parameters;
     std::vector<Output> outputs;
     // study.h5
@@ -162,7 +161,8 @@ struct Study {
         std::string d;
         for (size_t p = 0; p < parameters.size(); ++p)
             if (!skip.count(p))
-                d += (d.empty() ? "" : ", ") + shortKey(parameters[p].key) + "=" + formatValue(p, r);
+                d +=
+                    (d.empty() ? "" : ", ") + shortKey(parameters[p].key) + "=" + formatValue(p, r);
         return d;
     }
 };
@@ -191,7 +191,8 @@ Output makeOutput(const std::string& name, int column) {
     o.unit = unit;
     if (!per.empty()) {
         const auto [perStem, perUnit] = splitUnit(per);
-        o.label += " at " + words(perStem) + " " + perValue + (perUnit.empty() ? "" : " " + perUnit);
+        o.label +=
+            " at " + words(perStem) + " " + perValue + (perUnit.empty() ? "" : " " + perUnit);
     }
     return o;
 }
@@ -352,7 +353,8 @@ std::vector<Output> mergePerColumns(const Study& s) {
         }
         const std::string inside = o.name.substr(b + 1, o.name.size() - b - 2);
         Output m = makeOutput(o.name.substr(0, b), o.column);
-        m.label += " (at the case's " + words(splitUnit(inside.substr(0, inside.find('='))).first) + ")";
+        m.label +=
+            " (at the case's " + words(splitUnit(inside.substr(0, inside.find('='))).first) + ")";
         m.numeric = true;
         m.values.assign(s.table.rows.size(), kNaN);
         for (size_t k : f->second) {
@@ -493,7 +495,8 @@ std::string drawAgainst(const Study& s, size_t p, const std::vector<double>& y,
     }
     svg::PlotOptions o;
     o.title = title;
-    const std::string unit = (scale != 1.0 ? formatNumber(scale) + (q.unit.empty() ? "" : " ") : "") + q.unit;
+    const std::string unit =
+        (scale != 1.0 ? formatNumber(scale) + (q.unit.empty() ? "" : " ") : "") + q.unit;
     o.xLabel = describeKey(q.key) + (unit.empty() ? "" : " [" + unit + "]");
     o.yLabel = yAxis;
     o.refLines = refLines;
@@ -511,7 +514,8 @@ std::vector<size_t> findAxes(const Study& s) {
         if (!s.parameters[p].numeric || s.parameters[p].distinct.size() < 2) continue;
         // A parameter swept one to one with an axis already drawn is drawn on that axis.
         bool drawn = false;
-        for (size_t q : findPartners(s, p)) drawn = drawn || std::find(axes.begin(), axes.end(), q) != axes.end();
+        for (size_t q : findPartners(s, p))
+            drawn = drawn || std::find(axes.begin(), axes.end(), q) != axes.end();
         if (!drawn) axes.push_back(p);
     }
     return axes;
@@ -531,8 +535,8 @@ bool parsePosition(const std::string& text, int* along, int* across) {
 
 /// One map: the 3 x 3 block seen from above, +x (along the bags' length) up, +y right; each
 /// pressed position coloured by its value, the value written in it.
-std::string drawMap(const Study& s, const Output& o, const std::vector<size_t>& rows, size_t pressed,
-                    const report::ColourBar& scale, const std::string& caption) {
+std::string drawMap(const Study& s, const Output& o, const std::vector<size_t>& rows,
+                    size_t pressed, const report::ColourBar& scale, const std::string& caption) {
     const double cw = 92, ch = 74, left = 34, top = 28;
     const double W = left + 3 * cw + 10, H = top + 3 * ch + 40;
     std::map<std::pair<int, int>, size_t> at;
@@ -579,7 +583,8 @@ std::string drawMap(const Study& s, const Output& o, const std::vector<size_t>& 
                << "' width='" << cw << "' height='" << ch << "' fill='" << fill
                << "' stroke='#fff' stroke-width='2'/><text x='" << x + cw / 2 << "' y='"
                << y + ch / 2 + (std::isfinite(v) ? 2 : 0) << "' text-anchor='middle' fill='" << ink
-               << "'" << (std::isfinite(v) ? " font-size='15' font-weight='bold'" : " font-size='11'")
+               << "'"
+               << (std::isfinite(v) ? " font-size='15' font-weight='bold'" : " font-size='11'")
                << ">" << escape(text) << "</text><text x='" << x + cw / 2 << "' y='" << y + ch - 8
                << "' text-anchor='middle' font-size='10' fill='" << ink << "'>" << pos
                << "</text></g>";
@@ -623,8 +628,8 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
     std::map<std::string, int> count;
     for (size_t r = 0; r < n; ++r) ++count[s.status(r)];
     const int missing = count["not-run"] + count["interrupted"];
-    const bool incomplete = missing > 0 || !s.marker.empty() ||
-                            (!s.h5Status.empty() && s.h5Status != "complete");
+    const bool incomplete =
+        missing > 0 || !s.marker.empty() || (!s.h5Status.empty() && s.h5Status != "complete");
     double seconds = 0.0;
     for (size_t r = 0; r < n; ++r) {
         double v = 0.0;
@@ -669,7 +674,8 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
         for (size_t r = 0; r < n; ++r) {
             if (s.status(r) == "ok") continue;
             std::string why = s.reason(r);
-            if (why.empty() && s.status(r) == "not-run") why = "not started before the study stopped";
+            if (why.empty() && s.status(r) == "not-run")
+                why = "not started before the study stopped";
             if (why.empty() && s.status(r) == "interrupted")
                 why = "stopped by the interrupt; its partial results are in its folder";
             os << "<tr><td class='n'>" << escape(s.caseNumber(r)) << "</td><td>"
@@ -696,13 +702,12 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
         std::string values;
         for (const std::string& v : p.distinct) {
             double x = 0.0;
-            values += (values.empty() ? "" : ", ") +
-                      (parseNumber(v, &x) ? formatNumber(x) + (p.unit.empty() ? "" : " " + p.unit)
-                                          : v);
+            values +=
+                (values.empty() ? "" : ", ") +
+                (parseNumber(v, &x) ? formatNumber(x) + (p.unit.empty() ? "" : " " + p.unit) : v);
         }
-        row("swept: " + escape(p.key),
-            values + " (" + std::to_string(p.distinct.size()) + " value" +
-                (p.distinct.size() == 1 ? "" : "s") + ")");
+        row("swept: " + escape(p.key), values + " (" + std::to_string(p.distinct.size()) +
+                                           " value" + (p.distinct.size() == 1 ? "" : "s") + ")");
     }
     row("outputs", report::join(s.outputSpecs, "; "));
     row("status", s.h5Status);
@@ -789,7 +794,8 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
               "docs/array-coupling.md), red: a case that failed.</p>";
         const Groups g = groupRows(s, {pressed});
         for (const Output* o : numeric) {
-            os << "<h3>" << escape(o->label) << (o->unit.empty() ? "" : " [" + escape(o->unit) + "]")
+            os << "<h3>" << escape(o->label)
+               << (o->unit.empty() ? "" : " [" + escape(o->unit) + "]")
                << "</h3><div class='maps'>";
             for (size_t k = 0; k < g.rows.size(); ++k) {
                 double lo = INFINITY, hi = -INFINITY;
@@ -798,8 +804,7 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
                         lo = std::min(lo, o->values[r]), hi = std::max(hi, o->values[r]);
                 if (!std::isfinite(lo)) continue;
                 const double mid = 0.5 * (lo + hi);
-                const double span =
-                    std::max({hi - lo, kMinMapSpan * std::fabs(mid), 1e-12});
+                const double span = std::max({hi - lo, kMinMapSpan * std::fabs(mid), 1e-12});
                 const double step = svg::calcRoundUp(span / 5);
                 report::ColourBar bar;
                 bar.lo = std::floor((mid - 0.5 * span) / step + 1e-9) * step;
@@ -813,9 +818,10 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
                 const std::string caption =
                     o->label + (where.empty() ? "" : ", " + where) + ": " + num(lo, "%.4g") +
                     " to " + num(hi, "%.4g") + (o->unit.empty() ? "" : " " + o->unit) +
-                    (std::fabs(mid) > 0 ? " (spread " + num(100 * (hi - lo) / std::fabs(mid),
-                                                            "%.2g") + " % of the mean)"
-                                        : "");
+                    (std::fabs(mid) > 0
+                         ? " (spread " + num(100 * (hi - lo) / std::fabs(mid), "%.2g") +
+                               " % of the mean)"
+                         : "");
                 os << "<figure>" << drawMap(s, *o, g.rows[k], pressed, bar, caption)
                    << report::drawColourBar(bar) << "<figcaption>" << escape(caption)
                    << "</figcaption></figure>";
@@ -859,10 +865,10 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
                         change[r] = 100.0 * (o->values[r] / ref - 1.0);
                 }
                 for (size_t p : others)
-                    os << drawAgainst(s, p, change, "change against the bag alone [%]",
-                                      o->label + " among neighbours against " +
-                                          describeKey(s.parameters[p].key),
-                                      {{0.0, "alone", "#999"}});
+                    os << drawAgainst(
+                        s, p, change, "change against the bag alone [%]",
+                        o->label + " among neighbours against " + describeKey(s.parameters[p].key),
+                        {{0.0, "alone", "#999"}});
             }
             os << "</div>";
         }
@@ -882,8 +888,8 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
             std::error_code ec;
             if (s.key(r).empty() || !fs::exists(file, ec)) continue;
             try {
-                const CsvTable ld = report::readCsvTable(file, {"displacement_mm", "force_N"},
-                                                         true, "");
+                const CsvTable ld =
+                    report::readCsvTable(file, {"displacement_mm", "force_N"}, true, "");
                 const int di = ld.find("displacement_mm"), fi = ld.find("force_N"),
                           mi = ld.find("gas_mass_g");
                 Curve c{r, {}};
@@ -934,11 +940,10 @@ std::string formatStudyReportHtml(const fs::path& studyDir) {
                     }
                 }
                 svg::PlotOptions o;
-                o.title = "Force against displacement, cases " +
-                          s.caseNumber(curves[first].row) + " to " +
-                          s.caseNumber(curves[last - 1].row);
-                if (last - first == 1) o.title = "Force against displacement, case " +
-                                                 s.caseNumber(curves[first].row);
+                o.title = "Force against displacement, cases " + s.caseNumber(curves[first].row) +
+                          " to " + s.caseNumber(curves[last - 1].row);
+                if (last - first == 1)
+                    o.title = "Force against displacement, case " + s.caseNumber(curves[first].row);
                 o.xLabel = "displacement of the block [mm]";
                 o.yLabel = "force [N]";
                 o.xMin = 0.0;

@@ -291,7 +291,8 @@ void combine(StudyScenario& s, const std::vector<Block>& blocks, const ScenarioN
 
 // The output's file and columns are ones a run of `kind` writes (io/ResultFiles.h): refused
 // here, before any case runs, rather than found missing after each.
-void checkOutputAgainstKind(const ScenarioNode& o, const StudyOutput& out, const std::string& kind) {
+void checkOutputAgainstKind(const ScenarioNode& o, const StudyOutput& out,
+                            const std::string& kind) {
     const std::vector<ResultCsv> files = getResultCsvs(kind);
     if (files.empty()) return;
     std::string names;
@@ -303,7 +304,8 @@ void checkOutputAgainstKind(const ScenarioNode& o, const StudyOutput& out, const
         for (const std::string& c : columns) list += (list.empty() ? "" : ", ") + c;
         for (const char* key : {"column", "per"}) {
             const std::string& c = std::string(key) == "column" ? out.column : out.per;
-            if (c.empty() || std::find(columns.begin(), columns.end(), c) != columns.end()) continue;
+            if (c.empty() || std::find(columns.begin(), columns.end(), c) != columns.end())
+                continue;
             o.fail(key, "\"" + c + "\": " + out.file + " has no such column; its columns: " + list);
         }
         return;
@@ -387,8 +389,8 @@ void checkCase(const StudyScenario& s, size_t index, const std::string& basePath
         throw InputError(s.studyFile, 0, key, detail);
     }
     for (const StudyOutput& o : s.outputs) {
-        const bool missing = (o.file == "pneumatics.csv" && !pneumatics) ||
-                             (o.file == "rig_readings.csv" && !rig);
+        const bool missing =
+            (o.file == "pneumatics.csv" && !pneumatics) || (o.file == "rig_readings.csv" && !rig);
         if (missing)
             throw InputError(s.studyFile, o.line, "outputs",
                              o.file + " is written only by a run with a " +

@@ -574,16 +574,16 @@ void Network::loadState(bags::StateReader& r) {
     for (Node& n : m_nodes) {
         const std::string name = r.str();
         if (name != n.name)
-            throw bags::StateError("checkpoint: pneumatic node '" + name + "' where the model has '" +
-                                   n.name + "'");
+            throw bags::StateError("checkpoint: pneumatic node '" + name +
+                                   "' where the model has '" + n.name + "'");
         r.pod(n.mass), r.pod(n.temperature), r.pod(n.volume), r.pod(n.pressure), r.pod(n.received);
     }
     count(m_links.size(), "links of the pneumatic network");
     for (Link& l : m_links) {
         const std::string name = r.str();
         if (name != l.name)
-            throw bags::StateError("checkpoint: pneumatic link '" + name + "' where the model has '" +
-                                   l.name + "'");
+            throw bags::StateError("checkpoint: pneumatic link '" + name +
+                                   "' where the model has '" + l.name + "'");
         r.pod(l.opening), r.pod(l.command), r.pod(l.speed), r.pod(l.lastFlow);
     }
     count(m_sensors.size(), "pressure sensors");

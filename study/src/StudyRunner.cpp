@@ -113,7 +113,8 @@ std::string collectOutputs(const io::StudyScenario& s, const std::filesystem::pa
             keys.push_back(per >= 0 && per < int(cells.size()) ? cells[per] : "");
         }
         if (per < 0) {
-            r->outputs.push_back({int(j), o.reduce == "first" ? o.column : o.column + ":" + o.reduce,
+            r->outputs.push_back({int(j),
+                                  o.reduce == "first" ? o.column : o.column + ":" + o.reduce,
                                   reduceValues(values, o.reduce)});
             continue;
         }
@@ -132,10 +133,10 @@ std::string collectOutputs(const io::StudyScenario& s, const std::filesystem::pa
                        o.per + " = " + key +
                        "; give the output a reduce (last: the value at the end of a time "
                        "series; first, min, max, mean), or per a column whose values differ";
-            r->outputs.push_back(
-                {int(j),
-                 o.column + (o.reduce.empty() ? "" : ":" + o.reduce) + "[" + o.per + "=" + key + "]",
-                 o.reduce.empty() ? g.front() : reduceValues(g, o.reduce)});
+            r->outputs.push_back({int(j),
+                                  o.column + (o.reduce.empty() ? "" : ":" + o.reduce) + "[" +
+                                      o.per + "=" + key + "]",
+                                  o.reduce.empty() ? g.front() : reduceValues(g, o.reduce)});
         }
     }
     return "";
@@ -385,8 +386,8 @@ bool recollectOutputs(const io::StudyScenario& s, const std::filesystem::path& d
         if (a.status != b.status || a.reason != b.reason || a.outputs.size() != b.outputs.size())
             return false;
         for (size_t k = 0; k < a.outputs.size(); ++k)
-            if (a.outputs[k].output != b.outputs[k].output || a.outputs[k].name != b.outputs[k].name ||
-                a.outputs[k].value != b.outputs[k].value)
+            if (a.outputs[k].output != b.outputs[k].output ||
+                a.outputs[k].name != b.outputs[k].name || a.outputs[k].value != b.outputs[k].value)
                 return false;
         return true;
     };

@@ -91,8 +91,8 @@ TEST(ArrayPneumaticsRun, AShortTurnMovesGasThroughTheValvesAndWritesTheNewFiles)
         EXPECT_EQ(statuses.count(r.at(1)), 1u) << r.at(0);
         checks.insert(r.at(0));
     }
-    for (const char* c : {"target tilt reached", "back to supine", "slid or rolled toward the edge",
-                          "contact lost at the array edge", "bag bottomed out",
-                          "fell through or off the bags"})
+    for (const char* c :
+         {"target tilt reached", "back to supine", "slid or rolled toward the edge",
+          "contact lost at the array edge", "bag bottomed out", "fell through or off the bags"})
         EXPECT_EQ(checks.count(c), 1u) << c;
 }

@@ -67,9 +67,10 @@ TEST(ArrayRunLong, TheCoarseTurnTiltsHimOntoHisLeftSide) {
     ASSERT_TRUE(std::isfinite(pelvis0));
     const double pelvis = std::stod(tilt.rows.back().at(1)),
                  thorax = std::stod(tilt.rows.back().at(2));
-    std::printf("tilt after the settle: pelvis %+.2f deg, thorax %+.2f deg; after the turn: "
-                "pelvis %+.2f deg, thorax %+.2f deg\n",
-                pelvis0, thorax0, pelvis, thorax);
+    std::printf(
+        "tilt after the settle: pelvis %+.2f deg, thorax %+.2f deg; after the turn: "
+        "pelvis %+.2f deg, thorax %+.2f deg\n",
+        pelvis0, thorax0, pelvis, thorax);
     EXPECT_GT(pelvis - pelvis0, 2.0);
     EXPECT_GT(thorax - thorax0, 2.0);
     const Csv bags = readCsv(out / "bags.csv");

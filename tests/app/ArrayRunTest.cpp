@@ -15,8 +15,8 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     const std::filesystem::path out =
         std::filesystem::path(BAGSIM_BINARY_DIR) / "tests/app/array-short";
     ASSERT_EQ(runScenario("supine-on-array-coarse.yaml", out, "--set run.settle_time='0.1 s'"), 0);
-    for (const char* f : {"regions.csv", "bags.csv", "tilt.csv", "results.h5", "results.xdmf",
-                          "summary.txt"})
+    for (const char* f :
+         {"regions.csv", "bags.csv", "tilt.csv", "results.h5", "results.xdmf", "summary.txt"})
         EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
     EXPECT_FALSE(std::filesystem::exists(out / "INCOMPLETE"));
     const Csv regions = readCsv(out / "regions.csv");
@@ -79,7 +79,8 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
         if (std::stod(r.at(area)) > 0.0 && r.at(0) == "0.1000") immersed += depth > 1.0;
     }
     for (const auto& r : bags.rows) {
-        if (r.size() <= size_t(inner) || r.at(inner).empty()) {  // (the split drops a last empty cell)
+        if (r.size() <= size_t(inner) ||
+            r.at(inner).empty()) {  // (the split drops a last empty cell)
             EXPECT_LT(std::stod(r.at(bagForce)), 1.0) << "bag " << r.at(1) << " at " << r.at(0);
             ++untouched;
             continue;
@@ -114,7 +115,8 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     EXPECT_NE(page.str().find("<th>largest area above 32 mmHg</th>"), std::string::npos);
     const std::string bagsim = std::string("\"") + BAGSIM_BINARY_DIR + "/bin/bagsim\" report ";
     auto run = [&](const std::string& args) {
-        const int rc = std::system((bagsim + args + " > \"" + out.string() + ".report.log\" 2>&1").c_str());
+        const int rc =
+            std::system((bagsim + args + " > \"" + out.string() + ".report.log\" 2>&1").c_str());
         std::stringstream log;
         log << std::ifstream(out.string() + ".report.log").rdbuf();
         return std::make_pair(WEXITSTATUS(rc), log.str());
@@ -124,15 +126,17 @@ TEST(ArrayRun, AShortCoarseRunWritesEveryFileAndTheRegionsAddUpToTheBags) {
     { std::ofstream(other) << "mine\n"; }
     const auto refused = run("\"" + out.string() + "\" --out \"" + other.string() + "\"");
     EXPECT_EQ(refused.first, 2);
-    EXPECT_NE(refused.second.find("mine.html: exists; pass --force to replace it"), std::string::npos)
+    EXPECT_NE(refused.second.find("mine.html: exists; pass --force to replace it"),
+              std::string::npos)
         << refused.second;
     EXPECT_EQ(readCsv(other).header, "mine");
     EXPECT_EQ(run("\"" + out.string() + "\" --out \"" + other.string() + "\" --force").first, 0);
     EXPECT_NE(readCsv(other).header.find("<!DOCTYPE html>"), std::string::npos);
     const auto notResult = run("\"" + std::string(BAGSIM_SOURCE_DIR) + "/scenarios\"");
     EXPECT_EQ(notResult.first, 2);
-    EXPECT_NE(notResult.second.find("scenarios: no results.h5: not the output folder of a bagsim run"),
-              std::string::npos)
+    EXPECT_NE(
+        notResult.second.find("scenarios: no results.h5: not the output folder of a bagsim run"),
+        std::string::npos)
         << notResult.second;
 }
 

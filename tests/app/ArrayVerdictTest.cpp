@@ -213,7 +213,8 @@ TEST(ArrayVerdict, AFilmBeyondItsFittedRangeFailsTheRunsEnvelope) {
     io::VerdictRow r = row(v.makeRows(), "film within its fitted range");
     EXPECT_EQ(r.status, "ok");
     EXPECT_DOUBLE_EQ(r.value, 30.0);
-    EXPECT_NE(r.detail.find("bag 12 at 1.50 s, principal stretch 1.080"), std::string::npos) << r.detail;
+    EXPECT_NE(r.detail.find("bag 12 at 1.50 s, principal stretch 1.080"), std::string::npos)
+        << r.detail;
     EXPECT_FALSE(v.isFilmOutsideItsRange());
     v.addFilmRange(2.5, 1.9, 24, 2.5);
     r = row(v.makeRows(), "film within its fitted range");

@@ -57,8 +57,7 @@ TEST(ReducedTurn, TheCoarseTurnWithReducedBagsTiltsHimAsTheFiniteElementBagsDo) 
     // The run says where it left the calibration's validity envelope (the forearms' 38 mm).
     std::stringstream summary;
     summary << std::ifstream(out / "summary.txt").rdbuf();
-    EXPECT_NE(summary.str().find("outside the calibration's validity envelope"),
-              std::string::npos)
+    EXPECT_NE(summary.str().find("outside the calibration's validity envelope"), std::string::npos)
         << summary.str();
 }
 
@@ -93,8 +92,8 @@ TEST(ReducedTurn, AtTwentyMillimetresTheTurnFollowsTheFiniteElementTurnAndCarrie
     opt.from = 1.5;
     opt.times = {1.5, 3.0, 4.5};
     opt.tiltTolerance = 2.25 * kDeg;
-    const std::filesystem::path reference =
-        std::filesystem::path(BAGSIM_SOURCE_DIR) / "data/reduced-bag/fe-reference/turn-left-coarse-20mm";
+    const std::filesystem::path reference = std::filesystem::path(BAGSIM_SOURCE_DIR) /
+                                            "data/reduced-bag/fe-reference/turn-left-coarse-20mm";
     const io::RunComparison c = io::compareRuns(reference, out, opt);
     std::cout << io::formatRunComparison(c, true);
     EXPECT_EQ(c.tiltRows, 31);
@@ -105,7 +104,8 @@ TEST(ReducedTurn, AtTwentyMillimetresTheTurnFollowsTheFiniteElementTurnAndCarrie
     EXPECT_LT(c.overall.rms, 0.45);
     EXPECT_GE(c.overall.within, 15);
     const Csv run = readCsv(out / "regions.csv"), fe = readCsv(reference / "regions.csv");
-    const int t = run.column("time_s"), region = run.column("region"), force = run.column("force_N");
+    const int t = run.column("time_s"), region = run.column("region"),
+              force = run.column("force_N");
     for (const auto& r : run.rows)
         EXPECT_GT(std::stod(r.at(force)), -0.05) << r.at(region) << " at " << r.at(t) << " s";
     auto forceOf = [](const Csv& c, const std::string& name, double time) {

@@ -61,10 +61,10 @@ TEST(Resume, NeighbourModulesStoppedAndResumedEndByteIdentical) {
               0)
         << readLog(dir / "whole.log");
     const fs::path out = dir / "stopped";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
-                            " --stop-after '0.04 s'",
-                        dir / "stopped.log"),
-              130)
+    ASSERT_EQ(
+        runBagsim(scenario + " --out \"" + out.string() + "\"" + sets + " --stop-after '0.04 s'",
+                  dir / "stopped.log"),
+        130)
         << readLog(dir / "stopped.log");
     ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
     ASSERT_EQ(runBagsim("--resume \"" + out.string() + "\" --quiet", dir / "resumed.log"), 0)
@@ -72,4 +72,3 @@ TEST(Resume, NeighbourModulesStoppedAndResumedEndByteIdentical) {
     EXPECT_FALSE(fs::exists(out / "INCOMPLETE"));
     expectSameCsvFiles(dir / "whole", out);
 }
-

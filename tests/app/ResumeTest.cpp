@@ -62,9 +62,9 @@ void expectSameCsvFiles(const fs::path& whole, const fs::path& resumed) {
             size_t i = 0;
             while (i < a.size() && i < b.size() && a[i] == b[i]) ++i;
             const size_t from = a.rfind('\n', i) == std::string::npos ? 0 : a.rfind('\n', i) + 1;
-            ADD_FAILURE() << e.path().filename() << " differs from byte " << i << ":\n  whole:   "
-                          << a.substr(from, a.find('\n', i) - from) << "\n  resumed: "
-                          << b.substr(from, b.find('\n', i) - from);
+            ADD_FAILURE() << e.path().filename() << " differs from byte " << i
+                          << ":\n  whole:   " << a.substr(from, a.find('\n', i) - from)
+                          << "\n  resumed: " << b.substr(from, b.find('\n', i) - from);
         }
         ++compared;
     }
@@ -109,10 +109,10 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
     // Stopped after 0.15 s (checkpoint at 0.1 s), resumed and stopped after 0.25 s (its own
     // checkpoint at 0.2 s), resumed to the end.
     const fs::path out = dir / "stopped";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + sets +
-                            " --stop-after '0.15 s'",
-                        dir / "stopped.log"),
-              130)
+    ASSERT_EQ(
+        runBagsim(scenario + " --out \"" + out.string() + "\"" + sets + " --stop-after '0.15 s'",
+                  dir / "stopped.log"),
+        130)
         << readLog(dir / "stopped.log");
     ASSERT_TRUE(fs::exists(out / "checkpoint.bin"));
     ASSERT_TRUE(fs::exists(out / "INCOMPLETE"));
@@ -124,17 +124,19 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
                             "turn-left-coarse.yaml\" --quiet",
                         dir / "other.log"),
               2);
-    EXPECT_NE(readLog(dir / "other.log")
-                  .find("turn-left-coarse.yaml is not the scenario the run was started with (line 1"),
-              std::string::npos)
+    EXPECT_NE(
+        readLog(dir / "other.log")
+            .find("turn-left-coarse.yaml is not the scenario the run was started with (line 1"),
+        std::string::npos)
         << readLog(dir / "other.log");
     EXPECT_EQ(runBagsim("--resume \"" + out.string() + "\" --set run.settle_time='0.4 s' --quiet",
                         dir / "set.log"),
               2);
-    EXPECT_NE(readLog(dir / "set.log").find("the overrides differ from the run's (--set "
-                                            "run.settle_time=0.4 s given, --set "
-                                            "run.settle_time=0.3 s, --set "
-                                            "output.checkpoint_every=0.1 s in the checkpoint)"),
+    EXPECT_NE(readLog(dir / "set.log")
+                  .find("the overrides differ from the run's (--set "
+                        "run.settle_time=0.4 s given, --set "
+                        "run.settle_time=0.3 s, --set "
+                        "output.checkpoint_every=0.1 s in the checkpoint)"),
               std::string::npos)
         << readLog(dir / "set.log");
     writeFile(out / "checkpoint.bin", checkpoint.substr(0, checkpoint.size() / 2));
@@ -150,8 +152,9 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
     EXPECT_NE(readLog(dir / "version.log").find("its checkpoint was written by bagsim "),
               std::string::npos)
         << readLog(dir / "version.log");
-    EXPECT_NE(readLog(dir / "version.log").find(std::string(", this is bagsim ") + bagsim::kVersion),
-              std::string::npos);
+    EXPECT_NE(
+        readLog(dir / "version.log").find(std::string(", this is bagsim ") + bagsim::kVersion),
+        std::string::npos);
     // Written by a build that made another model of the same scenario (a default changed):
     // the model the checkpoint keeps, as the run header prints it, differs from this build's;
     // refused, naming the line, before anything in the folder is touched.
@@ -177,12 +180,11 @@ TEST(Resume, SupineSettleStoppedTwiceEndsByteIdentical) {
     writeFile(out / "checkpoint.bin", checkpoint);
     EXPECT_EQ(readFile(out / "tilt.csv"), tilt);
     {  // A run part this build does not know (a sound file): found only once the writer has
-       // cut the files back to the checkpoint (their rows past it, which any resume writes
-       // again bit for bit, are gone); the marker keeps the stopped run's text and says so.
-        const std::string other =
-            withModelText(checkpoint, bagsim::app::kCheckpointMagic,
-                          std::string("\x05\0\0\0\0\0\0\0run-5", 13),
-                          std::string("\x05\0\0\0\0\0\0\0run-9", 13));
+        // cut the files back to the checkpoint (their rows past it, which any resume writes
+        // again bit for bit, are gone); the marker keeps the stopped run's text and says so.
+        const std::string other = withModelText(checkpoint, bagsim::app::kCheckpointMagic,
+                                                std::string("\x05\0\0\0\0\0\0\0run-5", 13),
+                                                std::string("\x05\0\0\0\0\0\0\0run-9", 13));
         ASSERT_NE(other, checkpoint);
         writeFile(out / "checkpoint.bin", other);
         const std::string marker = readFile(out / "INCOMPLETE");
@@ -235,8 +237,8 @@ void expectResumedRunAsWhole(const fs::path& dir, const std::string& scenario,
     const app::test::Csv events = app::test::readCsv(dir / "whole" / "events.csv");
     ASSERT_GE(events.rows.size(), 3u);
     const fs::path out = dir / "stopped";
-    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + stopped +
-                            " --stop-after '" + stopAfter + "'",
+    ASSERT_EQ(runBagsim(scenario + " --out \"" + out.string() + "\"" + stopped + " --stop-after '" +
+                            stopAfter + "'",
                         dir / "stopped.log"),
               130)
         << readLog(dir / "stopped.log");
@@ -272,8 +274,8 @@ TEST(Resume, ReducedBagsWithFrictionOnOneAndTwoThreadsEndByteIdentical) {
         " --set output.checkpoint_every='0.5 s' --quiet";
     expectResumedRunAsWhole(fs::path(BAGSIM_BINARY_DIR) / "tests/app/resume/reduced",
                             "\"" + kScenarios + "turn-left-pneumatic-coarse.yaml\"",
-                            sets + " --set coupling.threads=2",
-                            sets + " --set coupling.threads=1", "2.2 s");
+                            sets + " --set coupling.threads=2", sets + " --set coupling.threads=1",
+                            "2.2 s");
 }
 
 namespace {
@@ -327,10 +329,10 @@ TEST(FromRest, ATurnFromTheRestStateOfASettleGivesTheWholeRunsBits) {
     EXPECT_NE(readFile(dir / "turned" / "events.csv").find("started from the rest state in"),
               std::string::npos);
 
-    EXPECT_EQ(runBagsim(scenario + out("other") + sets + " --set bag.body_friction=0.4" +
-                            from("settle"),
-                        dir / "other.log"),
-              2);
+    EXPECT_EQ(
+        runBagsim(scenario + out("other") + sets + " --set bag.body_friction=0.4" + from("settle"),
+                  dir / "other.log"),
+        2);
     EXPECT_NE(readLog(dir / "other.log")
                   .find("(bag.body_friction: '0.4' here, absent in the rest state's scenario)"),
               std::string::npos)
@@ -397,7 +399,8 @@ TEST(FromRest, PneumaticRunsStartFromARestStateWithEveryShippedController) {
                   0)
             << readLog(dir / (c.name + ".log"));
         const std::string events = readFile(dir / c.name / "events.csv");
-        EXPECT_NE(events.find("0.0500,started from the rest state in"), std::string::npos) << events;
+        EXPECT_NE(events.find("0.0500,started from the rest state in"), std::string::npos)
+            << events;
         EXPECT_NE(events.find(c.event), std::string::npos) << events;
         EXPECT_NE(events.find("0.1000,run ended"), std::string::npos) << events;
     }
@@ -412,8 +415,9 @@ TEST(Resume, ACheckpointOfAnotherRunIsRefusedAndTheFolderKept) {
     fs::remove_all(dir);
     fs::create_directories(dir);
     const std::string scenario = "\"" + kScenarios + "supine-on-array-coarse.yaml\"";
-    const std::string sets = " --quiet --set run.settle_time='0.06 s' --set "
-                             "output.checkpoint_every='0.02 s' --stop-after '0.045 s'";
+    const std::string sets =
+        " --quiet --set run.settle_time='0.06 s' --set "
+        "output.checkpoint_every='0.02 s' --stop-after '0.045 s'";
     ASSERT_EQ(runBagsim(scenario + sets + " --out \"" + (dir / "a").string() + "\"", dir / "a.log"),
               130);
     ASSERT_EQ(runBagsim(scenario + sets + " --set run.duration='0 s' --out \"" +
@@ -436,6 +440,7 @@ TEST(Resume, ACheckpointOfAnotherRunIsRefusedAndTheFolderKept) {
     for (const auto& e : fs::directory_iterator(dir / "b"))
         after[e.path().filename().string()] = readFile(e.path());
     EXPECT_TRUE(before == after) << "the folder changed";
-    EXPECT_EQ(runBagsim("--resume \"" + (dir / "a").string() + "\" --quiet", dir / "a-resume.log"), 0)
+    EXPECT_EQ(runBagsim("--resume \"" + (dir / "a").string() + "\" --quiet", dir / "a-resume.log"),
+              0)
         << readLog(dir / "a-resume.log");
 }

@@ -100,7 +100,7 @@ TEST(AirbagCluster, EachBagKeepsItsOwnGasAndFlows) {
     EXPECT_NEAR(pair.getTotalGasMass(), 8.0e-3, 1e-12);
     const double p0 = pair.getChamberState(pair.getBagChambers(0).front()).gaugePressure;
     const double p1 = pair.getChamberState(pair.getBagChambers(1).front()).gaugePressure;
-    EXPECT_GT(p0, p1);  // the fuller bag is at the higher pressure
+    EXPECT_GT(p0, p1);                    // the fuller bag is at the higher pressure
     pair.setTargetMass(1, 4.0e-3, 1e-3);  // 1 g/s into bag 1 up to 4.0 g
     ASSERT_TRUE(pair.advance(1.0).converged);
     pair.commit();
@@ -226,8 +226,7 @@ TEST(AirbagCluster, SharedAirIsOneBodyOfAirThatAPressMovesIntoTheNeighbour) {
     for (int c = 0; c < b.getNumChambers(); ++c) V += b.getChamberState(c).volume;
     const GasOptions& g = shared.gas;
     const double pAbs = gaugePressure(b, 0) + g.ambientPressure;
-    EXPECT_NEAR(pAbs * V, 8.0e-3 * g.getSpecificGasConstant() * g.temperature,
-                1e-9 * pAbs * V);
+    EXPECT_NEAR(pAbs * V, 8.0e-3 * g.getSpecificGasConstant() * g.temperature, 1e-9 * pAbs * V);
     EXPECT_GT(gaugePressure(b, 1), gaugePressure(*sharedAt0, 1));  // the press reached bag 1
 }
 

@@ -192,8 +192,8 @@ double checkWrenchTangent(double friction, const Vec3& sideways, double toleranc
             const double sgn = side == 0 ? 1.0 : -1.0;
             Eigen::Isometry3d X = X0;
             if (j < 3) {
-                X.linear() = Eigen::AngleAxisd(sgn * h, Vec3::Unit(j)).toRotationMatrix() *
-                             X0.linear();
+                X.linear() =
+                    Eigen::AngleAxisd(sgn * h, Vec3::Unit(j)).toRotationMatrix() * X0.linear();
             } else {
                 X.translation() += sgn * h * Vec3::Unit(j - 3);
             }
@@ -214,7 +214,8 @@ double checkWrenchTangent(double friction, const Vec3& sideways, double toleranc
             worst = std::max(worst, (a - b).cwiseAbs().maxCoeff() / scale);
             EXPECT_LT((a - b).cwiseAbs().maxCoeff(), tolerance * scale)
                 << "friction " << friction << ", block " << bi << "," << bj << "\ntangent\n"
-                << a << "\nfinite differences\n" << b;
+                << a << "\nfinite differences\n"
+                << b;
         }
     if (tangent) *tangent = T;
     return worst;
@@ -229,8 +230,10 @@ TEST(Airbag, WrenchTangentMatchesFiniteDifferencesOfReSolvedEquilibria) {
     Eigen::Matrix<double, 6, 6> T;
     const double worst = checkWrenchTangent(0.0, Vec3::Zero(), 1e-4, &T);
     RecordProperty("worst_block_error", std::to_string(worst));
-    std::printf("wrench tangent against finite differences: worst block error %.2e of the "
-                "block's largest entry; d(force z)/d(z) = %.1f N/m\n", worst, T(5, 5));
+    std::printf(
+        "wrench tangent against finite differences: worst block error %.2e of the "
+        "block's largest entry; d(force z)/d(z) = %.1f N/m\n",
+        worst, T(5, 5));
     // The vertical stiffness the shape feels is positive and well below the contact penalty
     // over the contact patch (the bag, not the penalty, governs it).
     EXPECT_LT(T(5, 5), 0.0);  // pushing down (+z translation raises it; force falls)
@@ -273,10 +276,11 @@ TEST(Airbag, WrenchTangentWithFrictionMatchesFiniteDifferencesOfReSolvedEquilibr
     const double slip = checkWrenchTangent(0.5, Vec3(0.0005, 0.0003, 0.0), 1e-2, &Ts);
     RecordProperty("worst_block_error_stick", std::to_string(stick));
     RecordProperty("worst_block_error_slip", std::to_string(slip));
-    std::printf("wrench tangent with friction 0.5 against finite differences: worst block error "
-                "%.2e stuck, %.2e partly slipping; d(force x)/d(x) = %.1f N/m stuck, %.1f N/m "
-                "slipping (frictionless %.1f N/m)\n",
-                stick, slip, T(3, 3), Ts(3, 3), T0(3, 3));
+    std::printf(
+        "wrench tangent with friction 0.5 against finite differences: worst block error "
+        "%.2e stuck, %.2e partly slipping; d(force x)/d(x) = %.1f N/m stuck, %.1f N/m "
+        "slipping (frictionless %.1f N/m)\n",
+        stick, slip, T(3, 3), Ts(3, 3), T0(3, 3));
     EXPECT_LT(T(3, 3), 20.0 * T0(3, 3));  // both negative: friction resists the sideways move
 }
 
@@ -324,10 +328,11 @@ TEST(Airbag, TheLinearisationWithoutFrictionLeavesTheStickSpringsOutAndTheStateA
                 const Eigen::Matrix3d b = T0.block<3, 3>(3 * bi, 3 * bj);
                 worst = std::max(worst, (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff());
             }
-        std::printf("friction 0.5, sideways %.1f mm: the tangent without friction against the "
-                    "frictionless bag's: worst block error %.2e; d(force x)/d(x) = %.1f N/m "
-                    "without friction, %.1f N/m with it, %.1f N/m frictionless\n",
-                    1e3 * sideways.norm(), worst, Tn(3, 3), T(3, 3), T0(3, 3));
+        std::printf(
+            "friction 0.5, sideways %.1f mm: the tangent without friction against the "
+            "frictionless bag's: worst block error %.2e; d(force x)/d(x) = %.1f N/m "
+            "without friction, %.1f N/m with it, %.1f N/m frictionless\n",
+            1e3 * sideways.norm(), worst, Tn(3, 3), T(3, 3), T0(3, 3));
         EXPECT_LT(worst, 5e-2);
         EXPECT_GT(T(3, 3) / Tn(3, 3), 20.0);  // both negative
         const Wrench after = bag.calcShapeWrench(p->shape);
@@ -342,7 +347,8 @@ namespace {
 // The pressed ellipsoid's wrench derivative by the bag's gas mass against central differences
 // of equilibria re-solved with gas let in and out over a step (the flow path advance() takes),
 // the shape held; returns the error relative to the derivative's largest entry.
-double checkGasDerivative(double friction, const Vec3& sideways, Eigen::Matrix<double, 6, 1>* dWdm) {
+double checkGasDerivative(double friction, const Vec3& sideways,
+                          Eigen::Matrix<double, 6, 1>* dWdm) {
     const std::unique_ptr<PressedBag> pressed = pressTightly(friction, sideways);
     PressedBag& p = *pressed;
     Airbag& bag = *p.bag;
@@ -366,10 +372,11 @@ double checkGasDerivative(double friction, const Vec3& sideways, Eigen::Matrix<d
     bag.setMassFlow(0.0);
     const Eigen::Matrix<double, 6, 1> fd = (w[0] - w[1]) / (2.0 * h);
     *dWdm = lin.gas.at(0).col(0);
-    std::printf("d force / d gas mass, friction %.1f: (%.3f, %.3f, %.3f) N/g, finite differences "
-                "(%.3f, %.3f, %.3f) N/g\n",
-                friction, 1e-3 * (*dWdm)(3), 1e-3 * (*dWdm)(4), 1e-3 * (*dWdm)(5), 1e-3 * fd(3),
-                1e-3 * fd(4), 1e-3 * fd(5));
+    std::printf(
+        "d force / d gas mass, friction %.1f: (%.3f, %.3f, %.3f) N/g, finite differences "
+        "(%.3f, %.3f, %.3f) N/g\n",
+        friction, 1e-3 * (*dWdm)(3), 1e-3 * (*dWdm)(4), 1e-3 * (*dWdm)(5), 1e-3 * fd(3),
+        1e-3 * fd(4), 1e-3 * fd(5));
     return (*dWdm - fd).cwiseAbs().maxCoeff() / fd.cwiseAbs().maxCoeff();
 }
 
@@ -386,8 +393,10 @@ TEST(Airbag, WrenchGasDerivativeMatchesFiniteDifferencesOfReSolvedEquilibria) {
     const double e0 = checkGasDerivative(0.0, Vec3::Zero(), &d0);
     const double e1 = checkGasDerivative(0.5, Vec3::Zero(), &d1);
     const double e2 = checkGasDerivative(0.5, Vec3(0.0005, 0.0003, 0.0), &d2);
-    std::printf("gas derivative against finite differences: %.2e frictionless, %.2e stuck, %.2e "
-                "partly slipping\n", e0, e1, e2);
+    std::printf(
+        "gas derivative against finite differences: %.2e frictionless, %.2e stuck, %.2e "
+        "partly slipping\n",
+        e0, e1, e2);
     EXPECT_LT(e0, 1e-5);
     EXPECT_LT(e1, 1e-5);
     EXPECT_LT(e2, 5e-3);
@@ -403,7 +412,7 @@ TEST(Airbag, GasInflowIsTheFlowOverTheStepUpToTheTarget) {
     bag.setTargetMass(4.6e-3, 1e-5);  // 0.1 g to go at 0.01 g/s
     EXPECT_DOUBLE_EQ(bag.calcGasInflow(0, 3.0), 3e-5);
     EXPECT_NEAR(bag.calcGasInflow(0, 30.0), 1e-4, 1e-15);  // what is left to the target
-    bag.setTargetMass(4.0e-3, 1e-5);  // out, toward a lower target
+    bag.setTargetMass(4.0e-3, 1e-5);                       // out, toward a lower target
     EXPECT_DOUBLE_EQ(bag.calcGasInflow(0, 3.0), -3e-5);
     EXPECT_THROW(bag.calcGasInflow(1, 1.0), std::out_of_range);
 }
@@ -443,8 +452,8 @@ TEST(Airbag, ImperfectionIsSmoothDeterministicAndOfTheStatedAmplitude) {
     applyImperfection(b, imp);
     imp.seed = 8;
     applyImperfection(c, imp);
-    EXPECT_EQ((a.X - b.X).cwiseAbs().maxCoeff(), 0.0);        // same seed, same bits
-    EXPECT_GT((a.X - c.X).cwiseAbs().maxCoeff(), 1e-4);       // another seed, another bag
+    EXPECT_EQ((a.X - b.X).cwiseAbs().maxCoeff(), 0.0);   // same seed, same bits
+    EXPECT_GT((a.X - c.X).cwiseAbs().maxCoeff(), 1e-4);  // another seed, another bag
     const Eigen::VectorXd d = (a.X - perfect.X).colwise().norm();
     EXPECT_NEAR(d.maxCoeff(), 0.5e-3, 1e-12);                 // the stated amplitude
     for (int n : perfect.supportNodes) EXPECT_EQ(d(n), 0.0);  // bonded nodes stay
@@ -463,7 +472,7 @@ TEST(Airbag, ImperfectionIsSmoothDeterministicAndOfTheStatedAmplitude) {
             ++edges;
         }
     EXPECT_LT(jump / edges, 0.15 * imp.amplitude);  // measured 0.11
-    a.validate();  // still a valid closed bag
+    a.validate();                                   // still a valid closed bag
 }
 
 TEST(Airbag, ResultsAreBitIdenticalOnOneAndTwoThreads) {
@@ -506,10 +515,11 @@ TEST(Airbag, DampedStepsRelaxOnTautFilmAndReportTheDampersWorkOnSlackFilm) {
     // one step: the damped solve is not easy; the dampers are re-anchored until the force they
     // hold is within the force tolerance, and their work on the way is reported.
     const auto [slackDamped, fSlack, b2] = press(2.0e-3, 1e5, 0.020);
-    std::printf("slack press: damper work %.3g J, shape work about %.3g J, residual %.3g N, "
-                "%d iterations\n",
-                slackDamped.stabilizationEnergy, 0.5 * fSlack.z() * 0.020, slackDamped.residual,
-                slackDamped.newtonIterations);
+    std::printf(
+        "slack press: damper work %.3g J, shape work about %.3g J, residual %.3g N, "
+        "%d iterations\n",
+        slackDamped.stabilizationEnergy, 0.5 * fSlack.z() * 0.020, slackDamped.residual,
+        slackDamped.newtonIterations);
     EXPECT_GT(slackDamped.stabilizationEnergy, 0.0);
     EXPECT_LE(slackDamped.residual, b2->getSpec().forceTolerance);
 }
@@ -652,8 +662,8 @@ TEST(Airbag, AShapePushedSidewaysOnTheFilmSticksThenSlipsAtMuTimesTheNormalForce
         EXPECT_LT(rough[k].x(), 0.0) << "step " << k;  // the film holds the plate back
         if (k == 0) ratioFirst = fh / fv;
         ratioLast = fh / fv;
-        std::printf("push %4.1f mm: F_h %7.3f N, F_v %7.3f N, F_h / F_v %.4f\n", 0.5 * (k + 1),
-                    fh, fv, fh / fv);
+        std::printf("push %4.1f mm: F_h %7.3f N, F_v %7.3f N, F_h / F_v %.4f\n", 0.5 * (k + 1), fh,
+                    fv, fh / fv);
     }
     EXPECT_LT(ratioFirst, 0.9 * mu);
     EXPECT_GT(ratioLast, 0.98 * mu);
@@ -689,9 +699,10 @@ TEST(Airbag, APlateDraggedOverTheFilmFeelsTheRegularisedLawsForceAtItsSpeed) {
             EXPECT_LE(fh, bound * fv + 1e-6 * fv) << "step " << k << ", V " << V;
             EXPECT_LT(f[k].x(), 0.0) << "step " << k;  // the film holds the plate back
             ratio = fh / fv;
-            std::printf("V %.3g mm/s, drag %4.1f mm: F_h %7.4f N, F_v %7.3f N, F_h / (mu F_v) "
-                        "%.4f (bound %.4f)\n", 1e3 * V, 0.5 * (k + 1), fh, fv, fh / (mu * fv),
-                        bound / mu);
+            std::printf(
+                "V %.3g mm/s, drag %4.1f mm: F_h %7.4f N, F_v %7.3f N, F_h / (mu F_v) "
+                "%.4f (bound %.4f)\n",
+                1e3 * V, 0.5 * (k + 1), fh, fv, fh / (mu * fv), bound / mu);
         }
         EXPECT_GT(ratio, 0.995 * bound) << "V " << V;  // measured: equal to 4 digits
     }

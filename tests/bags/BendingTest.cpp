@@ -199,7 +199,8 @@ TEST(DiscreteBending, InvariantUnderRigidMotion) {
     o.stiffness = kD;
     const DiscreteBending b(mesh, o);
     const Eigen::Matrix3Xd x = perturbed(mesh, 0.01, 11);
-    const Eigen::Matrix3d Q = Eigen::AngleAxisd(2.1, Vec3(-1, 0.5, 2).normalized()).toRotationMatrix();
+    const Eigen::Matrix3d Q =
+        Eigen::AngleAxisd(2.1, Vec3(-1, 0.5, 2).normalized()).toRotationMatrix();
     const Eigen::Matrix3Xd y = (Q * x).colwise() + Vec3(1.0, 2.0, -3.0);
     const double E = b.calcEnergy(x);
     EXPECT_GT(E, 0.0);
@@ -235,7 +236,8 @@ TEST(DiscreteBending, IndependentOfTriangleOrientation) {
     // nothing: the curvature each triangle sees turns with its normal.
     const Mesh mesh = test::makePatch(4, 0.1);
     Mesh flipped = mesh;
-    for (int t = 0; t < flipped.getNumTris(); t += 3) std::swap(flipped.tris(1, t), flipped.tris(2, t));
+    for (int t = 0; t < flipped.getNumTris(); t += 3)
+        std::swap(flipped.tris(1, t), flipped.tris(2, t));
     BendingOptions o;
     o.stiffness = kD;
     const DiscreteBending a(mesh, o), b(flipped, o);
@@ -333,7 +335,8 @@ TEST(DiscreteBendingVerification, StripRolledOntoCylinderConvergesToPlateEnergy)
     for (int nx : {8, 16, 32, 64}) {
         const Mesh mesh = makeStrip(nx, nx / 2, L, W);
         const DiscreteBending b(mesh, o);
-        const double ratio = b.calcEnergy(rollOntoCylinder(mesh, R, M_PI / 2)) / (exactPerArea * L * W);
+        const double ratio =
+            b.calcEnergy(rollOntoCylinder(mesh, R, M_PI / 2)) / (exactPerArea * L * W);
         EXPECT_NEAR(ratio, 1.0 - 1.0 / nx, 1e-10) << "nx " << nx;
         std::printf("aligned  h = %6.3f mm: E/E_exact = %.6f\n", 1e3 * L / nx, ratio);
     }
@@ -347,7 +350,8 @@ TEST(DiscreteBendingVerification, StripRolledOntoCylinderConvergesToPlateEnergy)
             const double error = std::abs(ratio - 1.0);
             const double order = previous > 0.0 ? std::log2(previous / error) : 0.0;
             std::printf("oblique %s h = %6.3f mm: E/E_exact = %.6f, error %.2e, order %.2f\n",
-                        alternate ? "alternating" : "regular    ", 1e3 * L / nx, ratio, error, order);
+                        alternate ? "alternating" : "regular    ", 1e3 * L / nx, ratio, error,
+                        order);
             if (!alternate) {
                 EXPECT_LT(error, 1.5 / nx) << "nx " << nx;
                 if (nx == 128) {

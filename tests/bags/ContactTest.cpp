@@ -13,11 +13,11 @@
 
 using bags::Mat3;
 using bags::Vec3;
+using bagstest::differenceContact;
+using bagstest::DifferencedContact;
 using bagstest::evaluate;
 using bagstest::Evaluated;
 using bagstest::finiteDifferences;
-using bagstest::DifferencedContact;
-using bagstest::differenceContact;
 
 namespace {
 
@@ -73,7 +73,8 @@ bool isSmoothPoint(Kind kind, const Vec3& p) {
         return s[2] - s[1] > m;
     };
     switch (kind) {
-        case Kind::Plane: return std::abs(p.z()) > m;
+        case Kind::Plane:
+            return std::abs(p.z()) > m;
         case Kind::SharpBox: {
             const Vec3 q = p.cwiseAbs() - kBoxHalf;
             int out = 0;
@@ -170,8 +171,8 @@ TEST(RigidShapes, CapsuleGivesAnalyticDistanceOnCylinderCapsAndAxis) {
     auto cap = bags::makeCapsule(r, L);
     cap->setPose(somePose());
     const double tol = 1e-14;  // closed form
-    expectLocal(*cap, Vec3(0.03, 0.04, 0.05), 0.05 - r, Vec3(0.024, 0.032, 0.05),
-                Vec3(0.6, 0.8, 0), tol);
+    expectLocal(*cap, Vec3(0.03, 0.04, 0.05), 0.05 - r, Vec3(0.024, 0.032, 0.05), Vec3(0.6, 0.8, 0),
+                tol);
     expectLocal(*cap, Vec3(0.0, 0.01, -0.02), 0.01 - r, Vec3(0, 0.04, -0.02), Vec3::UnitY(), tol);
     expectLocal(*cap, Vec3(0.0, 0.0, 0.2), 0.2 - L - r, Vec3(0, 0, L + r), Vec3::UnitZ(), tol);
     expectLocal(*cap, Vec3(0.0, 0.0, -0.1), 0.01 - r, Vec3(0, 0, -L - r), -Vec3::UnitZ(), tol);
@@ -372,7 +373,9 @@ TEST(RigidShapes, NormalDerivativeMatchesFiniteDifferences) {
             }
             // Curvatures here are up to ~1/(5 mm); FD error ~ h^2 k^3 + eps/h ~ 1e-6 relative.
             EXPECT_LT((dn - fd).norm(), 1e-5 * (1.0 + fd.norm()))
-                << s->getName() << " at " << p.transpose() << "\n" << dn << "\n" << fd;
+                << s->getName() << " at " << p.transpose() << "\n"
+                << dn << "\n"
+                << fd;
             EXPECT_LT((dn - dn.transpose()).norm(), 1e-9 * (1.0 + dn.norm()));
             worst = std::max(worst, (dn - fd).norm() / (1.0 + fd.norm()));
         }
@@ -578,7 +581,7 @@ TEST(RigidContact, RestoredHistoryUndoesCommitsOfAnAbandonedStep) {
     contact.commitStep(at(0.01));  // anchor at 10 mm
     const bags::RigidContact::History h = contact.getHistory();
     const double before = forceX(0.0101);
-    contact.commitStep(at(0.012));  // trial: slips 2 mm, anchor dragged along
+    contact.commitStep(at(0.012));                       // trial: slips 2 mm, anchor dragged along
     EXPECT_GT(std::abs(forceX(0.0101) - before), 1e-3);  // the trial moved the anchor
     contact.setHistory(h);
     EXPECT_EQ(forceX(0.0101), before);
@@ -650,7 +653,8 @@ TEST(RigidContact, FullFrictionTangentMatchesFiniteDifferencesForBothLawsOnEvery
     // per node block, relative to the block (FD error ~ (h / 5 um)^2 ~ 1e-7).
     const bags::Mesh mesh = bagstest::makeGridMesh(3, 3, 0.01, Vec3::Zero());
     std::mt19937 rng(29);
-    const std::vector<double> gaps = {-2e-3, -5e-4, -1e-3, -1.5e-3, -7e-4, -1.2e-3, -8e-4, -2e-3, -6e-4};
+    const std::vector<double> gaps = {-2e-3,   -5e-4, -1e-3, -1.5e-3, -7e-4,
+                                      -1.2e-3, -8e-4, -2e-3, -6e-4};
     const std::vector<double> drags = {5e-6, 2e-5, 1e-4, 1e-3, 3e-5, 4e-4, 8e-6, 2e-4, 6e-5};
     double worst = 0.0, coupling = 0.0;
     for (auto law : {bags::RigidContact::FrictionLaw::Regularised,
@@ -663,8 +667,8 @@ TEST(RigidContact, FullFrictionTangentMatchesFiniteDifferencesForBothLawsOnEvery
             o.frictionLaw = law;
             bags::RigidContact contact(mesh, allNodes(mesh), *s, o);
             const Eigen::Matrix3Xd x0 = placeNodes(*s, kindOf(k), mesh, gaps, rng);
-            contact.commitStep(x0);        // anchors where the nodes touch
-            contact.beginStep(x0, 0.01);   // a 10 ms step: slip length 20 um
+            contact.commitStep(x0);       // anchors where the nodes touch
+            contact.beginStep(x0, 0.01);  // a 10 ms step: slip length 20 um
             Eigen::Matrix3Xd x = x0;
             std::uniform_real_distribution<double> angle(0.0, 6.283);
             for (int i = 0; i < mesh.getNumNodes(); ++i) {
@@ -685,10 +689,13 @@ TEST(RigidContact, FullFrictionTangentMatchesFiniteDifferencesForBothLawsOnEvery
             for (int i = 0; i < mesh.getNumNodes(); ++i) {
                 const Mat3 f = hFd.block<3, 3>(3 * i, 3 * i);
                 const double err = (T[i] - f).norm() / f.norm();
-                EXPECT_LT(err, 1e-5) << s->getName() << " node " << i << " drag " << drags[i]
-                                     << (law == bags::RigidContact::FrictionLaw::Regularised
-                                             ? " regularised" : " stick-slip")
-                                     << "\nexact\n" << T[i] << "\nFD\n" << f;
+                EXPECT_LT(err, 1e-5)
+                    << s->getName() << " node " << i << " drag " << drags[i]
+                    << (law == bags::RigidContact::FrictionLaw::Regularised ? " regularised"
+                                                                            : " stick-slip")
+                    << "\nexact\n"
+                    << T[i] << "\nFD\n"
+                    << f;
                 worst = std::max(worst, err);
                 // The f_n coupling: its size against the block's (leaving it out fails).
                 Vec3 nn;

@@ -52,9 +52,9 @@ struct Evaluated {
 };
 
 /// Runs `add` on a fresh accumulator and returns energy, gradient and the dense Hessian.
-inline Evaluated evaluate(const std::function<void(const Eigen::Matrix3Xd&,
-                                                   bags::EnergyAccumulator&)>& add,
-                          const Eigen::Matrix3Xd& x) {
+inline Evaluated evaluate(
+    const std::function<void(const Eigen::Matrix3Xd&, bags::EnergyAccumulator&)>& add,
+    const Eigen::Matrix3Xd& x) {
     const int n = static_cast<int>(x.cols());
     bags::EnergyAccumulator acc(n);
     add(x, acc);
@@ -64,10 +64,9 @@ inline Evaluated evaluate(const std::function<void(const Eigen::Matrix3Xd&,
 }
 
 /// Central differences of the energy (gradient) and of the gradient (Hessian), step h [m].
-inline void finiteDifferences(const std::function<void(const Eigen::Matrix3Xd&,
-                                                       bags::EnergyAccumulator&)>& add,
-                              const Eigen::Matrix3Xd& x, double h, Eigen::VectorXd& gradFd,
-                              Eigen::MatrixXd& hessFd) {
+inline void finiteDifferences(
+    const std::function<void(const Eigen::Matrix3Xd&, bags::EnergyAccumulator&)>& add,
+    const Eigen::Matrix3Xd& x, double h, Eigen::VectorXd& gradFd, Eigen::MatrixXd& hessFd) {
     const int n = static_cast<int>(x.cols());
     gradFd.resize(3 * n);
     hessFd.resize(3 * n, 3 * n);

@@ -107,7 +107,7 @@ struct PressResult {
     double force = 0.0;        // [N] on the plate, +z
     double p0 = 0.0, p = 0.0;  // [Pa] gauge before and after pressing
     ContactAreas area;
-    double pContactInterior = 0.0;  // [Pa] contact force / deformed area inside the patch
+    double pContactInterior = 0.0;     // [Pa] contact force / deformed area inside the patch
     double interiorAreaStretch = 0.0;  // deformed / reference area of the patch's interior nodes
     double interiorHeight = 0.0;       // [m] mean height of the interior contact nodes
 };

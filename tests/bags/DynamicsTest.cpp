@@ -157,8 +157,8 @@ TEST(FilmDynamics, MomentumOfASphereHitByABlockIsTheBlocksImpulse) {
     const Eigen::VectorXd& m = film.getDofMass();
     for (int i = 0; i < x.cols(); ++i) P += m(3 * i) * v.col(i);
     ASSERT_GT(impulse.norm(), 1e-6);
-    EXPECT_LT((P - impulse).norm(), 1e-10 * impulse.norm()) << "P " << P.transpose()
-                                                             << " impulse " << impulse.transpose();
+    EXPECT_LT((P - impulse).norm(), 1e-10 * impulse.norm())
+        << "P " << P.transpose() << " impulse " << impulse.transpose();
     EXPECT_LT(impulse.z(), 0.0);  // pushed down
 }
 
@@ -299,7 +299,7 @@ AirbagSpec makeRelaxedSpec(double massScale = 1000.0) {
     s.dynamics.massScale = massScale;
     s.dynamics.damping = 20.0 * std::sqrt(1000.0 / massScale);  // the same in its own time
     s.forceTolerance = 1e-3;
-    s.dynamics.newtonFirst = false;  // the relaxation itself on trial,
+    s.dynamics.newtonFirst = false;          // the relaxation itself on trial,
     s.dynamics.quasiStaticFallback = false;  // and what it leaves short kept as it is
     return s;
 }
@@ -327,7 +327,8 @@ TEST(AirbagRelaxed, EachStepEndsOnTheQuasiStaticEquilibrium) {
         const double Fr = relaxed.bag.calcShapeWrench(relaxed.block).force.z();
         ASSERT_GT(F, 0.5);
         EXPECT_NEAR(Fr, F, 0.005 * F) << "at " << 0.5 * k << " mm";
-        RecordProperty("at_" + std::to_string(k / 2) + "_mm_N", std::to_string(F) + " vs " + std::to_string(Fr));
+        RecordProperty("at_" + std::to_string(k / 2) + "_mm_N",
+                       std::to_string(F) + " vs " + std::to_string(Fr));
     }
 }
 
@@ -347,7 +348,8 @@ TEST(AirbagRelaxed, NewtonFirstTakesTheTautStepsAsTheQuasiStaticStepping) {
         EXPECT_FALSE(s.unrelaxed);
         EXPECT_EQ(s.substep, 0.0) << "step " << k << ": relaxed, not Newton's";
         const double F = statics.bag.calcShapeWrench(statics.block).force.z();
-        EXPECT_NEAR(relaxed.bag.calcShapeWrench(relaxed.block).force.z(), F, 1e-3 * std::abs(F) + 1e-6)
+        EXPECT_NEAR(relaxed.bag.calcShapeWrench(relaxed.block).force.z(), F,
+                    1e-3 * std::abs(F) + 1e-6)
             << "step " << k;
     }
 }
@@ -578,9 +580,9 @@ TEST(LoadTestDynamics, TheObserverSeesOnlyTheLoadingThatWasKept) {
     LoadTestOptions o = coarseDynamicRig(0.2, 3);
     o.dynamic.kineticShareLimit = 0.02;
     std::vector<int> seen;
-    const LoadTestResult r = runLoadTest(o, [&](const LoadStep& s, const Mesh&, const Eigen::Matrix3Xd&) {
-        seen.push_back(s.step);
-    });
+    const LoadTestResult r = runLoadTest(
+        o,
+        [&](const LoadStep& s, const Mesh&, const Eigen::Matrix3Xd&) { seen.push_back(s.step); });
     ASSERT_EQ(seen.size(), r.curves[0].steps.size());
     for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], static_cast<int>(i));
     EXPECT_LT(r.curves[0].blockSpeed, 0.2);  // it slowed down

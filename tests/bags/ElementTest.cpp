@@ -99,8 +99,10 @@ TEST(MembraneElement, UniformStretchPatchHasNoInteriorForceAndExactStress) {
     for (int j = 0; j <= 4; ++j)
         for (int i = 0; i <= 4; ++i) {
             const double f = g.segment<3>(3 * (j * 5 + i)).norm();
-            if (i > 0 && i < 4 && j > 0 && j < 4) maxInterior = std::max(maxInterior, f);
-            else maxBoundary = std::max(maxBoundary, f);
+            if (i > 0 && i < 4 && j > 0 && j < 4)
+                maxInterior = std::max(maxInterior, f);
+            else
+                maxBoundary = std::max(maxBoundary, f);
         }
     EXPECT_LT(maxInterior, 1e-10 * maxBoundary);
     const Eigen::Matrix2d C = F.topLeftCorner<2, 2>().transpose() * F.topLeftCorner<2, 2>();

@@ -55,8 +55,8 @@ Comparison compare(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
     model.addEnergy(x, general);
     model.addMembraneEnergy(x, film);
     model.addLoadEnergy(x, loads);
-    const double scale = std::max(film.grad.lpNorm<Eigen::Infinity>(),
-                                  loads.grad.lpNorm<Eigen::Infinity>());
+    const double scale =
+        std::max(film.grad.lpNorm<Eigen::Infinity>(), loads.grad.lpNorm<Eigen::Infinity>());
     const FilmForce kernel(model);
     EnergyAccumulator fast(nn);
     kernel.addGradient(x, fast, true);
@@ -66,8 +66,8 @@ Comparison compare(const MembraneModel& model, const Eigen::Matrix3Xd& x) {
     EXPECT_EQ(fastNoEnergy.grad, fast.grad);  // the energy changes nothing of the force
     Comparison c;
     c.gradient = (fast.grad - general.grad).lpNorm<Eigen::Infinity>() / scale;
-    c.energy = std::abs(fast.energy - general.energy) /
-               (std::abs(film.energy) + std::abs(loads.energy));
+    c.energy =
+        std::abs(fast.energy - general.energy) / (std::abs(film.energy) + std::abs(loads.energy));
     return c;
 }
 
@@ -170,8 +170,10 @@ TEST(FilmForce, EqualsTheGeneralGradientForEveryLawWithAndWithoutPronyBranches) 
         {"Mooney-Rivlin", makeMooneyRivlin(4e6, 1e6), true},
         {"Yeoh", seedFilm(), true},
         {"Yeoh beyond its limit", makeYeoh(31.587917e6, -0.76582566e6, -3.06587618e6, 0.01), true},
-        {"tension field (Yeoh)", std::make_shared<WrinklingMaterial>(seedFilm()->clone(), 1e-3), true},
-        {"tension field, no residual", std::make_shared<WrinklingMaterial>(seedFilm()->clone(), 0.0), true},
+        {"tension field (Yeoh)", std::make_shared<WrinklingMaterial>(seedFilm()->clone(), 1e-3),
+         true},
+        {"tension field, no residual",
+         std::make_shared<WrinklingMaterial>(seedFilm()->clone(), 0.0), true},
         {"tension field, own residual",
          std::make_shared<WrinklingMaterial>(makeMooneyRivlin(4e6, 1e6), 1e-3, makeNeoHookean(5e6)),
          true},

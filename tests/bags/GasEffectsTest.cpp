@@ -87,7 +87,8 @@ TEST(GasHeatExchange, AnAdiabaticStepThenExponentialRelaxationByTheClosedForm) {
         t += dt;
         EXPECT_NEAR(T, Tr + (T1 - Tr) * std::exp(-t / 25.0), 1e-9) << "t " << t;
         g.setTemperature(T, V1);
-        const double pExact = m * o.getSpecificGasConstant() * (Tr + (T1 - Tr) * std::exp(-t / 25.0)) / V1;
+        const double pExact =
+            m * o.getSpecificGasConstant() * (Tr + (T1 - Tr) * std::exp(-t / 25.0)) / V1;
         EXPECT_NEAR(g.calcPressure(V1), pExact, 1e-9 * pExact);
     }
 }
@@ -104,7 +105,9 @@ TEST(GasHeatExchange, TheStepIsTheExactSolutionAlongAnExponentialVolume) {
     g.seal(3.5e-3);
     const double Tr = o.temperature;
     for (const auto& [V1, dt, T0] : std::vector<std::tuple<double, double, double>>{
-             {3.2e-3, 6.0, Tr}, {3.8e-3, 15.0, Tr + 3.0}, {3.5e-3 * std::exp(-6.0 / (10.0 * 0.4)), 6.0, Tr + 1.0}}) {
+             {3.2e-3, 6.0, Tr},
+             {3.8e-3, 15.0, Tr + 3.0},
+             {3.5e-3 * std::exp(-6.0 / (10.0 * 0.4)), 6.0, Tr + 1.0}}) {
         const double V0 = 3.5e-3;
         const double a = std::log(V1 / V0) / dt;  // dlnV/dt
         auto f = [&](double T) { return -(o.gamma - 1.0) * T * a - (T - Tr) / o.heatTimeConstant; };
@@ -112,7 +115,8 @@ TEST(GasHeatExchange, TheStepIsTheExactSolutionAlongAnExponentialVolume) {
         const int n = 20000;
         const double h = dt / n;
         for (int i = 0; i < n; ++i) {
-            const double k1 = f(T), k2 = f(T + 0.5 * h * k1), k3 = f(T + 0.5 * h * k2), k4 = f(T + h * k3);
+            const double k1 = f(T), k2 = f(T + 0.5 * h * k1), k3 = f(T + 0.5 * h * k2),
+                         k4 = f(T + h * k3);
             T += h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4);
         }
         EXPECT_NEAR(g.calcHeatStepTemperature(V0, T0, V1, dt), T, 1e-8) << "V1 " << V1;

@@ -97,7 +97,8 @@ TEST(Orifice, FlowFollowsTheOrificeLawAndItsDerivative) {
         bags::calcOrificeMassFlow(o, 1e5 + d, 1e5, rho, &g);
         const double h = 1e-4 * std::max(1.0, std::abs(d));
         const double fd = (bags::calcOrificeMassFlow(o, 1e5 + d + h, 1e5, rho) -
-                           bags::calcOrificeMassFlow(o, 1e5 + d - h, 1e5, rho)) / (2 * h);
+                           bags::calcOrificeMassFlow(o, 1e5 + d - h, 1e5, rho)) /
+                          (2 * h);
         EXPECT_NEAR(g, fd, 1e-6 * std::abs(fd)) << "dp = " << d;
     }
 }

@@ -622,9 +622,9 @@ TEST(PlaceCopies, CopiesKeepTheirVolumesAndNamesAndRefuseNonRigidPoses) {
     for (size_t c = 0; c < bag.chambers.size(); ++c) {
         const double v = bags::calcChamberVolume(bag, static_cast<int>(c), bag.X);
         for (size_t k = 0; k < 2; ++k)
-            EXPECT_NEAR(bags::calcChamberVolume(two, static_cast<int>(c + k * bag.chambers.size()),
-                                                two.X),
-                        v, 1e-12 * std::abs(v));
+            EXPECT_NEAR(
+                bags::calcChamberVolume(two, static_cast<int>(c + k * bag.chambers.size()), two.X),
+                v, 1e-12 * std::abs(v));
     }
     Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
     scaled.linear() *= 1.1;

@@ -36,7 +36,6 @@ TEST(LoadTest, SlackBagCurveEndsCleanlyWhateverHappens) {
     }
 }
 
-
 TEST(LoadTest, NearlyEmptyBagBottomsOutWithTheReasonStated) {
     // 1.0 g fills about a quarter of this bag: the block folds the slack top down to the bed
     // board long before 50 N (the seed's third stage is this bottoming). The curve must stop

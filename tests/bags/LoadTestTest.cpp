@@ -30,7 +30,7 @@ LoadTestOptions coarseOptions() {
 // A film that can be broken from outside: once `broken` is set, every evaluation is NaN, so
 // every solve fails from then on (the bag's copies share the switch).
 class BreakableMaterial : public MembraneMaterial {
-public:
+  public:
     BreakableMaterial(std::shared_ptr<const MembraneMaterial> base,
                       std::shared_ptr<std::atomic<bool>> broken)
         : m_base(std::move(base)), m_broken(std::move(broken)) {}
@@ -48,7 +48,7 @@ public:
         return std::make_unique<BreakableMaterial>(m_base, m_broken);
     }
 
-private:
+  private:
     std::shared_ptr<const MembraneMaterial> m_base;
     std::shared_ptr<std::atomic<bool>> m_broken;
 };
@@ -227,7 +227,8 @@ TEST(LoadTest, StageRuleFollowsTheDocumentedDefinition) {
     const double m[] = {3.5, 3.0, 2.5, 2.0, 1.5, 1.0};
     const double k[] = {8.0, 6.0, 3.0, 1.5, 2.0, 3.5};
     const double r2[] = {0.999, 0.998, 0.97, 0.96, 0.95, 0.999};
-    for (int i = 0; i < 6; ++i) c[i].gasMass = m[i] * 1e-3, c[i].stiffness = k[i] * 1e3, c[i].r2 = r2[i];
+    for (int i = 0; i < 6; ++i)
+        c[i].gasMass = m[i] * 1e-3, c[i].stiffness = k[i] * 1e3, c[i].r2 = r2[i];
     classifyStages(c);
     const int expected[] = {1, 1, 2, 2, 3, 3};
     for (int i = 0; i < 6; ++i) EXPECT_EQ(c[i].stage, expected[i]) << m[i] << " g";
@@ -237,9 +238,10 @@ TEST(LoadTest, SeedPolynomialIsTheSeedsFit) {
     // Seed eq. (18)-(24): k(3.5 g) = 7.90 N/mm, k(1.0 g) = 3.471 N/mm (hand-evaluated).
     const std::vector<double> c = getSeedStiffnessPolynomial();
     EXPECT_NEAR(evalPolynomial(c, 1.0), 3.471, 1e-9);
-    EXPECT_NEAR(evalPolynomial(c, 3.5), -0.945 * std::pow(3.5, 5) + 8.394 * std::pow(3.5, 4) -
-                                            25.707 * std::pow(3.5, 3) + 32.714 * 3.5 * 3.5 -
-                                            17.181 * 3.5 + 6.196, 1e-9);
+    EXPECT_NEAR(evalPolynomial(c, 3.5),
+                -0.945 * std::pow(3.5, 5) + 8.394 * std::pow(3.5, 4) - 25.707 * std::pow(3.5, 3) +
+                    32.714 * 3.5 * 3.5 - 17.181 * 3.5 + 6.196,
+                1e-9);
 }
 
 TEST(LoadTest, RejectsImpossibleOptions) {
@@ -478,10 +480,10 @@ TEST(LoadTest, ASetUpThatCannotBeSolvedFailsThatCurveAndKeepsTheOthers) {
     auto broken = std::make_shared<std::atomic<bool>>(false);
     o.material = std::make_shared<BreakableMaterial>(o.material, broken);
     // The film breaks at the last step of the first curve's unloading (the block has left).
-    const LoadTestResult r = runLoadTest(o, [&](const LoadStep& s, const Mesh&,
-                                                const Eigen::Matrix3Xd&) {
-        if (s.curve == 0 && !s.loading && s.force <= 0.0) *broken = true;
-    });
+    const LoadTestResult r =
+        runLoadTest(o, [&](const LoadStep& s, const Mesh&, const Eigen::Matrix3Xd&) {
+            if (s.curve == 0 && !s.loading && s.force <= 0.0) *broken = true;
+        });
     ASSERT_TRUE(*broken);
     ASSERT_EQ(r.curves.size(), 3u);
     const LoadCurve& first = r.curves[0];

@@ -37,8 +37,8 @@ TEST(SeedReading, ScalingsMultiplyTheSizesTheyName) {
     EXPECT_DOUBLE_EQ(c.width, 0.100);
     EXPECT_DOUBLE_EQ(c.height, 0.135);
     EXPECT_NEAR(c.calcFlatVolume(), s * p.calcFlatVolume(), 1e-15);
-    for (auto sc : {bags::FillScaling::Profile, bags::FillScaling::Uniform,
-                    bags::FillScaling::Height}) {
+    for (auto sc :
+         {bags::FillScaling::Profile, bags::FillScaling::Uniform, bags::FillScaling::Height}) {
         // The first guess follows the flat volume: V ~ s^q.
         const bags::LoadTestOptions rig = makeCoarseSeedRig();
         const double q = bags::getFillScalingExponent(sc);

@@ -58,10 +58,10 @@ void expectDerivativesMatch(const bags::SelfContact& sc, const Eigen::Matrix3Xd&
     ASSERT_GT(ev.grad.norm(), 1e-3) << what;  // the pair is active
     // Forces ~ 0.1-1 N, stiffness ~ 1e2-1e3 N/m; central FD with 1e-9 m: ~1e-6 relative.
     EXPECT_LT((ev.grad - gFd).norm(), 1e-6 * ev.grad.norm()) << what;
-    EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm()) << what << "\n"
-                                                              << ev.hess.topLeftCorner(12, 12)
-                                                              << "\n\n"
-                                                              << hFd.topLeftCorner(12, 12);
+    EXPECT_LT((ev.hess - hFd).norm(), 1e-5 * ev.hess.norm())
+        << what << "\n"
+        << ev.hess.topLeftCorner(12, 12) << "\n\n"
+        << hFd.topLeftCorner(12, 12);
     EXPECT_LT((ev.hess - ev.hess.transpose()).norm(), 1e-12 * ev.hess.norm()) << what;
     bagstest::recordFigure(std::string("self_grad_fd_rel_err ") + what,
                            (ev.grad - gFd).norm() / ev.grad.norm());

@@ -204,8 +204,8 @@ TEST(Solver, InexactNewtonReachesTheSameEquilibriumWithFewerKrylovIterations) {
     for (int n : mesh.supportNodes) fixed[n] = 1;
     for (int i = 0; i < mesh.getNumNodes(); ++i)
         if (!fixed[i])
-            start.col(i) += 2e-3 * std::exp(-(start.col(i) - c).squaredNorm() / 1e-3) *
-                            Vec3(0.3, -0.2, 1.0);
+            start.col(i) +=
+                2e-3 * std::exp(-(start.col(i) - c).squaredNorm() / 1e-3) * Vec3(0.3, -0.2, 1.0);
     auto solve = [&](double forcing, SolveSummary* s) {
         SolverOptions o;
         o.forcingTerm = forcing;
@@ -264,8 +264,9 @@ TEST(Solver, StabilisationSpringsAreWeightedPerNode) {
     Eigen::Matrix3Xd dir(3, mesh.getNumNodes());
     for (int i = 0; i < dir.size(); ++i) dir.data()[i] = u(rng) * 1e3;
     const double h = 1e-7;
-    const double fd = (model.calcStabilizationEnergy(x + h * dir) -
-                       model.calcStabilizationEnergy(x - h * dir)) / (2.0 * h);
+    const double fd =
+        (model.calcStabilizationEnergy(x + h * dir) - model.calcStabilizationEnergy(x - h * dir)) /
+        (2.0 * h);
     const double an = (g - g0).dot(Eigen::Map<const Eigen::VectorXd>(dir.data(), dir.size()));
     EXPECT_NEAR(fd, an, 1e-6 * std::abs(an));
     EXPECT_THROW(model.setStabilization(k, anchor, std::vector<double>(3, 1.0)),

@@ -29,8 +29,8 @@ TEST(StableYeoh, EqualsThePolynomialInsideAndStaysBoundedOutside) {
     const auto stable = bags::makeStableYeoh(kC10, kC20, kC30);
     // Inside the stable range (equibiaxial 1.2, uniaxial 1.4, a sheared state) the two agree
     // exactly (the same code path).
-    for (const Mat2& C : {makeC(1.2, 1.2, 0.0), makeC(1.4, 1.0 / std::sqrt(1.4), 0.3),
-                          makeC(1.1, 0.98, 0.7)}) {
+    for (const Mat2& C :
+         {makeC(1.2, 1.2, 0.0), makeC(1.4, 1.0 / std::sqrt(1.4), 0.3), makeC(1.1, 0.98, 0.7)}) {
         Eigen::Vector3d S1, S2;
         EXPECT_EQ(raw->calcEnergy(C, &S1, nullptr), stable->calcEnergy(C, &S2, nullptr));
         EXPECT_EQ(S1, S2);

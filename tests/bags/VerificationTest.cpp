@@ -45,7 +45,8 @@ struct NeoHookeanSphere {
     double V0;
     double pMax;  // at the limit point, l = 7^(1/6)
     NeoHookeanSphere()
-        : mesh(makeSphere(R, 3)), fixed(test::fixSphereRigidModes(mesh)),
+        : mesh(makeSphere(R, 3)),
+          fixed(test::fixSphereRigidModes(mesh)),
           model(mesh, std::shared_ptr<MembraneMaterial>(makeNeoHookean(C10)), H),
           V0(calcChamberVolume(mesh, 0, mesh.X)),
           pMax(sphereNeoHookeanPressure(C10, H, R, std::pow(7.0, 1.0 / 6.0))) {}
@@ -109,8 +110,9 @@ TEST(Verification, SphereInflatesAlongAnalyticPressureStretchCurve) {
     NeoHookeanSphere sphere;
     ASSERT_TRUE(sphere.fixed);
     sphere.checkPressureStretch([](MembraneModel& model, Eigen::Matrix3Xd& x, double p) {
-        ramp(model, x, 4, [&](double s) { model.setChamberPressure(0, s); },
-             model.getChamberPressure(0), p);
+        ramp(
+            model, x, 4, [&](double s) { model.setChamberPressure(0, s); },
+            model.getChamberPressure(0), p);
     });
 }
 
@@ -132,17 +134,18 @@ TEST(Verification, SphereWithFixedGasMassPassesTheLimitPoint) {
     const double mTarget = (air.ambientPressure + pTarget) * V0 * std::pow(lTarget, 3) /
                            (air.getSpecificGasConstant() * air.temperature);
     // Pre-inflate with pressure to l ~ 1.2, then seal the gas and add mass in steps.
-    ramp(model, x, 4, [&](double s) { model.setChamberPressure(0, s); }, 0.0, 0.8 * pMax);
+    ramp(
+        model, x, 4, [&](double s) { model.setChamberPressure(0, s); }, 0.0, 0.8 * pMax);
     model.setChamberPressure(0, 0.0);
     const double V1 = calcChamberVolume(mesh, 0, x);
-    const double m1 = (air.ambientPressure + 0.8 * pMax) * V1 /
-                      (air.getSpecificGasConstant() * air.temperature);
+    const double m1 =
+        (air.ambientPressure + 0.8 * pMax) * V1 / (air.getSpecificGasConstant() * air.temperature);
     GasChamber gas(air, m1);
     gas.seal(V1);
     const int g = model.addGas(gas, {0});
-    ramp(model, x, 12,
-         [&](double m) { model.updGas(g).setMass(m, calcChamberVolume(mesh, 0, x)); }, m1,
-         mTarget);
+    ramp(
+        model, x, 12, [&](double m) { model.updGas(g).setMass(m, calcChamberVolume(mesh, 0, x)); },
+        m1, mTarget);
     const double l = std::cbrt(calcChamberVolume(mesh, 0, x) / V0);
     EXPECT_NEAR(l, lTarget, 0.01 * lTarget);
     EXPECT_GT(l, std::pow(7.0, 1.0 / 6.0));  // really past the limit point
@@ -159,7 +162,8 @@ TEST(Verification, InflatedSquareAirbagCentreDeflection) {
     const SquareAirbag bag(24);
     MembraneModel model = bag.makeModel();
     Eigen::Matrix3Xd x = bag.mesh.X;
-    ramp(model, x, 10, [&](double s) { model.setChamberPressure(0, s); }, 0.0, 5000.0);
+    ramp(
+        model, x, 10, [&](double s) { model.setChamberPressure(0, s); }, 0.0, 5000.0);
     const double w = bag.calcCentreDeflection(x);
     EXPECT_NEAR(w, 0.2167, 0.02 * 0.2167);
 }
@@ -201,8 +205,10 @@ double henckyCentreDeflection(double a, double Eh, double nu, double q) {
     double lo = 1e-6 * Eh, hi = Eh, w0 = 0.0;  // u(a) increases with N0
     for (int it = 0; it < 200; ++it) {
         const double mid = std::sqrt(lo * hi);
-        if (shoot(mid, &w0) > 0.0) hi = mid;
-        else lo = mid;
+        if (shoot(mid, &w0) > 0.0)
+            hi = mid;
+        else
+            lo = mid;
     }
     shoot(std::sqrt(lo * hi), &w0);
     return w0;
@@ -229,7 +235,8 @@ TEST(Verification, ClampedCircularMembraneMatchesHencky) {
     Mesh mesh = makeDisk(a, 16);
     MembraneModel model(mesh, std::shared_ptr<MembraneMaterial>(makeStVenantKirchhoff(E, nu)), t);
     Eigen::Matrix3Xd x = mesh.X;
-    ramp(model, x, 5, [&](double s) { model.setChamberPressure(0, s); }, 0.0, q);
+    ramp(
+        model, x, 5, [&](double s) { model.setChamberPressure(0, s); }, 0.0, q);
     int centre = 0;
     mesh.X.colwise().norm().minCoeff(&centre);
     const double w = x(2, centre);
@@ -298,8 +305,9 @@ TEST(DynamicVerification, SphereInflatesAlongAnalyticPressureStretchCurve) {
     sphere.checkPressureStretch([&](MembraneModel& model, Eigen::Matrix3Xd& x, double p) {
         // Tolerance: 1e-6 of the pressure's resultant on a hemisphere.
         const double R = NeoHookeanSphere::R;
-        steps += relaxRamp(model, x, 4, [&](double s) { model.setChamberPressure(0, s); },
-                           model.getChamberPressure(0), p, 1e-6 * p * M_PI * R * R, 400000);
+        steps += relaxRamp(
+            model, x, 4, [&](double s) { model.setChamberPressure(0, s); },
+            model.getChamberPressure(0), p, 1e-6 * p * M_PI * R * R, 400000);
     });
     RecordProperty("substeps", std::to_string(steps));
 }
@@ -317,10 +325,10 @@ TEST(DynamicVerification, InflatedSquareAirbagCentreDeflection) {
     Eigen::Matrix3Xd x = bag.mesh.X;
     // Tolerance: 1e-6 of the pressure's resultant on one sheet.
     const double edge = SquareAirbag::kEdge;
-    const long steps =
-        relaxRamp(model, x, 10, [&](double s) { model.setChamberPressure(0, s); }, 0.0, 5000.0,
-                  1e-6 * 5000.0 * edge * edge, 400000,
-                  std::shared_ptr<const MembraneMaterial>(makeStVenantKirchhoff(588e6, 0.4)));
+    const long steps = relaxRamp(
+        model, x, 10, [&](double s) { model.setChamberPressure(0, s); }, 0.0, 5000.0,
+        1e-6 * 5000.0 * edge * edge, 400000,
+        std::shared_ptr<const MembraneMaterial>(makeStVenantKirchhoff(588e6, 0.4)));
     const double w = bag.calcCentreDeflection(x);
     EXPECT_NEAR(w, 0.2167, 0.02 * 0.2167);
     RecordProperty("centre_deflection_m", std::to_string(w));
@@ -335,8 +343,9 @@ TEST(DynamicVerification, ClampedCircularMembraneMatchesHencky) {
     Mesh mesh = makeDisk(a, 16);
     MembraneModel model(mesh, std::shared_ptr<MembraneMaterial>(makeStVenantKirchhoff(E, nu)), t);
     Eigen::Matrix3Xd x = mesh.X;
-    const long steps = relaxRamp(model, x, 5, [&](double s) { model.setChamberPressure(0, s); },
-                                 0.0, q, 1e-6 * q * M_PI * a * a, 400000);
+    const long steps = relaxRamp(
+        model, x, 5, [&](double s) { model.setChamberPressure(0, s); }, 0.0, q,
+        1e-6 * q * M_PI * a * a, 400000);
     int centre = 0;
     mesh.X.colwise().norm().minCoeff(&centre);
     const double ref = henckyCentreDeflection(a, E * t, nu, q);

@@ -84,8 +84,8 @@ TEST(Prony, ValidatesItsTermsAndGivesTheStepScaleLimits) {
     EXPECT_FALSE(makeProny({{0.0, 10.0}}).isOn());
     const PronySeries p = makeProny({{0.3, 10.0}, {0.2, 100.0}});
     EXPECT_DOUBLE_EQ(p.getLongTermFraction(), 0.5);
-    EXPECT_DOUBLE_EQ(p.calcStepScale(0.0), 2.0);    // 1 / g_inf: instantaneous
-    EXPECT_DOUBLE_EQ(p.calcStepScale(kInf), 1.0);   // quasi-static: the long-term law
+    EXPECT_DOUBLE_EQ(p.calcStepScale(0.0), 2.0);   // 1 / g_inf: instantaneous
+    EXPECT_DOUBLE_EQ(p.calcStepScale(kInf), 1.0);  // quasi-static: the long-term law
     EXPECT_NEAR(calcPronyPhi(1e-10), 1.0, 1e-10);
     EXPECT_NEAR(calcPronyPhi(2.0), (1 - std::exp(-2.0)) / 2.0, 1e-15);
 }
@@ -118,8 +118,10 @@ TEST(ViscoelasticElement, TangentMatchesFiniteDifferencesWithHistory) {
             Eigen::Matrix3Xd xp = x, xm = x;
             xp.data()[k] += h;
             xm.data()[k] -= h;
-            gfd(k) = (evaluate(model, xp, false).energy - evaluate(model, xm, false).energy) / (2 * h);
-            Hfd.col(k) = (evaluate(model, xp, false).grad - evaluate(model, xm, false).grad) / (2 * h);
+            gfd(k) =
+                (evaluate(model, xp, false).energy - evaluate(model, xm, false).energy) / (2 * h);
+            Hfd.col(k) =
+                (evaluate(model, xp, false).grad - evaluate(model, xm, false).grad) / (2 * h);
         }
         EXPECT_LT((g - gfd).norm(), 1e-5 * g.norm()) << "gradient vs FD at " << stretch;
         EXPECT_LT((H - Hfd).norm(), 1e-5 * H.norm()) << "Hessian vs FD at " << stretch;
@@ -213,7 +215,8 @@ TEST(Viscoelastic, ConstantStrainRateRampMatchesTheClosedForm) {
         double t = 0.0;
         for (double dt : {0.7, 0.7, 2.0, 5.0, 5.0, 1.0, 3.0}) {
             t += dt;
-            const Eigen::Matrix3Xd x = deform(model.getMesh(), std::sqrt(1.0 + 2.0 * r * t), 1.0, 0.0);
+            const Eigen::Matrix3Xd x =
+                deform(model.getMesh(), std::sqrt(1.0 + 2.0 * r * t), 1.0, 0.0);
             step(model, x, dt);
             Eigen::Vector3d expected;
             film->calcEnergy((Mat2() << 1.0 + 2.0 * r * t, 0, 0, 1).finished(), &expected, nullptr);
@@ -279,10 +282,10 @@ Cushion pressCushion(double youngsModulus, const PronySeries* prony,
         if (std::abs(p.z()) < 1e-9) c.mesh.fixedDofs.push_back(3 * i + 2);
         if (std::abs(p.x()) < 1e-9 && std::abs(p.y()) < 1e-9 && p.z() > 0) top = i;
     }
-    MembraneModel model(c.mesh,
-                        std::make_shared<WrinklingMaterial>(
-                            makeStVenantKirchhoff(youngsModulus, 0.4), 1e-3),
-                        0.6e-3);
+    MembraneModel model(
+        c.mesh,
+        std::make_shared<WrinklingMaterial>(makeStVenantKirchhoff(youngsModulus, 0.4), 1e-3),
+        0.6e-3);
     if (prony) model.setProny(*prony);
     Eigen::Matrix3Xd x = c.mesh.X;
     SolverOptions so;

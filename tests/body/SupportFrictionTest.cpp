@@ -15,9 +15,9 @@ namespace {
 constexpr double kG = 9.80665;
 
 struct Slide {
-    double drift = 0;         // centre-of-mass travel along x over the last `window` [m]
-    double acceleration = 0;  // mean centre-of-mass acceleration along x over it [m/s^2]
-    double coulomb = 0;       // g_x - mu N / M at the end [m/s^2]
+    double drift = 0;              // centre-of-mass travel along x over the last `window` [m]
+    double acceleration = 0;       // mean centre-of-mass acceleration along x over it [m/s^2]
+    double coulomb = 0;            // g_x - mu N / M at the end [m/s^2]
     std::array<int, 2> sliding{};  // stick-slip patches sliding, in contact (end)
     int steps = 0;                 // integrator steps taken
 };
@@ -64,13 +64,14 @@ Slide run(body::SupportFrictionLaw law, double gx, double settle, double window)
 TEST(PlaneSupportFriction, TheStickSlipLawHoldsAPatientBelowCoulombsLimitWithoutCreep) {
     const Slide stick = run(body::SupportFrictionLaw::StickSlip, 0.3 * kG, 1.0, 1.0);
     const Slide reg = run(body::SupportFrictionLaw::Regularised, 0.3 * kG, 1.0, 1.0);
-    std::printf("drift over 1 s: stick-slip %.4f mm (%d steps, %d of %d patches sliding), "
-                "regularised %.4f mm (%d steps)\n",
-                1e3 * stick.drift, stick.steps, stick.sliding[0], stick.sliding[1],
-                1e3 * reg.drift, reg.steps);
-    EXPECT_LT(std::abs(stick.drift), 2e-5);  // 0.02 mm: held
-    EXPECT_GT(reg.drift, 3e-4);              // the regularised law's creep
-    EXPECT_GT(stick.sliding[1], 100);        // he lies on the plane
+    std::printf(
+        "drift over 1 s: stick-slip %.4f mm (%d steps, %d of %d patches sliding), "
+        "regularised %.4f mm (%d steps)\n",
+        1e3 * stick.drift, stick.steps, stick.sliding[0], stick.sliding[1], 1e3 * reg.drift,
+        reg.steps);
+    EXPECT_LT(std::abs(stick.drift), 2e-5);              // 0.02 mm: held
+    EXPECT_GT(reg.drift, 3e-4);                          // the regularised law's creep
+    EXPECT_GT(stick.sliding[1], 100);                    // he lies on the plane
     EXPECT_LT(stick.sliding[0], stick.sliding[1] / 20);  // next to nothing slides
     // The stick spring is softer in the body's velocity than the regularised damper: fewer
     // steps for the same accuracy.
@@ -82,10 +83,11 @@ TEST(PlaneSupportFriction, BothLawsSlideAtCoulombsLimitAboveIt) {
     for (const body::SupportFrictionLaw law :
          {body::SupportFrictionLaw::StickSlip, body::SupportFrictionLaw::Regularised}) {
         const Slide r = run(law, 0.9 * kG, 0.6, 0.4);
-        std::printf("%s: acceleration %.4f m/s^2, Coulomb %.4f m/s^2, %d of %d patches "
-                    "sliding\n",
-                    law == body::SupportFrictionLaw::StickSlip ? "stick-slip" : "regularised",
-                    r.acceleration, r.coulomb, r.sliding[0], r.sliding[1]);
+        std::printf(
+            "%s: acceleration %.4f m/s^2, Coulomb %.4f m/s^2, %d of %d patches "
+            "sliding\n",
+            law == body::SupportFrictionLaw::StickSlip ? "stick-slip" : "regularised",
+            r.acceleration, r.coulomb, r.sliding[0], r.sliding[1]);
         EXPECT_NEAR(r.acceleration, r.coulomb, 0.01 * r.coulomb);
         if (law == body::SupportFrictionLaw::StickSlip) {
             EXPECT_EQ(r.sliding[0], r.sliding[1]);

@@ -104,8 +104,7 @@ TEST(ArrayReadings, ThePatchPeakIsTheMeanPressureOverTheBestDisc) {
         }
     for (double area : {10e-4, 20e-4, 40e-4}) {
         const double b2 = area / M_PI;
-        EXPECT_NEAR(calcPatchPeakPressure(pts, f, area), p0 * (1.0 - b2 / (2 * R * R)),
-                    0.01 * p0)
+        EXPECT_NEAR(calcPatchPeakPressure(pts, f, area), p0 * (1.0 - b2 / (2 * R * R)), 0.01 * p0)
             << area * 1e4 << " cm2";
     }
     // Uniform pressure on a region larger than the disc: the pressure itself.
@@ -119,13 +118,13 @@ TEST(ArrayReadings, ThePatchPeakAddsTheLoadsOneDiscHolds) {
     EXPECT_EQ(calcPatchPeakPressure({}, {}, area), 0.0);
     EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{0.1, 0.2}}, {3.0}, area), 3.0 / area);
     EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{0, 0}, {2.2 * r, 0}}, {3.0, 5.0}, area), 5.0 / area);
-    EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{0, 0}, {0.7 * r, 0.7 * r}, {5 * r, 0}},
-                                           {3.0, 5.0, 6.0}, area),
-                     8.0 / area);
+    EXPECT_DOUBLE_EQ(
+        calcPatchPeakPressure({{0, 0}, {0.7 * r, 0.7 * r}, {5 * r, 0}}, {3.0, 5.0, 6.0}, area),
+        8.0 / area);
     // Sorted by x inside: the order given does not matter.
-    EXPECT_DOUBLE_EQ(calcPatchPeakPressure({{5 * r, 0}, {0.7 * r, 0.7 * r}, {0, 0}},
-                                           {6.0, 5.0, 3.0}, area),
-                     8.0 / area);
+    EXPECT_DOUBLE_EQ(
+        calcPatchPeakPressure({{5 * r, 0}, {0.7 * r, 0.7 * r}, {0, 0}}, {6.0, 5.0, 3.0}, area),
+        8.0 / area);
     EXPECT_THROW(calcPatchPeakPressure({{0, 0}}, {1.0}, 0.0), std::invalid_argument);
 }
 

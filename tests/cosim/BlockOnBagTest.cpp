@@ -574,8 +574,7 @@ struct OutputRun {
     std::string error;
 };
 
-OutputRun runToOutputs(const CouplingOptions& o, int outputs, double every, double k,
-                       double zeta) {
+OutputRun runToOutputs(const CouplingOptions& o, int outputs, double every, double k, double zeta) {
     CoupledBlock run(o, k, zeta);
     const Vec3& touch = run.touch;
     BlockSystem& block = run.block;
@@ -654,12 +653,13 @@ namespace {
 struct FillRun {
     std::vector<double> miss;  // [N]
     int passes = 0;
-    double depth = 0.0;  // [m] below touching, at the end
-    double gasMass = 0.0;  // [kg] at the end
+    double depth = 0.0;                                      // [m] below touching, at the end
+    double gasMass = 0.0;                                    // [kg] at the end
     Eigen::Matrix<double, 6, Eigen::Dynamic> gasDerivative;  // the link's, at the end
 };
 
-FillRun fillUnderTheBlock(Scheme scheme, bool gasTangent, double flow, int steps, double dt = 0.01) {
+FillRun fillUnderTheBlock(Scheme scheme, bool gasTangent, double flow, int steps,
+                          double dt = 0.01) {
     const LoadCurvePoint ref = reference();
     CouplingOptions o = coupling(scheme, AccelerationKind::IQNILS, dt);
     o.gasTangent = gasTangent;

@@ -72,8 +72,7 @@ TEST(BodyCheckpoint, AResumedBodyOnAStickSlipSupportGoesOnToTheSameBits) {
             whole.advance(0.01 * k);
             resumed.advance(0.01 * k);
         }
-        const bool same =
-            sameBits(whole.participant->getState(), resumed.participant->getState());
+        const bool same = sameBits(whole.participant->getState(), resumed.participant->getState());
         if (carry) {
             EXPECT_TRUE(same) << "the anchors went through the checkpoint";
         } else {

@@ -507,7 +507,8 @@ namespace {
 
 double largestError(const SpringRun& r) {
     double worst = 0.0;
-    for (size_t i = 0; i < r.t.size(); ++i) worst = std::max(worst, std::abs(r.z[i] - exactZ(r.t[i])));
+    for (size_t i = 0; i < r.t.size(); ++i)
+        worst = std::max(worst, std::abs(r.z[i] - exactZ(r.t[i])));
     return worst;
 }
 
@@ -529,8 +530,8 @@ TEST(Coupling, TheTangentImplicitSchemeConvergesTheEndOfStepLoadWhereTheTangentI
     EXPECT_EQ(exact.iterations, int(exact.t.size()));
     EXPECT_LT(largestError(exact), 1e-6 * a0);
 
-    const StandInRun oneStep =
-        simulateStandIn(options(Scheme::Tangent, AccelerationKind::IQNILS, 1e-3), 0.15, kZeta, 0.5, false);
+    const StandInRun oneStep = simulateStandIn(
+        options(Scheme::Tangent, AccelerationKind::IQNILS, 1e-3), 0.15, kZeta, 0.5, false);
     double worst[2];
     int passes = 0, steps = 0;
     for (int h = 0; h < 2; ++h) {
@@ -551,12 +552,14 @@ TEST(Coupling, TheTangentImplicitSchemeConvergesTheEndOfStepLoadWhereTheTangentI
     EXPECT_NEAR(worst[0] / worst[1], 2.0, 0.4);
 
     const double big = 3.0 / omega();
-    const StandInRun large = simulateStandIn(options(Scheme::TangentImplicit, AccelerationKind::IQNILS, big),
-                                             20 * big, kZeta, 0.5, false);
+    const StandInRun large =
+        simulateStandIn(options(Scheme::TangentImplicit, AccelerationKind::IQNILS, big), 20 * big,
+                        kZeta, 0.5, false);
     ASSERT_FALSE(large.failed);
-    std::printf("half tangent at omega dt = 3: |z - z_rest| after 20 steps = %.2e m g / k, %.2f "
-                "passes a step\n",
-                std::abs(large.z.back() + a0) / a0, double(large.iterations) / large.t.size());
+    std::printf(
+        "half tangent at omega dt = 3: |z - z_rest| after 20 steps = %.2e m g / k, %.2f "
+        "passes a step\n",
+        std::abs(large.z.back() + a0) / a0, double(large.iterations) / large.t.size());
     EXPECT_LT(std::abs(large.z.back() + a0), 1e-3 * a0);
 }
 
@@ -665,7 +668,8 @@ TEST(Coupling, TheAccuracyDrivenStepShrinksAtTheImpactGrowsInFlightAndAtRestAndL
         EXPECT_TRUE(r.landedExactly);
         ASSERT_EQ(r.z.size(), ref.z.size());
         double worst = 0.0;
-        for (size_t i = 0; i < r.z.size(); ++i) worst = std::max(worst, std::abs(r.z[i] - ref.z[i]));
+        for (size_t i = 0; i < r.z.size(); ++i)
+            worst = std::max(worst, std::abs(r.z[i] - ref.z[i]));
         int redone = 0, passes = 0;
         size_t smallest = 0;
         double largestBefore = 0.0, largestAtRest = 0.0;
@@ -682,9 +686,8 @@ TEST(Coupling, TheAccuracyDrivenStepShrinksAtTheImpactGrowsInFlightAndAtRestAndL
             "difference %.3e of m g / k; smallest step %.3g ms at %.4f s (impact at %.4f s); "
             "largest %.3g ms before it, %.3g ms after 0.45 s; rest at %.4f m g / k\n",
             toString(s).c_str(), r.steps.size(), redone, double(passes) / r.steps.size(),
-            ref.steps.size(), worst / a0, 1e3 * r.steps[smallest].macroStep,
-            r.steps[smallest].time, tImpact, 1e3 * largestBefore, 1e3 * largestAtRest,
-            r.z.back() / a0);
+            ref.steps.size(), worst / a0, 1e3 * r.steps[smallest].macroStep, r.steps[smallest].time,
+            tImpact, 1e3 * largestBefore, 1e3 * largestAtRest, r.z.back() / a0);
         EXPECT_LT(worst, (s == Scheme::Implicit ? 0.05 : 0.005) * a0) << toString(s);
         EXPECT_LT(r.steps.size(), ref.steps.size() / 5) << toString(s);
         EXPECT_GT(redone, 0) << toString(s);

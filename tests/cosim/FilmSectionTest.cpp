@@ -65,7 +65,8 @@ TEST(FilmSection, TheGradientAndHessianMatchFiniteDifferencesOfTheEnergy) {
         Eigen::VectorXd qp = q, qm = q, gp, gm;
         qp[i] += h;
         qm[i] -= h;
-        gfd[i] = (film.calcEnergy(qp, P, &gp, nullptr) - film.calcEnergy(qm, P, &gm, nullptr)) / (2 * h);
+        gfd[i] =
+            (film.calcEnergy(qp, P, &gp, nullptr) - film.calcEnergy(qm, P, &gm, nullptr)) / (2 * h);
         Hfd.col(i) = (gp - gm) / (2 * h);
     }
     for (int i = 1; i < q.size(); i += 2) inside += q[i] < 0.0;

@@ -39,7 +39,7 @@ ArrayLayout makePair() {
 
 struct PairRun {
     std::vector<std::vector<int>> modules;
-    double inflatedOverlap = 0.0, pressedOverlap = 0.0;  // [m]
+    double inflatedOverlap = 0.0, pressedOverlap = 0.0;     // [m]
     Vec3 neighbourForce[2] = {Vec3::Zero(), Vec3::Zero()};  // [N] on bag 0 and bag 1
     double plankForce = 0.0;                                // [N] up, both bags
     double gaugePressure = 0.0;                             // [Pa] bag 0, pressed
@@ -50,8 +50,8 @@ struct PairRun {
 PairRun runPair(bool neighbourContact) {
     const bags::AirbagSpec spec = makeSpec(0.030);
     const std::vector<ArrayBag> cells = makeArrayBags(makePair(), spec.geometry);
-    ArrayParticipants a = makeArrayParticipants(cells, {0, 1}, spec, neighbourContact, 0.005,
-                                                4.5e-3);
+    ArrayParticipants a =
+        makeArrayParticipants(cells, {0, 1}, spec, neighbourContact, 0.005, 4.5e-3);
     PairRun r;
     r.modules = a.modules;
     const double ridgeX = cells[0].footprintMin.x() + spec.geometry.calcApexX();
@@ -73,7 +73,8 @@ PairRun runPair(bool neighbourContact) {
     };
     r.inflatedOverlap = overlap();
     double top = 0.0;
-    for (int b = 0; b < 2; ++b) top = std::max(top, a.bags[b]->getPressurePoints().row(2).maxCoeff());
+    for (int b = 0; b < 2; ++b)
+        top = std::max(top, a.bags[b]->getPressurePoints().row(2).maxCoeff());
     for (int k = 1; k <= 4; ++k) {
         Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
         pose.translation() = Vec3(ridgeX, 0.0, top + 0.025 - 0.005 * k);
@@ -117,15 +118,12 @@ TEST(NeighbourContact, BagsWhoseGrownExtentsMeetAreGroupedIntoConnectedModules) 
     using Box = Eigen::AlignedBox2d;
     const std::vector<Box> boxes = {
         Box(Eigen::Vector2d(0, 0), Eigen::Vector2d(1, 1)),
-        Box(Eigen::Vector2d(1.004, 0), Eigen::Vector2d(2, 1)),   // 4 mm from 0
-        Box(Eigen::Vector2d(2.1, 0), Eigen::Vector2d(3, 1)),     // 100 mm from 1
-        Box(Eigen::Vector2d(0, 1.02), Eigen::Vector2d(1, 2))};   // 20 mm from 0
-    EXPECT_EQ(findTouchingGroups(boxes, 0.005),
-              (std::vector<std::vector<int>>{{0, 1}, {2}, {3}}));
-    EXPECT_EQ(findTouchingGroups(boxes, 0.0),
-              (std::vector<std::vector<int>>{{0}, {1}, {2}, {3}}));
-    EXPECT_EQ(findTouchingGroups(boxes, 0.011),
-              (std::vector<std::vector<int>>{{0, 1, 3}, {2}}));
+        Box(Eigen::Vector2d(1.004, 0), Eigen::Vector2d(2, 1)),  // 4 mm from 0
+        Box(Eigen::Vector2d(2.1, 0), Eigen::Vector2d(3, 1)),    // 100 mm from 1
+        Box(Eigen::Vector2d(0, 1.02), Eigen::Vector2d(1, 2))};  // 20 mm from 0
+    EXPECT_EQ(findTouchingGroups(boxes, 0.005), (std::vector<std::vector<int>>{{0, 1}, {2}, {3}}));
+    EXPECT_EQ(findTouchingGroups(boxes, 0.0), (std::vector<std::vector<int>>{{0}, {1}, {2}, {3}}));
+    EXPECT_EQ(findTouchingGroups(boxes, 0.011), (std::vector<std::vector<int>>{{0, 1, 3}, {2}}));
     EXPECT_THROW(findTouchingGroups(boxes, -1.0), std::invalid_argument);
 }
 
@@ -138,17 +136,19 @@ TEST(NeighbourContact, TwoNeighboursPressedByAPlankTouchAndPushEachOtherEqually)
     // measured 160.8 N each, equal to the printed digits), pushing the bags apart.
     const PairRun off = runPair(false), on = runPair(true);
     const Eigen::AlignedBox2d ext = calcInflatedExtent(makeSpec(0.030), 4.5e-3);
-    std::printf("one bag inflated to 4.5 g alone: x %.2f to %.2f mm, y %.2f to %.2f mm "
-                "(flat footprint 350 x 100 mm); pressed pair's gauge pressure %.3f kPa\n",
-                1e3 * ext.min().x(), 1e3 * ext.max().x(), 1e3 * ext.min().y(),
-                1e3 * ext.max().y(), 1e-3 * on.gaugePressure);
-    std::printf("alone: films overlap %.3f mm inflated, %.3f mm pressed (plank %.2f N)\n"
-                "module: films overlap %.3f mm inflated, %.3f mm pressed (plank %.2f N); "
-                "neighbour forces on bag 0 (%.4f, %.4f, %.4f) N, on bag 1 (%.4f, %.4f, %.4f) N\n",
-                1e3 * off.inflatedOverlap, 1e3 * off.pressedOverlap, off.plankForce,
-                1e3 * on.inflatedOverlap, 1e3 * on.pressedOverlap, on.plankForce,
-                on.neighbourForce[0].x(), on.neighbourForce[0].y(), on.neighbourForce[0].z(),
-                on.neighbourForce[1].x(), on.neighbourForce[1].y(), on.neighbourForce[1].z());
+    std::printf(
+        "one bag inflated to 4.5 g alone: x %.2f to %.2f mm, y %.2f to %.2f mm "
+        "(flat footprint 350 x 100 mm); pressed pair's gauge pressure %.3f kPa\n",
+        1e3 * ext.min().x(), 1e3 * ext.max().x(), 1e3 * ext.min().y(), 1e3 * ext.max().y(),
+        1e-3 * on.gaugePressure);
+    std::printf(
+        "alone: films overlap %.3f mm inflated, %.3f mm pressed (plank %.2f N)\n"
+        "module: films overlap %.3f mm inflated, %.3f mm pressed (plank %.2f N); "
+        "neighbour forces on bag 0 (%.4f, %.4f, %.4f) N, on bag 1 (%.4f, %.4f, %.4f) N\n",
+        1e3 * off.inflatedOverlap, 1e3 * off.pressedOverlap, off.plankForce,
+        1e3 * on.inflatedOverlap, 1e3 * on.pressedOverlap, on.plankForce, on.neighbourForce[0].x(),
+        on.neighbourForce[0].y(), on.neighbourForce[0].z(), on.neighbourForce[1].x(),
+        on.neighbourForce[1].y(), on.neighbourForce[1].z());
     EXPECT_EQ(off.modules, (std::vector<std::vector<int>>{{0}, {1}}));
     EXPECT_EQ(on.modules, (std::vector<std::vector<int>>{{0, 1}}));
     // Alone: the films pass through each other (the overlap the grouping removes).

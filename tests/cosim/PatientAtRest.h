@@ -98,11 +98,13 @@ inline void checkLightPatientSettlesAndRests(double kRun, double kRest) {
         restRise = std::max(restRise, energy[i] - energy[rest]);
     }
     restForce /= double(time.size() - rest - 1);
-    for (size_t i = 1; i < time.size(); ++i) stepRise = std::max(stepRise, energy[i] - energy[i - 1]);
+    for (size_t i = 1; i < time.size(); ++i)
+        stepRise = std::max(stepRise, energy[i] - energy[i - 1]);
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf(
-        "  at rest (%.2f-%.2f s): bags and board carry %.3f N of %.3f N on average (%+.3f %%), each step "
+        "  at rest (%.2f-%.2f s): bags and board carry %.3f N of %.3f N on average (%+.3f %%), "
+        "each step "
         "within %.2f %%; energy fell %.3f J since release, rose at most %+.2e J over the rest, "
         "%+.2e J in a step; vmax at the end %.2e m/s; %.2f passes a step, %d steps, %.1f s\n",
         kRun - kRest, kRun, restForce, weight, 100 * (restForce - weight) / weight,

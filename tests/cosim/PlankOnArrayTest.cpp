@@ -153,8 +153,7 @@ TEST(PlankOnArray, AccuracyDrivenStepsAgreeWithTheFixedStepAndGiveTheSameBitsOnT
         ser.steps.size(), double(ser.passes) / ser.steps.size(),
         1e3 * *std::min_element(ser.steps.begin(), ser.steps.end()),
         1e3 * *std::max_element(ser.steps.begin(), ser.steps.end()), 1e3 * ser.depth,
-        1e3 * fixed.depth, ser.bagForce[0], ser.bagForce[1], fixed.bagForce[0],
-        fixed.bagForce[1]);
+        1e3 * fixed.depth, ser.bagForce[0], ser.bagForce[1], fixed.bagForce[0], fixed.bagForce[1]);
     EXPECT_NEAR(ser.depth, fixed.depth, 0.005 * fixed.depth);
     for (int b = 0; b < 2; ++b) EXPECT_NEAR(ser.bagForce[b], fixed.bagForce[b], 0.005 * kWeight);
     EXPECT_EQ(*std::max_element(ser.steps.begin(), ser.steps.end()), 0.04);

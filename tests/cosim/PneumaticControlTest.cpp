@@ -18,9 +18,10 @@ constexpr double kDt = 0.01;      // [s] the co-simulation's macro step
 constexpr double kVolume = 3e-3;  // [m^3] each rigid bag
 constexpr double kMass = 4.5e-3;  // [kg] each bag at the start
 
-// Four bags in two channels (bags 0, 1: 'a'; bags 2, 3: 'b'), each with a line, the
-// typical valves of the scenario defaults and a pump of 1 g/s shutting off at 100 kPa.
-cosim::ArrayPneumaticsSpec makeSpec() {
+// Two bags a channel ('a': bags 0, 1; 'b': bags 2, 3; 'c': bags 4, 5 ...), each channel with
+// a line, the typical valves of the scenario defaults and a pump of 1 g/s shutting off at
+// 100 kPa; two channels unless asked.
+cosim::ArrayPneumaticsSpec makeSpec(int channels = 2) {
     cosim::ArrayPneumaticsSpec s;
     s.pump.pressureRise = {0.0, 100e3};
     s.pump.massFlow = {1e-3, 0.0};
@@ -29,9 +30,9 @@ cosim::ArrayPneumaticsSpec makeSpec() {
     pneumatics::ValveSpec v;
     v.sonicConductance = 0.3e-8;
     v.criticalPressureRatio = 0.4;
-    for (int c = 0; c < 2; ++c) {
+    for (int c = 0; c < channels; ++c) {
         cosim::PneumaticChannel ch;
-        ch.name = c == 0 ? "a" : "b";
+        ch.name = std::string(1, char('a' + c));
         ch.bags = {2 * c, 2 * c + 1};
         ch.inflate = ch.vent = v;
         ch.lineVolume = 20e-6;
@@ -40,9 +41,11 @@ cosim::ArrayPneumaticsSpec makeSpec() {
     return s;
 }
 
+// Every bag of the spec's channels at kMass in kVolume.
 cosim::ArrayPneumatics makeNetwork(const cosim::ArrayPneumaticsSpec& s) {
-    return cosim::ArrayPneumatics(s, bags::GasOptions(), std::vector<double>(4, kMass),
-                                  std::vector<double>(4, kVolume));
+    const size_t n = 2 * s.channels.size();
+    return cosim::ArrayPneumatics(s, bags::GasOptions(), std::vector<double>(n, kMass),
+                                  std::vector<double>(n, kVolume));
 }
 
 std::vector<pneumatics::BagVolume> rigid(const cosim::ArrayPneumatics& p) {
@@ -51,10 +54,11 @@ std::vector<pneumatics::BagVolume> rigid(const cosim::ArrayPneumatics& p) {
 
 // Runs the controller and the network from t0 to t1 in macro steps; `each` is called after
 // every step with the time at its end.
-double run(cosim::PneumaticController& c, cosim::ArrayPneumatics& p, double t0, double t1,
-           std::vector<cosim::ControlEvent>& events,
-           const std::function<double()>& tilt = [] { return 0.0; },
-           const std::function<void(double)>& each = [](double) {}) {
+double run(
+    cosim::PneumaticController& c, cosim::ArrayPneumatics& p, double t0, double t1,
+    std::vector<cosim::ControlEvent>& events,
+    const std::function<double()>& tilt = [] { return 0.0; },
+    const std::function<void(double)>& each = [](double) {}) {
     double t = t0;
     while (t < t1 - 1e-9) {
         cosim::ControlInputs in;
@@ -144,8 +148,8 @@ TEST(PneumaticControl, AValveScheduleRepeatsWithItsPeriodOddAndEvenAlternating) 
     const cosim::ArrayPneumaticsSpec spec = makeSpec();
     cosim::ArrayPneumatics p = makeNetwork(spec);
     // From 1 s, every 0.4 s: 'a' fills and 'b' vents for 0.2 s, then the other way round.
-    std::vector<cosim::ValveCommand> cmds = {{0.0, 0, 1, 0}, {0.0, 1, 0, 1},
-                                             {0.2, 0, 0, 1}, {0.2, 1, 1, 0}};
+    std::vector<cosim::ValveCommand> cmds = {
+        {0.0, 0, 1, 0}, {0.0, 1, 0, 1}, {0.2, 0, 0, 1}, {0.2, 1, 1, 0}};
     cosim::ValveSchedule s(cmds, 1.0, 0.4, 2);
     EXPECT_DOUBLE_EQ(s.findNextChange(0.0), 1.0);
     std::vector<cosim::ControlEvent> events;
@@ -154,8 +158,11 @@ TEST(PneumaticControl, AValveScheduleRepeatsWithItsPeriodOddAndEvenAlternating) 
         bool aFills, bVents;
     };
     std::vector<State> states;
-    run(s, p, 0.0, 2.0, events, [] { return 0.0; },
-        [&](double t) { states.push_back({t, p.isInflateOpen(0), p.isVentOpen(1)}); });
+    run(
+        s, p, 0.0, 2.0, events, [] { return 0.0; },
+        [&](double t) {
+            states.push_back({t, p.isInflateOpen(0), p.isVentOpen(1)});
+        });
     // Closed before 1 s; then 'a' fills and 'b' vents in [1.0, 1.2), [1.4, 1.6), [1.8, 2.0).
     for (const State& st : states) {
         const double start = st.t - kDt;  // the step's start decides
@@ -181,12 +188,14 @@ TEST(PneumaticControl, ATargetMassIsReachedAndHeldWithinItsBand) {
     cosim::ArrayPneumatics p = makeNetwork(spec);
     // 'a' up to 5.0 g a bag, 'b' down to 4.0 g, bands 0.02 g.
     cosim::TargetController c(cosim::TargetController::Quantity::MassPerBag,
-                             {{0, 5.0e-3, 0.02e-3}, {1, 4.0e-3, 0.02e-3}}, 0.5);
+                              {{0, 5.0e-3, 0.02e-3}, {1, 4.0e-3, 0.02e-3}}, 0.5);
     std::vector<cosim::ControlEvent> events;
     double reachedA = -1.0;
-    run(c, p, 0.0, 6.0, events, [] { return 0.0; }, [&](double t) {
-        if (reachedA < 0.0 && channelMass(p, 0) >= 5.0e-3) reachedA = t;
-    });
+    run(
+        c, p, 0.0, 6.0, events, [] { return 0.0; },
+        [&](double t) {
+            if (reachedA < 0.0 && channelMass(p, 0) >= 5.0e-3) reachedA = t;
+        });
     // Reached (a bag of a channel gains what one valve step delivers: less than the band) and
     // held: valves closed, masses within the band.
     EXPECT_GT(reachedA, 0.5);
@@ -220,17 +229,19 @@ TEST(PneumaticControl, ATargetPressureIsHeldWithHysteresisFromALaggedNoisySensor
     p.setVent(1, true);
     const double target = 30e3, band = 1e3;
     cosim::TargetController c(cosim::TargetController::Quantity::Pressure, {{0, target, band}},
-                             0.0);
+                              0.0);
     std::vector<cosim::ControlEvent> events;
     std::vector<double> readings;
     int opened = 0;
     bool wasOpen = false;
-    run(c, p, 0.0, 8.0, events, [] { return 0.0; }, [&](double t) {
-        const double r = p.readChannelSensor(0);
-        if (t > 3.0) readings.push_back(r);
-        if (p.isInflateOpen(0) && !wasOpen) ++opened;
-        wasOpen = p.isInflateOpen(0);
-    });
+    run(
+        c, p, 0.0, 8.0, events, [] { return 0.0; },
+        [&](double t) {
+            const double r = p.readChannelSensor(0);
+            if (t > 3.0) readings.push_back(r);
+            if (p.isInflateOpen(0) && !wasOpen) ++opened;
+            wasOpen = p.isInflateOpen(0);
+        });
     // After the first fill (20.5 to 30 kPa) the reading stays in the hysteresis band (plus the
     // overshoot of the lag and one step's fill); the leak makes it cycle, a few times, not
     // at every step (noise 0.05 kPa << band 1 kPa).
@@ -301,28 +312,12 @@ TEST(PneumaticControl, AClinicalTurnHoldsTheZonesAtTheirSetpointAndReturnsToIt) 
     // (a centre column), 'c' vented by the turn. The bags start at 4.5 g (25.3 kPa gauge); the
     // zones' setpoint is 20 kPa within 0.5 kPa, so before the turn each channel vents down to
     // it and holds. The stand-in tilt follows 'a' against 'c', 10 deg a gram.
-    cosim::ArrayPneumaticsSpec spec = makeSpec();
-    spec.channels.clear();
-    pneumatics::ValveSpec v;
-    v.sonicConductance = 0.3e-8;
-    v.criticalPressureRatio = 0.4;
-    for (int c = 0; c < 3; ++c) {
-        cosim::PneumaticChannel ch;
-        ch.name = std::string(1, char('a' + c));
-        ch.bags = {2 * c, 2 * c + 1};
-        ch.inflate = ch.vent = v;
-        ch.lineVolume = 20e-6;
-        spec.channels.push_back(ch);
-    }
+    cosim::ArrayPneumaticsSpec spec = makeSpec(3);
     // A leak keeps the held zone busy: bag 3 ('b') is joined by a 1 mm orifice to bag 4
     // ('c'), so while the turn vents 'c', 'b' loses air and must be topped up.
     spec.orifices.push_back({3, 4, bags::OrificeOptions()});
     spec.orifices.back().orifice.diameter = 1e-3;
-    auto network = [&] {
-        return cosim::ArrayPneumatics(spec, bags::GasOptions(), std::vector<double>(6, kMass),
-                                      std::vector<double>(6, kVolume));
-    };
-    cosim::ArrayPneumatics p = network();
+    cosim::ArrayPneumatics p = makeNetwork(spec);
     const double degPerGram = 10.0 * M_PI / 180.0 / 1e-3;
     auto tilt = [&] { return degPerGram * (channelMass(p, 0) - channelMass(p, 2)); };
     cosim::TurnSpec t;

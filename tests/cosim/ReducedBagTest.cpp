@@ -91,8 +91,9 @@ void expectTangentMatchesFiniteDifferences(ReducedBag& bag, const Eigen::Vector3
     bag.rollback();
     const double scale = fd.cwiseAbs().maxCoeff();
     EXPECT_GT(scale, 1.0) << where;
-    EXPECT_LT((T - fd).cwiseAbs().maxCoeff(), tolerance * scale)
-        << where << "\nanalytic\n" << T << "\nfinite differences\n" << fd;
+    EXPECT_LT((T - fd).cwiseAbs().maxCoeff(), tolerance * scale) << where << "\nanalytic\n"
+                                                                 << T << "\nfinite differences\n"
+                                                                 << fd;
 }
 
 }  // namespace
@@ -251,9 +252,8 @@ TEST(ReducedBag, TwoShapesInOnePlaceCarryWhatOneCarriesAloneAndAShallowSkirtYiel
     // and take half of each column's film each, so together they carry the single shape's
     // wrench and the gas its pressure (1e-9 relative). Without the share the film would be
     // counted twice.
-    auto cal = makeCalibration(2e-3, [](double x, double y, double) {
-        return 0.06 - 0.8 * x * x - 2.0 * y * y;
-    });
+    auto cal = makeCalibration(
+        2e-3, [](double x, double y, double) { return 0.06 - 0.8 * x * x - 2.0 * y * y; });
     cal->skirt = 1.0;
     const Eigen::Vector3d semi(0.08, 0.05, 0.04);
     const ShapeState pose = at(Eigen::Vector3d(0.01, -0.005, 0.06 + 0.04 - 0.012),
@@ -285,8 +285,7 @@ TEST(ReducedBag, TwoShapesInOnePlaceCarryWhatOneCarriesAloneAndAShallowSkirtYiel
     beside.setShapeState(1, at(Eigen::Vector3d(0.03, 0.0, 0.06 + 0.03 - 0.002)));
     ASSERT_TRUE(beside.advance(0.0).converged);
     int yielded = 0;
-    for (const ReducedBag::SampleForce& sf : beside.getSampleForces(1))
-        yielded += sf.film < 0.05;
+    for (const ReducedBag::SampleForce& sf : beside.getSampleForces(1)) yielded += sf.film < 0.05;
     EXPECT_GE(yielded, 1);
 }
 
@@ -356,16 +355,16 @@ TEST(ReducedBag, TheSampleForcesAndTheFootprintAddUpToTheWrench) {
     bag.addShape(bags::makeEllipsoid(Eigen::Vector3d(0.08, 0.05, 0.04)));
     bag.addShape(bags::makeCapsule(0.012, 0.03));
     bag.setGasMass(4.0e-3);
-    bag.setShapeState(0, at(Eigen::Vector3d(0.27, -0.2, 0.035),
-                            rotation(Eigen::Vector3d(0.1, -0.2, 0.3))));
+    bag.setShapeState(
+        0, at(Eigen::Vector3d(0.27, -0.2, 0.035), rotation(Eigen::Vector3d(0.1, -0.2, 0.3))));
     bag.setShapeState(1, at(Eigen::Vector3d(0.36, -0.2, 0.042),  // along x
                             rotation(Eigen::Vector3d(0.0, 0.5 * kPi, 0.0))));
     ASSERT_TRUE(bag.advance(0.0).converged);
     int skirt = 0, column = 0, board = 0;
     for (int s = 0; s < 2; ++s) {
         const ShapeWrench W = bag.calcWrench(s);
-        const Eigen::Vector3d o = s == 0 ? Eigen::Vector3d(0.27, -0.2, 0.035)
-                                         : Eigen::Vector3d(0.36, -0.2, 0.042);
+        const Eigen::Vector3d o =
+            s == 0 ? Eigen::Vector3d(0.27, -0.2, 0.035) : Eigen::Vector3d(0.36, -0.2, 0.042);
         Eigen::Vector3d F = Eigen::Vector3d::Zero(), M = Eigen::Vector3d::Zero();
         for (const ReducedBag::SampleForce& f : bag.getSampleForces(s)) {
             F += f.force;
@@ -394,9 +393,11 @@ TEST(ReducedBag, TheSampleForcesAndTheFootprintAddUpToTheWrench) {
         auto probe = s == 0 ? bags::makeEllipsoid(Eigen::Vector3d(0.08, 0.05, 0.04))
                             : bags::makeCapsule(0.012, 0.03);
         probe->setPose(s == 0 ? at(Eigen::Vector3d(0.27, -0.2, 0.035),
-                                   rotation(Eigen::Vector3d(0.1, -0.2, 0.3))).X_GS
+                                   rotation(Eigen::Vector3d(0.1, -0.2, 0.3)))
+                                    .X_GS
                               : at(Eigen::Vector3d(0.36, -0.2, 0.042),
-                                   rotation(Eigen::Vector3d(0.0, 0.5 * kPi, 0.0))).X_GS);
+                                   rotation(Eigen::Vector3d(0.0, 0.5 * kPi, 0.0)))
+                                    .X_GS);
         Eigen::Vector3d F = Eigen::Vector3d::Zero();
         for (int i = 0; i < p.size(); ++i) {
             if (p[i] == 0.0) continue;
@@ -519,8 +520,8 @@ TEST(ReducedBag, FrictionSticksAsASpringUpToItsStickDistanceThenSlidesAtTheCoulo
     bag.setGasMass(4.4e-3);
     const double mu = 0.4, d = 5e-3;
     bag.setFriction(friction(mu, d, 0.0));
-    const Eigen::Vector3d p0 = pressWithFriction(bag, 0.012, Eigen::Matrix3d::Identity(),
-                                                 Eigen::Vector3d(0.0, 0.0, 0.09));
+    const Eigen::Vector3d p0 =
+        pressWithFriction(bag, 0.012, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.0, 0.0, 0.09));
     EXPECT_EQ(bag.getFrictionForce(0).norm(), 0.0);  // anchored where it stands
     for (double travel : {1e-3, 3e-3, 12e-3}) {
         bag.setShapeState(0, at(p0 + Eigen::Vector3d(travel, 0.0, 0.0)));
@@ -587,7 +588,8 @@ TEST(ReducedBag, TheTangentWithFrictionMatchesFiniteDifferencesOfTheWrench) {
         ASSERT_GT(bag.getFrictionForce(0).norm(), 1.0);
         const Mat6 T = bag.calcWrenchTangent(0);
         const Mat6 fd = finiteDifferenceTangent(
-            bag, p, R, [&](const Eigen::Vector3d& q, const Eigen::Matrix3d& Q) { return moving(at(q, Q)); });
+            bag, p, R,
+            [&](const Eigen::Vector3d& q, const Eigen::Matrix3d& Q) { return moving(at(q, Q)); });
         const double scale = fd.cwiseAbs().maxCoeff();
         EXPECT_LT((T - fd).cwiseAbs().maxCoeff(), 1e-4 * scale)
             << "travel " << travel << "\nanalytic\n"
@@ -608,8 +610,8 @@ TEST(ReducedBag, ItsStateWithFrictionAnchorsRoundTripsThroughACheckpoint) {
         return b;
     };
     auto a = make();
-    const Eigen::Vector3d p0 = pressWithFriction(*a, 0.012, Eigen::Matrix3d::Identity(),
-                                                 Eigen::Vector3d(0.0, 0.0, 0.09));
+    const Eigen::Vector3d p0 =
+        pressWithFriction(*a, 0.012, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.0, 0.0, 0.09));
     ShapeState s = at(p0 + Eigen::Vector3d(7e-3, 1e-3, 0.0));
     s.v_GS = Eigen::Vector3d(0.01, 0.0, 0.0);
     a->setShapeState(0, s);

@@ -52,7 +52,8 @@ class SpringParticipant : public Participant {
     }
     Mat6 calcWrenchTangent(int shape) const override {
         ++tangents;
-        if (oneSided && m_pose.at(shape).translation().z() >= m_springs.at(shape).X_ref.translation().z())
+        if (oneSided &&
+            m_pose.at(shape).translation().z() >= m_springs.at(shape).X_ref.translation().z())
             return Mat6::Zero();
         return tangentScale * m_springs.at(shape).K;
     }
@@ -60,7 +61,7 @@ class SpringParticipant : public Participant {
     Eigen::VectorXd calcContactPressure(int) const override { return Eigen::VectorXd(); }
 
     int advances = 0;
-    int failAt = -1;  // the advance (1-based count) that fails
+    int failAt = -1;            // the advance (1-based count) that fails
     mutable int tangents = 0;   // calcWrenchTangent() calls
     double tangentScale = 1.0;  // the tangent reported, as a multiple of the true one
     bool steady = false;        // isSteady()

@@ -113,8 +113,8 @@ Diagnosed diagnoseStandIn(const EffectValues& effects, bool pairGate = true,
     const std::vector<diagnose::InputRun> runs = diagnose::makeInputRuns(data, rig.options);
     std::vector<bags::LoadTestOptions> options;
     for (const diagnose::InputRun& r : runs) options.push_back(r.options);
-    diagnose::addInputUncertainties(data, runs, diagnose::runLoadTests(options, simulate, 2),
-                                    none, rig.options.loadingRate, d.tests);
+    diagnose::addInputUncertainties(data, runs, diagnose::runLoadTests(options, simulate, 2), none,
+                                    rig.options.loadingRate, d.tests);
     diagnose::WhereOptions wo;
     wo.loadFrom = 5.0;
     wo.loadTo = 15.0;
@@ -220,8 +220,8 @@ TEST(Diagnosis, MachineComplianceIsFoundInTheForceChannel) {
 }
 
 TEST(Diagnosis, WithABedGaugeTheMachinesComplianceIsNamedAlone) {
-    const Diagnosed d = diagnoseStandIn(EffectValues{{"machine-compliance", {0.5e-3}}}, true, {},
-                                        true);
+    const Diagnosed d =
+        diagnoseStandIn(EffectValues{{"machine-compliance", {0.5e-3}}}, true, {}, true);
     EXPECT_EQ(d.which.verdict, "machine-compliance") << d.which.reason;
     EXPECT_TRUE(d.which.rivals.empty());
     EXPECT_EQ(d.which.explained, "fully") << d.which.reason;
@@ -420,8 +420,7 @@ TEST(InputUncertainty, TheChannelsTermIsTheRmsOverAllItsSamplesAndEntersTheValid
     const diagnose::ChannelSummary& c = w.channels[0];
     EXPECT_NEAR(c.inputGasMass, std::sqrt(0.12), 1e-12);
     EXPECT_NEAR(c.inputTemperature, 0.05, 1e-12);
-    EXPECT_NEAR(c.validation,
-                std::sqrt(c.noise * c.noise + 0.01 + 0.12 + 0.0025), 1e-12);
+    EXPECT_NEAR(c.validation, std::sqrt(c.noise * c.noise + 0.01 + 0.12 + 0.0025), 1e-12);
 }
 
 namespace {
@@ -438,9 +437,8 @@ double calcStandInMassTerm(const std::vector<diagnose::TestComparison>& tests,
         for (const diagnose::ChannelComparison& ch : t.channels) {
             if (ch.kind != kind) continue;
             for (double d : ch.displacement) {
-                const double dSdm = kind == diagnose::ChannelKind::Force
-                                        ? (d > 0.0 ? 2e6 * d : 0.0)
-                                        : 1e7 + 2e8 * d;
+                const double dSdm = kind == diagnose::ChannelKind::Force ? (d > 0.0 ? 2e6 * d : 0.0)
+                                                                         : 1e7 + 2e8 * d;
                 s += std::pow(dSdm * u[t.test], 2);
                 ++n;
             }
@@ -639,9 +637,11 @@ TEST(Where, AFlatChannelHasNoShareAndShiftsNoOther) {
             c.displacement.push_back(1e-3 * i);
             c.force.push_back(i);
             c.loading.push_back(1);
-            const bool flat = k == diagnose::ChannelKind::Pressure || k == diagnose::ChannelKind::Mass;
+            const bool flat =
+                k == diagnose::ChannelKind::Pressure || k == diagnose::ChannelKind::Mass;
             c.measured.push_back(flat ? 1.0 : 0.1 * i);
-            c.simulated.push_back(flat ? 1.0 : 0.1 * i + (k == diagnose::ChannelKind::Bed ? 1e-4 : 0.01));
+            c.simulated.push_back(flat ? 1.0
+                                       : 0.1 * i + (k == diagnose::ChannelKind::Bed ? 1e-4 : 0.01));
         }
         t.channels.push_back(c);
     }
@@ -699,9 +699,9 @@ TEST(Diagnosis, AnEffectThatLeavesAResidualIsNamedAsPartlyExplaining) {
     const Diagnosed d = diagnoseStandIn(
         EffectValues{{"pressure-sensor", {3.0, 200.0}}, {"load-cell-gain", {0.05}}});
     ASSERT_FALSE(d.which.verdictEffects.empty()) << d.which.reason;
-    EXPECT_NE(std::find(d.which.verdictEffects.begin(), d.which.verdictEffects.end(),
-                        "pressure-sensor"),
-              d.which.verdictEffects.end())
+    EXPECT_NE(
+        std::find(d.which.verdictEffects.begin(), d.which.verdictEffects.end(), "pressure-sensor"),
+        d.which.verdictEffects.end())
         << d.which.verdict;
     EXPECT_EQ(d.which.explained, "partly") << d.which.reason;
     EXPECT_EQ(d.which.residualChannel, "force");
@@ -746,20 +746,20 @@ TEST(Diagnosis, ConfusableCandidatesMustExplainAlike) {
     EXPECT_EQ(diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.90, 1.9)}, 0.5, u),
               (Pairs{{"a", "b"}}));
     // The same shrinks, but b leaves 2.5 times the uncertainty: told apart.
-    EXPECT_TRUE(diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.90, 2.5)}, 0.5, u)
-                    .empty());
+    EXPECT_TRUE(
+        diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.90, 2.5)}, 0.5, u).empty());
     // Both beyond (both partly): rivals.
     EXPECT_EQ(diagnose::findConfusable({make("a", 0.70, 3.0), make("b", 0.65, 4.0)}, 0.5, u),
               (Pairs{{"a", "b"}}));
     // Shrinks 0.15 apart: told apart.
-    EXPECT_TRUE(diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.80, 1.9)}, 0.5, u)
-                    .empty());
+    EXPECT_TRUE(
+        diagnose::findConfusable({make("a", 0.95, 1.5), make("b", 0.80, 1.9)}, 0.5, u).empty());
     // The better just passes the threshold, the other just misses it: rivals all the same.
     EXPECT_EQ(diagnose::findConfusable({make("a", 0.56, 3.0), make("b", 0.50, 3.0)}, 0.5, u),
               (Pairs{{"a", "b"}}));
     // Neither explains: no pair.
-    EXPECT_TRUE(diagnose::findConfusable({make("a", 0.40, 3.0), make("b", 0.38, 3.0)}, 0.5, u)
-                    .empty());
+    EXPECT_TRUE(
+        diagnose::findConfusable({make("a", 0.40, 3.0), make("b", 0.38, 3.0)}, 0.5, u).empty());
     // A candidate's own prediction error widens its scale: 2.5 N over hypot(1, 1) is within.
     diagnose::CandidateResult b = make("b", 0.90, 2.5);
     b.predictionUncertainty = 1.0;

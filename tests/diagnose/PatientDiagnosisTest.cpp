@@ -60,7 +60,8 @@ MatRegions makeRegions() {
 const std::vector<double> kEdges = {0.0, 1.0, 2.0, 3.0 + 1e-9};
 
 PatientSimulator noSimulation() {
-    return [](const std::vector<std::pair<std::string, std::string>>&, const std::string&) -> PatientChannels {
+    return [](const std::vector<std::pair<std::string, std::string>>&,
+              const std::string&) -> PatientChannels {
         throw std::logic_error("an instrument effect needs no co-simulation");
     };
 }
@@ -82,8 +83,8 @@ Diagnosed diagnoseSynthetic(const PatientInstruments& inst, std::uint64_t seed =
     Diagnosed d;
     d.comparison = comparePatient(measured, run, {}, makeRegions());
     d.where = calcPatientWhere(d.comparison, {}, kEdges, 2.0);
-    d.which = calibratePatientCandidates(measured, run, d.comparison, d.where, makeRegions(), kEdges,
-                                         4.5e-3, noSimulation(), {});
+    d.which = calibratePatientCandidates(measured, run, d.comparison, d.where, makeRegions(),
+                                         kEdges, 4.5e-3, noSimulation(), {});
     return d;
 }
 
@@ -97,7 +98,7 @@ TEST(PatientDiagnosis, SynthesisSamplesTheInstrumentsWithNoise) {
     PatientSynthesisOptions so;
     so.matNoise = so.tiltNoise = so.pressureNoise = 0.0;
     const PatientChannels m = synthesizePatientChannels(run, inst, so);
-    ASSERT_EQ(m.mat.time.size(), 31u);  // 0 to 3 s every 0.1 s
+    ASSERT_EQ(m.mat.time.size(), 31u);    // 0 to 3 s every 0.1 s
     ASSERT_EQ(m.tilt.time.size(), 151u);  // every 0.02 s
     EXPECT_NEAR(m.mat.pressure[10][1], 1.1 * run.mat.pressure[100][1], 1e-9);
     EXPECT_EQ(m.mat.pressure[10][3], 0.0);  // a sensel that reads nothing stays 0
@@ -212,9 +213,11 @@ TEST(PatientDiagnosis, JoinedTestsKeepTheirSamplesApart) {
     std::vector<PatientComparison> parts;
     for (double lift : {0.0, 3e3}) {
         const PatientChannels run = makeTestRun(lift);
-        parts.push_back(comparePatient(synthesizePatientChannels(run, {}, so), run, {}, makeRegions()));
+        parts.push_back(
+            comparePatient(synthesizePatientChannels(run, {}, so), run, {}, makeRegions()));
     }
-    parts[1].channels.back().partNames = {"bag 8", "bag 3"};  // the same bags named in another order
+    parts[1].channels.back().partNames = {"bag 8",
+                                          "bag 3"};  // the same bags named in another order
     for (int& p : parts[1].channels.back().part) p = 1 - p;
     const PatientComparison j = joinPatientComparisons(parts, {"a", "b"});
     ASSERT_EQ(j.tests.size(), 2u);
@@ -225,7 +228,8 @@ TEST(PatientDiagnosis, JoinedTestsKeepTheirSamplesApart) {
     // A sample of test b keeps its bag's name and its test.
     const size_t i = parts[0].find("bag-pressure")->time.size();
     EXPECT_EQ(bags->getTest(i), 1);
-    EXPECT_EQ(bags->partNames[size_t(bags->part[i])], parts[1].channels.back().partNames[size_t(parts[1].channels.back().part[0])]);
+    EXPECT_EQ(bags->partNames[size_t(bags->part[i])],
+              parts[1].channels.back().partNames[size_t(parts[1].channels.back().part[0])]);
     // The series (noise, signatures) are per test and part: 2 tests x 2 bags.
     EXPECT_EQ(bags->partSeries().size(), 4u);
     PatientFolds folds;
@@ -260,14 +264,16 @@ TEST(PatientDiagnosis, LeavesOneTestOutForAnInstrumentEffect) {
         tests.push_back(t);
     }
     const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
-    const PatientComparison base = joinPatientComparisons(parts, {tests[0].name, tests[1].name, tests[2].name});
+    const PatientComparison base =
+        joinPatientComparisons(parts, {tests[0].name, tests[1].name, tests[2].name});
     const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
     PatientFolds folds;
     folds.windowEdges = kEdges;
     folds.tests = 3;
     const WhichReport which = calibratePatientCandidates(
         tests, where, makeRegions(), folds,
-        [](int, const std::vector<std::pair<std::string, std::string>>&, const std::string&) -> PatientChannels {
+        [](int, const std::vector<std::pair<std::string, std::string>>&,
+           const std::string&) -> PatientChannels {
             throw std::logic_error("an instrument effect needs no co-simulation");
         },
         {});
@@ -300,14 +306,14 @@ TEST(PatientDiagnosis, LeavesOneTestOutRunningAResponseEffectInEveryTest) {
         tests.push_back(c);
     }
     std::vector<std::pair<int, std::string>> calls;  // test, its array.gas_mass
-    const PatientTestSimulator simulate = [&](int t, const std::vector<std::pair<std::string, std::string>>& ov,
-                                              const std::string&) {
-        EXPECT_EQ(ov.size(), 1u);
-        EXPECT_EQ(ov.at(0).first, "array.gas_mass");
-        calls.push_back({t, ov.at(0).second});
-        const double mass = std::stod(ov.at(0).second) * 1e-3;  // "4.25 g"
-        return makeTestRun(perKg * (mass - stated[size_t(t)]));
-    };
+    const PatientTestSimulator simulate =
+        [&](int t, const std::vector<std::pair<std::string, std::string>>& ov, const std::string&) {
+            EXPECT_EQ(ov.size(), 1u);
+            EXPECT_EQ(ov.at(0).first, "array.gas_mass");
+            calls.push_back({t, ov.at(0).second});
+            const double mass = std::stod(ov.at(0).second) * 1e-3;  // "4.25 g"
+            return makeTestRun(perKg * (mass - stated[size_t(t)]));
+        };
     const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
     const PatientComparison base = joinPatientComparisons(parts, {tests[0].name, tests[1].name});
     const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
@@ -316,7 +322,8 @@ TEST(PatientDiagnosis, LeavesOneTestOutRunningAResponseEffectInEveryTest) {
     folds.tests = 2;
     PatientCalibrationOptions o;
     o.candidates = {"gas-mass-bias"};
-    const WhichReport which = calibratePatientCandidates(tests, where, makeRegions(), folds, simulate, o);
+    const WhichReport which =
+        calibratePatientCandidates(tests, where, makeRegions(), folds, simulate, o);
     EXPECT_EQ(which.verdict, "gas-mass-bias") << which.reason;
     const CandidateResult& c = which.candidates.front();
     EXPECT_NEAR(c.parameters[0], 0.2e-3, 0.01e-3);
@@ -394,8 +401,10 @@ PatientFolds makeSubjectFolds(const PatientComparison& base) {
 TEST(PatientDiagnosis, JoinedTestsKnowTheirSubjects) {
     const std::vector<PatientTestCase> tests = makeSubjectTests({});
     const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
-    const PatientComparison j = joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
-    EXPECT_EQ(j.subjects, (std::vector<std::string>{"a", "b", "c"}));  // in the order they first appear
+    const PatientComparison j =
+        joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
+    EXPECT_EQ(j.subjects,
+              (std::vector<std::string>{"a", "b", "c"}));  // in the order they first appear
     EXPECT_EQ(j.testSubject, (std::vector<int>{0, 1, 0, 2}));
     // Without subjects the joined tests have none.
     const PatientComparison n = joinPatientComparisons(parts, getNames(tests, false));
@@ -441,14 +450,17 @@ TEST(PatientDiagnosis, LeavesOneSubjectOutForAnInstrumentEffect) {
     inst.bagSensorOffset = 400.0;
     const std::vector<PatientTestCase> tests = makeSubjectTests(inst);
     const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
-    const PatientComparison base = joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
+    const PatientComparison base =
+        joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
     const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
     const PatientFolds folds = makeSubjectFolds(base);
-    const PatientTestSimulator none = [](int, const std::vector<std::pair<std::string, std::string>>&,
+    const PatientTestSimulator none = [](int,
+                                         const std::vector<std::pair<std::string, std::string>>&,
                                          const std::string&) -> PatientChannels {
         throw std::logic_error("an instrument effect needs no co-simulation");
     };
-    const WhichReport which = calibratePatientCandidates(tests, where, makeRegions(), folds, none, {});
+    const WhichReport which =
+        calibratePatientCandidates(tests, where, makeRegions(), folds, none, {});
     EXPECT_EQ(which.verdict, "bag-pressure-sensor") << which.reason;
     const CandidateResult& c = which.candidates.front();
     ASSERT_EQ(c.folds.size(), 3u);  // one per subject, not per test (4) or time window
@@ -470,7 +482,8 @@ TEST(PatientDiagnosis, LeavesOneSubjectOutForAnInstrumentEffect) {
     // Folds that do not match the tests are refused.
     PatientFolds bad = folds;
     bad.testSubject.pop_back();
-    EXPECT_THROW(calibratePatientCandidates(tests, where, makeRegions(), bad, none, {}), std::invalid_argument);
+    EXPECT_THROW(calibratePatientCandidates(tests, where, makeRegions(), bad, none, {}),
+                 std::invalid_argument);
 }
 
 TEST(PatientDiagnosis, LeavesOneSubjectOutRunningAResponseEffectInEveryTest) {
@@ -487,25 +500,27 @@ TEST(PatientDiagnosis, LeavesOneSubjectOutRunningAResponseEffectInEveryTest) {
         PatientSynthesisOptions so;
         so.matInterval = 0.05;
         so.seed = k + 1;
-        c.measured = synthesizePatientChannels(makeTestRun(kSubjectCases[k].lift + perKg * 0.2e-3), {}, so);
+        c.measured =
+            synthesizePatientChannels(makeTestRun(kSubjectCases[k].lift + perKg * 0.2e-3), {}, so);
         c.statedGasMass = stated[k];
         tests.push_back(c);
     }
     std::vector<int> calls(tests.size(), 0);
-    const PatientTestSimulator simulate = [&](int t, const std::vector<std::pair<std::string, std::string>>& ov,
-                                              const std::string&) {
-        EXPECT_EQ(ov.at(0).first, "array.gas_mass");
-        ++calls.at(size_t(t));
-        const double mass = std::stod(ov.at(0).second) * 1e-3;
-        return makeTestRun(kSubjectCases[size_t(t)].lift + perKg * (mass - stated[size_t(t)]));
-    };
+    const PatientTestSimulator simulate =
+        [&](int t, const std::vector<std::pair<std::string, std::string>>& ov, const std::string&) {
+            EXPECT_EQ(ov.at(0).first, "array.gas_mass");
+            ++calls.at(size_t(t));
+            const double mass = std::stod(ov.at(0).second) * 1e-3;
+            return makeTestRun(kSubjectCases[size_t(t)].lift + perKg * (mass - stated[size_t(t)]));
+        };
     const std::vector<PatientComparison> parts = comparePatientTests(tests, makeRegions());
-    const PatientComparison base = joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
+    const PatientComparison base =
+        joinPatientComparisons(parts, getNames(tests, false), getNames(tests, true));
     const WhereReport where = calcPatientWhere(base, {}, kEdges, 2.0);
     PatientCalibrationOptions o;
     o.candidates = {"gas-mass-bias"};
-    const WhichReport which = calibratePatientCandidates(tests, where, makeRegions(), makeSubjectFolds(base),
-                                                         simulate, o);
+    const WhichReport which = calibratePatientCandidates(tests, where, makeRegions(),
+                                                         makeSubjectFolds(base), simulate, o);
     EXPECT_EQ(which.verdict, "gas-mass-bias") << which.reason;
     const CandidateResult& c = which.candidates.front();
     ASSERT_EQ(c.folds.size(), 3u);

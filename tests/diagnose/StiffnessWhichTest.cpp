@@ -134,8 +134,8 @@ TEST(StiffnessWhich, SaysWhenTheVerdictIsFittedAtItsBound) {
     // the flowmeter and a compliance the candidates.
     const std::vector<CurveCandidate> all = makeCandidates();
     const StiffnessWhich w = calibrateStiffnessCandidates(
-        makeComparison([](double m) { return modelStiffness(m + 0.4 * kGram); }),
-        {all[0], all[3]}, kValidation, "stand-in", CalibrationOptions());
+        makeComparison([](double m) { return modelStiffness(m + 0.4 * kGram); }), {all[0], all[3]},
+        kValidation, "stand-in", CalibrationOptions());
     ASSERT_EQ(w.which.verdict, "flowmeter-bias") << w.which.reason;
     EXPECT_DOUBLE_EQ(w.which.candidates.front().parameters[0], -0.25 * kGram);
     EXPECT_NE(w.which.reason.find("fitted at its bound (offset -0.25 g)"), std::string::npos)
@@ -184,9 +184,9 @@ TEST(StiffnessWhich, AWarmerGasIsConfusableWithTheBagVolume) {
 }
 
 TEST(StiffnessWhich, TheModelsOwnCurveIsNone) {
-    const StiffnessWhich w = calibrateStiffnessCandidates(makeComparison(modelStiffness),
-                                                          makeCandidates(), kValidation,
-                                                          "stand-in", CalibrationOptions());
+    const StiffnessWhich w =
+        calibrateStiffnessCandidates(makeComparison(modelStiffness), makeCandidates(), kValidation,
+                                     "stand-in", CalibrationOptions());
     EXPECT_TRUE(w.withinValidation);
     EXPECT_EQ(w.which.verdict, "none");
     EXPECT_TRUE(w.which.verdictEffects.empty());
@@ -196,8 +196,8 @@ TEST(StiffnessWhich, TheModelsOwnCurveIsNone) {
     // The model's curve as a file keeps it (rounded to 1e-9): the fit stays at 0, not a
     // roundoff's step beside it (where bag-volume's grid may give no stiffness).
     const StiffnessWhich r = calibrateStiffnessCandidates(
-        makeComparison([](double m) { return modelStiffness(m) * (1.0 + 1e-9); }),
-        makeCandidates(), kValidation, "stand-in", CalibrationOptions());
+        makeComparison([](double m) { return modelStiffness(m) * (1.0 + 1e-9); }), makeCandidates(),
+        kValidation, "stand-in", CalibrationOptions());
     EXPECT_EQ(r.which.verdict, "none");
     for (const CandidateResult& c : r.which.candidates) {
         EXPECT_EQ(c.parameters[0], 0.0) << c.effect;
@@ -220,8 +220,10 @@ TEST(StiffnessWhich, TheOthersAreNotApplicableWithAReason) {
     for (const Effect& e : getEffects()) {
         CurveAction a;
         std::string why;
-        if (actsOnStiffnessCurve(e, a, why)) ++applicable;
-        else EXPECT_FALSE(why.empty()) << e.name;
+        if (actsOnStiffnessCurve(e, a, why))
+            ++applicable;
+        else
+            EXPECT_FALSE(why.empty()) << e.name;
     }
     EXPECT_EQ(applicable, 6);  // five of the library and the load cell's gain
     CalibrationOptions o;

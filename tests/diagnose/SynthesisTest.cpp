@@ -44,8 +44,8 @@ TEST(Synthesis, NoiseFreeSamplesAreTheTruthWithTheRigsEffects) {
     diagnose::RigEffects rig;
     rig.machineCompliance = 1e-3;  // 1 mm/N: the crosshead travels twice the block's travel
     rig.flowmeterOffset = 0.1e-3;
-    const diagnose::MeasuredData d = diagnose::synthesizeMeasurement(
-        {makeCurve(3.4e-3)}, {3.5e-3}, rig, makeProtocol(), o);
+    const diagnose::MeasuredData d =
+        diagnose::synthesizeMeasurement({makeCurve(3.4e-3)}, {3.5e-3}, rig, makeProtocol(), o);
     ASSERT_EQ(d.tests.size(), 1u);
     const diagnose::MeasuredTest& t = d.tests[0];
     // Crosshead path 0 -> 6 mm -> 2 mm: 36 s + 24 s, samples every 1.5 s.
@@ -53,7 +53,7 @@ TEST(Synthesis, NoiseFreeSamplesAreTheTruthWithTheRigsEffects) {
     EXPECT_NEAR(t.time.back(), 60.0, 1e-9);
     EXPECT_NEAR(t.displacement[24], 6e-3, 1e-12);  // at 36 s, the turning point
     EXPECT_NEAR(t.force[24], 3.0, 1e-9);
-    EXPECT_NEAR(t.force[12], 1.5, 1e-9);           // 18 s: 3 mm crosshead, 1.5 mm block
+    EXPECT_NEAR(t.force[12], 1.5, 1e-9);  // 18 s: 3 mm crosshead, 1.5 mm block
     EXPECT_NEAR(t.pressure.value[12], 1500.0, 1e-6);
     EXPECT_NEAR(t.flowmeter.value[5], 3.5e-3, 1e-15);  // it reads the bag's 3.4 g + 0.1 g
     EXPECT_DOUBLE_EQ(t.gasMass, 3.5e-3);
@@ -65,8 +65,10 @@ TEST(Synthesis, NoiseHasItsStatedSizeAndTheSeedRepeatsIt) {
     o.sampleInterval = 0.01;
     o.seed = 7;
     const diagnose::RigEffects rig;
-    const auto a = diagnose::synthesizeMeasurement({makeCurve(3e-3)}, {3e-3}, rig, makeProtocol(), o);
-    const auto b = diagnose::synthesizeMeasurement({makeCurve(3e-3)}, {3e-3}, rig, makeProtocol(), o);
+    const auto a =
+        diagnose::synthesizeMeasurement({makeCurve(3e-3)}, {3e-3}, rig, makeProtocol(), o);
+    const auto b =
+        diagnose::synthesizeMeasurement({makeCurve(3e-3)}, {3e-3}, rig, makeProtocol(), o);
     const diagnose::MeasuredTest& t = a.tests[0];
     double sum2 = 0.0;
     for (size_t i = 0; i < t.time.size(); ++i) {
@@ -78,6 +80,7 @@ TEST(Synthesis, NoiseHasItsStatedSizeAndTheSeedRepeatsIt) {
     EXPECT_NEAR(sd, 0.05, 0.004) << t.time.size() << " samples";  // 3000 samples: 1.3 % s.e.
     EXPECT_EQ(a.tests[0].force, b.tests[0].force);
     o.seed = 8;
-    const auto c = diagnose::synthesizeMeasurement({makeCurve(3e-3)}, {3e-3}, rig, makeProtocol(), o);
+    const auto c =
+        diagnose::synthesizeMeasurement({makeCurve(3e-3)}, {3e-3}, rig, makeProtocol(), o);
     EXPECT_NE(a.tests[0].force, c.tests[0].force);
 }

@@ -32,7 +32,8 @@ std::string fmt(const char* f, double v) {
 }
 
 std::string errorOf(const fs::path& dir) {
-    return io::test::reportErrorOf([](const fs::path& d) { return io::formatArrayReportHtml(d); }, dir);
+    return io::test::reportErrorOf([](const fs::path& d) { return io::formatArrayReportHtml(d); },
+                                   dir);
 }
 
 }  // namespace
@@ -133,10 +134,11 @@ TEST(ArrayReport, AFolderThatIsNotAPatientOnArrayResultGetsALocatedError) {
     const fs::path dir = makeDir("report-not-a-result");
     EXPECT_NE(errorOf(dir).find("is not a folder"), std::string::npos) << errorOf(dir);
     fs::create_directories(dir);
-    EXPECT_NE(errorOf(dir).find(
-                  "report-not-a-result: no results.h5: not the output folder of a bagsim run, nor a "
-                  "study's folder (no study.csv)"),
-              std::string::npos)
+    EXPECT_NE(
+        errorOf(dir).find(
+            "report-not-a-result: no results.h5: not the output folder of a bagsim run, nor a "
+            "study's folder (no study.csv)"),
+        std::string::npos)
         << errorOf(dir);
     // results.h5 of another kind of run.
     {

@@ -20,21 +20,21 @@ using io::test::readError;
 namespace {
 
 const std::string kBase =
-    "kind: patient-on-array\n"                                                    // 1
+    "kind: patient-on-array\n"                                                   // 1
     "patient: {sex: male, height: 1.75 m, mass: 75 kg, position: [0 m, 0 m]}\n"  // 2
-    "bag: {mesh_size: 30 mm}\n"                                                   // 3
-    "array:\n"                                                                    // 4
-    "  rows: 20\n"                                                                // 5
-    "  columns: 2\n"                                                              // 6
-    "  row_pitch: 105 mm\n"                                                       // 7
-    "  column_pitch: 360 mm\n"                                                    // 8
-    "  centre: [-30 mm, 0 mm]\n"                                                  // 9
-    "  orientation: [across, across-flipped]\n"                                   // 10
-    "  gas_mass: 4.5 g\n"                                                         // 11
-    "  groups:\n"                                                                 // 12
-    "    - {name: left, columns: [0]}\n"                                          // 13
-    "    - {name: right, columns: [1], gas_mass: 5 g}\n"                          // 14
-    "run: {settle_time: 1 s, duration: 10 s}\n";                                  // 15
+    "bag: {mesh_size: 30 mm}\n"                                                  // 3
+    "array:\n"                                                                   // 4
+    "  rows: 20\n"                                                               // 5
+    "  columns: 2\n"                                                             // 6
+    "  row_pitch: 105 mm\n"                                                      // 7
+    "  column_pitch: 360 mm\n"                                                   // 8
+    "  centre: [-30 mm, 0 mm]\n"                                                 // 9
+    "  orientation: [across, across-flipped]\n"                                  // 10
+    "  gas_mass: 4.5 g\n"                                                        // 11
+    "  groups:\n"                                                                // 12
+    "    - {name: left, columns: [0]}\n"                                         // 13
+    "    - {name: right, columns: [1], gas_mass: 5 g}\n"                         // 14
+    "run: {settle_time: 1 s, duration: 10 s}\n";                                 // 15
 
 }  // namespace
 
@@ -98,7 +98,7 @@ TEST(ArrayScenario, ReadsGroupsGasCommandsAndDefaults) {
     EXPECT_NEAR(flow->massFlow, -0.05e-3, 1e-15);
     EXPECT_EQ(sc.gas.findCommand(2, 1.99), nullptr);
     EXPECT_EQ(sc.gas.findCommand(1, 2.99), nullptr);
-    EXPECT_NE(sc.gas.findCommand(1, 3.0), nullptr);  // row 0, column 1: group right
+    EXPECT_NE(sc.gas.findCommand(1, 3.0), nullptr);   // row 0, column 1: group right
     EXPECT_EQ(sc.gas.findCommand(4, 10.0), nullptr);  // row 2, column 0: no command
     EXPECT_DOUBLE_EQ(sc.getEndTime(), 11.0);
 }
@@ -168,7 +168,8 @@ TEST(ArrayScenario, TheBodyOnTheFilmsIsFrictionlessByDefaultAndTakesACoulombCoef
         const io::InputError e = readError(with(bad));
         EXPECT_EQ(e.getLine(), 3);
         EXPECT_EQ(e.getKey(), "bag.body_friction");
-        EXPECT_NE(e.getMessage().find("valid: 0 (frictionless) to 2"), std::string::npos) << e.what();
+        EXPECT_NE(e.getMessage().find("valid: 0 (frictionless) to 2"), std::string::npos)
+            << e.what();
     }
 }
 
@@ -288,9 +289,9 @@ TEST(ArrayScenario, FrictionLawIsStickSlipByDefaultAndSlipVelocityBelongsToTheRe
     const io::PatientOnArrayScenario reg = read(with(", friction_law: regularised"));
     EXPECT_EQ(reg.options.contact.frictionLaw, Law::Regularised);
     EXPECT_DOUBLE_EQ(reg.options.contact.slipVelocity, 2e-3);
-    EXPECT_DOUBLE_EQ(
-        read(with(", friction_law: regularised, slip_velocity: 5 mm/s")).options.contact.slipVelocity,
-        5e-3);
+    EXPECT_DOUBLE_EQ(read(with(", friction_law: regularised, slip_velocity: 5 mm/s"))
+                         .options.contact.slipVelocity,
+                     5e-3);
     {
         const io::InputError e = readError(with(", friction_law: viscous"));
         EXPECT_EQ(e.getLine(), 3);
@@ -301,7 +302,8 @@ TEST(ArrayScenario, FrictionLawIsStickSlipByDefaultAndSlipVelocityBelongsToTheRe
         const io::InputError e = readError(with(", slip_velocity: 2 mm/s"));
         EXPECT_EQ(e.getKey(), "bag.slip_velocity");
         EXPECT_NE(e.getMessage().find("valid only with friction_law: regularised"),
-                  std::string::npos) << e.what();
+                  std::string::npos)
+            << e.what();
     }
     for (const char* bad : {"0 mm/s", "-1 mm/s", "2 m/s"}) {
         const io::InputError e =
@@ -318,7 +320,8 @@ TEST(ArrayScenario, NeighbourContactIsOffByDefaultAndNeedsTheBagsSelfContact) {
     EXPECT_FALSE(plain.options.neighbourContact);
     EXPECT_DOUBLE_EQ(plain.options.neighbourMargin, 0.003);
     std::string on = kBase;
-    on.replace(on.find("bag: {mesh_size: 30 mm}"), 23, "bag: {mesh_size: 30 mm, self_contact: true}");
+    on.replace(on.find("bag: {mesh_size: 30 mm}"), 23,
+               "bag: {mesh_size: 30 mm, self_contact: true}");
     on.insert(on.find("  groups:"), "  neighbour_contact: true\n  neighbour_margin: 8 mm\n");
     const io::PatientOnArrayScenario sc = read(on);
     EXPECT_TRUE(sc.options.neighbourContact);
@@ -360,11 +363,14 @@ TEST(ArrayScenario, APatientOffTheArrayIsRefusedAtHisPositionNamingTheSegments) 
     const io::InputError e = readError(text);
     EXPECT_EQ(e.getLine(), 2);
     EXPECT_EQ(e.getKey(), "patient.position");
-    EXPECT_NE(e.getMessage().find("no bag of the array lies under his lower_trunk, middle_trunk, head"), std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("no bag of the array lies under his lower_trunk, middle_trunk, head"),
+        std::string::npos)
         << e.what();
-    EXPECT_NE(e.getMessage().find("the bags cover x from -1077.5 mm to 1017.5 mm and y from -355 mm "
-                                  "to 355 mm"),
-              std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("the bags cover x from -1077.5 mm to 1017.5 mm and y from -355 mm "
+                            "to 355 mm"),
+        std::string::npos)
         << e.what();
 }
 
@@ -384,8 +390,7 @@ TEST(ArrayScenario, GasCommandsNameOneGroupOrBagsAndOneKind) {
     EXPECT_EQ(noRate.getKey(), "gas[0].rate");
     EXPECT_NE(noRate.getMessage().find("0.05 g/s"), std::string::npos) << noRate.what();
 
-    const io::InputError unit =
-        readError(kBase + "gas:\n  - {bags: [1], flow: 0.05 g}\n");
+    const io::InputError unit = readError(kBase + "gas:\n  - {bags: [1], flow: 0.05 g}\n");
     EXPECT_EQ(unit.getKey(), "gas[0].flow");
     EXPECT_NE(unit.getMessage().find("g/s"), std::string::npos) << unit.what();
 
@@ -490,9 +495,12 @@ TEST(ArrayScenario, TheFilmsDamperIsOffByDefaultAStiffnessPerAreaAndTheFiniteEle
 }
 
 TEST(ArrayScenario, TheGasInTheLinearisationIsOnByDefaultAndCanBeSwitchedOff) {
-    auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
+    auto with = [](const std::string& coupling) {
+        return kBase + "coupling: {" + coupling + "}\n";
+    };
     EXPECT_TRUE(read(kBase).options.coupling.gasTangent);
-    EXPECT_FALSE(read(with("scheme: tangent-implicit, gas_tangent: false")).options.coupling.gasTangent);
+    EXPECT_FALSE(
+        read(with("scheme: tangent-implicit, gas_tangent: false")).options.coupling.gasTangent);
     const io::InputError e = readError(with("gas_tangent: maybe"));
     EXPECT_EQ(e.getLine(), 16);
     EXPECT_EQ(e.getKey(), "coupling.gas_tangent");
@@ -503,15 +511,17 @@ TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreL
     const io::PatientOnArrayScenario plain = read(kBase);
     EXPECT_FALSE(plain.options.coupling.adaptive);
     EXPECT_DOUBLE_EQ(plain.options.coupling.macroStep, 0.01);
-    auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
+    auto with = [](const std::string& coupling) {
+        return kBase + "coupling: {" + coupling + "}\n";
+    };
     const io::PatientOnArrayScenario a = read(with("macro_step: adaptive"));
     EXPECT_TRUE(a.options.coupling.adaptive);
     EXPECT_DOUBLE_EQ(a.options.coupling.minMacroStep, 1e-3);
     EXPECT_DOUBLE_EQ(a.options.coupling.macroStep, 1e-3);  // the first step
     EXPECT_DOUBLE_EQ(a.options.coupling.maxMacroStep, 0.04);
     EXPECT_DOUBLE_EQ(a.options.coupling.stepAccuracy, 1000.0);
-    const io::PatientOnArrayScenario b = read(
-        with("macro_step: adaptive, min_macro_step: 2 ms, max_macro_step: 20 ms, step_accuracy: 50"));
+    const io::PatientOnArrayScenario b = read(with(
+        "macro_step: adaptive, min_macro_step: 2 ms, max_macro_step: 20 ms, step_accuracy: 50"));
     EXPECT_DOUBLE_EQ(b.options.coupling.minMacroStep, 2e-3);
     EXPECT_DOUBLE_EQ(b.options.coupling.maxMacroStep, 0.02);
     EXPECT_DOUBLE_EQ(b.options.coupling.stepAccuracy, 50.0);
@@ -521,10 +531,12 @@ TEST(ArrayScenario, AnAdaptiveMacroStepTakesItsBoundsAndAccuracyAndBadValuesAreL
         const char* valid;
     };
     for (const Bad& bad :
-         {Bad{"macro_step: fast", "coupling.macro_step", "valid: a time such as 10 ms, or adaptive"},
+         {Bad{"macro_step: fast", "coupling.macro_step",
+              "valid: a time such as 10 ms, or adaptive"},
           Bad{"macro_step: 10 ms, max_macro_step: 40 ms", "coupling.max_macro_step",
               "only applies with macro_step: adaptive"},
-          Bad{"step_accuracy: 10", "coupling.step_accuracy", "only applies with macro_step: adaptive"},
+          Bad{"step_accuracy: 10", "coupling.step_accuracy",
+              "only applies with macro_step: adaptive"},
           Bad{"macro_step: adaptive, max_macro_step: 1 s", "coupling.max_macro_step", "valid:"},
           Bad{"macro_step: adaptive, min_macro_step: 50 ms, max_macro_step: 20 ms",
               "coupling.min_macro_step", "at most max_macro_step"},
@@ -544,13 +556,16 @@ TEST(ArrayScenario, StepsWithNoFixedPointAreKeptAndStalledPassesAcceptedWithinAR
     const io::PatientOnArrayScenario plain = read(kBase);
     EXPECT_TRUE(plain.options.coupling.keepUnconverged);
     EXPECT_DOUBLE_EQ(plain.options.coupling.acceptResidual, 0.1);
-    auto with = [](const std::string& coupling) { return kBase + "coupling: {" + coupling + "}\n"; };
+    auto with = [](const std::string& coupling) {
+        return kBase + "coupling: {" + coupling + "}\n";
+    };
     const io::PatientOnArrayScenario off =
         read(with("keep_unconverged: false, accept_residual: 0 N"));
     EXPECT_FALSE(off.options.coupling.keepUnconverged);
     EXPECT_EQ(off.options.coupling.acceptResidual, 0.0);
     EXPECT_DOUBLE_EQ(read(with("accept_residual: 50 mN")).options.coupling.acceptResidual, 0.05);
-    for (const char* bad : {"accept_residual: -1 N", "accept_residual: 20 N", "accept_residual: 5"}) {
+    for (const char* bad :
+         {"accept_residual: -1 N", "accept_residual: 20 N", "accept_residual: 5"}) {
         const io::InputError e = readError(with(bad));
         EXPECT_EQ(e.getLine(), 16) << bad;
         EXPECT_EQ(e.getKey(), "coupling.accept_residual") << e.what();
@@ -578,9 +593,9 @@ TEST(ArrayScenario, TheFilmsSteppingIsQuasiStaticByDefaultAndDynamicWithItsSetti
     EXPECT_EQ(set.dynamics.damping, 5.0);
     EXPECT_EQ(set.dynamics.stepFraction, 0.25);
     // The settings without the stepping, a damping without its rate unit, a stepping unknown.
-    for (const char* bad : {", stepping: quasi-static, dynamic: {mass_scale: 100}",
-                            ", stepping: dynamic, dynamic: {damping: 5 s}",
-                            ", stepping: implicit"}) {
+    for (const char* bad :
+         {", stepping: quasi-static, dynamic: {mass_scale: 100}",
+          ", stepping: dynamic, dynamic: {damping: 5 s}", ", stepping: implicit"}) {
         const io::InputError e = readError(with(bad));
         EXPECT_EQ(e.getLine(), 3) << bad;
     }
@@ -615,17 +630,20 @@ TEST(ArrayScenario, TheRelaxedSteppingTakesItsSubstepsAndPaceAndOnlyIt) {
     EXPECT_EQ(set.dynamics.relaxSubsteps, 500);
     EXPECT_DOUBLE_EQ(set.dynamics.relaxPace, 0.005);
     // The relaxation's keys with the dynamic stepping; a pace without its unit; no sub-step.
-    const io::InputError e =
-        readError(with(", stepping: dynamic, dynamic: {relax_substeps: 500}"));
+    const io::InputError e = readError(with(", stepping: dynamic, dynamic: {relax_substeps: 500}"));
     EXPECT_EQ(e.getLine(), 3);
     EXPECT_NE(std::string(e.what()).find("relax_substeps"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("stepping: relaxed"), std::string::npos) << e.what();
     for (const auto& [bad, key] : std::vector<std::pair<std::string, std::string>>{
              {", stepping: relaxed, dynamic: {relax_pace: 5}", "relax_pace': \"5\" has no unit"},
-             {", stepping: relaxed, dynamic: {relax_substeps: 0}", "relax_substeps': 0 is not valid; valid: in [1, 1e+07]"},
-             {", stepping: relaxed, dynamic: {mass_scale: 0.5}", "mass_scale': 0.5 is not valid; valid: in [1, 1e+06]"},
-             {", stepping: relaxed, dynamic: {newton_polish: -1}", "newton_polish': -1 is not valid; valid: in [0, 1000]"},
-             {", stepping: dynamic, dynamic: {newton_polish: 5}", "newton_polish': is the relaxed stepping's"}}) {
+             {", stepping: relaxed, dynamic: {relax_substeps: 0}",
+              "relax_substeps': 0 is not valid; valid: in [1, 1e+07]"},
+             {", stepping: relaxed, dynamic: {mass_scale: 0.5}",
+              "mass_scale': 0.5 is not valid; valid: in [1, 1e+06]"},
+             {", stepping: relaxed, dynamic: {newton_polish: -1}",
+              "newton_polish': -1 is not valid; valid: in [0, 1000]"},
+             {", stepping: dynamic, dynamic: {newton_polish: 5}",
+              "newton_polish': is the relaxed stepping's"}}) {
         const io::InputError b = readError(with(bad));
         EXPECT_EQ(b.getLine(), 3) << bad;
         EXPECT_NE(std::string(b.what()).find(key), std::string::npos) << b.what();
@@ -642,8 +660,7 @@ TEST(ArrayScenario, ThePressureAtRestSetsTheFillAsAClinicalMattressIsSet) {
         const std::string fill = "  gas_mass: 4.5 g\n";
         const std::string right5 = "{name: right, columns: [1], gas_mass: 5 g}";
         t.replace(t.find(fill), fill.size(), array);
-        t.replace(t.find(right5), right5.size(),
-                  "{name: right, columns: [1]" + right + "}");
+        t.replace(t.find(right5), right5.size(), "{name: right, columns: [1]" + right + "}");
         return t;
     };
     const io::PatientOnArrayScenario sc = read(with("  pressure: 4 kPa\n", ", pressure: 8 kPa"));
@@ -668,22 +685,23 @@ TEST(ArrayScenario, ThePressureAtRestSetsTheFillAsAClinicalMattressIsSet) {
         EXPECT_EQ(e.getKey(), key) << e.what();
         EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
     };
-    refused((with("  gas_mass: 4 g\n  pressure: 4 kPa\n", "")), 12,
-                     "array.pressure", "and gas_mass both set the bags' fill; valid: one of them");
+    refused((with("  gas_mass: 4 g\n  pressure: 4 kPa\n", "")), 12, "array.pressure",
+            "and gas_mass both set the bags' fill; valid: one of them");
     refused((with("", "")), 4, "array.gas_mass",
-                     "missing: the bags' fill, a gas mass (gas_mass: 4.5 g) or the gauge pressure");
+            "missing: the bags' fill, a gas mass (gas_mass: 4.5 g) or the gauge pressure");
     refused((with("  pressure: 50 Pa\n", "")), 11, "array.pressure",
-                     "0.05 kPa is not valid; valid: in [0.2 kPa, 100 kPa]");
+            "0.05 kPa is not valid; valid: in [0.2 kPa, 100 kPa]");
     refused((with("  pressure: 4\n", "")), 11, "array.pressure", "has no unit");
     refused((with("  pressure: 4 kPa\n", ", gas_mass: 4 g, pressure: 4 kPa")), 14,
-                     "array.groups[1].pressure", "and gas_mass both set the group's fill");
+            "array.groups[1].pressure", "and gas_mass both set the group's fill");
 }
 
 TEST(ArrayScenario, AMatWhoseFramesWouldFillTheDiskIsRefused) {
     // frames x sensels x 8 bytes above 4 GiB (1 ms over an hour on a 1024 x 1024 mat: 30 TB)
     // is refused at output.every with the size and the least interval that fits; the shipped
     // 64 x 32 mat at 50 ms over 30 s is 10 MB.
-    const io::InputError e = readError(kBase + "mat: {rows: 1024, columns: 1024}\noutput: {every: 1 ms}\n");
+    const io::InputError e =
+        readError(kBase + "mat: {rows: 1024, columns: 1024}\noutput: {every: 1 ms}\n");
     EXPECT_EQ(e.getKey(), "output.every") << e.what();
     EXPECT_NE(std::string(e.what()).find("sensels writes about"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("at most 4 GiB are allowed; valid: output.every at least"),

@@ -180,7 +180,8 @@ TEST(LoadTestScenario, OrificeAndExtrapolationKeys) {
     EXPECT_LT(poly.options.material->calcEnergy(C, nullptr, nullptr), 0.0);
 
     // Errors name the line, the key and what is valid.
-    const InputError e = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  orifice_diameter: 3 mm"));
+    const InputError e =
+        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  orifice_diameter: 3 mm"));
     EXPECT_EQ(e.getLine(), 7);
     EXPECT_EQ(e.getKey(), "airbag.orifice_diameter");
     EXPECT_NE(std::string(e.what()).find("only applies to connection: orifice"), std::string::npos)
@@ -195,9 +196,8 @@ TEST(LoadTestScenario, OrificeAndExtrapolationKeys) {
     const InputError e4 = errorFor(
         replaceLine(kBase, 6, "  height: 150 mm\n  connection: orifice\n  orifice_diameter: 0 mm"));
     EXPECT_EQ(e4.getKey(), "airbag.orifice_diameter");
-    const InputError e5 = errorFor(replaceLine(
-        replaceLine(kBase, 8, "  model: neo-hookean"), 10,
-        "  extrapolation: linear"));
+    const InputError e5 = errorFor(
+        replaceLine(replaceLine(kBase, 8, "  model: neo-hookean"), 10, "  extrapolation: linear"));
     EXPECT_EQ(e5.getKey(), "membrane.extrapolation");
 }
 
@@ -310,7 +310,8 @@ TEST(LoadTestScenario, RangesAreCheckedWithTheKeysLine) {
     for (const char* t : {"5000 K", "150 degC", "-60 degC"}) {
         const InputError hot = errorFor(kBase + "gas: {temperature: " + t + "}\n");
         EXPECT_EQ(hot.getKey(), "gas.temperature") << t;
-        EXPECT_NE(std::string(hot.what()).find("must be in [223.15 K, 373.15 K]"), std::string::npos)
+        EXPECT_NE(std::string(hot.what()).find("must be in [223.15 K, 373.15 K]"),
+                  std::string::npos)
             << hot.what();
     }
     for (const char* t : {"23 degC", "40 degC", "0 degC"})
@@ -457,12 +458,11 @@ TEST(LoadTestScenario, FillMassKeys) {
     EXPECT_NEAR(sc.fillMass, 2.8e-3, 1e-15);
     EXPECT_EQ(sc.fillScaling, bags::FillScaling::Uniform);
     EXPECT_NEAR(sc.options.geometry.longSide, 0.350, 1e-15);  // scaled only before the run
-    const io::LoadTestScenario sc2 = io::readLoadTestScenario(ScenarioFile::parse(
-        replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 3 g"), "f.yaml"));
+    const io::LoadTestScenario sc2 = io::readLoadTestScenario(
+        ScenarioFile::parse(replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: 3 g"), "f.yaml"));
     EXPECT_EQ(sc2.fillScaling, bags::FillScaling::Profile);  // the default
 
-    const InputError e =
-        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: -2.8 g"));
+    const InputError e = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  fill_mass: -2.8 g"));
     EXPECT_EQ(e.getLine(), 7);
     EXPECT_EQ(e.getKey(), "airbag.fill_mass");
     EXPECT_NE(std::string(e.what()).find("must be > 0 g"), std::string::npos) << e.what();
@@ -522,11 +522,10 @@ TEST(LoadTestScenario, VolumeChangeKey) {
     EXPECT_EQ(e.getKey(), "airbag.volume_change");
     EXPECT_NE(std::string(e.what()).find("must be in [-0.25, 0.25]"), std::string::npos)
         << e.what();
-    const InputError e2 =
-        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  volume_change: 5 %"));
+    const InputError e2 = errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  volume_change: 5 %"));
     EXPECT_EQ(e2.getKey(), "airbag.volume_change");
-    const InputError e3 = errorFor(replaceLine(
-        kBase, 6, "  height: 150 mm\n  mesh_size: 49 mm\n  volume_change: 0.2"));
+    const InputError e3 = errorFor(
+        replaceLine(kBase, 6, "  height: 150 mm\n  mesh_size: 49 mm\n  volume_change: 0.2"));
     EXPECT_EQ(e3.getLine(), 8);
     EXPECT_EQ(e3.getKey(), "airbag.volume_change");
     EXPECT_NE(std::string(e3.what()).find("beyond 50 mm"), std::string::npos) << e3.what();
@@ -540,10 +539,11 @@ TEST(LoadTestScenario, BendingStiffnessKey) {
     const auto base = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
     EXPECT_NEAR(base.options.bendingStiffness, plate, 1e-12 * plate);
     auto read = [](const std::string& value) {
-        return io::readLoadTestScenario(
-                   ScenarioFile::parse(replaceLine(kBase, 12, "  thickness: 0.2 mm\n"
-                                                              "  bending_stiffness: " + value),
-                                       "k.yaml"))
+        return io::readLoadTestScenario(ScenarioFile::parse(replaceLine(kBase, 12,
+                                                                        "  thickness: 0.2 mm\n"
+                                                                        "  bending_stiffness: " +
+                                                                            value),
+                                                            "k.yaml"))
             .options.bendingStiffness;
     };
     EXPECT_NEAR(read("plate"), plate, 1e-12 * plate);
@@ -552,13 +552,13 @@ TEST(LoadTestScenario, BendingStiffnessKey) {
     EXPECT_NEAR(read("0.05 N mm"), 5e-5, 1e-18);
     // A wrong unit, a bare number and a negative value are errors at the key's line.
     for (const char* bad : {"0.17 N/mm", "1.7e-4", "-1e-4 N m", "2 N m", "stiff"}) {
-        const InputError e = errorFor(
-            replaceLine(kBase, 12, std::string("  thickness: 0.2 mm\n  bending_stiffness: ") + bad));
+        const InputError e = errorFor(replaceLine(
+            kBase, 12, std::string("  thickness: 0.2 mm\n  bending_stiffness: ") + bad));
         EXPECT_EQ(e.getLine(), 13) << bad;
         EXPECT_EQ(e.getKey(), "membrane.bending_stiffness") << bad;
     }
-    const InputError e = errorFor(
-        replaceLine(kBase, 12, "  thickness: 0.2 mm\n  bending_stiffness: 0.17 N/mm"));
+    const InputError e =
+        errorFor(replaceLine(kBase, 12, "  thickness: 0.2 mm\n  bending_stiffness: 0.17 N/mm"));
     EXPECT_NE(std::string(e.what()).find("is not a moment"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("N m"), std::string::npos) << e.what();
 }
@@ -575,8 +575,7 @@ TEST(LoadTestScenario, ImperfectionAndEnsembleKeys) {
     EXPECT_EQ(read(kBase).imperfection.amplitude, 0.0);  // absent: the perfect bag
     EXPECT_EQ(read(kBase).ensemble, 1);
     // The ensemble: test.ensemble bags, each with its own seed.
-    const bags::LoadTestOptions e =
-        read(withImperfection + "  ensemble: 5\n");
+    const bags::LoadTestOptions e = read(withImperfection + "  ensemble: 5\n");
     EXPECT_EQ(e.ensemble, 5);
     // Errors at the key's line: a missing unit, too large, a negative seed, an unknown key,
     // an ensemble out of range or without an imperfection.
@@ -617,7 +616,7 @@ TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
     const auto base = io::readLoadTestScenario(ScenarioFile::parse(kBase, "b.yaml"));
     EXPECT_EQ(base.options.neighbours, bags::LoadTestOptions::Neighbours::None);
     EXPECT_EQ(base.options.neighbourGasMass, 0.0);  // the pressed bag's own at each curve
-    EXPECT_FALSE(sc.options.neighbourSharedAir);      // each bag its own air by default
+    EXPECT_FALSE(sc.options.neighbourSharedAir);    // each bag its own air by default
     const io::LoadTestScenario shared = io::readLoadTestScenario(ScenarioFile::parse(
         replaceLine(kBase, 6, "  height: 150 mm\n  neighbours: {layout: pair, shared_air: true}"),
         "s.yaml"));
@@ -631,7 +630,8 @@ TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
 
     // Where in a 3 x 3 block the pressed bag stands.
     const io::LoadTestScenario corner = io::readLoadTestScenario(ScenarioFile::parse(
-        replaceLine(kBase, 6, "  height: 150 mm\n  neighbours: {layout: block3x3, pressed: [1, -1]}"),
+        replaceLine(kBase, 6,
+                    "  height: 150 mm\n  neighbours: {layout: block3x3, pressed: [1, -1]}"),
         "c.yaml"));
     EXPECT_EQ(corner.options.neighbourPressed[0], 1);
     EXPECT_EQ(corner.options.neighbourPressed[1], -1);
@@ -651,8 +651,8 @@ TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
     EXPECT_EQ(e.getLine(), 9);
     EXPECT_EQ(e.getKey(), "airbag.neighbours.gap");
     EXPECT_NE(std::string(e.what()).find("100 mm"), std::string::npos) << e.what();
-    const InputError e2 = errorFor(
-        replaceLine(kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: hexagon"));
+    const InputError e2 =
+        errorFor(replaceLine(kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: hexagon"));
     EXPECT_EQ(e2.getLine(), 8);
     EXPECT_NE(std::string(e2.what()).find("row3"), std::string::npos) << e2.what();
     const InputError e3 = errorFor(replaceLine(
@@ -661,10 +661,10 @@ TEST(LoadTestScenario, NeighboursKeysAndTheirErrors) {
     const InputError e4 = errorFor(replaceLine(
         kBase, 6, "  height: 150 mm\n  neighbours:\n    layout: pair\n    pitch: 110 mm"));
     EXPECT_EQ(e4.getLine(), 9);
-    const InputError e5 = errorFor(
-        replaceLine(kBase, 6,
-                    "  height: 150 mm\n  diaphragm: true\n  connection: orifice\n"
-                    "  neighbours: {layout: pair}"));
+    const InputError e5 =
+        errorFor(replaceLine(kBase, 6,
+                             "  height: 150 mm\n  diaphragm: true\n  connection: orifice\n"
+                             "  neighbours: {layout: pair}"));
     EXPECT_EQ(e5.getKey(), "airbag.connection");
 }
 
@@ -730,5 +730,6 @@ TEST(LoadTestScenario, ANameOfDotsIsNotAnOutputFolderOfItsOwn) {
             << e.what();
     }
     EXPECT_EQ(errorFor("name: ../up\n" + kBase).getKey(), "name");
-    EXPECT_NO_THROW(io::readLoadTestScenario(ScenarioFile::parse("name: a.b-c_1\n" + kBase, "n.yaml")));
+    EXPECT_NO_THROW(
+        io::readLoadTestScenario(ScenarioFile::parse("name: a.b-c_1\n" + kBase, "n.yaml")));
 }

@@ -17,26 +17,27 @@ using io::test::expectInputError;
 namespace {
 
 const std::string kManifest =
-    "format: bagsim-measured-data 1\n"                                        // 1
-    "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/tiny-load-test.yaml\n"   // 2
-    "protocol:\n"                                                             // 3
-    "  block: 50 mm\n"                                                        // 4
-    "  rate: 10 mm/min\n"                                                     // 5
-    "  peak_force: 4 N\n"                                                     // 6
-    "  room_temperature: 23 degC\n"                                           // 7
-    "tests:\n"                                                                // 8
-    "  - gas_mass: 3.5 g\n"                                                   // 9
-    "    machine: m.csv\n"                                                    // 10
-    "    pressure: p.csv\n"                                                   // 11
-    "    flowmeter: f.csv\n";                                                 // 12
+    "format: bagsim-measured-data 1\n"  // 1
+    "scenario: " BAGSIM_SOURCE_DIR
+    "/scenarios/tests/tiny-load-test.yaml\n"  // 2
+    "protocol:\n"                             // 3
+    "  block: 50 mm\n"                        // 4
+    "  rate: 10 mm/min\n"                     // 5
+    "  peak_force: 4 N\n"                     // 6
+    "  room_temperature: 23 degC\n"           // 7
+    "tests:\n"                                // 8
+    "  - gas_mass: 3.5 g\n"                   // 9
+    "    machine: m.csv\n"                    // 10
+    "    pressure: p.csv\n"                   // 11
+    "    flowmeter: f.csv\n";                 // 12
 
 const std::string kMachine =
-    "# testing machine export\n"    // 1
+    "# testing machine export\n"        // 1
     "time_s,displacement_mm,force_N\n"  // 2
-    "0,0,0\n"                       // 3
-    "6,1,1.5\n"                     // 4
-    "12,2,4.0\n"                    // 5
-    "18,1,1.4\n";                   // 6
+    "0,0,0\n"                           // 3
+    "6,1,1.5\n"                         // 4
+    "12,2,4.0\n"                        // 5
+    "18,1,1.4\n";                       // 6
 const std::string kPressure = "time [s],pressure [kPa]\n0,0.5\n9,0.9\n18,0.6\n";
 const std::string kFlow = "time (s),mass (g)\n0,3.501\n18,3.499\n";
 
@@ -79,7 +80,6 @@ class MeasuredDataTest : public ::testing::Test {
     }
     fs::path m_dir;
 };
-
 
 }  // namespace
 
@@ -125,8 +125,9 @@ TEST_F(MeasuredDataTest, UnsortedTimeNamesRowAndColumn) {
     const io::InputError e = readError();
     EXPECT_EQ(e.getWhere(), file("m.csv"));
     EXPECT_EQ(e.getLine(), 5);
-    EXPECT_NE(e.getMessage().find("column 1 'time_s': 5 is not after the previous row's (line 4) 6"),
-              std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("column 1 'time_s': 5 is not after the previous row's (line 4) 6"),
+        std::string::npos)
         << e.what();
     EXPECT_NE(e.getMessage().find("strictly increasing"), std::string::npos);
 }
@@ -144,7 +145,8 @@ TEST_F(MeasuredDataTest, WrongUnitListsTheValidOnes) {
     write("f.csv", replaceAll(kFlow, "mass (g)", "mass (kPa)"));
     const io::InputError e = readError();
     EXPECT_EQ(e.getWhere(), file("f.csv"));
-    EXPECT_NE(e.getMessage().find("column 2 'mass (kPa)': 'kPa' is not a unit of a mass; valid: g, kg, mg"),
+    EXPECT_NE(e.getMessage().find(
+                  "column 2 'mass (kPa)': 'kPa' is not a unit of a mass; valid: g, kg, mg"),
               std::string::npos)
         << e.what();
 }
@@ -213,7 +215,8 @@ TEST_F(MeasuredDataTest, ProtocolIsAppliedToTheScenario) {
 // scenario runs its masses from the largest down.
 TEST_F(MeasuredDataTest, StiffnessCurveAloneReadsInSi) {
     write("measured.yaml", kManifest.substr(0, kManifest.find("tests:")) + "stiffness: k.csv\n");
-    write("k.csv", "# k(m)\ngas_mass_g,stiffness [N/mm],stage\n1.0,3.47,3\n2.5,1.64,2\n3.5,7.91,1\n");
+    write("k.csv",
+          "# k(m)\ngas_mass_g,stiffness [N/mm],stage\n1.0,3.47,3\n2.5,1.64,2\n3.5,7.91,1\n");
     const diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
     EXPECT_TRUE(d.tests.empty());
     ASSERT_EQ(d.stiffness.gasMass.size(), 3u);
@@ -283,11 +286,12 @@ TEST_F(MeasuredDataTest, TheBedGaugeIsOptionalReadsInSiAndWritesBack) {
 TEST_F(MeasuredDataTest, ABedGaugeForSomeTestsOnlyIsNamed) {
     write("b.csv", "time_s,sink_mm\n0,0\n12,0.25\n18,0.1\n");
     write("f2.csv", "time (s),mass (g)\n0,3.001\n18,2.999\n");
-    write("measured.yaml", kManifest + "    bed: b.csv\n"
-                           "  - gas_mass: 3.0 g\n"     // 14
-                           "    machine: m.csv\n"
-                           "    pressure: p.csv\n"
-                           "    flowmeter: f2.csv\n");
+    write("measured.yaml", kManifest +
+                               "    bed: b.csv\n"
+                               "  - gas_mass: 3.0 g\n"  // 14
+                               "    machine: m.csv\n"
+                               "    pressure: p.csv\n"
+                               "    flowmeter: f2.csv\n");
     const io::InputError e = readError();
     EXPECT_EQ(e.getWhere(), file("measured.yaml"));
     EXPECT_EQ(e.getLine(), 14);
@@ -303,24 +307,24 @@ TEST_F(MeasuredDataTest, StatedInputUncertaintiesReadInSiAndAreOptional) {
     EXPECT_EQ(none.tests[0].gasMassUncertainty, 0.0);
     EXPECT_FALSE(none.protocol.roomTemperatureUncertaintyStated);
     // For all tests in the protocol, and the room temperature's in K.
-    write("measured.yaml",
-          replaceAll(kManifest, "  room_temperature: 23 degC\n",
-                     "  room_temperature: 23 degC\n  gas_mass_uncertainty: 20 mg\n"
-                     "  room_temperature_uncertainty: 0.5 K\n"));
+    write("measured.yaml", replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                                      "  room_temperature: 23 degC\n  gas_mass_uncertainty: 20 mg\n"
+                                      "  room_temperature_uncertainty: 0.5 K\n"));
     diagnose::MeasuredData d = io::readMeasuredData(m_dir.string());
     EXPECT_TRUE(d.tests[0].gasMassUncertaintyStated);
     EXPECT_DOUBLE_EQ(d.tests[0].gasMassUncertainty, 0.02e-3);
     EXPECT_TRUE(d.protocol.roomTemperatureUncertaintyStated);
     EXPECT_DOUBLE_EQ(d.protocol.roomTemperatureUncertainty, 0.5);
     // A test's own statement wins over the protocol's; a stated 0 is stated.
-    write("measured.yaml",
-          replaceAll(kManifest, "    machine: m.csv\n", "    gas_mass_uncertainty: 0 g\n    machine: m.csv\n"));
+    write("measured.yaml", replaceAll(kManifest, "    machine: m.csv\n",
+                                      "    gas_mass_uncertainty: 0 g\n    machine: m.csv\n"));
     d = io::readMeasuredData(m_dir.string());
     EXPECT_TRUE(d.tests[0].gasMassUncertaintyStated);
     EXPECT_EQ(d.tests[0].gasMassUncertainty, 0.0);
     // Written and read back.
     d.tests[0].gasMassUncertainty = 0.03e-3;
-    d.protocol.roomTemperatureUncertainty = 0.25, d.protocol.roomTemperatureUncertaintyStated = true;
+    d.protocol.roomTemperatureUncertainty = 0.25,
+    d.protocol.roomTemperatureUncertaintyStated = true;
     const diagnose::MeasuredData r = writeAndReadBack(d);
     EXPECT_NEAR(r.tests[0].gasMassUncertainty, 0.03e-3, 1e-12);
     EXPECT_NEAR(r.protocol.roomTemperatureUncertainty, 0.25, 1e-12);
@@ -328,8 +332,8 @@ TEST_F(MeasuredDataTest, StatedInputUncertaintiesReadInSiAndAreOptional) {
 
 TEST_F(MeasuredDataTest, StatedInputUncertaintiesOutOfRangeNameFileLineKeyAndTheRange) {
     // A test's: beyond 10 % of its gas mass (3.5 g: 0.35 g).
-    write("measured.yaml",
-          replaceAll(kManifest, "    machine: m.csv\n", "    gas_mass_uncertainty: 0.4 g\n    machine: m.csv\n"));
+    write("measured.yaml", replaceAll(kManifest, "    machine: m.csv\n",
+                                      "    gas_mass_uncertainty: 0.4 g\n    machine: m.csv\n"));
     io::InputError e = readError();
     EXPECT_EQ(e.getWhere(), file("measured.yaml"));
     EXPECT_EQ(e.getLine(), 10);
@@ -339,8 +343,9 @@ TEST_F(MeasuredDataTest, StatedInputUncertaintiesOutOfRangeNameFileLineKeyAndThe
               std::string::npos)
         << e.what();
     // The protocol's, negative: named at the protocol's key, with the test it fails for.
-    write("measured.yaml", replaceAll(kManifest, "  room_temperature: 23 degC\n",
-                                      "  room_temperature: 23 degC\n  gas_mass_uncertainty: -1 mg\n"));
+    write("measured.yaml",
+          replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                     "  room_temperature: 23 degC\n  gas_mass_uncertainty: -1 mg\n"));
     e = readError();
     EXPECT_EQ(e.getLine(), 8);
     EXPECT_EQ(e.getKey(), "protocol.gas_mass_uncertainty");
@@ -348,21 +353,24 @@ TEST_F(MeasuredDataTest, StatedInputUncertaintiesOutOfRangeNameFileLineKeyAndThe
               std::string::npos)
         << e.what();
     // Not a mass.
-    write("measured.yaml", replaceAll(kManifest, "  room_temperature: 23 degC\n",
-                                      "  room_temperature: 23 degC\n  gas_mass_uncertainty: 2 %\n"));
+    write("measured.yaml",
+          replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                     "  room_temperature: 23 degC\n  gas_mass_uncertainty: 2 %\n"));
     e = readError();
     EXPECT_EQ(e.getLine(), 8);
     EXPECT_EQ(e.getKey(), "protocol.gas_mass_uncertainty");
     // The room temperature's: beyond 10 K, and in degC (a temperature, not a difference).
     for (const std::string v : {"12 K", "0.5 degC", "0.5"}) {
-        write("measured.yaml",
-              replaceAll(kManifest, "  room_temperature: 23 degC\n",
-                         "  room_temperature: 23 degC\n  room_temperature_uncertainty: " + v + "\n"));
+        write(
+            "measured.yaml",
+            replaceAll(kManifest, "  room_temperature: 23 degC\n",
+                       "  room_temperature: 23 degC\n  room_temperature_uncertainty: " + v + "\n"));
         e = readError();
         EXPECT_EQ(e.getLine(), 8) << v;
         EXPECT_EQ(e.getKey(), "protocol.room_temperature_uncertainty") << v;
-        EXPECT_NE(e.getMessage().find("valid: 0 K to 10 K, a standard uncertainty in K (e.g. 0.5 K)"),
-                  std::string::npos)
+        EXPECT_NE(
+            e.getMessage().find("valid: 0 K to 10 K, a standard uncertainty in K (e.g. 0.5 K)"),
+            std::string::npos)
             << e.what();
     }
 }
@@ -402,9 +410,8 @@ TEST(RigSection, BadValuesAreLocated) {
         "test: {gas_masses: [3.5 g, 3.0 g], polynomial_order: 1}\n"
         "rig:\n";
     auto error = [&](const std::string& rig) {
-        return expectInputError([&] {
-            io::readLoadTestScenario(io::ScenarioFile::parse(head + rig, "rig.yaml"));
-        });
+        return expectInputError(
+            [&] { io::readLoadTestScenario(io::ScenarioFile::parse(head + rig, "rig.yaml")); });
     };
     io::InputError e = error("  pressure_sensor: {lag: 2}\n");
     EXPECT_EQ(e.getLine(), 6);
@@ -437,14 +444,14 @@ TEST(GasSection, LeakageAndHeatExchangeKeysReadInSiAndBadValuesAreLocated) {
         head + "  leak_conductance: 0.05 mg/(s kPa)\n  heat_time_constant: 20 s\n", "gas.yaml"));
     EXPECT_NEAR(sc.options.gas.leakConductance, 0.05e-9, 1e-24);
     EXPECT_DOUBLE_EQ(sc.options.gas.heatTimeConstant, 20.0);
-    EXPECT_NEAR(io::readLoadTestScenario(io::ScenarioFile::parse(
-                    head + "  leak_conductance: 0.05 mg/s/kPa\n", "gas.yaml"))
-                    .options.gas.leakConductance,
-                0.05e-9, 1e-24);
+    EXPECT_NEAR(
+        io::readLoadTestScenario(
+            io::ScenarioFile::parse(head + "  leak_conductance: 0.05 mg/s/kPa\n", "gas.yaml"))
+            .options.gas.leakConductance,
+        0.05e-9, 1e-24);
     auto error = [&](const std::string& gas) {
-        return expectInputError([&] {
-            io::readLoadTestScenario(io::ScenarioFile::parse(head + gas, "gas.yaml"));
-        });
+        return expectInputError(
+            [&] { io::readLoadTestScenario(io::ScenarioFile::parse(head + gas, "gas.yaml")); });
     };
     io::InputError e = error("  leak_conductance: 2 mg/(s kPa)\n");
     EXPECT_EQ(e.getKey(), "gas.leak_conductance");
@@ -484,9 +491,8 @@ TEST(MembraneSection, PronyTermsReadInSiAndBadTermsAreLocated) {
     EXPECT_TRUE(io::readLoadTestScenario(io::ScenarioFile::parse(head, "film.yaml"))
                     .options.prony.terms.empty());
     auto error = [&](const std::string& prony) {
-        return expectInputError([&] {
-            io::readLoadTestScenario(io::ScenarioFile::parse(head + prony, "film.yaml"));
-        });
+        return expectInputError(
+            [&] { io::readLoadTestScenario(io::ScenarioFile::parse(head + prony, "film.yaml")); });
     };
     io::InputError e = error("  prony:\n    - {g: 0.1, tau: 20 s}\n    - {g: 1.2, tau: 5 s}\n");
     EXPECT_EQ(e.getKey(), "membrane.prony[1].g");

@@ -21,30 +21,31 @@ using io::test::expectInputError;
 namespace {
 
 const std::string kManifest =
-    "format: bagsim-measured-data 1\n"                                                 // 1
-    "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/supine-on-array-coarse.yaml\n"    // 2
-    "protocol:\n"                                                                      // 3
-    "  kind: patient-on-array\n"                                                       // 4
-    "  settle_time: 0.3 s\n"                                                           // 5
-    "channels:\n"                                                                      // 6
-    "  mat: mat.csv\n"                                                                 // 7
-    "  tilt: tilt.csv\n"                                                               // 8
-    "  bag_pressures:\n"                                                               // 9
-    "    - {bag: 17, file: b17.csv}\n"                                                 // 10
-    "    - {bag: 3, file: b3.csv}\n";                                                  // 11
+    "format: bagsim-measured-data 1\n"  // 1
+    "scenario: " BAGSIM_SOURCE_DIR
+    "/scenarios/tests/supine-on-array-coarse.yaml\n"  // 2
+    "protocol:\n"                                     // 3
+    "  kind: patient-on-array\n"                      // 4
+    "  settle_time: 0.3 s\n"                          // 5
+    "channels:\n"                                     // 6
+    "  mat: mat.csv\n"                                // 7
+    "  tilt: tilt.csv\n"                              // 8
+    "  bag_pressures:\n"                              // 9
+    "    - {bag: 17, file: b17.csv}\n"                // 10
+    "    - {bag: 3, file: b3.csv}\n";                 // 11
 
 const std::string kMat =
-    "# mat export\n"        // 1
-    "rows,2\n"              // 2
-    "columns,3\n"           // 3
-    "unit,mmHg\n"           // 4
-    "time_s,0.1\n"          // 5
-    "0,1,2\n"               // 6
-    "3,4,5\n"               // 7
-    "\n"                    // 8
-    "time_s,0.2\n"          // 9
-    "0,10,20\n"             // 10
-    "30,40,50\n";           // 11
+    "# mat export\n"  // 1
+    "rows,2\n"        // 2
+    "columns,3\n"     // 3
+    "unit,mmHg\n"     // 4
+    "time_s,0.1\n"    // 5
+    "0,1,2\n"         // 6
+    "3,4,5\n"         // 7
+    "\n"              // 8
+    "time_s,0.2\n"    // 9
+    "0,10,20\n"       // 10
+    "30,40,50\n";     // 11
 const std::string kTilt = "time_s,pelvis_tilt_deg\n0,0\n0.1,1.5\n0.2,3\n";
 const std::string kBag = "time [s],pressure [kPa]\n0,20\n0.2,21\n";
 
@@ -69,9 +70,8 @@ class PatientMeasuredDataTest : public ::testing::Test {
         return expectInputError([&] { io::readPatientMeasuredData(m_dir.string()); });
     }
     io::InputError scenarioError() {
-        return expectInputError([&] {
-            io::readPatientMeasuredScenario(io::readPatientMeasuredData(m_dir.string()));
-        });
+        return expectInputError(
+            [&] { io::readPatientMeasuredScenario(io::readPatientMeasuredData(m_dir.string())); });
     }
     fs::path m_dir;
 };
@@ -166,8 +166,9 @@ TEST_F(PatientMeasuredDataTest, MatCellNamesFrameRowAndColumn) {
     const io::InputError e = readError();
     EXPECT_EQ(e.getWhere(), file("mat.csv"));
     EXPECT_EQ(e.getLine(), 11);
-    EXPECT_NE(e.getMessage().find("frame 2 (time 0.2 s), row 2, column 2: 'nan' is not a finite number"),
-              std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("frame 2 (time 0.2 s), row 2, column 2: 'nan' is not a finite number"),
+        std::string::npos)
         << e.what();
     EXPECT_NE(e.getMessage().find("valid: a finite pressure in mmHg"), std::string::npos);
     write("mat.csv", replaceAll(kMat, "0,1,2", "0,1,x"));
@@ -205,8 +206,9 @@ TEST_F(PatientMeasuredDataTest, MatFramesMustBeInTimeOrder) {
     write("mat.csv", replaceAll(kMat, "time_s,0.2", "time_s,0.1"));
     const io::InputError e = readError();
     EXPECT_EQ(e.getLine(), 9);
-    EXPECT_NE(e.getMessage().find("the frame's time 0.1 is not after the previous frame's (line 5) 0.1"),
-              std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("the frame's time 0.1 is not after the previous frame's (line 5) 0.1"),
+        std::string::npos)
         << e.what();
     write("mat.csv", replaceAll(kMat, "time_s,0.2", "time_h,0.2"));
     EXPECT_NO_THROW(io::readPatientMeasuredData(m_dir.string()));  // 0.2 h: later
@@ -227,7 +229,8 @@ TEST_F(PatientMeasuredDataTest, TiltFileNeedsATiltColumn) {
     write("tilt.csv", "time_s,roll_deg\n0,0\n0.2,1\n");
     const io::InputError e = readError();
     EXPECT_EQ(e.getWhere(), file("tilt.csv"));
-    EXPECT_NE(e.getMessage().find("no 'pelvis_tilt' and no 'thorax_tilt' column"), std::string::npos)
+    EXPECT_NE(e.getMessage().find("no 'pelvis_tilt' and no 'thorax_tilt' column"),
+              std::string::npos)
         << e.what();
     write("tilt.csv", "time_s,pelvis_tilt_mm\n0,0\n0.2,1\n");
     const io::InputError u = readError();
@@ -236,7 +239,8 @@ TEST_F(PatientMeasuredDataTest, TiltFileNeedsATiltColumn) {
 }
 
 TEST_F(PatientMeasuredDataTest, BagListedTwiceIsNamed) {
-    write("measured.yaml", replaceAll(kManifest, "{bag: 3, file: b3.csv}", "{bag: 17, file: b3.csv}"));
+    write("measured.yaml",
+          replaceAll(kManifest, "{bag: 3, file: b3.csv}", "{bag: 17, file: b3.csv}"));
     const io::InputError e = readError();
     EXPECT_EQ(e.getLine(), 11);
     EXPECT_NE(e.getMessage().find("bag 17 is listed twice"), std::string::npos) << e.what();
@@ -257,8 +261,9 @@ TEST_F(PatientMeasuredDataTest, TheScenarioMustBeAPatientOnArray) {
           replaceAll(kManifest, "supine-on-array-coarse.yaml", "tiny-load-test.yaml"));
     const io::InputError e = scenarioError();
     EXPECT_EQ(e.getLine(), 2);
-    EXPECT_NE(e.getMessage().find("is of kind 'seed-load-test'; valid: a patient-on-array scenario"),
-              std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("is of kind 'seed-load-test'; valid: a patient-on-array scenario"),
+        std::string::npos)
         << e.what();
 }
 
@@ -266,7 +271,8 @@ TEST_F(PatientMeasuredDataTest, TheMatMustBeTheScenarios) {
     const io::InputError e = scenarioError();  // 2 x 3 against the scenario's 64 x 32
     EXPECT_EQ(e.getLine(), 7);
     EXPECT_EQ(e.getKey(), "channels.mat");
-    EXPECT_NE(e.getMessage().find("has 2 x 3 sensels, the scenario's mat 64 x 32"), std::string::npos)
+    EXPECT_NE(e.getMessage().find("has 2 x 3 sensels, the scenario's mat 64 x 32"),
+              std::string::npos)
         << e.what();
 }
 
@@ -284,8 +290,9 @@ TEST_F(PatientMeasuredDataTest, SamplesAfterTheRunsEndAndBagsOutsideTheArray) {
     write("measured.yaml", replaceAll(kManifest, "bag: 17", "bag: 42"));
     const io::InputError b = scenarioError();
     EXPECT_EQ(b.getLine(), 9);
-    EXPECT_NE(b.getMessage().find("bag 42 (" + file("b17.csv") + ") is not in the array of 42 bags"),
-              std::string::npos)
+    EXPECT_NE(
+        b.getMessage().find("bag 42 (" + file("b17.csv") + ") is not in the array of 42 bags"),
+        std::string::npos)
         << b.what();
     write("measured.yaml", replaceAll(kManifest, "settle_time: 0.3 s", "settle_time: -1 s"));
     const io::InputError s = readError();
@@ -313,23 +320,24 @@ TEST_F(PatientMeasuredDataTest, WrittenDataReadBackTheSame) {
 namespace {
 
 const std::string kTestsManifest =
-    "format: bagsim-measured-data 1\n"                                                 // 1
-    "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/supine-on-array-coarse.yaml\n"    // 2
-    "protocol:\n"                                                                      // 3
-    "  kind: patient-on-array\n"                                                       // 4
-    "  settle_time: 0.3 s\n"                                                           // 5
-    "tests:\n"                                                                         // 6
-    "  - name: gas-4.0g\n"                                                             // 7
-    "    overrides: {array.gas_mass: 4.0 g}\n"                                         // 8
-    "    channels:\n"                                                                  // 9
-    "      mat: full.csv\n"                                                            // 10
-    "      bag_pressures: [{bag: 17, file: b17.csv}]\n"                                // 11
-    "  - name: gas-5.0g\n"                                                             // 12
-    "    overrides:\n"                                                                 // 13
-    "      array.gas_mass: 5.0 g\n"                                                    // 14
-    "      bag.body_tissue: {thickness: 10 mm, modulus: 50 kPa}\n"                     // 15
-    "    channels:\n"                                                                  // 16
-    "      tilt: tilt.csv\n";                                                          // 17
+    "format: bagsim-measured-data 1\n"  // 1
+    "scenario: " BAGSIM_SOURCE_DIR
+    "/scenarios/tests/supine-on-array-coarse.yaml\n"                // 2
+    "protocol:\n"                                                   // 3
+    "  kind: patient-on-array\n"                                    // 4
+    "  settle_time: 0.3 s\n"                                        // 5
+    "tests:\n"                                                      // 6
+    "  - name: gas-4.0g\n"                                          // 7
+    "    overrides: {array.gas_mass: 4.0 g}\n"                      // 8
+    "    channels:\n"                                               // 9
+    "      mat: full.csv\n"                                         // 10
+    "      bag_pressures: [{bag: 17, file: b17.csv}]\n"             // 11
+    "  - name: gas-5.0g\n"                                          // 12
+    "    overrides:\n"                                              // 13
+    "      array.gas_mass: 5.0 g\n"                                 // 14
+    "      bag.body_tissue: {thickness: 10 mm, modulus: 50 kPa}\n"  // 15
+    "    channels:\n"                                               // 16
+    "      tilt: tilt.csv\n";                                       // 17
 
 }  // namespace
 
@@ -379,9 +387,10 @@ TEST_F(PatientMeasuredDataTest, ChannelsAndTestsTogetherAreRefused) {
     const io::InputError e = readError();
     EXPECT_EQ(e.getKey(), "tests");
     EXPECT_EQ(e.getLine(), 12);
-    EXPECT_NE(e.getMessage().find("both 'channels' and 'tests'; valid: 'channels' for one record, or "
-                                  "'tests'"),
-              std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("both 'channels' and 'tests'; valid: 'channels' for one record, or "
+                            "'tests'"),
+        std::string::npos)
         << e.what();
     write("measured.yaml", kManifest.substr(0, kManifest.find("channels:")));
     const io::InputError n = readError();
@@ -406,10 +415,12 @@ TEST_F(PatientMeasuredDataTest, ATestNeedsANameOnceAndChannels) {
     EXPECT_EQ(bad.getLine(), 12);
     EXPECT_NE(bad.getMessage().find("is not a test's name; valid: 1-64 letters"), std::string::npos)
         << bad.what();
-    write("measured.yaml", replaceAll(kTestsManifest, "  - name: gas-5.0g\n", "  - nam: gas-5.0g\n"));
+    write("measured.yaml",
+          replaceAll(kTestsManifest, "  - name: gas-5.0g\n", "  - nam: gas-5.0g\n"));
     const io::InputError missing = readError();
     EXPECT_NE(std::string(missing.what()).find("tests[1]"), std::string::npos) << missing.what();
-    write("measured.yaml", replaceAll(kTestsManifest, "      tilt: tilt.csv\n", "      tilt: none.csv\n"));
+    write("measured.yaml",
+          replaceAll(kTestsManifest, "      tilt: tilt.csv\n", "      tilt: none.csv\n"));
     const io::InputError file = readError();
     EXPECT_EQ(file.getLine(), 17);
     EXPECT_EQ(file.getKey(), "tests[1].channels.tilt");
@@ -419,19 +430,22 @@ TEST_F(PatientMeasuredDataTest, ATestNeedsANameOnceAndChannels) {
 TEST_F(PatientMeasuredDataTest, ATestsOverridesAreCheckedAgainstTheScenario) {
     write("full.csv", makeFullMat({0.1, 0.2}));
     // A key the scenario does not have: at the test's key, with the scenario's own message.
-    write("measured.yaml", replaceAll(kTestsManifest, "array.gas_mass: 5.0 g", "array.gas_mas: 5.0 g"));
+    write("measured.yaml",
+          replaceAll(kTestsManifest, "array.gas_mass: 5.0 g", "array.gas_mas: 5.0 g"));
     const io::InputError typo = scenarioError();
     EXPECT_EQ(typo.getLine(), 14);
     EXPECT_EQ(typo.getKey(), "tests[1].overrides.array.gas_mas");
     EXPECT_NE(typo.getMessage().find("the test \"gas-5.0g\": "), std::string::npos) << typo.what();
     EXPECT_NE(typo.getMessage().find("did you mean 'gas_mass'"), std::string::npos) << typo.what();
     // A value out of its bounds.
-    write("measured.yaml", replaceAll(kTestsManifest, "{array.gas_mass: 4.0 g}", "{array.gas_mass: 4.0 m}"));
+    write("measured.yaml",
+          replaceAll(kTestsManifest, "{array.gas_mass: 4.0 g}", "{array.gas_mass: 4.0 m}"));
     const io::InputError unit = scenarioError();
     EXPECT_EQ(unit.getLine(), 8);
     EXPECT_EQ(unit.getKey(), "tests[0].overrides.array.gas_mass");
     // The protocol's keys are every test's.
-    write("measured.yaml", replaceAll(kTestsManifest, "array.gas_mass: 5.0 g", "run.settle_time: 1 s"));
+    write("measured.yaml",
+          replaceAll(kTestsManifest, "array.gas_mass: 5.0 g", "run.settle_time: 1 s"));
     const io::InputError proto = readError();
     EXPECT_EQ(proto.getLine(), 14);
     EXPECT_NE(proto.getMessage().find("a test cannot change 'run.settle_time'"), std::string::npos)
@@ -441,7 +455,8 @@ TEST_F(PatientMeasuredDataTest, ATestsOverridesAreCheckedAgainstTheScenario) {
     const io::InputError mat = scenarioError();
     EXPECT_EQ(mat.getLine(), 10);
     EXPECT_EQ(mat.getKey(), "tests[0].channels.mat");
-    EXPECT_NE(mat.getMessage().find("has 2 x 3 sensels, the scenario's mat 64 x 32"), std::string::npos);
+    EXPECT_NE(mat.getMessage().find("has 2 x 3 sensels, the scenario's mat 64 x 32"),
+              std::string::npos);
     write("measured.yaml", kTestsManifest);
     write("tilt.csv", "time_s,pelvis_tilt_deg\n0,0\n0.5,1\n");
     const io::InputError span = scenarioError();
@@ -453,22 +468,24 @@ namespace {
 
 // Three tests of two subjects (docs/measured-data.md#several-subjects).
 const std::string kSubjectsManifest =
-    "format: bagsim-measured-data 1\n"                                                 // 1
-    "scenario: " BAGSIM_SOURCE_DIR "/scenarios/tests/supine-on-array-coarse.yaml\n"    // 2
-    "protocol: {kind: patient-on-array, settle_time: 0.3 s}\n"                         // 3
-    "tests:\n"                                                                         // 4
-    "  - name: woman-4.5g\n"                                                           // 5
-    "    subject: small-woman\n"                                                       // 6
+    "format: bagsim-measured-data 1\n"  // 1
+    "scenario: " BAGSIM_SOURCE_DIR
+    "/scenarios/tests/supine-on-array-coarse.yaml\n"                                       // 2
+    "protocol: {kind: patient-on-array, settle_time: 0.3 s}\n"                             // 3
+    "tests:\n"                                                                             // 4
+    "  - name: woman-4.5g\n"                                                               // 5
+    "    subject: small-woman\n"                                                           // 6
     "    overrides: {patient.sex: female, patient.height: 1.55 m, patient.mass: 50 kg}\n"  // 7
-    "    channels: {tilt: tilt.csv}\n"                                                 // 8
-    "  - name: man-4.5g\n"                                                             // 9
-    "    subject: tall-man\n"                                                          // 10
-    "    overrides: {patient.height: 1.90 m, patient.mass: 110 kg}\n"                  // 11
-    "    channels: {tilt: tilt.csv}\n"                                                 // 12
-    "  - name: woman-5.0g\n"                                                           // 13
-    "    subject: small-woman\n"                                                       // 14
-    "    overrides: {patient.sex: female, patient.height: 1.55 m, patient.mass: 50 kg, array.gas_mass: 5.0 g}\n"  // 15
-    "    channels: {tilt: tilt.csv}\n";                                                // 16
+    "    channels: {tilt: tilt.csv}\n"                                                     // 8
+    "  - name: man-4.5g\n"                                                                 // 9
+    "    subject: tall-man\n"                                                              // 10
+    "    overrides: {patient.height: 1.90 m, patient.mass: 110 kg}\n"                      // 11
+    "    channels: {tilt: tilt.csv}\n"                                                     // 12
+    "  - name: woman-5.0g\n"                                                               // 13
+    "    subject: small-woman\n"                                                           // 14
+    "    overrides: {patient.sex: female, patient.height: 1.55 m, patient.mass: 50 kg, "
+    "array.gas_mass: 5.0 g}\n"           // 15
+    "    channels: {tilt: tilt.csv}\n";  // 16
 
 }  // namespace
 
@@ -511,22 +528,26 @@ TEST_F(PatientMeasuredDataTest, ATestWithoutASubjectWhereAnotherNamesOneIsLocate
     EXPECT_NE(e.getWhere().find("measured.yaml"), std::string::npos) << e.what();
     EXPECT_EQ(e.getLine(), 9);  // the test's entry: its key is absent
     EXPECT_EQ(e.getKey(), "tests[1].subject");
-    EXPECT_NE(e.getMessage().find("the test \"man-4.5g\" names no subject, the test \"woman-4.5g\" "
-                                  "(line 6) names \"small-woman\"; valid: a subject for every test"),
-              std::string::npos)
+    EXPECT_NE(
+        e.getMessage().find("the test \"man-4.5g\" names no subject, the test \"woman-4.5g\" "
+                            "(line 6) names \"small-woman\"; valid: a subject for every test"),
+        std::string::npos)
         << e.what();
 }
 
 TEST_F(PatientMeasuredDataTest, SubjectsNeedTwoAndPlainNames) {
-    write("measured.yaml", replaceAll(kSubjectsManifest, "subject: tall-man", "subject: small-woman"));
+    write("measured.yaml",
+          replaceAll(kSubjectsManifest, "subject: tall-man", "subject: small-woman"));
     const io::InputError one = readError();
     EXPECT_EQ(one.getLine(), 6);
     EXPECT_EQ(one.getKey(), "tests[0].subject");
-    EXPECT_NE(one.getMessage().find("every test names the subject \"small-woman\"; valid: at least two "
-                                    "subjects"),
-              std::string::npos)
+    EXPECT_NE(
+        one.getMessage().find("every test names the subject \"small-woman\"; valid: at least two "
+                              "subjects"),
+        std::string::npos)
         << one.what();
-    write("measured.yaml", replaceAll(kSubjectsManifest, "subject: tall-man", "subject: tall man/2"));
+    write("measured.yaml",
+          replaceAll(kSubjectsManifest, "subject: tall-man", "subject: tall man/2"));
     const io::InputError bad = readError();
     EXPECT_EQ(bad.getLine(), 10);
     EXPECT_EQ(bad.getKey(), "tests[1].subject");

@@ -181,7 +181,8 @@ TEST(PatientScenario, TheSupportsFrictionLawIsRegularisedByDefaultAndCanBeStickS
              {"  friction_law: sticky\n", "support.friction_law", 6},
              {"  slip_velocity: 5 mm/s\n  friction_law: stick-slip\n", "support.slip_velocity", 6},
              {"  stick_distance: 1 mm\n", "support.stick_distance", 6},
-             {"  friction_law: stick-slip\n  stick_distance: 0 mm\n", "support.stick_distance", 7}}) {
+             {"  friction_law: stick-slip\n  stick_distance: 0 mm\n", "support.stick_distance",
+              7}}) {
         try {
             read(b.lines);
             ADD_FAILURE() << "accepted:\n" << b.lines;

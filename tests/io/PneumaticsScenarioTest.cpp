@@ -18,21 +18,21 @@ using io::test::readError;
 namespace {
 
 const std::string kBase =
-    "kind: patient-on-array\n"                                                    // 1
+    "kind: patient-on-array\n"                                                   // 1
     "patient: {sex: male, height: 1.75 m, mass: 75 kg, position: [0 m, 0 m]}\n"  // 2
-    "bag: {mesh_size: 30 mm}\n"                                                   // 3
-    "array:\n"                                                                    // 4
-    "  rows: 6\n"                                                                 // 5
-    "  columns: 7\n"                                                              // 6
-    "  row_pitch: 360 mm\n"                                                       // 7
-    "  column_pitch: 105 mm\n"                                                    // 8
-    "  centre: [-30 mm, 0 mm]\n"                                                  // 9
-    "  orientation: [along, along-flipped]\n"                                     // 10
-    "  gas_mass: 4.5 g\n"                                                         // 11
-    "  groups:\n"                                                                 // 12
-    "    - {name: left, columns: [0, 1, 2]}\n"                                    // 13
-    "    - {name: right, columns: [4, 5, 6]}\n"                                   // 14
-    "run: {settle_time: 1 s, duration: 10 s}\n";                                  // 15
+    "bag: {mesh_size: 30 mm}\n"                                                  // 3
+    "array:\n"                                                                   // 4
+    "  rows: 6\n"                                                                // 5
+    "  columns: 7\n"                                                             // 6
+    "  row_pitch: 360 mm\n"                                                      // 7
+    "  column_pitch: 105 mm\n"                                                   // 8
+    "  centre: [-30 mm, 0 mm]\n"                                                 // 9
+    "  orientation: [along, along-flipped]\n"                                    // 10
+    "  gas_mass: 4.5 g\n"                                                        // 11
+    "  groups:\n"                                                                // 12
+    "    - {name: left, columns: [0, 1, 2]}\n"                                   // 13
+    "    - {name: right, columns: [4, 5, 6]}\n"                                  // 14
+    "run: {settle_time: 1 s, duration: 10 s}\n";                                 // 15
 
 }  // namespace
 
@@ -71,9 +71,10 @@ TEST(PneumaticsScenario, ReadsTheCoarsePneumaticTurnAndTheDefaults) {
 
     // A channel of its own bags; one bag alone has its valves on the bag.
     const io::PatientOnArrayScenario c =
-        read(kBase + "pneumatics:\n  channels:\n    - {bags: [3]}\n    - {bags: [10, 17], "
-                     "name: middle}\n  manifold: {volume: 0.1 L, thermal: heat-exchange, "
-                     "heat_transfer: 10, wall_area: 100 cm^2}\n");
+        read(kBase +
+             "pneumatics:\n  channels:\n    - {bags: [3]}\n    - {bags: [10, 17], "
+             "name: middle}\n  manifold: {volume: 0.1 L, thermal: heat-exchange, "
+             "heat_transfer: 10, wall_area: 100 cm^2}\n");
     EXPECT_EQ(c.pneumatics.channels[0].name, "bags 3");
     EXPECT_DOUBLE_EQ(c.pneumatics.channels[0].lineVolume, 0.0);
     EXPECT_EQ(c.pneumatics.channels[1].name, "middle");
@@ -87,32 +88,31 @@ TEST(PneumaticsScenario, ErrorsAreLocatedAtTheirKeys) {
     EXPECT_EQ(gas.getKey(), "gas");
     EXPECT_NE(gas.getMessage().find("remove the gas list"), std::string::npos) << gas.what();
 
-    const io::InputError unit = readError(
-        kBase + "pneumatics:\n  valves:\n    vent: {conductance: 0.3 L/s}\n");
+    const io::InputError unit =
+        readError(kBase + "pneumatics:\n  valves:\n    vent: {conductance: 0.3 L/s}\n");
     EXPECT_EQ(unit.getLine(), 18);
     EXPECT_EQ(unit.getKey(), "pneumatics.valves.vent.conductance");
     EXPECT_NE(unit.getMessage().find("dm^3/(s bar)"), std::string::npos) << unit.what();
 
-    const io::InputError ratio = readError(
-        kBase + "pneumatics:\n  valves:\n    inflate: {critical_ratio: 1.2}\n");
+    const io::InputError ratio =
+        readError(kBase + "pneumatics:\n  valves:\n    inflate: {critical_ratio: 1.2}\n");
     EXPECT_EQ(ratio.getKey(), "pneumatics.valves.inflate.critical_ratio");
 
-    const io::InputError curve = readError(
-        kBase + "pneumatics:\n  pump: {curve: [[0 kPa, 0.1 g/s], [50 kPa, 0.2 g/s]]}\n");
+    const io::InputError curve =
+        readError(kBase + "pneumatics:\n  pump: {curve: [[0 kPa, 0.1 g/s], [50 kPa, 0.2 g/s]]}\n");
     EXPECT_EQ(curve.getKey(), "pneumatics.pump.curve[1][1]");  // at the point that rises
 
     const io::InputError misspelt = readError(kBase + "pneumatics:\n  manifodl: {}\n");
     EXPECT_NE(misspelt.getMessage().find("did you mean 'manifold'"), std::string::npos)
         << misspelt.what();
 
-    const io::InputError twice = readError(
-        kBase + "pneumatics:\n  channels:\n    - {group: left}\n    - {bags: [1]}\n");
+    const io::InputError twice =
+        readError(kBase + "pneumatics:\n  channels:\n    - {group: left}\n    - {bags: [1]}\n");
     EXPECT_EQ(twice.getLine(), 19);
     EXPECT_NE(twice.getMessage().find("bag 1 is already in channel 'left'"), std::string::npos)
         << twice.what();
 
-    const io::InputError noPneumatics =
-        readError(kBase + "control: {kind: turn, tilt: 30 deg}\n");
+    const io::InputError noPneumatics = readError(kBase + "control: {kind: turn, tilt: 30 deg}\n");
     EXPECT_EQ(noPneumatics.getKey(), "control");
 
     const io::InputError channel = readError(
@@ -120,31 +120,34 @@ TEST(PneumaticsScenario, ErrorsAreLocatedAtTheirKeys) {
     EXPECT_EQ(channel.getKey(), "control.inflate[0]");
     EXPECT_NE(channel.getMessage().find("right"), std::string::npos) << channel.what();
 
-    const io::InputError stiffness = readError(
-        kBase + "pneumatics: {}\ncontrol:\n  kind: target-mass\n  targets:\n"
-                "    - {channel: left, stiffness: 2 N/mm}\n");
+    const io::InputError stiffness =
+        readError(kBase +
+                  "pneumatics: {}\ncontrol:\n  kind: target-mass\n  targets:\n"
+                  "    - {channel: left, stiffness: 2 N/mm}\n");
     EXPECT_EQ(stiffness.getKey(), "control.targets[0].stiffness");
     EXPECT_NE(stiffness.getMessage().find("k_of_m"), std::string::npos) << stiffness.what();
 
-    const io::InputError outside = readError(
-        kBase + "pneumatics: {}\ncontrol:\n  kind: target-mass\n"
-                "  k_of_m: [[3 g, 0.9 N/mm], [4.5 g, 3.2 N/mm]]\n  targets:\n"
-                "    - {channel: left, stiffness: 5 N/mm}\n");
+    const io::InputError outside =
+        readError(kBase +
+                  "pneumatics: {}\ncontrol:\n  kind: target-mass\n"
+                  "  k_of_m: [[3 g, 0.9 N/mm], [4.5 g, 3.2 N/mm]]\n  targets:\n"
+                  "    - {channel: left, stiffness: 5 N/mm}\n");
     EXPECT_EQ(outside.getKey(), "control.targets[0].stiffness");
-    EXPECT_NE(outside.getMessage().find("outside the table"), std::string::npos)
-        << outside.what();
+    EXPECT_NE(outside.getMessage().find("outside the table"), std::string::npos) << outside.what();
 
-    const io::InputError period = readError(
-        kBase + "pneumatics: {}\ncontrol:\n  kind: schedule\n  period: 10 s\n  commands:\n"
-                "    - {at: 12 s, channel: left, inflate: open}\n");
+    const io::InputError period =
+        readError(kBase +
+                  "pneumatics: {}\ncontrol:\n  kind: schedule\n  period: 10 s\n  commands:\n"
+                  "    - {at: 12 s, channel: left, inflate: open}\n");
     EXPECT_EQ(period.getKey(), "control.commands[0].at");
 }
 
 TEST(PneumaticsScenario, ATargetMassFromAStiffnessIsInterpolatedInTheTable) {
-    const io::PatientOnArrayScenario sc = read(
-        kBase + "pneumatics: {}\ncontrol:\n  kind: target-mass\n"
-                "  k_of_m: [[3 g, 1 N/mm], [4 g, 3 N/mm]]\n  targets:\n"
-                "    - {channel: left, stiffness: 2 N/mm}\n    - {channel: right, mass: 5 g}\n");
+    const io::PatientOnArrayScenario sc =
+        read(kBase +
+             "pneumatics: {}\ncontrol:\n  kind: target-mass\n"
+             "  k_of_m: [[3 g, 1 N/mm], [4 g, 3 N/mm]]\n  targets:\n"
+             "    - {channel: left, stiffness: 2 N/mm}\n    - {channel: right, mass: 5 g}\n");
     EXPECT_EQ(sc.controlKind, "target-mass");
     ASSERT_EQ(sc.controlText.size(), 2u);
     EXPECT_NE(sc.controlText[0].find("'left' to 3.5 g a bag"), std::string::npos)
@@ -189,7 +192,8 @@ TEST(PneumaticsScenario, TheZonesPressureIsStatedOnceOrSetFromHisBody) {
     const io::PatientOnArrayScenario sc = read(kBase + control);
     EXPECT_EQ(sc.controlKind, "target-pressure");
     ASSERT_EQ(sc.controlText.size(), 2u);
-    EXPECT_EQ(sc.controlText[0], "'left' to 4 kPa gauge (band 0.3 kPa) from his body (75 kg, 1.75 m)");
+    EXPECT_EQ(sc.controlText[0],
+              "'left' to 4 kPa gauge (band 0.3 kPa) from his body (75 kg, 1.75 m)");
     EXPECT_EQ(sc.controlText[1].substr(0, 20), "'right' to 4 kPa gau");
     EXPECT_EQ(sc.fillFromBody, 0.0);  // the array is filled by gas mass here
 
@@ -198,8 +202,9 @@ TEST(PneumaticsScenario, TheZonesPressureIsStatedOnceOrSetFromHisBody) {
     small.replace(small.find("  gas_mass: 4.5 g\n"), 18, "  pressure: from-body\n");
     const io::PatientOnArrayScenario s2 = read(small);
     EXPECT_NEAR(s2.fillFromBody, 3582.4, 0.1);
-    EXPECT_NE(s2.controlText[0].find("to 3.58236 kPa gauge (band 0.3 kPa) from his body (55 kg, 1.6 m)"),
-              std::string::npos)
+    EXPECT_NE(
+        s2.controlText[0].find("to 3.58236 kPa gauge (band 0.3 kPa) from his body (55 kg, 1.6 m)"),
+        std::string::npos)
         << s2.controlText[0];
     // The stated pressure fills the bags as a stated 3.58236 kPa does.
     std::string stated = small;
@@ -215,13 +220,15 @@ TEST(PneumaticsScenario, TheZonesPressureIsStatedOnceOrSetFromHisBody) {
         EXPECT_EQ(e.getKey(), key) << e.what();
         EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
     };
-    refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure, pressure: 4 kPa, "
-                    "targets: [{channel: left, pressure: 4 kPa}]}\n",
+    refused(kBase +
+                "pneumatics: {}\ncontrol: {kind: target-pressure, pressure: 4 kPa, "
+                "targets: [{channel: left, pressure: 4 kPa}]}\n",
             "control.pressure", "and targets both set the channels' pressures");
     refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure}\n", "control.targets",
             "missing: targets");
-    refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure, band: 1 kPa, "
-                    "targets: [{channel: left, pressure: 4 kPa}]}\n",
+    refused(kBase +
+                "pneumatics: {}\ncontrol: {kind: target-pressure, band: 1 kPa, "
+                "targets: [{channel: left, pressure: 4 kPa}]}\n",
             "control.band", "goes with control.pressure");
     refused(kBase + "pneumatics: {}\ncontrol: {kind: target-pressure, pressure: from-bdy}\n",
             "control.pressure", "; or from-body (the pressure set from the patient's mass");
@@ -231,8 +238,9 @@ TEST(PneumaticsScenario, ATurnHoldsTheZonesAtAPressureWhenOneIsGiven) {
     // control.pressure on a turn: the zones held at it (from-body: 4 kPa for this man) within
     // pressure_band (0.3 kPa by default); the run header says so. Refused: the mass band of a
     // sealed turn beside it, a pressure_band alone, a pressure outside 0.2-100 kPa.
-    const std::string turn = "pneumatics: {}\ncontrol: {kind: turn, tilt: 12 deg, inflate: [right], "
-                             "vent: [left]";
+    const std::string turn =
+        "pneumatics: {}\ncontrol: {kind: turn, tilt: 12 deg, inflate: [right], "
+        "vent: [left]";
     const io::PatientOnArrayScenario sc = read(kBase + turn + ", pressure: from-body}\n");
     ASSERT_EQ(sc.controlText.size(), 2u);
     EXPECT_NE(sc.controlText[0].find("then back to the zones' setpoint"), std::string::npos)

@@ -75,7 +75,8 @@ TEST(ReducedBagFile, AWrittenCalibrationReadsBackTheSame) {
     EXPECT_EQ(r->panelSink, 0.0);  // no record: the panel coupling off
     // With the panel coupling, its record comes back to the digit written.
     cosim::ReducedBagCalibration coupled = small();
-    coupled.panelSink = 1.057612147e-05, coupled.panelLift = 6.080769544e-06, coupled.panelBlend = 0.02;
+    coupled.panelSink = 1.057612147e-05, coupled.panelLift = 6.080769544e-06,
+    coupled.panelBlend = 0.02;
     io::writeReducedBagCalibration(path, coupled);
     const auto rc = io::readReducedBagCalibration(path);
     EXPECT_DOUBLE_EQ(rc->panelSink, 1.057612147e-05);
@@ -145,8 +146,8 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
         t.replace(t.find("MODEL"), 5, "reduced");
         t.replace(t.find("CAL"), 3, ", calibration: " + shipped);
         t += "coupling: {scheme: implicit, body_accuracy: 1e-6}\n";
-        const io::PatientOnArrayScenario own = io::readPatientOnArrayScenario(io::ScenarioFile::parse(
-            t, std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/r.yaml"));
+        const io::PatientOnArrayScenario own = io::readPatientOnArrayScenario(
+            io::ScenarioFile::parse(t, std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/r.yaml"));
         EXPECT_EQ(own.options.coupling.scheme, cosim::Scheme::Implicit);
         EXPECT_DOUBLE_EQ(own.options.integrator.accuracy, 1e-6);
     }
@@ -176,21 +177,22 @@ TEST(ReducedBagFile, TheScenarioKeysChooseTheModelAndCheckTheCalibration) {
     EXPECT_DOUBLE_EQ(fr.options.reducedFriction.stickDistance, 8e-3);
     EXPECT_EQ(fr.options.coupling.scheme, cosim::Scheme::Tangent);
     EXPECT_NO_THROW(fr.options.validate());
-    EXPECT_DOUBLE_EQ(
-        readWith("30 mm", "reduced", shipped + ", body_friction: 0.4").options.reducedFriction.stickDistance,
-        5e-3);
+    EXPECT_DOUBLE_EQ(readWith("30 mm", "reduced", shipped + ", body_friction: 0.4")
+                         .options.reducedFriction.stickDistance,
+                     5e-3);
     const io::InputError e6 = expectInputError([] {
         std::string t = kScenario;
         t.replace(t.find("MESH"), 4, "30 mm");
         t.replace(t.find("MODEL"), 5, "finite-element");
         t.replace(t.find("CAL"), 3, ", stick_distance: 8 mm");
-        io::readPatientOnArrayScenario(io::ScenarioFile::parse(
-            t, std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/r.yaml"));
+        io::readPatientOnArrayScenario(
+            io::ScenarioFile::parse(t, std::string(BAGSIM_SOURCE_DIR) + "/scenarios/tests/r.yaml"));
     });
     EXPECT_EQ(e6.getKey(), "bag.stick_distance");
     EXPECT_NE(std::string(e6.what()).find("model: reduced"), std::string::npos) << e6.what();
-    const io::InputError e6b = expectInputError(
-        [&] { readWith("30 mm", "reduced", shipped + ", body_friction: 0.4, stick_distance: 90 mm"); });
+    const io::InputError e6b = expectInputError([&] {
+        readWith("30 mm", "reduced", shipped + ", body_friction: 0.4, stick_distance: 90 mm");
+    });
     EXPECT_EQ(e6b.getKey(), "bag.stick_distance");
     const io::InputError e6c = expectInputError([&] {
         readWith("30 mm", "reduced", shipped + ", body_friction: 0.4, friction_law: regularised");

@@ -180,7 +180,8 @@ TEST(ReportBrowser, ChromiumRendersEveryImageOfAStudyReportOffline) {
         << "Chromium is not installed, and this test opens report.html in a real browser. "
            "Install it with `sudo apt-get install chromium` (Debian; scripts/setup --tests "
            "installs it), or set BAGSIM_CHROMIUM to a Chromium or Chrome binary.";
-    const fs::path dir = fs::path(BAGSIM_BINARY_DIR) / "test-output" / "io" / "report-browser-study";
+    const fs::path dir =
+        fs::path(BAGSIM_BINARY_DIR) / "test-output" / "io" / "report-browser-study";
     fs::create_directories(dir.parent_path());
     io::test::writeSyntheticMapStudy(dir, true);
     io::writeStudyReport(dir, dir / "report.html");

@@ -422,10 +422,11 @@ TEST(ResultsWriter, CurveStoppedByNoConvergenceMarksTheRunPartial) {
     EXPECT_TRUE(out.isIncomplete());
     const std::string marker = readText(dir / "INCOMPLETE");
     EXPECT_NE(marker.find("status: partial"), std::string::npos) << marker;
-    EXPECT_NE(marker.find("1 of 2 curves stopped on a numerical failure or outside the model's envelope "
-                          "(2 g: no convergence "
-                          "loading at block travel 9 mm)"),
-              std::string::npos)
+    EXPECT_NE(
+        marker.find("1 of 2 curves stopped on a numerical failure or outside the model's envelope "
+                    "(2 g: no convergence "
+                    "loading at block travel 9 mm)"),
+        std::string::npos)
         << marker;
     const auto st = readLines(dir / "stiffness.csv");
     ASSERT_EQ(st.size(), 3u);

@@ -23,7 +23,8 @@ fs::path makeRun(const std::string& name, const std::string& tilt, const std::st
     fs::create_directories(d);
     std::ofstream(d / "tilt.csv") << "time_s,pelvis_tilt_deg,thorax_tilt_deg\n" << tilt;
     std::ofstream(d / "regions.csv")
-        << "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg\n" << regions;
+        << "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N,patch_peak_mmHg\n"
+        << regions;
     return d;
 }
 
@@ -121,8 +122,8 @@ TEST(RunComparison, APartialComparisonIsNotJudgedAsMeetingTheTargets) {
     EXPECT_FALSE(io::compareRuns(ref, cut, io::RunComparisonOptions()).meetsTargets());
     // A run that loads no region at 0.2 s (lifted off): its tilt row is there, its regions.csv
     // has none; the reference's loaded regions count -100 % then, not skipped.
-    const fs::path lifted = makeRun("lifted", kRefTilt,
-                                    "0.1000,heel_r,0,0,0,20.0,100.0\n0.1000,head,0,0,0,30.0,50.0\n");
+    const fs::path lifted = makeRun(
+        "lifted", kRefTilt, "0.1000,heel_r,0,0,0,20.0,100.0\n0.1000,head,0,0,0,30.0,50.0\n");
     const io::RunComparison d = io::compareRuns(ref, lifted, io::RunComparisonOptions());
     ASSERT_EQ(d.moments.size(), 2u);
     EXPECT_EQ(d.moments[1].regions, 2);
@@ -158,8 +159,8 @@ TEST(RunComparison, BadFoldersAreNamedWithFileLineAndColumn) {
     // regions.csv of a run before the patch peak was written.
     const fs::path old = makeRun("old", kRefTilt, "");
     std::ofstream(old / "regions.csv") << "time_s,region,ppi_mmHg,mean_mmHg,area_cm2,force_N\n";
-    io::InputError e = io::test::expectInputError(
-        [&] { io::compareRuns(ref, old, io::RunComparisonOptions()); });
+    io::InputError e =
+        io::test::expectInputError([&] { io::compareRuns(ref, old, io::RunComparisonOptions()); });
     EXPECT_NE(e.getWhere().find("regions.csv"), std::string::npos);
     EXPECT_NE(e.getMessage().find("no column 'patch_peak_mmHg'"), std::string::npos)
         << e.getMessage();
@@ -170,7 +171,8 @@ TEST(RunComparison, BadFoldersAreNamedWithFileLineAndColumn) {
     EXPECT_EQ(e.getLine(), 3);
     // No row in common.
     const fs::path later = makeRun("later", "5.0000,0,0\n", kRefRegions);
-    e = io::test::expectInputError([&] { io::compareRuns(ref, later, io::RunComparisonOptions()); });
+    e = io::test::expectInputError(
+        [&] { io::compareRuns(ref, later, io::RunComparisonOptions()); });
     EXPECT_NE(e.getMessage().find("no row at a time of"), std::string::npos) << e.getMessage();
     // Not a folder.
     e = io::test::expectInputError(

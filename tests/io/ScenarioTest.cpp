@@ -201,7 +201,8 @@ TEST(Scenario, StemIsFileNameWithoutExtension) {
 // A copy is its own scenario: the diagnosis copies the data's scenario for each co-simulation
 // and sets its keys (half the macro step, a trial gas mass); the original must not take them.
 TEST(Scenario, OverridesOfACopyLeaveTheOriginal) {
-    const ScenarioFile original = ScenarioFile::parse("kind: x\ncoupling:\n  macro_step: 10 ms\n", "s.yaml");
+    const ScenarioFile original =
+        ScenarioFile::parse("kind: x\ncoupling:\n  macro_step: 10 ms\n", "s.yaml");
     ScenarioFile copy = original;
     copy.applyOverride("coupling.macro_step", "5 ms");
     ScenarioFile assigned;

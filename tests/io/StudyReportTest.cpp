@@ -35,7 +35,8 @@ std::string section(const std::string& html, const std::string& open, const std:
 }
 
 std::string errorOf(const fs::path& dir) {
-    return io::test::reportErrorOf([](const fs::path& d) { return io::formatStudyReportHtml(d); }, dir);
+    return io::test::reportErrorOf([](const fs::path& d) { return io::formatStudyReportHtml(d); },
+                                   dir);
 }
 
 }  // namespace
@@ -59,8 +60,9 @@ TEST(StudyReport, AMapStudyShowsItsTableCurvesMapsAndLoadDisplacementCurves) {
     EXPECT_EQ(count(cases, "&#10008; failed"), 1);
     EXPECT_NE(cases.find("<th>test.gas_masses [g]</th>"), std::string::npos);
     EXPECT_NE(cases.find("<td>[1, 1]</td>"), std::string::npos);
-    EXPECT_NE(cases.find(io::test::formatSyntheticNumber(io::test::getSyntheticMapStiffness(0, 3.5))),
-              std::string::npos);
+    EXPECT_NE(
+        cases.find(io::test::formatSyntheticNumber(io::test::getSyntheticMapStiffness(0, 3.5))),
+        std::string::npos);
     // The failed case is named with its reason above the table.
     const std::string problems = section(html, "<table id='problem-cases'>", "</table>");
     EXPECT_EQ(count(problems, "<tr>"), 2);
@@ -77,8 +79,10 @@ TEST(StudyReport, AMapStudyShowsItsTableCurvesMapsAndLoadDisplacementCurves) {
     // Maps: per output, one per gas mass, each with its colour scale; the value in each cell.
     EXPECT_EQ(count(html, "class='map'"), 6);
     EXPECT_EQ(count(html, "class='colourbar'"), 6);
-    const std::string map = section(html, "<svg xmlns='http://www.w3.org/2000/svg' role='img' "
-                                          "class='map'", "</svg>");
+    const std::string map = section(html,
+                                    "<svg xmlns='http://www.w3.org/2000/svg' role='img' "
+                                    "class='map'",
+                                    "</svg>");
     EXPECT_NE(map.find(">stiffness [N/mm]</text>"), std::string::npos);
     EXPECT_NE(map.find(">3.617</text>"), std::string::npos) << map;  // 3.553 x 1.018
     EXPECT_NE(map.find(">3.553</text>"), std::string::npos);
@@ -105,8 +109,9 @@ TEST(StudyReport, AnIncompleteStudySaysWhichCasesAreMissingAtTheTop) {
     const fs::path dir = makeDir("study-report-incomplete");
     io::test::writeSyntheticMapStudy(dir, true);
     const std::string html = io::formatStudyReportHtml(dir);
-    const size_t banner = html.find("<b>INCOMPLETE STUDY</b>: 1 of 12 cases have no result "
-                                    "(1 not run, 0 interrupted)");
+    const size_t banner = html.find(
+        "<b>INCOMPLETE STUDY</b>: 1 of 12 cases have no result "
+        "(1 not run, 0 interrupted)");
     ASSERT_NE(banner, std::string::npos);
     EXPECT_LT(banner, html.find("<h2>Study"));
     EXPECT_NE(html.find("bagsim study scenarios/array-stiffness-map.yaml --out " + dir.string()),
@@ -184,18 +189,31 @@ TEST(StudyReport, AStiffnessPerGasMassWithOneMassPerCaseIsDrawnAsOneOutput) {
     // As scenarios/seed-mass-study.yaml: each case fills the one column of its own gas mass.
     const fs::path dir = makeDir("study-report-per");
     io::StudyTable t;
-    t.header = {"case", "key", "test.gas_masses [g]", "contact.penalty [Pa/m]", "status", "reason",
-                "seconds", "stiffness_N_per_mm[gas_mass_g=3.5]",
-                "stiffness_N_per_mm[gas_mass_g=3]", "stiffness_N_per_mm[gas_mass_g=2.5]"};
+    t.header = {"case",
+                "key",
+                "test.gas_masses [g]",
+                "contact.penalty [Pa/m]",
+                "status",
+                "reason",
+                "seconds",
+                "stiffness_N_per_mm[gas_mass_g=3.5]",
+                "stiffness_N_per_mm[gas_mass_g=3]",
+                "stiffness_N_per_mm[gas_mass_g=2.5]"};
     int n = 0;
     const double masses[] = {3.5, 3.0, 2.5};
     for (int m = 0; m < 3; ++m)
         for (double penalty : {1e7, 1e8}) {
             ++n;
-            std::vector<std::string> row = {std::to_string(n), "k" + std::to_string(n),
+            std::vector<std::string> row = {std::to_string(n),
+                                            "k" + std::to_string(n),
                                             io::test::formatSyntheticNumber(masses[m]),
-                                            io::test::formatSyntheticNumber(penalty), "ok", "",
-                                            "5.0", "", "", ""};
+                                            io::test::formatSyntheticNumber(penalty),
+                                            "ok",
+                                            "",
+                                            "5.0",
+                                            "",
+                                            "",
+                                            ""};
             row[size_t(7 + m)] = io::test::formatSyntheticNumber(1.0 + m + penalty * 1e-8);
             t.rows.push_back(row);
         }

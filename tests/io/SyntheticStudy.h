@@ -55,25 +55,32 @@ inline void writeSyntheticStudyFiles(const std::filesystem::path& dir, StudyTabl
                                      const std::string& studyFile) {
     namespace fs = std::filesystem;
     fs::create_directories(dir / "cases");
-    std::ofstream(dir / ".bagsim-study") << "A bagsim study folder\nlast study: " << studyFile
-                                         << "\n";
+    std::ofstream(dir / ".bagsim-study")
+        << "A bagsim study folder\nlast study: " << studyFile << "\n";
     t.studyFile = studyFile;
     t.baseText = "kind: seed-load-test\n";
     t.commandLine = "bagsim study " + studyFile + " --out " + dir.string();
     writeStudyCsv(t, (dir / "study.csv").string());
     writeStudyH5(t, (dir / "study.h5").string());
     if (t.status != "complete")
-        std::ofstream(dir / "INCOMPLETE") << "This study's table is incomplete: 1 of "
-                                          << t.rows.size() << " cases have not run.\nstatus: "
-                                          << t.status << "\n";
+        std::ofstream(dir / "INCOMPLETE")
+            << "This study's table is incomplete: 1 of " << t.rows.size()
+            << " cases have not run.\nstatus: " << t.status << "\n";
 }
 
 /// The map study (12 cases). Returns the folder's table as written.
 inline StudyTable writeSyntheticMapStudy(const std::filesystem::path& dir, bool incomplete) {
     StudyTable t;
-    t.header = {"case",   "key",    "airbag.neighbours.pressed", "test.gas_masses [g]",
-                "status", "reason", "seconds",                   "stiffness_N_per_mm",
-                "r2",     "pressure_kPa"};
+    t.header = {"case",
+                "key",
+                "airbag.neighbours.pressed",
+                "test.gas_masses [g]",
+                "status",
+                "reason",
+                "seconds",
+                "stiffness_N_per_mm",
+                "r2",
+                "pressure_kPa"};
     t.studyText =
         "kind: study\ndescription: stiffness map of a synthetic 3 x 3 block\n"
         "scenario: seed-load-test.yaml\nset:\n  airbag.neighbours.layout: block3x3\n"
@@ -92,8 +99,7 @@ inline StudyTable writeSyntheticMapStudy(const std::filesystem::path& dir, bool 
             std::snprintf(key, sizeof key, "%016x", 0xa000 + n);
             const std::string pos = "[" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + "]";
             const double k = getSyntheticMapStiffness(p[1], m);
-            std::vector<std::string> row = {std::to_string(n), key, pos,
-                                            formatSyntheticNumber(m)};
+            std::vector<std::string> row = {std::to_string(n), key, pos, formatSyntheticNumber(m)};
             if (n == 12) {
                 row.insert(row.end(), {"failed",
                                        "numerical failure: no convergence while inflating the "
@@ -102,10 +108,9 @@ inline StudyTable writeSyntheticMapStudy(const std::filesystem::path& dir, bool 
             } else if (n == 11 && incomplete) {
                 row.insert(row.end(), {"not-run", "", "", "", "", ""});
             } else {
-                row.insert(row.end(),
-                           {"ok", "", "12.5", formatSyntheticNumber(k), "0.9991",
-                            formatSyntheticNumber(m > 3.25 ? (p[1] ? 19.09 : 19.72)
-                                                           : (p[1] ? 5.35 : 5.67))});
+                row.insert(row.end(), {"ok", "", "12.5", formatSyntheticNumber(k), "0.9991",
+                                       formatSyntheticNumber(m > 3.25 ? (p[1] ? 19.09 : 19.72)
+                                                                      : (p[1] ? 5.35 : 5.67))});
                 writeSyntheticCurve(dir / "cases" / key, m, k);
             }
             t.rows.push_back(row);
@@ -118,13 +123,21 @@ inline StudyTable writeSyntheticMapStudy(const std::filesystem::path& dir, bool 
 /// The coupling study (12 cases, all ok).
 inline StudyTable writeSyntheticCouplingStudy(const std::filesystem::path& dir) {
     StudyTable t;
-    t.header = {"case",   "key",     "airbag.neighbours.layout", "test.gas_masses [g]",
-                "airbag.neighbours.gas_mass [g]", "status", "reason", "seconds",
-                "stiffness_N_per_mm", "r2"};
-    t.studyText = "kind: study\ndescription: synthetic array coupling\nscenario: "
-                  "seed-load-test.yaml\nparameters:\n  grid:\n    airbag.neighbours.layout: "
-                  "[none, pair, row3]\n    test.gas_masses: [[3.5 g], [3.0 g]]\n"
-                  "    airbag.neighbours.gas_mass: [3.5 g, 3.0 g]\n";
+    t.header = {"case",
+                "key",
+                "airbag.neighbours.layout",
+                "test.gas_masses [g]",
+                "airbag.neighbours.gas_mass [g]",
+                "status",
+                "reason",
+                "seconds",
+                "stiffness_N_per_mm",
+                "r2"};
+    t.studyText =
+        "kind: study\ndescription: synthetic array coupling\nscenario: "
+        "seed-load-test.yaml\nparameters:\n  grid:\n    airbag.neighbours.layout: "
+        "[none, pair, row3]\n    test.gas_masses: [[3.5 g], [3.0 g]]\n"
+        "    airbag.neighbours.gas_mass: [3.5 g, 3.0 g]\n";
     std::filesystem::remove_all(dir);
     int n = 0;
     for (const char* layout : {"none", "pair", "row3"})
@@ -133,11 +146,11 @@ inline StudyTable writeSyntheticCouplingStudy(const std::filesystem::path& dir) 
                 ++n;
                 char key[17];
                 std::snprintf(key, sizeof key, "%016x", 0xc000 + n);
-                t.rows.push_back({std::to_string(n), key, layout, formatSyntheticNumber(own),
-                                  formatSyntheticNumber(nb), "ok", "", "20.0",
-                                  formatSyntheticNumber(
-                                      getSyntheticCouplingStiffness(layout, own, nb)),
-                                  "0.999"});
+                t.rows.push_back(
+                    {std::to_string(n), key, layout, formatSyntheticNumber(own),
+                     formatSyntheticNumber(nb), "ok", "", "20.0",
+                     formatSyntheticNumber(getSyntheticCouplingStiffness(layout, own, nb)),
+                     "0.999"});
             }
     t.status = "complete";
     writeSyntheticStudyFiles(dir, t, "scenarios/array-coupling-study.yaml");

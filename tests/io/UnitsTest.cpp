@@ -53,12 +53,11 @@ TEST(Units, ConvertsTheBriefsExamplesToSi) {
 
 TEST(Units, ConvertsEveryListedUnitByItsFactor) {
     // Reference: each unit's definition; 2.5 of it must be 2.5 * factor + offset in SI.
-    const Dimension all[] = {
-        Dimension::Length,   Dimension::Mass,      Dimension::Force,
-        Dimension::Pressure, Dimension::Velocity,  Dimension::Temperature,
-        Dimension::Density,  Dimension::MolarMass, Dimension::Time,
-        Dimension::Angle,    Dimension::Stiffness, Dimension::StiffnessPerArea,
-        Dimension::Moment};
+    const Dimension all[] = {Dimension::Length,   Dimension::Mass,      Dimension::Force,
+                             Dimension::Pressure, Dimension::Velocity,  Dimension::Temperature,
+                             Dimension::Density,  Dimension::MolarMass, Dimension::Time,
+                             Dimension::Angle,    Dimension::Stiffness, Dimension::StiffnessPerArea,
+                             Dimension::Moment};
     int count = 0;
     for (Dimension d : all) {
         ASSERT_FALSE(io::getUnits(d).empty());

@@ -270,8 +270,8 @@ TEST(StudyOutputs, ATimeSeriesIsReducedPerValueAndARepeatedValueWithoutReduceIsN
     // A regions.csv-like time series: two regions at three times. `per: region` with `reduce:
     // last` gives each region's value at the end; `max` its largest; without `reduce` the
     // repeated region is refused by name (it would otherwise give one column three times).
-    const std::filesystem::path dir =
-        std::filesystem::temp_directory_path() / ("bagsim-study-outputs-" + std::to_string(::getpid()));
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                      ("bagsim-study-outputs-" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     {
         std::ofstream f(dir / "regions.csv");
@@ -283,9 +283,12 @@ TEST(StudyOutputs, ATimeSeriesIsReducedPerValueAndARepeatedValueWithoutReduceIsN
         const bool array = output.find("regions.csv") != std::string::npos;
         const io::StudyScenario s = readText(
             array ? "kind: study\nscenario: supine-on-array-coarse.yaml\nparameters:\n  grid: "
-                    "{run.duration: [1 s]}\noutputs:\n  - " + output + "\n"
-                  : std::string(kHead) + "parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n"
-                                         "outputs:\n  - " + output + "\n");
+                    "{run.duration: [1 s]}\noutputs:\n  - " +
+                        output + "\n"
+                  : std::string(kHead) +
+                        "parameters:\n  grid: {contact.penalty: [1e7 Pa/m]}\n"
+                        "outputs:\n  - " +
+                        output + "\n");
         study::CaseRecord r;
         *missing = study::collectOutputs(s, dir, &r);
         std::map<std::string, std::string> out;
@@ -299,8 +302,8 @@ TEST(StudyOutputs, ATimeSeriesIsReducedPerValueAndARepeatedValueWithoutReduceIsN
     ASSERT_EQ(last.size(), 2u);
     EXPECT_EQ(last["patch_peak_mmHg:last[region=sacrum]"], "38");
     EXPECT_EQ(last["patch_peak_mmHg:last[region=heel_l]"], "47");
-    auto max = collect("{file: regions.csv, column: patch_peak_mmHg, per: region, reduce: max}",
-                       &missing);
+    auto max =
+        collect("{file: regions.csv, column: patch_peak_mmHg, per: region, reduce: max}", &missing);
     EXPECT_EQ(max["patch_peak_mmHg:max[region=sacrum]"], "41");
     EXPECT_EQ(max["patch_peak_mmHg:max[region=heel_l]"], "50");
     collect("{file: regions.csv, column: patch_peak_mmHg, per: region}", &missing);
@@ -313,7 +316,8 @@ TEST(StudyOutputs, ATimeSeriesIsReducedPerValueAndARepeatedValueWithoutReduceIsN
         std::ofstream f(dir / "stiffness.csv");
         f << "gas_mass_g,stiffness_N_per_mm\n3.5,5.8\n3,1.7\n";
     }
-    auto k = collect("{file: stiffness.csv, column: stiffness_N_per_mm, per: gas_mass_g}", &missing);
+    auto k =
+        collect("{file: stiffness.csv, column: stiffness_N_per_mm, per: gas_mass_g}", &missing);
     EXPECT_EQ(missing, "");
     EXPECT_EQ(k["stiffness_N_per_mm[gas_mass_g=3.5]"], "5.8");
     EXPECT_EQ(k["stiffness_N_per_mm[gas_mass_g=3]"], "1.7");

@@ -55,9 +55,9 @@ namespace bags {
 /// nodes stay. Real bags have seams and tolerances; the imperfection, not roundoff, then
 /// chooses which way a symmetric fold goes.
 struct Imperfection {
-    double amplitude = 0.0;      ///< [m] largest normal offset (0: the perfect bag)
-    std::uint64_t seed = 1;      ///< random field
-    void validate() const;       ///< throws std::invalid_argument naming the option
+    double amplitude = 0.0;  ///< [m] largest normal offset (0: the perfect bag)
+    std::uint64_t seed = 1;  ///< random field
+    void validate() const;   ///< throws std::invalid_argument naming the option
 };
 
 /// Moves the free nodes of mesh.X by the imperfection (in place); a no-op at zero amplitude.
@@ -66,20 +66,20 @@ void applyImperfection(Mesh& mesh, const Imperfection& imperfection);
 
 /// Everything an Airbag is built from.
 struct AirbagSpec {
-    DoubleWedgeParams geometry;          ///< the double wedge, used when `mesh` has no nodes
-    Mesh mesh;                           ///< a ready mesh in the bag frame (optional)
+    DoubleWedgeParams geometry;  ///< the double wedge, used when `mesh` has no nodes
+    Mesh mesh;                   ///< a ready mesh in the bag frame (optional)
     Eigen::Isometry3d X_GB = Eigen::Isometry3d::Identity();  ///< bag frame in Ground
-    std::shared_ptr<const MembraneMaterial> material;  ///< base material (wrinkling added)
-    double thickness = 0.2e-3;           ///< membrane thickness [m]
-    double density = 1150.0;             ///< membrane density [kg/m^3]
-    double wrinklingResidual = 1e-3;     ///< residual stiffness fraction of slack states
+    std::shared_ptr<const MembraneMaterial> material;        ///< base material (wrinkling added)
+    double thickness = 0.2e-3;                               ///< membrane thickness [m]
+    double density = 1150.0;                                 ///< membrane density [kg/m^3]
+    double wrinklingResidual = 1e-3;  ///< residual stiffness fraction of slack states
     /// Viscoelastic film: a Prony series on its stress (`material` is then the long-term law);
     /// its Maxwell branches relax over advance()'s time, a quasi-static change (inflate,
     /// changeGasMass) ends relaxed. Empty: elastic. docs/materials.md#viscoelasticity.
     PronySeries prony;
     /// Bending stiffness of the film [N m] (discrete hinges); 0: a pure membrane.
     double bendingStiffness = 0.0;
-    Vec3 gravity = Vec3(0, 0, -9.81);    ///< [m/s^2] in Ground, on the sheet's own weight
+    Vec3 gravity = Vec3(0, 0, -9.81);  ///< [m/s^2] in Ground, on the sheet's own weight
     GasOptions gas;
     /// Open: one gas body fills all chambers; Orifice: one per chamber, neighbours (c, c+1)
     /// joined by `orifice`, the flow integrated over advance()'s time.
@@ -100,11 +100,11 @@ struct AirbagSpec {
     bool sharedAir = false;
     OrificeOptions orifice;
     Imperfection imperfection;
-    bool bedBoard = true;                ///< a rigid plane z_B = 0 under the bag
-    RigidContact::Options bedContact;    ///< its contact options
+    bool bedBoard = true;              ///< a rigid plane z_B = 0 under the bag
+    RigidContact::Options bedContact;  ///< its contact options
     bool selfContact = true;
-    double selfContactPenalty = 1e7;     ///< [Pa/m]
-    SolverOptions solver;                ///< Newton options (maxStep 0: one mesh size)
+    double selfContactPenalty = 1e7;  ///< [Pa/m]
+    SolverOptions solver;             ///< Newton options (maxStep 0: one mesh size)
     /// [Pa/m] springs to the last converged state per unit area, used when Newton fails on a
     /// slack, wrinkling state (escalated 1x, 10x, 100x); 0 disables them.
     double stabilization = 1.0e4;
@@ -149,8 +149,8 @@ struct AirbagSpec {
     /// and changeGasMass() stay quasi-static in all three and end at rest.
     enum class Stepping { QuasiStatic, Dynamic, Relaxed };
     Stepping stepping = Stepping::QuasiStatic;
-    DynamicOptions dynamics;             ///< mass scale, damping, sub-step (Dynamic, Relaxed)
-    void validate() const;               ///< throws std::invalid_argument naming the option
+    DynamicOptions dynamics;  ///< mass scale, damping, sub-step (Dynamic, Relaxed)
+    void validate() const;    ///< throws std::invalid_argument naming the option
 };
 
 /// Force [N] and torque [N m] about the shape frame's origin, both in Ground.
@@ -169,10 +169,10 @@ struct ChamberState {
 /// What one advance() did.
 struct AdvanceSummary {
     bool converged = false;
-    int substeps = 0;              ///< sub-steps solved (1 without cutting)
-    int newtonIterations = 0;      ///< over every solve of the call
+    int substeps = 0;          ///< sub-steps solved (1 without cutting)
+    int newtonIterations = 0;  ///< over every solve of the call
     int factorizations = 0;
-    double residual = 0.0;         ///< [N] spring-free force residual at the accepted state
+    double residual = 0.0;  ///< [N] spring-free force residual at the accepted state
     /// [J] held by the stabilisation springs at the accepted state, or the damper's work over
     /// the step
     double stabilizationEnergy = 0.0;
@@ -186,7 +186,7 @@ struct AdvanceSummary {
 };
 
 class Airbag {
-public:
+  public:
     explicit Airbag(const AirbagSpec& spec);
     ~Airbag();
     Airbag(Airbag&&) noexcept;
@@ -198,8 +198,7 @@ public:
     int addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options);
     /// As addShape(), the shape touching only bag b's free nodes (a module of several bags,
     /// AirbagSpec::cluster): its wrench and contact pressures are then that bag's alone.
-    int addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options,
-                 int bag);
+    int addShape(std::shared_ptr<RigidShape> shape, const RigidContact::Options& options, int bag);
     int getNumShapes() const;
 
     // --- gas
@@ -223,12 +222,12 @@ public:
     /// Gas mass flow [kg/s] into the bag (into every bag of a cluster; negative: out) during
     /// the following advance() calls, shared among a bag's gas bodies by volume.
     void setMassFlow(double massFlow);
-    void setMassFlow(int bag, double massFlow);   ///< one bag of a cluster
+    void setMassFlow(int bag, double massFlow);  ///< one bag of a cluster
     /// Flow at |rate| [kg/s] during the following advance() calls until the bag's (every
     /// bag's) mass is `mass` [kg], then none. Refused with AirbagSpec::sharedAir.
     void setTargetMass(double mass, double rate);
     void setTargetMass(int bag, double mass, double rate);  ///< one bag of a cluster
-    double getTotalGasMass() const;       ///< [kg] summed over the module's bags
+    double getTotalGasMass() const;                         ///< [kg] summed over the module's bags
     /// [kg] of one bag (AirbagSpec::sharedAir: its share of the shared air, by volume)
     double getGasMass(int bag) const;
     /// No gas enters or leaves any bag, nor passes an orifice between chambers, nor leaks
@@ -269,7 +268,7 @@ public:
     std::shared_ptr<const Snapshot> getSnapshot() const;
     /// Makes a snapshot current (and the commit point).
     void setSnapshot(const std::shared_ptr<const Snapshot>& snapshot);
-    double getTime() const;               ///< [s] accumulated by advance()
+    double getTime() const;  ///< [s] accumulated by advance()
     /// Dynamic stepping: the film's mass scale, damping and sub-step from the next advance()
     /// on (the velocity kept). @throws std::logic_error for a quasi-statically stepped bag.
     void setDynamicOptions(const DynamicOptions& options);
@@ -345,14 +344,14 @@ public:
     Vec3 calcBedForce() const;
     int getNumChambers() const;
     ChamberState getChamberState(int chamber) const;
-    const Mesh& getMesh() const;          ///< in Ground (X_GB applied), imperfection included
+    const Mesh& getMesh() const;  ///< in Ground (X_GB applied), imperfection included
     const Eigen::Matrix3Xd& getPositions() const;  ///< nodes [m], Ground
     const MembraneModel& getModel() const;
-    const AirbagSpec& getSpec() const;     ///< as built (validated)
+    const AirbagSpec& getSpec() const;  ///< as built (validated)
     /// Force [N] residual of the current state without stabilisation springs.
     double calcResidual() const;
 
-private:
+  private:
     int checkBag(int bag) const;  ///< bag, or std::out_of_range
     /// The inflation's pressure ramp to pTarget[b] [Pa] per bag (bags ramp together, the
     /// highest's pressure the parameter), then each bag's gas sealed at that state.

@@ -66,16 +66,16 @@ double calcHingeAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3
                       Eigen::Matrix<double, 12, 12>* hess = nullptr);
 
 struct BendingOptions {
-    double stiffness = 0.0;   ///< plate bending stiffness D [N m]
-    double poisson = 0.5;     ///< Poisson's ratio of the plate law [-] (0.5: incompressible)
-    bool seamsBend = true;    ///< edges between two panels' triangles are hinges (rest: X)
-    void validate() const;    ///< throws std::invalid_argument naming the option
+    double stiffness = 0.0;  ///< plate bending stiffness D [N m]
+    double poisson = 0.5;    ///< Poisson's ratio of the plate law [-] (0.5: incompressible)
+    bool seamsBend = true;   ///< edges between two panels' triangles are hinges (rest: X)
+    void validate() const;   ///< throws std::invalid_argument naming the option
 };
 
 /// The bending energy of a mesh; topology and reference data are built once, addEnergy() is
 /// called every Newton iteration.
 class DiscreteBending {
-public:
+  public:
     /// @throws std::invalid_argument for bad options or a degenerate reference triangle.
     DiscreteBending(const Mesh& mesh, const BendingOptions& options);
 
@@ -100,19 +100,19 @@ public:
     /// plate, duplicates to be summed.
     std::vector<Triplet> calcHingeStiffness() const;
 
-private:
+  private:
     struct Hinge {
         std::array<int, 4> nodes;
         double restAngle;
     };
-    struct Plate {                   ///< a triangle with at least one hinge
-        std::array<int, 3> hinges;   ///< hinge of edge i (opposite vertex i), -1: free edge
-        Eigen::Matrix3d M;           ///< d2E/dtheta_i dtheta_j [N m], signs included
-        int numNodes;                ///< distinct nodes of its hinges (<= 6)
+    struct Plate {                  ///< a triangle with at least one hinge
+        std::array<int, 3> hinges;  ///< hinge of edge i (opposite vertex i), -1: free edge
+        Eigen::Matrix3d M;          ///< d2E/dtheta_i dtheta_j [N m], signs included
+        int numNodes;               ///< distinct nodes of its hinges (<= 6)
         std::array<int, 6> nodes;
         std::array<std::array<int, 4>, 3> local;  ///< local node of hinge i's node k
-        std::array<int, 36> slots;   ///< Hessian block slot of local pair (a,b), 6a+b
-        std::array<bool, 3> ownsHinge;  ///< adds hinge i's angle-curvature Hessian term
+        std::array<int, 36> slots;                ///< Hessian block slot of local pair (a,b), 6a+b
+        std::array<bool, 3> ownsHinge;            ///< adds hinge i's angle-curvature Hessian term
     };
     BendingOptions m_options;
     int m_numNodes = 0;

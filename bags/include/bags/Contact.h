@@ -24,7 +24,7 @@ namespace bags {
 
 /// A rigid solid with an analytic surface, posed in Ground by X_GS (shape frame S).
 class RigidShape {
-public:
+  public:
     virtual ~RigidShape() = default;
     /// Signed distance [m] of Ground point p to the surface, negative inside the solid.
     /// Also the closest surface point and the outward unit normal there (Ground), if asked.
@@ -49,20 +49,21 @@ public:
     virtual std::string getName() const = 0;
     void setPose(const Eigen::Isometry3d& X_GS) { m_X_GS = X_GS; }
     const Eigen::Isometry3d& getPose() const { return m_X_GS; }
-protected:
+
+  protected:
     Eigen::Isometry3d m_X_GS = Eigen::Isometry3d::Identity();
 };
 
 /// A shape that evaluates everything in its own frame S in one pass: derived classes give
 /// evalLocal(); the distance queries and the transforms to and from Ground are done here.
 class LocalRigidShape : public RigidShape {
-public:
+  public:
     double calcSignedDistance(const Vec3& p_G, Vec3* closest_G, Vec3* normal_G) const override;
     Mat3 calcNormalDerivative(const Vec3& p_G) const override;
     void calcContactGeometry(const Vec3& p_G, double* distance, Vec3* closest_G, Vec3* normal_G,
                              Mat3* dndp_G) const override;
 
-protected:
+  protected:
     /// Signed distance d, closest point c, unit outward normal n and d n / d p, all in S.
     virtual void evalLocal(const Vec3& p, double& d, Vec3& c, Vec3& n, Mat3* dn) const = 0;
 };
@@ -83,7 +84,7 @@ std::unique_ptr<RigidShape> makeCapsule(double radius, double halfLength);
 /// the penalty: p = pressurePenalty * (penetration - c) = sigma(c), sigma the layer's law
 /// (calcTissueStress).
 class RigidContact {
-public:
+  public:
     /// How the tangential force follows the slip (docs/contact.md).
     enum class FrictionLaw {
         /// An elastic stick spring (stickStiffnessRatio) to an anchor, capped at mu f_n; the
@@ -98,10 +99,10 @@ public:
         double pressurePenalty = 1e7;  ///< [Pa/m]: 1 mm penetration carries 10 kPa
         double friction = 0.0;         ///< Coulomb coefficient (0 = frictionless)
         FrictionLaw frictionLaw = FrictionLaw::StickSlip;  ///< the tangential law
-        double slipVelocity = 2e-3;    ///< [m/s] v_s of the regularised law
+        double slipVelocity = 2e-3;                        ///< [m/s] v_s of the regularised law
         double stickStiffnessRatio = 1.0;  ///< tangential / normal penalty (stick-slip law)
-        double onsetGap = 0.0;          ///< [m] smoothing width of the contact onset (0: C1 quadratic)
-        int minNodesForThreads = 50000; ///< evaluate nodes with OpenMP from this many nodes on
+        double onsetGap = 0.0;  ///< [m] smoothing width of the contact onset (0: C1 quadratic)
+        int minNodesForThreads = 50000;  ///< evaluate nodes with OpenMP from this many nodes on
         /// A compliant layer on the shape (soft tissue over bone, a pad on an indenter), inside
         /// its surface: the surface is the layer's unloaded outside, the rigid core lies
         /// tissueThickness below it. 0 (with tissueModulus 0): no layer, the shape is rigid.
@@ -109,7 +110,7 @@ public:
         double tissueThickness = 0.0;  ///< [m] layer thickness h
         double tissueModulus = 0.0;    ///< [Pa] its effective compressive (Young's) modulus E
         bool hasTissue() const { return tissueThickness > 0.0; }
-        void validate() const;          ///< throws std::invalid_argument naming the option
+        void validate() const;  ///< throws std::invalid_argument naming the option
     };
     RigidContact(const Mesh& mesh, std::vector<int> nodes, const RigidShape& shape,
                  const Options& options);
@@ -165,7 +166,8 @@ public:
     const std::vector<int>& getNodes() const;
     const RigidShape& getShape() const;
     const Options& getOptions() const;
-private:
+
+  private:
     struct Impl;
     std::shared_ptr<Impl> m_impl;
 };
@@ -186,16 +188,16 @@ TissueStress calcTissueStress(double compression, double thickness, double modul
 /// Membrane-membrane contact of a mesh with itself (top wall meeting bottom wall, folds):
 /// node-to-triangle penalty with a thickness offset, broad phase by spatial hashing.
 class SelfContact {
-public:
+  public:
     struct Options {
-        double pressurePenalty = 1e7;  ///< [Pa/m]
-        double thickness = 1e-3;       ///< [m] contact offset between two sheets
-        double candidateMargin = 2e-3; ///< [m] extra search distance kept in the candidate list
+        double pressurePenalty = 1e7;   ///< [Pa/m]
+        double thickness = 1e-3;        ///< [m] contact offset between two sheets
+        double candidateMargin = 2e-3;  ///< [m] extra search distance kept in the candidate list
         /// beta * thickness [-] of the soft minimum over the facets a node sees on one side:
         /// the energy is C2 where the nearest facet changes, smoothed over distance
         /// differences of ~ thickness / softMinSharpness (docs/contact.md).
         double softMinSharpness = 20.0;
-        void validate() const;         ///< throws std::invalid_argument naming the option
+        void validate() const;  ///< throws std::invalid_argument naming the option
     };
     SelfContact(const Mesh& mesh, const Options& options);
     /// Rebuilds the candidate pairs at x (call once per load step or when x moved far).
@@ -213,7 +215,8 @@ public:
     void saveState(StateWriter& w) const;
     /// @throws StateError if the checkpoint is of another mesh.
     void loadState(StateReader& r);
-private:
+
+  private:
     struct Impl;
     std::shared_ptr<Impl> m_impl;
 };

@@ -62,7 +62,7 @@ struct DynamicOptions {
 
 /// The film's inertia and its explicit step, for one MembraneModel.
 class FilmDynamics {
-public:
+  public:
     /// Masses from the model's mesh (nodal reference areas), thickness and `density`
     /// [kg/m^3], times options.massScale. `contactPenalty` [Pa/m]: the stiffest penalty per
     /// area of any contact that may press a node (rigid shapes, bed, self contact), counted in
@@ -104,14 +104,14 @@ public:
     /// [J] 1/2 v^T M v with the scaled masses.
     double calcKineticEnergy(const Eigen::Matrix3Xd& v) const;
 
-private:
+  private:
     const MembraneModel* m_model;
     std::unique_ptr<MembraneModel> m_taut;  // the film without its tension field (or null)
     DynamicOptions m_options;
     double m_contactPenalty;
-    double m_areaDensity;        // [kg/m^2] scaled: density x thickness x massScale
-    Eigen::VectorXd m_mass;      // per dof, 0 on fixed dofs
-    Eigen::VectorXd m_invMass;   // per dof, 0 on fixed dofs
+    double m_areaDensity;                        // [kg/m^2] scaled: density x thickness x massScale
+    Eigen::VectorXd m_mass;                      // per dof, 0 on fixed dofs
+    Eigen::VectorXd m_invMass;                   // per dof, 0 on fixed dofs
     mutable std::unique_ptr<FilmForce> m_force;  // built at the first step
 };
 

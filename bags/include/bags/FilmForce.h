@@ -48,7 +48,7 @@ namespace bags {
 double calcAtan2(double y, double x);
 
 class FilmForce {
-public:
+  public:
     /// Keeps a reference to `model` (which must outlive this object) and its constants.
     /// @throws std::invalid_argument if the model's element frames are not set.
     explicit FilmForce(const MembraneModel& model);
@@ -70,7 +70,7 @@ public:
     /// The film's law as the kernel evaluates it (public for the source's helpers only).
     struct Law;
 
-private:
+  private:
     template <bool withEnergy>
     void addGradientImpl(const Eigen::Matrix3Xd& x, EnergyAccumulator& acc) const;
 
@@ -85,12 +85,12 @@ private:
         double sign[2];           ///< NA (NB) = sign x the wing triangle's normal
         double cosRest, sinRest;  ///< of the rest angle
     };
-    struct TriHinges {            ///< a triangle's view of the hinges on its edges
-        int hinge[3] = {-1, -1, -1};          ///< of the edge opposite vertex i, -1: none
-        double sign[3] = {0.0, 0.0, 0.0};     ///< HingeData::sign of this wing
-        unsigned char wing[3] = {0, 0, 0};    ///< 0: the hinge's wing A (x2), 1: B (x3)
-        unsigned char edge0[3] = {0, 0, 0};   ///< local vertex that is the hinge's x0
-        unsigned char edge1[3] = {0, 0, 0};   ///< local vertex that is the hinge's x1
+    struct TriHinges {                       ///< a triangle's view of the hinges on its edges
+        int hinge[3] = {-1, -1, -1};         ///< of the edge opposite vertex i, -1: none
+        double sign[3] = {0.0, 0.0, 0.0};    ///< HingeData::sign of this wing
+        unsigned char wing[3] = {0, 0, 0};   ///< 0: the hinge's wing A (x2), 1: B (x3)
+        unsigned char edge0[3] = {0, 0, 0};  ///< local vertex that is the hinge's x0
+        unsigned char edge1[3] = {0, 0, 0};  ///< local vertex that is the hinge's x1
     };
     const MembraneModel* m_model;
     std::shared_ptr<const Law> m_law;
@@ -98,7 +98,7 @@ private:
     /// Per element, CSR: its chambers and signs (+1: its normal points out of the chamber).
     std::vector<int> m_triChamberStart, m_triChamber;
     std::vector<double> m_triChamberSign;
-    std::vector<char> m_inChamber;   ///< per element: bounds some chamber
+    std::vector<char> m_inChamber;  ///< per element: bounds some chamber
     std::vector<HingeData> m_hinges;
     std::vector<TriHinges> m_triHinges;
     std::vector<int> m_couplingStart, m_couplingHinge;  ///< CSR rows of the hinge stiffness
@@ -107,15 +107,15 @@ private:
     std::vector<int> m_nodeElemStart, m_nodeElemSlot;
 
     // Scratch, sized once.
-    mutable std::vector<double> m_elemForce;   ///< 9 per element [N]
-    mutable std::vector<double> m_elemEnergy;  ///< per element [J] (energy wanted)
-    mutable std::vector<double> m_volume6;     ///< per element: x0 . (x1 x x2) [m^3]
-    mutable std::vector<double> m_triNormal;   ///< 3 per element: N / |N|^2 [1/m^2]
-    mutable std::vector<double> m_hingeShape;  ///< 3 per hinge: L [m], alpha_A, alpha_B [-]
-    mutable std::vector<double> m_dtheta;      ///< per hinge [rad]
-    mutable std::vector<double> m_moment;      ///< per hinge [N m]
-    mutable std::vector<double> m_wingScale;   ///< per hinge: -moment L [N m^2]
-    mutable std::vector<double> m_chamberCoef; ///< per chamber: -p / 6 [Pa]
+    mutable std::vector<double> m_elemForce;    ///< 9 per element [N]
+    mutable std::vector<double> m_elemEnergy;   ///< per element [J] (energy wanted)
+    mutable std::vector<double> m_volume6;      ///< per element: x0 . (x1 x x2) [m^3]
+    mutable std::vector<double> m_triNormal;    ///< 3 per element: N / |N|^2 [1/m^2]
+    mutable std::vector<double> m_hingeShape;   ///< 3 per hinge: L [m], alpha_A, alpha_B [-]
+    mutable std::vector<double> m_dtheta;       ///< per hinge [rad]
+    mutable std::vector<double> m_moment;       ///< per hinge [N m]
+    mutable std::vector<double> m_wingScale;    ///< per hinge: -moment L [N m^2]
+    mutable std::vector<double> m_chamberCoef;  ///< per chamber: -p / 6 [Pa]
 };
 
 }  // namespace bags

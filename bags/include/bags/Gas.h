@@ -18,12 +18,12 @@ inline constexpr double kGasConstant = 8.314462618;
 
 struct GasOptions {
     enum class Process { Isothermal, Adiabatic, Polytropic };
-    double molarMass = 0.029;         ///< [kg/mol] (air)
-    double temperature = 296.15;      ///< [K] gas and room temperature (23 degC)
-    double ambientPressure = 1.0e5;   ///< [Pa] absolute
+    double molarMass = 0.029;        ///< [kg/mol] (air)
+    double temperature = 296.15;     ///< [K] gas and room temperature (23 degC)
+    double ambientPressure = 1.0e5;  ///< [Pa] absolute
     Process process = Process::Isothermal;
-    double polytropicIndex = 1.4;     ///< n in p V^n = const (Adiabatic uses gamma = 1.4)
-    double gamma = 1.4;               ///< heat capacity ratio of the gas
+    double polytropicIndex = 1.4;  ///< n in p V^n = const (Adiabatic uses gamma = 1.4)
+    double gamma = 1.4;            ///< heat capacity ratio of the gas
     /// Leakage through seams and valves [kg/(s Pa)]: the gas flows out at this conductance
     /// times its gauge pressure (laminar; in at a gauge pressure below zero). Per bag, shared
     /// among its gas bodies by volume. 0: sealed. docs/diagnosis.md#leakage.
@@ -49,7 +49,7 @@ std::string toString(GasOptions::Process p);
 /// connections). State: mass m [kg] and a reference state (pRef, VRef) set when the gas is
 /// sealed at temperature T; isothermal: p V = m R T; polytropic: p V^n = pRef VRef^n.
 class GasChamber {
-public:
+  public:
     GasChamber() = default;
     GasChamber(const GasOptions& options, double mass);
     /// Seals the gas at volume V [m^3] and the options' temperature: pRef = m R T / V.
@@ -57,8 +57,8 @@ public:
     double getMass() const { return m_mass; }
     /// Changes the mass at fixed temperature (inflation, deflation), reseals at volume V.
     void setMass(double mass, double volume);
-    double calcPressure(double volume) const;      ///< absolute [Pa]
-    double calcGaugePressure(double volume) const; ///< [Pa]
+    double calcPressure(double volume) const;            ///< absolute [Pa]
+    double calcGaugePressure(double volume) const;       ///< [Pa]
     double calcPressureDerivative(double volume) const;  ///< dp/dV [Pa/m^3]
     /// G(V) with dG/dV = p(V) - pAmbient [J] (defined up to a constant).
     double calcWorkPotential(double volume) const;
@@ -98,7 +98,8 @@ public:
         r.pod(m_pRef);
         r.pod(m_VRef);
     }
-private:
+
+  private:
     GasOptions m_options;
     double m_mass = 0.0;
     double m_exponent = 1.0;  ///< 1 isothermal, gamma adiabatic, n polytropic
@@ -114,11 +115,11 @@ private:
 /// the upstream gas density. Valid while dp is a few percent of the absolute pressure (the
 /// compressible expansion factor then stays above 0.98); choked flow is not modelled.
 struct OrificeOptions {
-    double diameter = 4.0e-3;          ///< [m] of the equivalent round opening
-    double dischargeCoefficient = 0.62;///< Cd (sharp-edged orifice: about 0.6)
-    double laminarPressure = 1.0;      ///< [Pa] dpLam, where the law turns linear
-    void validate() const;             ///< throws std::invalid_argument naming the option
-    double getArea() const;            ///< [m^2]
+    double diameter = 4.0e-3;            ///< [m] of the equivalent round opening
+    double dischargeCoefficient = 0.62;  ///< Cd (sharp-edged orifice: about 0.6)
+    double laminarPressure = 1.0;        ///< [Pa] dpLam, where the law turns linear
+    void validate() const;               ///< throws std::invalid_argument naming the option
+    double getArea() const;              ///< [m^2]
 };
 
 /// Mass flow [kg/s] from gas a to gas b through an orifice for absolute pressures pa, pb [Pa]

@@ -36,14 +36,14 @@ const char* getMeshPatternName(MeshPattern pattern);
 /// ("wedge-steep", "wedge-gentle") joined by the intermediate connection. Without the
 /// diaphragm and with shortSide == height it is a single right-angled wedge.
 struct DoubleWedgeParams {
-    double longSide = 0.350;   ///< base length [m]
-    double shortSide = 0.200;  ///< steep sloped side [m]
-    double width = 0.100;      ///< extrusion width [m]
-    double height = 0.150;     ///< apex height of the panel layout [m]
-    double meshSize = 0.010;   ///< target element edge [m]
+    double longSide = 0.350;                    ///< base length [m]
+    double shortSide = 0.200;                   ///< steep sloped side [m]
+    double width = 0.100;                       ///< extrusion width [m]
+    double height = 0.150;                      ///< apex height of the panel layout [m]
+    double meshSize = 0.010;                    ///< target element edge [m]
     MeshPattern pattern = MeshPattern::Legacy;  ///< how the structured panels' cells are split
-    bool diaphragm = true;     ///< build the internal wall (two chambers); false: one chamber
-    bool bondBase = true;      ///< base panel nodes are support nodes
+    bool diaphragm = true;  ///< build the internal wall (two chambers); false: one chamber
+    bool bondBase = true;   ///< base panel nodes are support nodes
     /// Throws std::invalid_argument naming the parameter if the geometry is impossible.
     void validate() const;
     /// x of the apex (and of the diaphragm), sqrt(shortSide^2 - height^2) [m].

@@ -34,21 +34,21 @@ struct LoadTestOptions {
     /// `geometry` with its sizes and mesh size times bagScale: the bag's sizes as built.
     DoubleWedgeParams getBagGeometry() const;
     std::shared_ptr<const MembraneMaterial> material;  ///< base material (wrinkling added)
-    double thickness = 0.2e-3;          ///< membrane thickness [m]
-    double density = 1150.0;            ///< membrane density [kg/m^3] (gravity on the sheet)
-    double wrinklingResidual = 1e-3;    ///< residual stiffness fraction of slack states
+    double thickness = 0.2e-3;                         ///< membrane thickness [m]
+    double density = 1150.0;          ///< membrane density [kg/m^3] (gravity on the sheet)
+    double wrinklingResidual = 1e-3;  ///< residual stiffness fraction of slack states
     /// Viscoelastic film (AirbagSpec::prony): `material` is the long-term law; the
     /// Maxwell branches relax over the test's time (block travel / loadingRate). Empty: elastic.
     PronySeries prony;
-    double bendingStiffness = 0.0;      ///< film bending stiffness [N m] (0: pure membrane)
-    Imperfection imperfection;          ///< stated geometric imperfection of the bag
-    int threads = 0;                    ///< element-loop threads (0: default; results identical)
-    bool predictor = true;              ///< secant predictor for block steps (AirbagSpec)
+    double bendingStiffness = 0.0;  ///< film bending stiffness [N m] (0: pure membrane)
+    Imperfection imperfection;      ///< stated geometric imperfection of the bag
+    int threads = 0;                ///< element-loop threads (0: default; results identical)
+    bool predictor = true;          ///< secant predictor for block steps (AirbagSpec)
     /// Ensemble size: the test is also run for the imperfection seeds seed + 1 ... seed + N - 1
     /// (in parallel, one thread each) and each curve reports the spread of its stiffness over
     /// the N bags (LoadCurve::stiffnessMin/Max). 1: the one bag. Needs an imperfection.
     int ensemble = 1;
-    bool gravity = true;                ///< self-weight of the sheet
+    bool gravity = true;  ///< self-weight of the sheet
     GasOptions gas;
     /// How the chambers share their air: Open, one gas body filling all chambers (pressures
     /// always equal); Orifice, one gas body per chamber, neighbouring chambers (c, c + 1)
@@ -62,7 +62,7 @@ struct LoadTestOptions {
     /// 1e-5 of the remaining pressure difference on the 20 mm rig). 0 s: no settling.
     double settleTime = 1000.0;
     int settleSteps = 10;
-    std::vector<double> gasMasses;      ///< [kg], run in this order (seed: 3.5 g down to 1.0 g)
+    std::vector<double> gasMasses;  ///< [kg], run in this order (seed: 3.5 g down to 1.0 g)
     /// The pressed bag among neighbours of the same bag, side by side in one module
     /// (AirbagSpec::cluster; their walls meet through self-contact, so selfContact must be
     /// on and the connection open). The pressed bag is bag 0 at the origin; across the width
@@ -76,17 +76,17 @@ struct LoadTestOptions {
     /// or 1; (0, 0) the middle, (1, 1) the corner at +x +y. The block's other eight bags stand
     /// around it; pressing each position in turn maps the block's stiffness.
     std::array<int, 2> neighbourPressed{0, 0};
-    double neighbourGap = 5.0e-3;       ///< [m] between facing flat panels (0 < gap < 100 mm)
+    double neighbourGap = 5.0e-3;  ///< [m] between facing flat panels (0 < gap < 100 mm)
     /// [kg] every neighbour's gas mass at every curve; 0: the pressed bag's mass of that curve
     double neighbourGasMass = 0.0;
     /// The pressed bag and its neighbours share one body of air (joined by open tubes:
     /// AirbagSpec::sharedAir), its mass the bags' masses summed; false: each its own.
     bool neighbourSharedAir = false;
-    double blockSize = 0.050;           ///< square block edge [m]
-    double loadingRate = 10.0e-3 / 60.0;///< [m/s] (10 mm/min)
-    double peakForce = 50.0;            ///< [N]
-    bool unload = true;                 ///< record the unloading branch too
-    double displacementStep = 1.0e-3;   ///< target block increment [m] (adapted)
+    double blockSize = 0.050;             ///< square block edge [m]
+    double loadingRate = 10.0e-3 / 60.0;  ///< [m/s] (10 mm/min)
+    double peakForce = 50.0;              ///< [N]
+    bool unload = true;                   ///< record the unloading branch too
+    double displacementStep = 1.0e-3;     ///< target block increment [m] (adapted)
     /// While the block force is below a quarter of stiffnessFrom (a slack bag folding in
     /// under almost no force), block steps may grow to this many times displacementStep
     /// (the loading step also stays short of half stiffnessFrom by the stiffness so far).
@@ -94,9 +94,9 @@ struct LoadTestOptions {
     /// Where no equilibrium is found near the last one at any step down to the smallest, go on
     /// by 1, 2 or 4 displacement steps (stepOverSnap) instead of ending the curve as failed.
     bool stepOverSnaps = true;
-    double stiffnessFrom = 10.0;        ///< [N] force range of the stiffness fit
-    double stiffnessTo = 35.0;          ///< [N]
-    int polynomialOrder = 5;            ///< k(m) fit order (seed: 5)
+    double stiffnessFrom = 10.0;  ///< [N] force range of the stiffness fit
+    double stiffnessTo = 35.0;    ///< [N]
+    int polynomialOrder = 5;      ///< k(m) fit order (seed: 5)
     RigidContact::Options blockContact;
     RigidContact::Options floorContact;
     bool selfContact = true;
@@ -123,11 +123,11 @@ struct LoadTestOptions {
     /// (travel / loadingRate, which the gas and the film's viscous branches keep) that is
     /// the mass scale massScale r^2 and damping damping / r, r = blockSpeed / loadingRate.
     struct Dynamic {
-        double blockSpeed = 0.02;        ///< [m/s] the pace the film is integrated at
-        double massScale = 1000.0;       ///< film mass scale at that pace (>= 1)
-        double damping = 20.0;           ///< [1/s] mass-proportional damping at that pace
-        double stepFraction = 0.5;       ///< sub-step as a fraction of the stable step
-        double recordEvery = 0.25e-3;    ///< [m] block travel between recorded states
+        double blockSpeed = 0.02;      ///< [m/s] the pace the film is integrated at
+        double massScale = 1000.0;     ///< film mass scale at that pace (>= 1)
+        double damping = 20.0;         ///< [1/s] mass-proportional damping at that pace
+        double stepFraction = 0.5;     ///< sub-step as a fraction of the stable step
+        double recordEvery = 0.25e-3;  ///< [m] block travel between recorded states
         /// [m] at the start of the loading and of the unloading the block comes up to speed
         /// over this much travel (from a sixteenth of it, in proportion to the travel), so
         /// that the film at rest is not struck (0: at full speed at once).
@@ -149,17 +149,18 @@ struct LoadTestOptions {
 
 /// One converged state of the test.
 struct LoadStep {
-    int curve = 0;             ///< index into LoadTestOptions::gasMasses
-    int step = 0;              ///< step within the curve
-    bool loading = true;       ///< false on the unloading branch
-    double time = 0.0;         ///< test time of this curve [s]
-    double displacement = 0.0; ///< block travel [m] from the top of the unloaded bag under the block
-    double force = 0.0;        ///< block force [N]
+    int curve = 0;        ///< index into LoadTestOptions::gasMasses
+    int step = 0;         ///< step within the curve
+    bool loading = true;  ///< false on the unloading branch
+    double time = 0.0;    ///< test time of this curve [s]
+    double displacement =
+        0.0;             ///< block travel [m] from the top of the unloaded bag under the block
+    double force = 0.0;  ///< block force [N]
     std::vector<double> gaugePressure;  ///< per chamber [Pa]
     std::vector<double> volume;         ///< per chamber [m^3]
     std::vector<double> gasMass;        ///< per chamber [kg] (its share of a shared gas)
     int newtonIterations = 0;
-    int factorizations = 0;    ///< sparse factorisations of the step's solves
+    int factorizations = 0;  ///< sparse factorisations of the step's solves
     /// [J] held by the stabilisation springs at the accepted state (0 if the step ended on a
     /// spring-free equilibrium)
     double stabilizationEnergy = 0.0;
@@ -173,23 +174,23 @@ struct LoadStep {
 };
 
 struct LoadCurve {
-    double gasMass = 0.0;            ///< [kg]
-    double unloadedHeight = 0.0;     ///< top of the inflated bag before loading [m]
-    double inflatedVolume = 0.0;     ///< [m^3] total
-    double inflatedGaugePressure = 0.0; ///< [Pa]
+    double gasMass = 0.0;                ///< [kg]
+    double unloadedHeight = 0.0;         ///< top of the inflated bag before loading [m]
+    double inflatedVolume = 0.0;         ///< [m^3] total
+    double inflatedGaugePressure = 0.0;  ///< [Pa]
     std::vector<LoadStep> steps;
-    double stiffness = 0.0;          ///< slope over the stiffness range [N/m]
-    double r2 = 0.0;                 ///< linearity of that range
-    int stage = 0;                   ///< 1, 2 or 3 (rule in docs/seed-load-test.md)
+    double stiffness = 0.0;  ///< slope over the stiffness range [N/m]
+    double r2 = 0.0;         ///< linearity of that range
+    int stage = 0;           ///< 1, 2 or 3 (rule in docs/seed-load-test.md)
     bool reachedPeak = false;
-    std::string failure;             ///< empty, or why the curve stopped early
-    bool failed = false;             ///< a step could not be solved (not a bottoming out)
+    std::string failure;  ///< empty, or why the curve stopped early
+    bool failed = false;  ///< a step could not be solved (not a bottoming out)
     /// The curve left the model's envelope and was stopped there (`failure` says how): the
     /// block force fell by more than kForceFallShare of the most it had reached (and by more
     /// than the stiffness range's start) while the block pressed deeper at a fixed gas mass,
     /// which a sealed bag cannot do: the film let the block through.
     bool outsideEnvelope = false;
-    int stabilizedSteps = 0;         ///< steps accepted with the stabilisation springs
+    int stabilizedSteps = 0;  ///< steps accepted with the stabilisation springs
     /// Largest ratio, over the loading steps, of the energy the stabilisation springs held at
     /// the accepted states so far (LoadStep::stabilizationEnergy summed) to the work the block
     /// has done so far [-]:
@@ -220,8 +221,9 @@ struct LoadCurve {
 
 struct LoadTestResult {
     std::vector<LoadCurve> curves;
-    std::vector<double> kFit;        ///< polynomial coefficients, highest power first, k in N/mm of m in g
-    double seconds = 0.0;            ///< wall time of the solve
+    std::vector<double>
+        kFit;              ///< polynomial coefficients, highest power first, k in N/mm of m in g
+    double seconds = 0.0;  ///< wall time of the solve
 };
 
 /// Called after each converged step with the step and the nodal positions (3 x N).

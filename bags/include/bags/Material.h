@@ -28,12 +28,12 @@ namespace bags {
 /// non-negative part of its curvature there (makeYeoh). Neo-Hooke, Mooney-Rivlin and Yeoh are
 /// of this form; the explicit step's force kernel (bags/FilmForce.h) evaluates it inline.
 struct InvariantPolynomial {
-    double C10 = 0.0, C01 = 0.0, C20 = 0.0, C30 = 0.0;  ///< [Pa]
+    double C10 = 0.0, C01 = 0.0, C20 = 0.0, C30 = 0.0;                   ///< [Pa]
     double continuationLimit = std::numeric_limits<double>::infinity();  ///< in I1 - 3 [-]
 };
 
 class MembraneMaterial {
-public:
+  public:
     virtual ~MembraneMaterial() = default;
 
     /// Strain energy per unit reference volume [J/m^3] at in-plane C; if S (resp. D) is not
@@ -85,9 +85,9 @@ std::unique_ptr<MembraneMaterial> makeMooneyRivlin(double C10, double C01);
 /// beyond it W goes on with its value, slope and (non-negative part of its) curvature there.
 /// A fit with C30 < 0 has W -> -infinity at large I1: the limit keeps the energy bounded below
 /// (see makeStableYeoh). Default: the polynomial everywhere.
-std::unique_ptr<MembraneMaterial> makeYeoh(double C10, double C20, double C30,
-                                           double continuationLimit =
-                                               std::numeric_limits<double>::infinity());
+std::unique_ptr<MembraneMaterial> makeYeoh(
+    double C10, double C20, double C30,
+    double continuationLimit = std::numeric_limits<double>::infinity());
 /// W = sum_i 2 mu_i / alpha_i^2 (l1^a_i + l2^a_i + l3^a_i - 3) (Abaqus convention).
 std::unique_ptr<MembraneMaterial> makeOgden(const std::vector<double>& mu,
                                             const std::vector<double>& alpha);
@@ -100,7 +100,7 @@ std::unique_ptr<MembraneMaterial> makeOgden(const std::vector<double>& mu,
 /// where lambda1 >= lambda2 are the in-plane principal stretches and W_uni is the uniaxial
 /// energy. The total is W_relaxed + residual * W_base. Energy, S and D are consistent.
 class WrinklingMaterial : public MembraneMaterial {
-public:
+  public:
     WrinklingMaterial(std::unique_ptr<MembraneMaterial> base, double residual = 1e-3);
     /// As above, but the residual term is residual * W_residual with its own material (e.g. a
     /// neo-Hookean of the base's initial shear modulus, which stays convex where a Yeoh with
@@ -123,7 +123,8 @@ public:
     }
     /// Principal stretches (lambda1 >= lambda2) of the in-plane C [-].
     static void calcPrincipalStretches(const Mat2& C, double* lambda1, double* lambda2);
-private:
+
+  private:
     std::unique_ptr<MembraneMaterial> m_base;
     double m_residual;
     std::unique_ptr<MembraneMaterial> m_residualMaterial;  ///< null: the base
@@ -154,7 +155,7 @@ struct FabricAnisotropy {
 /// the element frame. The stress adds k <E_a> a a^T per family (positive semidefinite), so
 /// with a tension-field matrix the sum carries no compression in any direction.
 class FabricMaterial : public MembraneMaterial {
-public:
+  public:
     /// @throws std::invalid_argument if the matrix is null or the yarns are invalid.
     FabricMaterial(std::unique_ptr<MembraneMaterial> matrix, const FabricAnisotropy& yarns);
     FabricMaterial(const FabricMaterial& other);
@@ -166,7 +167,8 @@ public:
     std::unique_ptr<MembraneMaterial> clone() const override;
     const MembraneMaterial& getMatrix() const { return *m_matrix; }
     const FabricAnisotropy& getYarns() const { return m_yarns; }
-private:
+
+  private:
     std::unique_ptr<MembraneMaterial> m_matrix;
     FabricAnisotropy m_yarns;
 };

@@ -25,13 +25,13 @@ struct ChamberBoundary {
 };
 
 struct Mesh {
-    Eigen::Matrix3Xd X;                  ///< reference node positions, Ground [m]
-    Eigen::Matrix3Xi tris;               ///< node indices of each triangle (columns)
-    std::vector<int> triPanel;           ///< panel index of each triangle
-    std::vector<std::string> panelNames; ///< name of each panel ("bottom", "side-left", ...)
+    Eigen::Matrix3Xd X;                   ///< reference node positions, Ground [m]
+    Eigen::Matrix3Xi tris;                ///< node indices of each triangle (columns)
+    std::vector<int> triPanel;            ///< panel index of each triangle
+    std::vector<std::string> panelNames;  ///< name of each panel ("bottom", "side-left", ...)
     std::vector<ChamberBoundary> chambers;
-    std::vector<int> supportNodes;       ///< nodes bonded to the bed board (fixed), if any
-    std::vector<int> fixedDofs;          ///< extra fixed dofs (3*node+dir), e.g. symmetry planes
+    std::vector<int> supportNodes;  ///< nodes bonded to the bed board (fixed), if any
+    std::vector<int> fixedDofs;     ///< extra fixed dofs (3*node+dir), e.g. symmetry planes
 
     int getNumNodes() const { return static_cast<int>(X.cols()); }
     int getNumTris() const { return static_cast<int>(tris.cols()); }
@@ -57,15 +57,15 @@ struct Mesh {
 
 /// Shape statistics of a mesh's reference triangles (for choosing and reporting mesh sizes).
 struct MeshQuality {
-    int numNodes = 0;        ///< number of nodes
-    int numTris = 0;         ///< number of triangles
-    double minAngle = 0.0;   ///< smallest interior angle of any triangle [rad]
-    double maxAngle = 0.0;   ///< largest interior angle of any triangle [rad]
-    double meanAspect = 0.0; ///< mean R/(2 r), circumradius over twice inradius (1: equilateral)
-    double maxAspect = 0.0;  ///< largest R/(2 r)
-    double minEdge = 0.0;    ///< shortest edge [m]
-    double meanEdge = 0.0;   ///< mean edge length over triangles' edges [m]
-    double maxEdge = 0.0;    ///< longest edge [m]
+    int numNodes = 0;         ///< number of nodes
+    int numTris = 0;          ///< number of triangles
+    double minAngle = 0.0;    ///< smallest interior angle of any triangle [rad]
+    double maxAngle = 0.0;    ///< largest interior angle of any triangle [rad]
+    double meanAspect = 0.0;  ///< mean R/(2 r), circumradius over twice inradius (1: equilateral)
+    double maxAspect = 0.0;   ///< largest R/(2 r)
+    double minEdge = 0.0;     ///< shortest edge [m]
+    double meanEdge = 0.0;    ///< mean edge length over triangles' edges [m]
+    double maxEdge = 0.0;     ///< longest edge [m]
 };
 
 /// Triangle shape statistics of the reference configuration mesh.X.

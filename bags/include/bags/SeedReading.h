@@ -96,12 +96,12 @@ double estimateFillScale(const LoadTestOptions& rig, double targetFillMass, Fill
 
 /// What findFillScale found.
 struct FillScaleResult {
-    double scale = 1.0;                ///< s [-]
-    DoubleWedgeParams geometry;        ///< rig.geometry scaled by s
-    FillMassMeasurement measurement;   ///< of that geometry
-    std::vector<double> scales;        ///< every s measured, in order
-    std::vector<double> fillMasses;    ///< [kg] their fill masses
-    double seconds = 0.0;              ///< wall time
+    double scale = 1.0;               ///< s [-]
+    DoubleWedgeParams geometry;       ///< rig.geometry scaled by s
+    FillMassMeasurement measurement;  ///< of that geometry
+    std::vector<double> scales;       ///< every s measured, in order
+    std::vector<double> fillMasses;   ///< [kg] their fill masses
+    double seconds = 0.0;             ///< wall time
 };
 
 /// Finds the scale s of rig.geometry (the sizes `scaling` names) whose fill mass is

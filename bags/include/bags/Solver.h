@@ -24,17 +24,17 @@
 namespace bags {
 
 struct SolverOptions {
-    double relativeTolerance = 1e-8;   ///< |r| / |f_ref| to converge
-    double absoluteTolerance = 1e-7;   ///< [N] |r| to converge regardless
-    int maxIterations = 60;            ///< Newton iterations per solve
-    double pseudoTransientShift = 1e-3;///< initial shift, as a fraction of mean tangent diagonal
-    double maxStep = 0.0;              ///< [m] largest nodal move per iteration (0: no limit)
+    double relativeTolerance = 1e-8;     ///< |r| / |f_ref| to converge
+    double absoluteTolerance = 1e-7;     ///< [N] |r| to converge regardless
+    int maxIterations = 60;              ///< Newton iterations per solve
+    double pseudoTransientShift = 1e-3;  ///< initial shift, as a fraction of mean tangent diagonal
+    double maxStep = 0.0;                ///< [m] largest nodal move per iteration (0: no limit)
     /// Solve Newton systems by conjugate gradients preconditioned with the last factorisation
     /// (kept in a SolverWorkspace across iterations and solves); refactor only when that
     /// takes more than maxKrylovIterations.
     bool reuseFactorization = true;
     int maxKrylovIterations = 40;
-    double krylovTolerance = 1e-4;     ///< tightest relative residual of the inner linear solve
+    double krylovTolerance = 1e-4;  ///< tightest relative residual of the inner linear solve
     /// With a bending term: factor the tangent without the bending couplings between nodes
     /// that share no element (each dropped entry's magnitude added to its two diagonal
     /// entries, so the factored matrix stays positive definite) and solve the exact tangent
@@ -53,18 +53,18 @@ struct SolverOptions {
     /// Observer of each Newton iteration (iteration, residual [N], step length, shift [N/m]);
     /// for diagnostics, the library itself prints nothing.
     std::function<void(int, double, double, double)> monitor;
-    void validate() const;             ///< throws std::invalid_argument naming the option
+    void validate() const;  ///< throws std::invalid_argument naming the option
 };
 
 struct SolveSummary {
     bool converged = false;
     int iterations = 0;
     int factorizations = 0;
-    double residualNorm = 0.0;         ///< [N] free-dof residual at exit
-    double energy = 0.0;               ///< [J] at exit
-    int shiftedIterations = 0;         ///< iterations that needed the pseudo-transient shift
-    bool stalled = false;              ///< accepted under acceptableResidual, not tolerance
-    int krylovIterations = 0;          ///< preconditioned CG iterations (reused factorisation)
+    double residualNorm = 0.0;  ///< [N] free-dof residual at exit
+    double energy = 0.0;        ///< [J] at exit
+    int shiftedIterations = 0;  ///< iterations that needed the pseudo-transient shift
+    bool stalled = false;       ///< accepted under acceptableResidual, not tolerance
+    int krylovIterations = 0;   ///< preconditioned CG iterations (reused factorisation)
 };
 
 class MembraneModel;
@@ -83,7 +83,7 @@ struct ViscousState {
 };
 
 class SolverWorkspace {
-public:
+  public:
     SolverWorkspace();
     ~SolverWorkspace();
     SolverWorkspace(SolverWorkspace&&) noexcept;
@@ -91,8 +91,8 @@ public:
     /// Forgets the stored factorisation (e.g. after the model's structure changed).
     void reset();
     int getNumFactorizations() const;  ///< factorisations made through this workspace
-    struct Impl;  ///< defined in the solver's source only
-private:
+    struct Impl;                       ///< defined in the solver's source only
+  private:
     friend SolveSummary solveEquilibrium(const MembraneModel&, Eigen::Matrix3Xd&,
                                          const SolverOptions&, SolverWorkspace*);
     std::unique_ptr<Impl> m_impl;
@@ -100,7 +100,7 @@ private:
 
 /// The membrane, its gas, pressures and contacts as one energy.
 class MembraneModel {
-public:
+  public:
     MembraneModel(Mesh mesh, std::shared_ptr<const MembraneMaterial> material, double thickness);
 
     const Mesh& getMesh() const { return m_mesh; }
@@ -137,14 +137,18 @@ public:
 
     /// Adds a contact term; the model shares ownership.
     void addRigidContact(std::shared_ptr<RigidContact> contact);
-    void setSelfContact(std::shared_ptr<SelfContact> contact) { m_selfContact = std::move(contact); }
+    void setSelfContact(std::shared_ptr<SelfContact> contact) {
+        m_selfContact = std::move(contact);
+    }
     std::shared_ptr<SelfContact> getSelfContact() const { return m_selfContact; }
     bool isConservative() const;
     /// Bending stiffness D [N m] of the sheet (DiscreteBending: plate law, nu = 0.5, seams
     /// bend with their reference angle as rest angle); 0 (the default) switches it off.
     /// calcPlateBendingStiffness() gives the homogeneous film's value.
     void setBendingStiffness(double D);
-    double getBendingStiffness() const { return m_bending ? m_bending->getOptions().stiffness : 0.0; }
+    double getBendingStiffness() const {
+        return m_bending ? m_bending->getOptions().stiffness : 0.0;
+    }
     /// Threads of the element loops: 0 the OpenMP default, 1 single-threaded. The results are
     /// bit-identical for any value (fixed chunks merged in a fixed order).
     void setNumThreads(int threads) { m_threads = threads; }
@@ -212,7 +216,7 @@ public:
     /// panel's normal (docs/materials.md#fabric-anisotropy). No effect on an isotropic film.
     /// @throws std::invalid_argument for a zero direction or two within 30 degrees.
     void setWarpAxes(const Vec3& axis, const Vec3& fallback);
-    const Vec3& getWarpAxis() const { return m_warpAxis; }        ///< as set (setWarpAxes)
+    const Vec3& getWarpAxis() const { return m_warpAxis; }          ///< as set (setWarpAxes)
     const Vec3& getWarpFallback() const { return m_warpFallback; }  ///< as set (setWarpAxes)
     /// Unit warp direction per triangle in the reference configuration (the rule above).
     std::vector<Vec3> calcWarpDirections() const;
@@ -223,7 +227,7 @@ public:
     /// Largest in-plane principal Cauchy stress per triangle [Pa].
     Eigen::VectorXd calcPrincipalStress(const Eigen::Matrix3Xd& x) const;
 
-private:
+  private:
     friend class EquilibriumSolver;
     friend class FilmForce;  // the explicit step's kernel reads the element data and state
     struct GasBody {
@@ -239,24 +243,24 @@ private:
     double m_density = 0.0;
     Vec3 m_gravity = Vec3::Zero();
     std::vector<GasBody> m_gases;
-    std::vector<int> m_chamberGas;        ///< gas index per chamber or -1
-    std::vector<double> m_chamberPressure;///< prescribed gauge pressure per chamber [Pa]
+    std::vector<int> m_chamberGas;          ///< gas index per chamber or -1
+    std::vector<double> m_chamberPressure;  ///< prescribed gauge pressure per chamber [Pa]
     std::vector<std::shared_ptr<RigidContact>> m_contacts;
     std::shared_ptr<SelfContact> m_selfContact;
     std::vector<int> m_fixedDofs;
     std::shared_ptr<const DiscreteBending> m_bending;  ///< null: no bending
-    Vec3 m_warpAxis = Vec3::UnitX();      ///< an anisotropic film's warp reference (setWarpAxes)
+    Vec3 m_warpAxis = Vec3::UnitX();  ///< an anisotropic film's warp reference (setWarpAxes)
     Vec3 m_warpFallback = Vec3::UnitZ();
-    int m_threads = 0;                    ///< 0: OpenMP default
-    int m_elementChunks = 0;              ///< setElementChunks (0: by size)
-    double m_stabilization = 0.0;         ///< [Pa/m]
+    int m_threads = 0;             ///< 0: OpenMP default
+    int m_elementChunks = 0;       ///< setElementChunks (0: by size)
+    double m_stabilization = 0.0;  ///< [Pa/m]
     Eigen::Matrix3Xd m_anchor;
     std::vector<double> m_stabilizationWeight;  ///< per node; empty: all 1
-    Eigen::VectorXd m_nodalArea;          ///< [m^2]
+    Eigen::VectorXd m_nodalArea;                ///< [m^2]
     // Per triangle: inverse of the reference edge matrix in a local 2D frame, reference area.
     std::vector<Eigen::Matrix2d> m_DmInv;
     std::vector<double> m_area0;
-    Eigen::VectorXd m_nodalMass;          ///< [kg]
+    Eigen::VectorXd m_nodalMass;  ///< [kg]
     // Viscoelasticity (setProny): the series, its state and the current step's potential:
     // per term phi_i (0: the branch is gone), the branch's energy weight k_i / phi_i, and per
     // term and element the constant c of the branch strain q_i(C) = phi_i E(C) + c.
@@ -269,8 +273,7 @@ private:
     void setViscousStep(double dt);
     /// Adds the branches' energy, stress and tangent of element e at C (false: a branch
     /// strain with det(I + 2 q) <= 0).
-    bool addBranches(int e, const Mat2& C, double* W, Eigen::Vector3d* S,
-                     Eigen::Matrix3d* D) const;
+    bool addBranches(int e, const Mat2& C, double* W, Eigen::Vector3d* S, Eigen::Matrix3d* D) const;
 };
 
 /// Minimises the model's energy over the free dofs, starting from x (updated in place).

@@ -24,11 +24,11 @@ using Triplet = Eigen::Triplet<double>;
 /// Sums energy [J], gradient [N] and Hessian [N/m] contributions over the 3N dofs of a mesh.
 /// Dof of node n, direction d (0=x,1=y,2=z) is 3*n+d. Terms add, never overwrite.
 struct EnergyAccumulator {
-    double energy = 0.0;                 ///< [J]
-    Eigen::VectorXd grad;                ///< dE/dx [N], size 3N
-    std::vector<Triplet> hess;           ///< d2E/dx2 [N/m] as triplets (duplicates are summed)
-    bool wantGradient = true;            ///< false: only energy is needed (line search)
-    bool wantHessian = true;             ///< false: skip triplets
+    double energy = 0.0;        ///< [J]
+    Eigen::VectorXd grad;       ///< dE/dx [N], size 3N
+    std::vector<Triplet> hess;  ///< d2E/dx2 [N/m] as triplets (duplicates are summed)
+    bool wantGradient = true;   ///< false: only energy is needed (line search)
+    bool wantHessian = true;    ///< false: skip triplets
     /// Triplets [wideBegin, wideEnd) of `hess` couple nodes beyond the element's own (the
     /// bending stencil reaches the neighbouring triangles' far vertices); the solver may leave
     /// those couplings out of the matrix it factors (docs/solver.md).
@@ -54,13 +54,13 @@ struct EnergyAccumulator {
 /// Numerical failure (inverted element, negative volume, no convergence). Carries where it
 /// happened so the caller can cut the step and retry, or report it.
 class NumericalError : public std::runtime_error {
-public:
+  public:
     NumericalError(const std::string& what, double time = -1.0, int step = -1, int element = -1)
         : std::runtime_error(what), m_time(time), m_step(step), m_element(element) {}
-    double getTime() const { return m_time; }      ///< simulated time [s], -1 if unknown
-    int getStep() const { return m_step; }         ///< load step, -1 if unknown
-    int getElement() const { return m_element; }   ///< element index, -1 if none
-private:
+    double getTime() const { return m_time; }     ///< simulated time [s], -1 if unknown
+    int getStep() const { return m_step; }        ///< load step, -1 if unknown
+    int getElement() const { return m_element; }  ///< element index, -1 if none
+  private:
     double m_time;
     int m_step;
     int m_element;

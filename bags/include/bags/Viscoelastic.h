@@ -49,9 +49,9 @@ struct PronySeries {
     std::vector<PronyTerm> terms;
 
     static constexpr int kMaxTerms = 8;
-    static constexpr double kMaxSum = 0.95;      ///< sum g_i at most (1 / g_inf <= 20)
-    static constexpr double kMinTau = 1e-3;      ///< [s]
-    static constexpr double kMaxTau = 1e7;       ///< [s] (about four months)
+    static constexpr double kMaxSum = 0.95;  ///< sum g_i at most (1 / g_inf <= 20)
+    static constexpr double kMinTau = 1e-3;  ///< [s]
+    static constexpr double kMaxTau = 1e7;   ///< [s] (about four months)
 
     /// True when a term has g > 0 (terms of g = 0 change nothing and are not evaluated).
     bool isOn() const;

@@ -41,7 +41,7 @@ struct PlaneSupportOptions {
     double slipVelocity = 2.0e-3;  ///< friction regularization velocity [m/s] (regularised)
     SupportFrictionLaw frictionLaw = SupportFrictionLaw::Regularised;
     double stickDistance = 1.0e-3;  ///< [m] elastic slip at which the stick spring is at mu F_n
-    double sampleSpacing = 0.012;  ///< patch size on the shapes' surfaces [m]
+    double sampleSpacing = 0.012;   ///< patch size on the shapes' surfaces [m]
     /// @throws std::invalid_argument naming the option if a value is out of range.
     void validate() const;
 };
@@ -110,7 +110,7 @@ class PlaneSupport : public SimTK::Force::Custom::Implementation {
     std::array<std::vector<Patch>, kSegmentCount> m_patches;
     std::array<int, kSegmentCount> m_firstPatch{};  // global index of each segment's first
     int m_patchCount = 0;
-    const SimTK::Subsystem& m_forces;                 // holds the anchors (stick-slip)
+    const SimTK::Subsystem& m_forces;  // holds the anchors (stick-slip)
     mutable SimTK::DiscreteVariableIndex m_anchorsIndex;
     // Per segment, the axis-aligned box of its patches in the body frame: centre and half
     // extents [m] (the broad phase; tighter than the shape's bounding sphere).

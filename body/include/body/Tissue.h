@@ -43,8 +43,7 @@ const char* getTissueSiteName(TissueSite site);
 /// The published default of a site (docs/body.md#soft-tissue).
 SoftTissue getPublishedTissue(TissueSite site);
 /// Every segment's layer (body::Segment order, kSegmentCount entries) from one per site.
-std::vector<SoftTissue> makeSegmentTissue(
-    const std::array<SoftTissue, kTissueSiteCount>& perSite);
+std::vector<SoftTissue> makeSegmentTissue(const std::array<SoftTissue, kTissueSiteCount>& perSite);
 /// The published default of every site.
 std::array<SoftTissue, kTissueSiteCount> getPublishedTissues();
 

@@ -76,6 +76,7 @@ class IQNILS : public Accelerator {
     /// The earlier steps' columns (reuseSteps).
     void saveState(bags::StateWriter& w) const override;
     void loadState(bags::StateReader& r) override;
+
   private:
     double m_initial;
     int m_reuse;

@@ -47,9 +47,9 @@ struct BagOrifice {
 };
 
 struct ArrayPneumaticsSpec {
-    pneumatics::PumpSpec pump;           ///< flow against pressure rise
-    pneumatics::VolumeSpec manifold;     ///< volume, thermal model (pressure: set to ambient)
-    pneumatics::VolumeSpec line;         ///< thermal model of the lines (volume per channel)
+    pneumatics::PumpSpec pump;        ///< flow against pressure rise
+    pneumatics::VolumeSpec manifold;  ///< volume, thermal model (pressure: set to ambient)
+    pneumatics::VolumeSpec line;      ///< thermal model of the lines (volume per channel)
     std::vector<PneumaticChannel> channels;
     std::vector<BagOrifice> orifices;
     pneumatics::SensorSpec sensor;  ///< every bag's and line's (seeds: sensor.seed + node)
@@ -134,9 +134,9 @@ class ArrayPneumatics {
     double m_savedTime = -1.0, m_time = 0.0;
     int m_pump = -1, m_manifold = -1;
     std::vector<Channel> m_channels;
-    std::vector<int> m_bags;           // array index per network bag
-    std::vector<int> m_slot;           // network bag per array index, -1: none
-    std::vector<int> m_bagSensor;      // per network bag
+    std::vector<int> m_bags;       // array index per network bag
+    std::vector<int> m_slot;       // network bag per array index, -1: none
+    std::vector<int> m_bagSensor;  // per network bag
     std::vector<std::vector<std::pair<int, int>>> m_bagLinks;  // per network bag: (link, sign)
 };
 

@@ -40,12 +40,12 @@ namespace cosim {
 
 /// Loads on one body region (or on a segment, for nodes in no region).
 struct RegionLoad {
-    std::string name;           ///< body::BodyRegion::name, or the segment's name
-    double peakPressure = 0.0;  ///< [Pa] highest nodal contact pressure
+    std::string name;                ///< body::BodyRegion::name, or the segment's name
+    double peakPressure = 0.0;       ///< [Pa] highest nodal contact pressure
     double patchPeakPressure = 0.0;  ///< [Pa] highest mean pressure over a patch (file comment)
-    double meanPressure = 0.0;  ///< [Pa] normal force over the area (0 with no area)
-    double area = 0.0;          ///< [m^2] nodes' areas where the pressure exceeds the threshold
-    double force = 0.0;         ///< [N] vertical (Ground +z) part of the contact force
+    double meanPressure = 0.0;       ///< [Pa] normal force over the area (0 with no area)
+    double area = 0.0;   ///< [m^2] nodes' areas where the pressure exceeds the threshold
+    double force = 0.0;  ///< [N] vertical (Ground +z) part of the contact force
     /// [m] the most a node above the area threshold lies below its height at the start
     /// (file comment); 0 with no such node; NaN on the reduced bag (no film: not measured)
     double immersion = 0.0;

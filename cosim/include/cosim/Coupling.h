@@ -163,21 +163,21 @@ struct Link {
 
 /// What one macro step did.
 struct StepSummary {
-    int step = 0;              ///< index of the macro step (0 the first)
-    double time = 0.0;         ///< [s] at its end
-    int iterations = 0;        ///< passes (1 for the one-pass schemes)
+    int step = 0;        ///< index of the macro step (0 the first)
+    double time = 0.0;   ///< [s] at its end
+    int iterations = 0;  ///< passes (1 for the one-pass schemes)
     /// implicit: within tolerance; one-pass schemes: true; false only for a step kept
     /// unconverged at the smallest step (CouplingOptions::keepUnconverged)
     bool converged = true;
     /// converged to CouplingOptions::acceptResidual, not to the tolerance: the passes stalled
     /// (residual then says where)
     bool accepted = false;
-    double residual = 0.0;     ///< [N] |H(x) - x| of the last pass (scaled as above)
-    double wrenchNorm = 0.0;   ///< [N] |H(x)| of the last pass
-    int bagIterations = 0;     ///< Newton iterations over every participant and pass
-    double macroStep = 0.0;    ///< [s] the step taken
-    int cuts = 0;              ///< stepAdaptive(): halvings before this step succeeded
-    double shapeTravel = 0.0;  ///< [m] the largest travel of a linked shape's origin
+    double residual = 0.0;       ///< [N] |H(x) - x| of the last pass (scaled as above)
+    double wrenchNorm = 0.0;     ///< [N] |H(x)| of the last pass
+    int bagIterations = 0;       ///< Newton iterations over every participant and pass
+    double macroStep = 0.0;      ///< [s] the step taken
+    int cuts = 0;                ///< stepAdaptive(): halvings before this step succeeded
+    double shapeTravel = 0.0;    ///< [m] the largest travel of a linked shape's origin
     double firstResidual = 0.0;  ///< [N] |H(x) - x| of the first pass (scaled as above)
     /// [N] the coupling tolerance at the first pass, relativeTolerance |H| + absoluteTolerance
     double tolerance = 0.0;
@@ -198,22 +198,22 @@ struct StepSummary {
 /// Where a coupling's wall time went, summed over the steps since the last resetProfile()
 /// (failed and cut steps included). Read by bench/CosimBench.cpp (docs/performance.md).
 struct CouplingProfile {
-    int steps = 0;              ///< step() calls (cut ones included)
-    int passes = 0;             ///< body-then-bags passes
-    double bodySeconds = 0.0;   ///< [s] wall in the body's advanceTo()
-    double bagsSeconds = 0.0;   ///< [s] wall of the participants' sections (all threads at once)
+    int steps = 0;             ///< step() calls (cut ones included)
+    int passes = 0;            ///< body-then-bags passes
+    double bodySeconds = 0.0;  ///< [s] wall in the body's advanceTo()
+    double bagsSeconds = 0.0;  ///< [s] wall of the participants' sections (all threads at once)
     /// [s] the participants' own wall time summed over participants (advance and read-back):
     /// threads x bagsSeconds - bagBusySeconds is the time threads waited for one another.
     double bagBusySeconds = 0.0;
-    double tangentSeconds = 0.0;  ///< [s] of bagBusySeconds in calcWrenchTangents()
-    int threads = 1;              ///< threads the participants ran on
-    long tangentRefreshes = 0;    ///< participants' tangents computed (tangent scheme)
-    long skipped = 0;             ///< participant steps skipped (skipTravel)
-    long advances = 0;            ///< participant advance() calls
-    long idleAdvances = 0;        ///< of which returned with no solver iteration (stood)
-    long solverIterations = 0;    ///< over every advance
+    double tangentSeconds = 0.0;             ///< [s] of bagBusySeconds in calcWrenchTangents()
+    int threads = 1;                         ///< threads the participants ran on
+    long tangentRefreshes = 0;               ///< participants' tangents computed (tangent scheme)
+    long skipped = 0;                        ///< participant steps skipped (skipTravel)
+    long advances = 0;                       ///< participant advance() calls
+    long idleAdvances = 0;                   ///< of which returned with no solver iteration (stood)
+    long solverIterations = 0;               ///< over every advance
     std::vector<double> participantSeconds;  ///< per participant [s]
-    std::vector<long> participantIterations; ///< per participant
+    std::vector<long> participantIterations;  ///< per participant
 };
 
 class Coupling {

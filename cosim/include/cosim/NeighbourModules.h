@@ -25,8 +25,8 @@ namespace cosim {
 /// enclosed by B's chambers (winding number of B's chamber triangles above 1/2), its distance
 /// to B's nearest triangle; and the same with A and B swapped. 0 if no node lies inside.
 /// `filmA`'s triangles and chambers index the columns of xA (Ground [m]); likewise B.
-double calcFilmOverlap(const bags::Mesh& filmA, const Eigen::Matrix3Xd& xA,
-                       const bags::Mesh& filmB, const Eigen::Matrix3Xd& xB);
+double calcFilmOverlap(const bags::Mesh& filmA, const Eigen::Matrix3Xd& xA, const bags::Mesh& filmB,
+                       const Eigen::Matrix3Xd& xB);
 
 /// The bags that may touch, grouped: the connected components of the graph in which two bags
 /// are joined when their boxes (each bag's inflated extent on the bed, Ground x and y [m]),
@@ -91,7 +91,7 @@ class ModuleBag : public Bag {
 /// by `margin`), each group of two or more a module (AirbagSpec::cluster, the bags at their
 /// cells' poses in Ground) read per bag through ModuleBag.
 struct ArrayParticipants {
-    std::vector<std::vector<int>> modules;           ///< per participant: its bags (positions)
+    std::vector<std::vector<int>> modules;  ///< per participant: its bags (positions)
     std::vector<std::unique_ptr<BagParticipant>> participants;
     std::vector<std::unique_ptr<ModuleBag>> moduleBags;
     std::vector<Bag*> bags;          ///< per bag: its participant, or its ModuleBag

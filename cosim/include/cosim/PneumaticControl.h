@@ -55,8 +55,8 @@ class PneumaticController {
 struct ValveCommand {
     double time = 0.0;  ///< [s] from which it holds (within the period if repeated)
     int channel = 0;
-    int inflate = -1;   ///< 1 open, 0 closed, -1 as it was
-    int vent = -1;      ///< 1 open, 0 closed, -1 as it was
+    int inflate = -1;  ///< 1 open, 0 closed, -1 as it was
+    int vent = -1;     ///< 1 open, 0 closed, -1 as it was
 };
 
 /// A timed schedule of valve states, optionally repeated every `period` from `start`.
@@ -135,8 +135,8 @@ double calcCellPressureForBody(const body::PatientSpec& patient);
 /// The gas mass [kg] that gives stiffness k [N/m] by linear interpolation in a k(m) table
 /// (masses increasing, stiffness strictly monotone over them).
 /// @throws std::invalid_argument if k lies outside the table or the table is not monotone.
-double calcMassForStiffness(const std::vector<double>& masses,
-                            const std::vector<double>& stiffness, double k);
+double calcMassForStiffness(const std::vector<double>& masses, const std::vector<double>& stiffness,
+                            double k);
 
 /// The turn: from `start`, the `inflate` channels fill and the `vent` channels vent until the
 /// pelvis tilt reaches `tilt` (signed: positive onto his left side), or `maxTurnTime` passes;
@@ -147,16 +147,16 @@ double calcMassForStiffness(const std::vector<double>& masses,
 /// and after it, the channels the turn does not move throughout; the turn channels are
 /// sealed for `hold` and then brought back to the pressure, not to their masses.
 struct TurnSpec {
-    double start = 0.0;                ///< [s]
-    std::vector<int> inflate, vent;    ///< channels
-    double tilt = 0.0;                 ///< [rad] signed target pelvis tilt
-    double hold = 0.0;                 ///< [s]
-    double maxTurnTime = 60.0;         ///< [s] the turn gives up after this
-    double minMass = 0.0;              ///< [kg] per bag: venting stops below it (0: none)
-    double maxPressure = 0.0;          ///< [Pa] gauge: filling stops above it (0: none)
-    double band = 0.05e-3;             ///< [kg] per bag, for the return
-    double holdPressure = 0.0;         ///< [Pa] gauge, the zones' setpoint (0: sealed bags)
-    double pressureBand = 0.3e3;       ///< [Pa] its dead band (with a holdPressure)
+    double start = 0.0;              ///< [s]
+    std::vector<int> inflate, vent;  ///< channels
+    double tilt = 0.0;               ///< [rad] signed target pelvis tilt
+    double hold = 0.0;               ///< [s]
+    double maxTurnTime = 60.0;       ///< [s] the turn gives up after this
+    double minMass = 0.0;            ///< [kg] per bag: venting stops below it (0: none)
+    double maxPressure = 0.0;        ///< [Pa] gauge: filling stops above it (0: none)
+    double band = 0.05e-3;           ///< [kg] per bag, for the return
+    double holdPressure = 0.0;       ///< [Pa] gauge, the zones' setpoint (0: sealed bags)
+    double pressureBand = 0.3e3;     ///< [Pa] its dead band (with a holdPressure)
     /// @throws std::invalid_argument naming the parameter.
     void validate(int numChannels) const;
 };
@@ -193,9 +193,9 @@ class TurnController : public PneumaticController {
     Phase m_phase = Phase::Waiting;
     double m_phaseStart = 0.0;
     double m_reached = std::numeric_limits<double>::quiet_NaN();
-    std::vector<int> m_channels;         // inflate then vent
-    std::vector<double> m_initialMass;   // per bag, per m_channels entry
-    std::vector<double> m_turnedMass;    // per bag, per m_channels entry, at the turn's end
+    std::vector<int> m_channels;        // inflate then vent
+    std::vector<double> m_initialMass;  // per bag, per m_channels entry
+    std::vector<double> m_turnedMass;   // per bag, per m_channels entry, at the turn's end
     double m_turnedTilt = 0.0;
     std::vector<BandController> m_band;  // the return
     std::vector<char> m_isTurnChannel;   // per channel of the network

@@ -168,7 +168,7 @@ class ReducedBag : public Bag {
         int point = -1;
         bool column = false;
         double delta = 0.0, blend = 0.0, gasPressure = 0.0, boardPressure = 0.0;
-        double film = 1.0;  // the shape's share of the column's film (1 alone there)
+        double film = 1.0;   // the shape's share of the column's film (1 alone there)
         double shift = 0.0;  // the top's rise there by the other shapes' loads [m] (coupling)
         Vec3 c = Vec3::Zero(), n = Vec3::Zero(), force = Vec3::Zero();
     };
@@ -254,12 +254,12 @@ class ReducedBag : public Bag {
     /// The contact weight of a sample at depth delta of a shape whose deepest depth is
     /// `depth`, and its derivatives.
     double calcWeight(double delta, double depth, double* dDelta, double* dDepth) const;
-    void evaluate();  // m_cur.mass and the shapes' poses -> everything
-    Eigen::Matrix3Xd calcTop() const;  // the unloaded top at m_cur.mass (Ground), per grid point
+    void evaluate();                     // m_cur.mass and the shapes' poses -> everything
+    Eigen::Matrix3Xd calcTop() const;    // the unloaded top at m_cur.mass (Ground), per grid point
     Vec3 calcTopPoint(int point) const;  // one grid point's of calcTop()
-    double calcBoardPressure(const Vec3& p) const;  // the board's penalty pressure at p [Pa]
+    double calcBoardPressure(const Vec3& p) const;     // the board's penalty pressure at p [Pa]
     void buildFootprint(const Eigen::Matrix3Xd& top);  // m_points, m_areas from the samples
-    void shareFilm(const Eigen::Matrix3Xd& top);  // each sample's film share (evaluate)
+    void shareFilm(const Eigen::Matrix3Xd& top);       // each sample's film share (evaluate)
     /// The panel coupling (evaluate, after the gas): each shape's depths under the top moved
     /// by the other shapes' loads; its depth, deepest sample and area again.
     void coupleThePanels();
@@ -268,12 +268,12 @@ class ReducedBag : public Bag {
     double lookup(const Eigen::MatrixXd& table, double mass, double depth, double* dDepth) const;
     double solvePressure(double displaced, double* dPdV) const;
     void checkEnvelope();
-    void addFriction(size_t s);      // the friction force onto m_results[s] (evaluate)
-    void updateAnchors();            // commit: anchors follow slides and the centroid
+    void addFriction(size_t s);  // the friction force onto m_results[s] (evaluate)
+    void updateAnchors();        // commit: anchors follow slides and the centroid
 
     std::shared_ptr<const ReducedBagCalibration> m_cal;
     Eigen::Isometry3d m_X_GB;
-    Eigen::Isometry3d m_X_BG;  // its inverse
+    Eigen::Isometry3d m_X_BG;      // its inverse
     std::vector<int> m_gridIndex;  // point -> ix + nx iy
     std::vector<double> m_steep;   // point -> its share of the steep panel (the coupling)
     std::vector<std::shared_ptr<bags::RigidShape>> m_shapes;
@@ -284,7 +284,7 @@ class ReducedBag : public Bag {
     std::vector<ShapeResult> m_results;
     State m_cur, m_committed;
     double m_displaced = 0.0, m_dPdV = 0.0;
-    Eigen::Matrix3Xd m_points;  // the grid's tops, then each shape's samples' contact points
+    Eigen::Matrix3Xd m_points;     // the grid's tops, then each shape's samples' contact points
     std::vector<int> m_slotStart;  // per shape: its first sample's column in m_points
     Eigen::VectorXd m_areas;
     std::vector<double> m_pVfree, m_Vfree;  // taut unloaded states, ascending pressure

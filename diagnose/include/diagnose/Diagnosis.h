@@ -51,8 +51,8 @@ struct ChannelComparison {
 };
 
 struct TestComparison {
-    int test = 0;          ///< index in MeasuredData::tests
-    double gasMass = 0.0;  ///< [kg] as the flowmeter read it
+    int test = 0;                             ///< index in MeasuredData::tests
+    double gasMass = 0.0;                     ///< [kg] as the flowmeter read it
     std::vector<ChannelComparison> channels;  ///< force, pressure, mass[, bed]
     /// RMS of (simulated - simulated at half the step) per channel [SI], when given: the
     /// numerical uncertainty (0 if not estimated); with a finer mesh's run (diagnose
@@ -101,10 +101,9 @@ std::vector<double> calcSensitivityUncertainty(const TestComparison& plus,
 std::vector<double> combineInputUncertainties(const std::vector<std::vector<double>>& terms);
 
 /// Runs the load tests at once, `threads` at a time; rethrows the first failure (by index).
-std::vector<bags::LoadTestResult> runLoadTests(const std::vector<bags::LoadTestOptions>& runs,
-                                               const std::function<bags::LoadTestResult(
-                                                   const bags::LoadTestOptions&)>& simulate,
-                                               int threads);
+std::vector<bags::LoadTestResult> runLoadTests(
+    const std::vector<bags::LoadTestOptions>& runs,
+    const std::function<bags::LoadTestResult(const bags::LoadTestOptions&)>& simulate, int threads);
 
 /// Sets each test's inputUncertaintyGasMass and inputUncertaintyTemperature from the runs of
 /// makeInputRuns (`results` in the same order), the instruments reading them with `rig`.
@@ -127,24 +126,24 @@ struct RegimeStats {
     std::string regime;   ///< "all", "gas mass 3.50 g", "loading", "load 10-35 N",
                           ///< "time first third", ...
     int samples = 0;
-    double rmse = 0.0;    ///< [SI]
-    double bias = 0.0;    ///< mean residual [SI]
-    double maxError = 0.0;   ///< largest |residual| [SI]
-    double share = 0.0;   ///< of the channel's squared error (0-1)
+    double rmse = 0.0;      ///< [SI]
+    double bias = 0.0;      ///< mean residual [SI]
+    double maxError = 0.0;  ///< largest |residual| [SI]
+    double share = 0.0;     ///< of the channel's squared error (0-1)
 };
 
 /// Signatures of a channel's residuals over one test (or all, test = -1).
 struct Signature {
     std::string channel;
     int test = -1;
-    double gasMass = 0.0;     ///< [kg] (0 for all)
-    double bias = 0.0;        ///< mean residual [SI]
-    double scale = 0.0;       ///< measured = a + (1 + scale) simulated, least squares [-]
-    double lag = 0.0;         ///< [s] cross-correlation peak: measured behind simulated > 0
-    double lagCorrelation = 0.0;  ///< the correlation at that peak (-1 to 1)
-    double loopAreaMeasured = 0.0;   ///< hysteresis loop area, channel x displacement [SI m]
+    double gasMass = 0.0;           ///< [kg] (0 for all)
+    double bias = 0.0;              ///< mean residual [SI]
+    double scale = 0.0;             ///< measured = a + (1 + scale) simulated, least squares [-]
+    double lag = 0.0;               ///< [s] cross-correlation peak: measured behind simulated > 0
+    double lagCorrelation = 0.0;    ///< the correlation at that peak (-1 to 1)
+    double loopAreaMeasured = 0.0;  ///< hysteresis loop area, channel x displacement [SI m]
     double loopAreaSimulated = 0.0;
-    double drift = 0.0;       ///< slope of the residual over time [SI/s]
+    double drift = 0.0;  ///< slope of the residual over time [SI/s]
     /// What the signature is of within its channel ("bag 17", "test gas-4.0g, bag 17"); "" all
     /// (the rig's: `test` and `gasMass` say it).
     std::string part;
@@ -152,22 +151,22 @@ struct Signature {
 
 struct ChannelSummary {
     std::string channel;
-    double rmse = 0.0;         ///< [SI]
+    double rmse = 0.0;  ///< [SI]
     /// Measured max - min [SI] (normalises the gap); for the bed gauge the crosshead's
     /// travel (the bed's sink is judged against how far the block went: a rigid bed's
     /// channel spans its noise only).
     double range = 0.0;
-    double noise = 0.0;        ///< sensor noise from the data (median second difference) [SI]
-    double numerical = 0.0;    ///< numerical uncertainty [SI] (0 if not estimated)
+    double noise = 0.0;          ///< sensor noise from the data (median second difference) [SI]
+    double numerical = 0.0;      ///< numerical uncertainty [SI] (0 if not estimated)
     double numericalMesh = 0.0;  ///< the mesh's part of `numerical` [SI] (0 if not estimated)
-    double input = 0.0;        ///< input uncertainty (the imperfection's spread) [SI]
+    double input = 0.0;          ///< input uncertainty (the imperfection's spread) [SI]
     /// Input uncertainty of the protocol's stated gas mass and room temperature [SI]: over the
     /// channel's samples of all tests, the RMS of |dS/dx| u_x (0 where not stated).
     double inputGasMass = 0.0, inputTemperature = 0.0;
     /// ASME V&V 20 validation uncertainty [SI]: the root sum square of noise, numerical,
     /// input, inputGasMass and inputTemperature.
     double validation = 0.0;
-    double shareOfGap = 0.0;   ///< of the normalised squared error over force, pressure, bed
+    double shareOfGap = 0.0;  ///< of the normalised squared error over force, pressure, bed
 };
 
 struct WhereReport {
@@ -182,8 +181,8 @@ struct WhereReport {
     /// input not stated adds nothing and is said so); set by the caller (describeInputs).
     struct StatedInput {
         ProtocolInput input = ProtocolInput::GasMass;
-        bool stated = false;           ///< by every test (the gas mass) or the protocol
-        std::vector<double> values;    ///< [SI] per test (the gas mass) or one (temperature)
+        bool stated = false;         ///< by every test (the gas mass) or the protocol
+        std::vector<double> values;  ///< [SI] per test (the gas mass) or one (temperature)
     };
     std::vector<StatedInput> statedInputs;
 };
@@ -195,7 +194,7 @@ std::vector<WhereReport::StatedInput> describeInputs(const MeasuredData& data);
 struct WhereOptions {
     double loadFrom = 10.0;  ///< [N] load range split (the scenario's stiffness range)
     double loadTo = 35.0;
-    double maxLag = 30.0;    ///< [s] cross-correlation search window
+    double maxLag = 30.0;  ///< [s] cross-correlation search window
 };
 
 WhereReport calcWhere(const std::vector<TestComparison>& tests, const WhereOptions& options);
@@ -243,13 +242,13 @@ double calcGap(const std::vector<TestComparison>& tests, const std::vector<int>&
 using Simulator = std::function<bags::LoadTestResult(const bags::LoadTestOptions&)>;
 
 struct CalibrationOptions {
-    int gridPoints = 7;          ///< coarse scan per parameter before Ceres refines
-    int maxIterations = 10;      ///< Ceres iterations per fold
+    int gridPoints = 7;              ///< coarse scan per parameter before Ceres refines
+    int maxIterations = 10;          ///< Ceres iterations per fold
     double parameterPenalty = 0.05;  ///< subtracted from the shrink per parameter [-]
     /// An effect is named when its held-out shrink (less the penalty) is at least this.
     double explainThreshold = 0.5;
     std::vector<std::string> candidates;  ///< effect names; empty: the library (Effect::inLibrary)
-    int threads = 1;             ///< simulations run at once
+    int threads = 1;                      ///< simulations run at once
     /// The pair stage (docs/diagnosis.md#two-effects-at-once): the best singles taken as a
     /// pair's first member, and how many of the pairs screened are fitted in full.
     bool pairs = true;
@@ -266,9 +265,9 @@ struct CalibrationOptions {
 };
 
 struct FoldResult {
-    int heldOut = 0;             ///< test index
-    std::vector<double> parameters;   ///< calibrated on the others [SI]
-    double before = 0.0, after = 0.0;  ///< held-out gap without and with the effect [-]
+    int heldOut = 0;                               ///< test index
+    std::vector<double> parameters;                ///< calibrated on the others [SI]
+    double before = 0.0, after = 0.0;              ///< held-out gap without and with the effect [-]
     double excessBefore = 0.0, excessAfter = 0.0;  ///< the same beyond the uncertainty [-]
 };
 
@@ -277,9 +276,9 @@ struct FoldResult {
 struct GapMetrics {
     std::string channel;
     int samples = 0;
-    double rmse = 0.0;             ///< RMS of E [SI]
-    double meanError = 0.0;        ///< mean of E = S - D [SI]
-    double maxError = 0.0;         ///< largest |E| [SI]
+    double rmse = 0.0;       ///< RMS of E [SI]
+    double meanError = 0.0;  ///< mean of E = S - D [SI]
+    double maxError = 0.0;   ///< largest |E| [SI]
     /// Area between the empirical CDFs of the measured and the simulated values (Ferson,
     /// Oberkampf and Ginzburg 2008): the Wasserstein-1 distance of the two samples [SI].
     double areaMetric = 0.0;
@@ -290,18 +289,18 @@ std::vector<GapMetrics> calcGapMetrics(const std::vector<TestComparison>& tests)
 
 struct CandidateResult {
     std::string effect;
-    std::vector<double> parameters;        ///< calibrated on all tests [SI]
-    std::vector<double> parameterStdDev;   ///< from Ceres' covariance (NaN if unavailable)
+    std::vector<double> parameters;       ///< calibrated on all tests [SI]
+    std::vector<double> parameterStdDev;  ///< from Ceres' covariance (NaN if unavailable)
     std::vector<FoldResult> folds;
     double heldoutBefore = 0.0;  ///< mean over folds [-]
     double heldoutAfter = 0.0;
-    double shrink = 0.0;         ///< 1 - after / before [-]
+    double shrink = 0.0;  ///< 1 - after / before [-]
     /// The held-out gap beyond the validation uncertainty (calcGap), mean over folds, and its
     /// shrink: the part of the gap an effect must explain.
     double excessBefore = 0.0, excessAfter = 0.0;
     double excessShrink = 0.0;
-    double score = 0.0;          ///< excessShrink - penalty x parameters
-    int simulations = 0;         ///< load tests run for this candidate
+    double score = 0.0;   ///< excessShrink - penalty x parameters
+    int simulations = 0;  ///< load tests run for this candidate
     /// Over every test when held out (each with its fold's parameters), per channel: without
     /// and with the effect.
     std::vector<GapMetrics> heldoutMetricsBefore, heldoutMetricsAfter;
@@ -350,8 +349,8 @@ struct WhichReport {
     int pairSimulations = 0;  ///< load tests the pair stage ran (screen and fits)
     /// The effects the verdict names: none for `none` and `unexplained`, one, or two.
     std::vector<std::string> verdictEffects;
-    std::string verdict;   ///< an effect name, "none" or "unexplained"
-    std::string reason;    ///< one sentence
+    std::string verdict;  ///< an effect name, "none" or "unexplained"
+    std::string reason;   ///< one sentence
     /// Pairs of effects whose scores are both above the threshold and whose shrinks beyond the
     /// uncertainty are within 0.1 of each other: these data do not tell them apart.
     std::vector<std::pair<std::string, std::string>> confusable;

@@ -14,10 +14,10 @@
 namespace diagnose {
 
 struct EffectParameter {
-    std::string name;         ///< as given to --param ("lag")
-    std::string unit;         ///< the unit it is shown and given in ("s")
-    double siPerUnit = 1.0;   ///< SI value of one unit
-    double lower = 0.0;       ///< physical bounds [SI]
+    std::string name;        ///< as given to --param ("lag")
+    std::string unit;        ///< the unit it is shown and given in ("s")
+    double siPerUnit = 1.0;  ///< SI value of one unit
+    double lower = 0.0;      ///< physical bounds [SI]
     double upper = 0.0;
     double typical = 0.0;     ///< default magnitude for a synthetic check [SI]
     std::string scenarioKey;  ///< the scenario key that switches it on

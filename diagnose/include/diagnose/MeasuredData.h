@@ -19,7 +19,7 @@ struct Channel {
 
 /// One loading-unloading test at one gas mass.
 struct MeasuredTest {
-    double gasMass = 0.0;   ///< [kg] as the flowmeter read it (the protocol's value)
+    double gasMass = 0.0;  ///< [kg] as the flowmeter read it (the protocol's value)
     /// The stated standard uncertainty of that reading [kg] (the manifest's
     /// `gas_mass_uncertainty`, the test's or the protocol's); 0 when not stated.
     double gasMassUncertainty = 0.0;
@@ -64,9 +64,9 @@ struct MeasuredData {
     std::string scenarioFile;  ///< path of the scenario it corresponds to
     std::string description;
     Protocol protocol;
-    std::vector<MeasuredTest> tests;   ///< may be empty when a stiffness curve is given
-    StiffnessChannel stiffness;        ///< empty unless the manifest names one
-    std::string stiffnessFile;         ///< the stiffness curve's file as named in messages
+    std::vector<MeasuredTest> tests;  ///< may be empty when a stiffness curve is given
+    StiffnessChannel stiffness;       ///< empty unless the manifest names one
+    std::string stiffnessFile;        ///< the stiffness curve's file as named in messages
 };
 
 }  // namespace diagnose

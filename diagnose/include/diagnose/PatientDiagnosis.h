@@ -32,9 +32,9 @@ struct PatientInstruments {
     double bagSensorLag = 0.0;     ///< the bags' pressure sensors' first-order lag [s]
     double bagSensorOffset = 0.0;  ///< their zero offset [Pa]
     double matGain = 0.0;          ///< the mat reads the pressure times 1 + this [-]
-    static constexpr double kMaxBagSensorLag = 2.0;      ///< [s] tubing and filter
-    static constexpr double kMaxBagSensorOffset = 5e3;   ///< [Pa] either sign
-    static constexpr double kMaxMatGain = 0.3;           ///< either sign: a mat's drift
+    static constexpr double kMaxBagSensorLag = 2.0;     ///< [s] tubing and filter
+    static constexpr double kMaxBagSensorOffset = 5e3;  ///< [Pa] either sign
+    static constexpr double kMaxMatGain = 0.3;          ///< either sign: a mat's drift
 };
 
 /// The patient's library, in order: bag-pressure-sensor (lag, offset), mat-gain (gain) change
@@ -65,9 +65,9 @@ PatientChannels readPatientInstruments(const PatientChannels& run, const Patient
 struct PatientSynthesisOptions {
     double sampleInterval = 0.02;  ///< [s] tilt and bag sensors sample at this interval
     double matInterval = 0.1;      ///< [s] the mat's frame interval
-    double matNoise = 0.5 * bags::kPascalsPerMmHg;  ///< [Pa] per loaded sensel (0.5 mmHg)
+    double matNoise = 0.5 * bags::kPascalsPerMmHg;            ///< [Pa] per loaded sensel (0.5 mmHg)
     double tiltNoise = 0.1 * 3.14159265358979323846 / 180.0;  ///< [rad] (0.1 deg)
-    double pressureNoise = 50.0;   ///< [Pa] the bags' sensors (0.05 kPa)
+    double pressureNoise = 50.0;                              ///< [Pa] the bags' sensors (0.05 kPa)
     std::uint64_t seed = 1;
     /// @throws std::invalid_argument naming the option and what would be valid.
     void validate() const;
@@ -76,7 +76,8 @@ struct PatientSynthesisOptions {
 /// The instruments' readings (readPatientInstruments) sampled at the options' intervals from
 /// the first time on, by linear interpolation between the run's outputs, with Gaussian noise
 /// (a sensel that reads nothing stays 0, and none reads below 0: a mat reads no tension).
-PatientChannels synthesizePatientChannels(const PatientChannels& run, const PatientInstruments& inst,
+PatientChannels synthesizePatientChannels(const PatientChannels& run,
+                                          const PatientInstruments& inst,
                                           const PatientSynthesisOptions& options);
 
 // ------------------------------------------------------------------------- where
@@ -93,7 +94,7 @@ struct PatientChannelComparison {
     std::string unit;        ///< how it is reported: "mmHg", "deg", "kPa"
     double unitScale = 1.0;  ///< SI per reported unit
     std::vector<double> time, measured, simulated;  ///< SI
-    std::vector<int> part;   ///< per sample: the mat's region or the bag (index into partNames)
+    std::vector<int> part;  ///< per sample: the mat's region or the bag (index into partNames)
     std::vector<std::string> partNames;  ///< "sacrum", "bag 17"; empty for the tilt
     /// The mat's samples: frame of the measured mat and sensel (to re-evaluate them alike).
     std::vector<int> frame, sensel;
@@ -129,17 +130,21 @@ PatientComparison joinPatientComparisons(const std::vector<PatientComparison>& p
 /// tests) whole tests, or (tests that name their subjects) all tests of one subject, each in
 /// turn.
 struct PatientFolds {
-    std::vector<double> windowEdges;  ///< [s] the time windows' bounds (also the where stage's)
-    int tests = 1;                    ///< more than one: the folds are the tests (or subjects)
+    std::vector<double> windowEdges;    ///< [s] the time windows' bounds (also the where stage's)
+    int tests = 1;                      ///< more than one: the folds are the tests (or subjects)
     std::vector<std::string> subjects;  ///< not empty: the folds are these subjects
     std::vector<int> testSubject;       ///< per test: its subject (index into subjects)
     bool isBySubject() const { return !subjects.empty(); }
     bool isByTest() const { return tests > 1 && !isBySubject(); }
     int getCount() const {
-        return isBySubject() ? int(subjects.size()) : isByTest() ? tests : int(windowEdges.size()) - 1;
+        return isBySubject() ? int(subjects.size())
+               : isByTest()  ? tests
+                             : int(windowEdges.size()) - 1;
     }
     /// "subject", "test" or "time-window" (diagnosis.json's fold_kind).
-    const char* getKind() const { return isBySubject() ? "subject" : isByTest() ? "test" : "time-window"; }
+    const char* getKind() const {
+        return isBySubject() ? "subject" : isByTest() ? "test" : "time-window";
+    }
     /// The fold a sample of the channel belongs to.
     int findFold(const PatientChannelComparison& c, size_t sample) const;
     /// The tests (indices) of a fold: its subject's, or the one test; empty for a time window.
@@ -173,8 +178,9 @@ double calcPatientGap(const PatientComparison& c, const WhereReport& where,
                       const std::vector<double>& windowEdges, const std::vector<int>& windows,
                       bool beyondUncertainty);
 /// The same over the samples of the given folds (time windows, or tests).
-double calcPatientGap(const PatientComparison& c, const WhereReport& where, const PatientFolds& folds,
-                      const std::vector<int>& selected, bool beyondUncertainty);
+double calcPatientGap(const PatientComparison& c, const WhereReport& where,
+                      const PatientFolds& folds, const std::vector<int>& selected,
+                      bool beyondUncertainty);
 
 // ------------------------------------------------------------------------- which
 
@@ -195,11 +201,11 @@ struct PatientCalibrationOptions {
 
 /// One test of a patient's data as the which stage uses it.
 struct PatientTestCase {
-    std::string name;           ///< "" for one record
+    std::string name;  ///< "" for one record
     PatientChannels measured;
-    PatientChannels baseline;   ///< the model's run of the test's scenario
-    double statedGasMass = 0.0; ///< [kg] the test's array.gas_mass
-    std::string subject;        ///< the patient measured ("" when the data name none)
+    PatientChannels baseline;    ///< the model's run of the test's scenario
+    double statedGasMass = 0.0;  ///< [kg] the test's array.gas_mass
+    std::string subject;         ///< the patient measured ("" when the data name none)
     /// The mat's regions under this test's patient (a subject's own build); empty: the regions
     /// the caller gives for every test.
     MatRegions regions;
@@ -208,7 +214,8 @@ struct PatientTestCase {
 /// Simulates test `test`'s scenario with these overrides (applied after the test's own) and
 /// returns the run's channels; the app supplies it (a co-simulation).
 using PatientTestSimulator = std::function<PatientChannels(
-    int test, const std::vector<std::pair<std::string, std::string>>& overrides, const std::string& label)>;
+    int test, const std::vector<std::pair<std::string, std::string>>& overrides,
+    const std::string& label)>;
 
 /// Each test's comparison of its baseline (the model as it is) with what was measured, on the
 /// test's own regions when it has them, else on `regions`.
@@ -222,7 +229,8 @@ std::vector<PatientComparison> comparePatientTests(const std::vector<PatientTest
 /// record. The fit, the score and the verdict as below.
 WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests,
                                        const WhereReport& where, const MatRegions& regions,
-                                       const PatientFolds& folds, const PatientTestSimulator& simulate,
+                                       const PatientFolds& folds,
+                                       const PatientTestSimulator& simulate,
                                        const PatientCalibrationOptions& options);
 
 /// Calibrates each candidate with leave-one-window-out folds (the windows bounded by
@@ -233,11 +241,12 @@ WhichReport calibratePatientCandidates(const std::vector<PatientTestCase>& tests
 /// grid of 11 values per parameter refined coordinate by coordinate by golden section); effects
 /// that change the response are scanned over gridPoints values per parameter, each a run
 /// (cached: the folds share them), and a one-parameter effect refined by a parabola.
-WhichReport calibratePatientCandidates(const PatientChannels& measured, const PatientChannels& baseline,
+WhichReport calibratePatientCandidates(const PatientChannels& measured,
+                                       const PatientChannels& baseline,
                                        const PatientComparison& baseComparison,
                                        const WhereReport& where, const MatRegions& regions,
-                                       const std::vector<double>& windowEdges,
-                                       double statedGasMass, const PatientSimulator& simulate,
+                                       const std::vector<double>& windowEdges, double statedGasMass,
+                                       const PatientSimulator& simulate,
                                        const PatientCalibrationOptions& options);
 
 }  // namespace diagnose

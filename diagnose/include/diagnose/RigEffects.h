@@ -35,8 +35,8 @@ struct RigEffects {
     double bedCompliance = 0.0;      ///< the bed board's spring under the bag [m/N]
 
     /// Physical bounds of each parameter (also the calibration's bounds).
-    static constexpr double kMaxPressureLag = 30.0;          ///< [s]
-    static constexpr double kMaxPressureOffset = 5000.0;     ///< [Pa] either sign
+    static constexpr double kMaxPressureLag = 30.0;       ///< [s]
+    static constexpr double kMaxPressureOffset = 5000.0;  ///< [Pa] either sign
     /// [kg] either sign: about 6 % of the taut rig's 4 g, several times a thermal mass
     /// flowmeter's stated accuracy (1-2 % of reading)
     static constexpr double kMaxFlowmeterOffset = 0.25e-3;

@@ -59,9 +59,9 @@ struct CurveCandidate {
     /// MassOffset, MassScale: the dense curve; Grid: one table per value of `values`; Series,
     /// Gain: the model's curve at the measured masses.
     std::vector<StiffnessTable> tables;
-    std::vector<double> values;     ///< Grid: the parameter's values [SI], increasing
-    double roomTemperature = 0.0;   ///< MassScale: the gas temperature of the protocol [K]
-    int simulations = 0;            ///< load tests its grid ran (not those found cached)
+    std::vector<double> values;    ///< Grid: the parameter's values [SI], increasing
+    double roomTemperature = 0.0;  ///< MassScale: the gas temperature of the protocol [K]
+    int simulations = 0;           ///< load tests its grid ran (not those found cached)
 };
 
 /// The model's stiffness with the candidate's parameter at `value` [SI], at `gasMass` [kg]

@@ -15,16 +15,16 @@
 namespace diagnose {
 
 struct SynthesisOptions {
-    double sampleInterval = 0.5;        ///< [s] every instrument samples at this interval
-    double displacementNoise = 2e-6;    ///< standard deviation [m]
-    double forceNoise = 0.01;           ///< [N]
-    double pressureNoise = 5.0;         ///< [Pa]
-    double massNoise = 2e-6;            ///< [kg]
+    double sampleInterval = 0.5;      ///< [s] every instrument samples at this interval
+    double displacementNoise = 2e-6;  ///< standard deviation [m]
+    double forceNoise = 0.01;         ///< [N]
+    double pressureNoise = 5.0;       ///< [Pa]
+    double massNoise = 2e-6;          ///< [kg]
     /// The rig has a bed gauge: each test gets the bed board's sink as a channel (a dial gauge
     /// or displacement transducer under the board, against the floor).
     bool bedGauge = false;
-    double bedNoise = 2e-6;             ///< the bed gauge's [m]
-    std::uint64_t seed = 1;             ///< of the noise (the same seed gives the same data)
+    double bedNoise = 2e-6;  ///< the bed gauge's [m]
+    std::uint64_t seed = 1;  ///< of the noise (the same seed gives the same data)
     /// @throws std::invalid_argument naming the option and what would be valid.
     void validate() const;
 };

@@ -33,10 +33,10 @@ inline constexpr const char* kVerdictCsv = "verdict.csv";
 
 /// One bag's pneumatics at an output time (pneumatics.csv).
 struct PneumaticsReading {
-    int bag = 0;          ///< ArrayBag index
-    double sensor = 0.0;  ///< [Pa] gauge, the bag's sensor reading
-    double inflow = 0.0;  ///< [kg/s] into the bag over the last step
-    double outflow = 0.0; ///< [kg/s] out of the bag over the last step
+    int bag = 0;           ///< ArrayBag index
+    double sensor = 0.0;   ///< [Pa] gauge, the bag's sensor reading
+    double inflow = 0.0;   ///< [kg/s] into the bag over the last step
+    double outflow = 0.0;  ///< [kg/s] out of the bag over the last step
 };
 
 /// One check of the support verdict (verdict.csv).
@@ -50,11 +50,11 @@ struct VerdictRow {
 
 /// One output time of the run.
 struct ArrayFrame {
-    double time = 0.0;                        ///< [s] since the release
-    std::vector<cosim::RegionLoad> regions;   ///< every region (rows with no load are skipped)
-    std::vector<cosim::BagReading> bags;      ///< every coupled bag
+    double time = 0.0;                          ///< [s] since the release
+    std::vector<cosim::RegionLoad> regions;     ///< every region (rows with no load are skipped)
+    std::vector<cosim::BagReading> bags;        ///< every coupled bag
     double pelvisTilt = 0.0, thoraxTilt = 0.0;  ///< [rad] cosim::calcSegmentTilt()
-    const cosim::PressureMat* mat = nullptr;  ///< filled for this time (optional)
+    const cosim::PressureMat* mat = nullptr;    ///< filled for this time (optional)
     Eigen::Vector3d centreOfMass = Eigen::Vector3d::Zero();  ///< [m] the patient's, Ground
     std::vector<PneumaticsReading> pneumatics;  ///< every bag in the network (none: no rows)
     /// With setShapes(), at the times wantsShapes() says: the node positions [m], Ground, of
@@ -83,8 +83,8 @@ class ArrayResultsWriter {
     /// Saves the bags' and the body's meshes in results.h5 (/shapes) and shows them beside the
     /// mat in results.xdmf: node positions at the first output, every `interval` [s] and at
     /// `end` [s], stored as float32 (0.1 um at 2 m). Call before the first addFrame().
-    void setShapes(const cosim::SurfaceMesh& bags, const cosim::SurfaceMesh& body,
-                   double interval, double end);
+    void setShapes(const cosim::SurfaceMesh& bags, const cosim::SurfaceMesh& body, double interval,
+                   double end);
     /// True if the frame at `time` [s] should carry the shapes' node positions.
     bool wantsShapes(double time) const;
     /// Appends one output time to every file (flushing them at most every few seconds).

@@ -54,7 +54,7 @@ struct PatientOnArrayScenario {
     /// [s] output.checkpoint_every: simulated time between checkpoints (bagsim run --resume);
     /// 0: none.
     double checkpointInterval = 1.0;
-    cosim::PressureMatOptions mat;        ///< mat section (default: 64 x 32 over the array)
+    cosim::PressureMatOptions mat;  ///< mat section (default: 64 x 32 over the array)
     /// pneumatics section: the air hardware (absent: the gas list sets the bags' flows).
     bool hasPneumatics = false;
     cosim::ArrayPneumaticsSpec pneumatics;

@@ -16,10 +16,10 @@ namespace io {
 struct DiagnosisInfo {
     std::string measuredFolder;
     std::string scenarioFile;
-    std::string program;      ///< "bagsim 0.1.0"
+    std::string program;  ///< "bagsim 0.1.0"
     std::string commandLine;
-    int simulations = 0;      ///< load tests run in all
-    double seconds = 0.0;     ///< wall time
+    int simulations = 0;   ///< load tests run in all
+    double seconds = 0.0;  ///< wall time
 };
 
 /// The whole diagnosis as JSON text; `which` may be null (part 2 not run); `stiffness`, when

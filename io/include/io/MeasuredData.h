@@ -42,8 +42,8 @@ inline constexpr double kMaxRoomTemperatureUncertainty = 10.0;
 
 /// One column a channel file must have: its name and its kind of unit.
 struct ChannelColumn {
-    std::string name;  ///< "time", "displacement", "force", "pressure", "mass"
-    Dimension dimension;  ///< Dimensionless: a plain number, written without a unit
+    std::string name;       ///< "time", "displacement", "force", "pressure", "mass"
+    Dimension dimension;    ///< Dimensionless: a plain number, written without a unit
     bool optional = false;  ///< a missing column is returned empty instead of refused
 };
 

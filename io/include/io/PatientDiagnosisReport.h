@@ -18,7 +18,8 @@ namespace io {
 /// diagnosis.json; `which` may be null (--where-only); `folds` the time windows [s] and
 /// whether the folds were tests or subjects (`fold_kind`, `tests`, `subjects`, `test_subjects`,
 /// each fold's `held_out_test`, or `held_out_subject` and its `held_out_tests`, by name).
-std::string formatPatientDiagnosisJson(const DiagnosisInfo& info, const diagnose::PatientComparison& c,
+std::string formatPatientDiagnosisJson(const DiagnosisInfo& info,
+                                       const diagnose::PatientComparison& c,
                                        const diagnose::WhereReport& where,
                                        const diagnose::WhichReport* which,
                                        const diagnose::PatientFolds& folds);

@@ -52,15 +52,15 @@ diagnose::PatientMeasurement readPatientMeasuredData(const std::string& folder);
 
 /// One test's scenario: the data's with the protocol and the test's overrides applied.
 struct PatientMeasuredTestScenario {
-    std::string name;                   ///< the test's
-    ScenarioFile file;                  ///< the protocol and the test's overrides as overrides
-    PatientOnArrayScenario scenario;    ///< read and checked
+    std::string name;                 ///< the test's
+    ScenarioFile file;                ///< the protocol and the test's overrides as overrides
+    PatientOnArrayScenario scenario;  ///< read and checked
 };
 
 /// A patient's data's scenario, ready to run.
 struct PatientMeasuredScenario {
-    ScenarioFile file;                  ///< the scenario's text and the protocol as overrides
-    PatientOnArrayScenario scenario;    ///< read and checked
+    ScenarioFile file;                ///< the scenario's text and the protocol as overrides
+    PatientOnArrayScenario scenario;  ///< read and checked
     /// Per test of the manifest's `tests` (empty for one record): its own scenario.
     std::vector<PatientMeasuredTestScenario> tests;
 };

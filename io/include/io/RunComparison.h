@@ -13,11 +13,11 @@
 namespace io {
 
 struct RunComparisonOptions {
-    double from = 0.0;             ///< [s] rows before this time are not compared
-    std::vector<double> times;     ///< [s] the region moments; empty: every common row time
-    double minForce = 10.0;        ///< [N] a region is judged where the reference carries this
+    double from = 0.0;          ///< [s] rows before this time are not compared
+    std::vector<double> times;  ///< [s] the region moments; empty: every common row time
+    double minForce = 10.0;     ///< [N] a region is judged where the reference carries this
     double tiltTolerance = 2.0 * 3.14159265358979323846 / 180.0;  ///< [rad]
-    double peakTolerance = 0.15;   ///< relative, of the reference's patch peak
+    double peakTolerance = 0.15;  ///< relative, of the reference's patch peak
 };
 
 /// The tilt of one segment over the compared rows.
@@ -29,7 +29,7 @@ struct TiltDifference {
 
 /// One region at one moment.
 struct RegionPeak {
-    double time = 0.0;            ///< [s]
+    double time = 0.0;  ///< [s]
     std::string region;
     double referenceForce = 0.0;  ///< [N]
     double reference = 0.0;       ///< [Pa] the reference's patch peak
@@ -49,10 +49,10 @@ struct RegionPeakSummary {
 struct RunComparison {
     std::filesystem::path reference, run;
     RunComparisonOptions options;
-    int tiltRows = 0;             ///< rows both runs have, from options.from
-    int tiltRowsWithin = 0;       ///< both segments within the tilt tolerance
-    int tiltRowsNotFinite = 0;    ///< compared rows with a NaN or infinite tilt (not within)
-    int referenceTiltRows = 0;    ///< the reference's rows from options.from
+    int tiltRows = 0;           ///< rows both runs have, from options.from
+    int tiltRowsWithin = 0;     ///< both segments within the tilt tolerance
+    int tiltRowsNotFinite = 0;  ///< compared rows with a NaN or infinite tilt (not within)
+    int referenceTiltRows = 0;  ///< the reference's rows from options.from
     double firstTime = 0.0, lastTime = 0.0;  ///< [s] of the compared tilt rows
     TiltDifference pelvis, thorax;
     /// The turn alone: each run's tilt less its own at the first compared row, run - reference
@@ -60,10 +60,10 @@ struct RunComparison {
     /// mesh moves; this leaves that pick out). Rows both segments are within the tolerance.
     TiltDifference pelvisSinceFirst, thoraxSinceFirst;
     int tiltRowsWithinSinceFirst = 0;
-    std::vector<RegionPeak> peaks;              ///< every judged region-moment, by time
-    std::vector<RegionPeakSummary> moments;     ///< per moment
-    RegionPeakSummary overall;                  ///< over every judged region-moment
-    std::vector<double> missingTimes;           ///< asked-for moments one of the runs lacks [s]
+    std::vector<RegionPeak> peaks;           ///< every judged region-moment, by time
+    std::vector<RegionPeakSummary> moments;  ///< per moment
+    RegionPeakSummary overall;               ///< over every judged region-moment
+    std::vector<double> missingTimes;        ///< asked-for moments one of the runs lacks [s]
     /// The status line of a folder's INCOMPLETE marker ("" when the run finished), for the
     /// reference and the run.
     std::string referenceIncomplete, runIncomplete;
@@ -82,8 +82,8 @@ struct RunComparison {
 /// unfinished folder's last row is left out.
 /// @throws InputError naming the file, line and column of a missing or malformed file or value,
 /// or a comparison with no common row.
-RunComparison compareRuns(const std::filesystem::path& reference,
-                          const std::filesystem::path& run, const RunComparisonOptions& options);
+RunComparison compareRuns(const std::filesystem::path& reference, const std::filesystem::path& run,
+                          const RunComparisonOptions& options);
 
 /// The comparison as text: the tilt's summary, the peaks per moment and overall, and with
 /// `detail` every region-moment.

@@ -36,7 +36,7 @@ struct StudyOutput {
     /// first, last, min, max or mean of the column (with `per`: over the rows of each value;
     /// "" with `per`: one row per value, a value on two rows is an error)
     std::string reduce;
-    int line = 0;        ///< line of the output in the study file
+    int line = 0;  ///< line of the output in the study file
 };
 
 /// A study, its sweep expanded.
