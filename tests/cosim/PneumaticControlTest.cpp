@@ -48,6 +48,20 @@ cosim::ArrayPneumatics makeNetwork(const cosim::ArrayPneumaticsSpec& s) {
                                   std::vector<double>(n, kVolume));
 }
 
+// The turn of these tests: from `start`, channel `inflate` filled and `vent` vented until the
+// stand-in's tilt reaches 5 deg (half a gram of difference at 10 deg a gram), held 1 s, given up
+// after 30 s of turning.
+cosim::TurnSpec makeTurn(double start, int inflate, int vent) {
+    cosim::TurnSpec t;
+    t.start = start;
+    t.inflate = {inflate};
+    t.vent = {vent};
+    t.tilt = 5.0 * M_PI / 180.0;
+    t.hold = 1.0;
+    t.maxTurnTime = 30.0;
+    return t;
+}
+
 std::vector<pneumatics::BagVolume> rigid(const cosim::ArrayPneumatics& p) {
     return std::vector<pneumatics::BagVolume>(p.getBags().size(), {kVolume, 0.0});
 }
@@ -263,13 +277,7 @@ TEST(PneumaticControl, TheTurnReachesItsTiltHoldsAndRestoresTheInitialMasses) {
     // A stand-in patient: his tilt follows the two sides' mass difference, 10 deg a gram.
     const double degPerGram = 10.0 * M_PI / 180.0 / 1e-3;
     auto tilt = [&] { return degPerGram * (channelMass(p, 0) - channelMass(p, 1)); };
-    cosim::TurnSpec t;
-    t.start = 1.0;
-    t.inflate = {0};
-    t.vent = {1};
-    t.tilt = 5.0 * M_PI / 180.0;  // reached at 0.5 g of difference
-    t.hold = 1.0;
-    t.maxTurnTime = 30.0;
+    cosim::TurnSpec t = makeTurn(1.0, 0, 1);
     t.band = 0.02e-3;
     cosim::TurnController c(t, 2);
     std::vector<cosim::ControlEvent> events;
@@ -320,13 +328,7 @@ TEST(PneumaticControl, AClinicalTurnHoldsTheZonesAtTheirSetpointAndReturnsToIt) 
     cosim::ArrayPneumatics p = makeNetwork(spec);
     const double degPerGram = 10.0 * M_PI / 180.0 / 1e-3;
     auto tilt = [&] { return degPerGram * (channelMass(p, 0) - channelMass(p, 2)); };
-    cosim::TurnSpec t;
-    t.start = 4.0;
-    t.inflate = {0};
-    t.vent = {2};
-    t.tilt = 5.0 * M_PI / 180.0;
-    t.hold = 1.0;
-    t.maxTurnTime = 30.0;
+    cosim::TurnSpec t = makeTurn(4.0, 0, 2);
     t.holdPressure = 20e3;
     t.pressureBand = 0.5e3;
     cosim::TurnController c(t, 3);
