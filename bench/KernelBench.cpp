@@ -11,7 +11,7 @@
 #include <bags/LoadTest.h>
 #include <bags/Material.h>
 #include <bags/MaterialFit.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 
 #include <algorithm>
 #include <chrono>

@@ -39,7 +39,7 @@
 // SCENARIO is a patient-on-array scenario (its bag section: reading, mesh, contact penalty,
 // tolerances); the bag stands alone on the bed board, a rigid shape pressed into it in steps.
 #include <bags/Airbag.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 #include <bags/Units.h>
 #include <body/Anthropometry.h>
 #include <cosim/ArrayReadings.h>

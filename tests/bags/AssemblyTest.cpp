@@ -6,7 +6,7 @@
 
 #include <bags/Geometry.h>
 #include <bags/Material.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 #include <bags/Bending.h>
 #include <bags/Geometry.h>
 #include <bags/Material.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 
 #include <gtest/gtest.h>
 

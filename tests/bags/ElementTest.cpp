@@ -3,7 +3,7 @@
 #include "TestMeshes.h"
 
 #include <bags/Material.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 #include <bags/StVenantKirchhoff.h>
 
 #include <gtest/gtest.h>

@@ -7,7 +7,7 @@
 #include <bags/Geometry.h>
 #include <bags/Material.h>
 #include <bags/MaterialFit.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>

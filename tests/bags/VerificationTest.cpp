@@ -7,7 +7,7 @@
 #include <bags/Gas.h>
 #include <bags/Geometry.h>
 #include <bags/Material.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 #include <bags/StVenantKirchhoff.h>
 
 #include <gtest/gtest.h>

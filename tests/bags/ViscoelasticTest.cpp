@@ -10,7 +10,7 @@
 #include <bags/LoadTest.h>
 #include <bags/Material.h>
 #include <bags/MaterialFit.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 #include <bags/StVenantKirchhoff.h>
 #include <bags/StateStream.h>
 #include <bags/Viscoelastic.h>

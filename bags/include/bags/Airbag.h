@@ -37,7 +37,7 @@
 #include <bags/Geometry.h>
 #include <bags/Material.h>
 #include <bags/Mesh.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 #include <bags/Viscoelastic.h>
 
 #include <Eigen/Geometry>

@@ -14,7 +14,7 @@
 /// an oscillation of order h^2. Fixed dofs (support nodes) do not move.
 
 #include <bags/FilmForce.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 #include <bags/Types.h>
 
 #include <Eigen/Core>

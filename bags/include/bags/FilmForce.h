@@ -33,7 +33,7 @@
 /// A collapsed hinge wing is a collapsed element (det C <= 1e-12), reported as one.
 /// Not thread-safe: one call at a time per object (its scratch is its own).
 
-#include <bags/Solver.h>
+#include <bags/MembraneModel.h>
 #include <bags/Types.h>
 
 #include <Eigen/Core>

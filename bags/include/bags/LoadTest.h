@@ -13,7 +13,7 @@
 #include <bags/Geometry.h>
 #include <bags/Material.h>
 #include <bags/Polynomial.h>
-#include <bags/Solver.h>
+#include <bags/EquilibriumSolver.h>
 
 #include <functional>
 #include <memory>

@@ -1,4 +1,4 @@
-#include <bags/Solver.h>
+#include <bags/MembraneModel.h>
 
 #include "SparseSolve.h"
 
@@ -45,30 +45,6 @@ Mat32 calcDeformationGradient(const Eigen::Matrix3Xi& tris, int e, const ShapeGr
 }
 
 }  // namespace
-
-void SolverOptions::validate() const {
-    auto fail = [](const char* name, double v, const char* valid) {
-        std::ostringstream s;
-        s << "solver option '" << name << "' = " << v << " is invalid; " << valid;
-        throw std::invalid_argument(s.str());
-    };
-    if (!(relativeTolerance > 0.0 && relativeTolerance < 1.0))
-        fail("relativeTolerance", relativeTolerance, "use 0 < tol < 1 (e.g. 1e-8)");
-    if (!(absoluteTolerance > 0.0)) fail("absoluteTolerance", absoluteTolerance, "use > 0 N");
-    if (maxIterations < 1) fail("maxIterations", maxIterations, "use at least 1");
-    if (!(pseudoTransientShift > 0.0))
-        fail("pseudoTransientShift", pseudoTransientShift, "use > 0");
-    if (!(maxStep >= 0.0)) fail("maxStep", maxStep, "use >= 0 m (0: no limit)");
-    if (maxKrylovIterations < 1) fail("maxKrylovIterations", maxKrylovIterations, "use >= 1");
-    if (maxSparsifiedKrylovIterations < 1)
-        fail("maxSparsifiedKrylovIterations", maxSparsifiedKrylovIterations, "use >= 1");
-    if (!(krylovTolerance > 0.0 && krylovTolerance < 1.0))
-        fail("krylovTolerance", krylovTolerance, "use 0 < tol < 1 (e.g. 1e-4)");
-    if (!(forcingTerm > 0.0 && forcingTerm < 1.0))
-        fail("forcingTerm", forcingTerm, "use 0 < eta < 1 (e.g. 0.1)");
-    if (!(acceptableResidual >= 0.0))
-        fail("acceptableResidual", acceptableResidual, "use >= 0 N (0: only the tolerance)");
-}
 
 // ---------------------------------------------------------------------------------------------
 // MembraneModel
