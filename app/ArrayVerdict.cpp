@@ -171,10 +171,11 @@ std::vector<io::VerdictRow> ArrayVerdict::makeRows() const {
             m_setpoint > 0.0 ? "the turned zones were brought back to their setpoint (" +
                                    fmt("%.3f kPa", 1e-3 * m_setpoint) + ")"
                              : std::string("the initial gas masses were restored");
-        const std::string short_ = m_setpoint > 0.0 ? "the turned zones were back at their setpoint"
-                                                    : "the initial masses were restored";
+        const std::string pending = m_setpoint > 0.0
+                                        ? "the turned zones were back at their setpoint"
+                                        : "the initial masses were restored";
         rows.push_back({"back to supine", m_back ? "ok" : "warning", kNaN, "",
-                        m_back ? restored : "the run ended before " + short_});
+                        m_back ? restored : "the run ended before " + pending});
     }
     // Travel toward the edge.
     if (!m_haveRef) {

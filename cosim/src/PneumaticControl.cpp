@@ -37,6 +37,17 @@ const char* stateText(BandController::State s) {
     return "holding";
 }
 
+// The event of a band controller whose state changed: "WHAT: channel 'NAME' STATE at AT
+// (GOAL VALUE)", and ": GOAL reached" when it had been filling or venting.
+std::string describeBandChange(const std::string& what, const std::string& channel,
+                               BandController::State before, BandController::State now,
+                               const std::string& at, const std::string& goal,
+                               const std::string& value) {
+    return what + ": channel '" + channel + "' " + stateText(now) + " at " + at + " (" + goal +
+           " " + value + ")" +
+           (before != BandController::State::Holding ? ": " + goal + " reached" : "");
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------------------ ValveSchedule
@@ -166,10 +177,9 @@ void TargetController::update(const ControlInputs& in, ArrayPneumatics& p,
         if (m_band[i].update(v, t.value, t.band, t.channel, p))
             events.push_back(
                 {in.time,
-                 std::string(mass ? "target mass" : "target pressure") + ": channel '" +
-                     p.getChannelName(t.channel) + "' " + stateText(m_band[i].getState()) + " at " +
-                     (mass ? "" : "sensor ") + text(v) + " (target " + text(t.value) + ")" +
-                     (before != BandController::State::Holding ? ": target reached" : "")});
+                 describeBandChange(mass ? "target mass" : "target pressure",
+                                    p.getChannelName(t.channel), before, m_band[i].getState(),
+                                    (mass ? "" : "sensor ") + text(v), "target", text(t.value))});
     }
 }
 
@@ -253,10 +263,9 @@ void TurnController::holdChannel(int c, double t, ArrayPneumatics& p,
     const BandController::State before = m_hold[c].getState();
     if (m_hold[c].update(v, m_spec.holdPressure, m_spec.pressureBand, c, p))
         events.push_back(
-            {t, "zone held: channel '" + p.getChannelName(c) + "' " +
-                    stateText(m_hold[c].getState()) + " at sensor " + fmt("%.3f kPa", 1e-3 * v) +
-                    " (setpoint " + fmt("%.3f kPa", 1e-3 * m_spec.holdPressure) + ")" +
-                    (before != BandController::State::Holding ? ": setpoint reached" : "")});
+            {t, describeBandChange("zone held", p.getChannelName(c), before, m_hold[c].getState(),
+                                   "sensor " + fmt("%.3f kPa", 1e-3 * v), "setpoint",
+                                   fmt("%.3f kPa", 1e-3 * m_spec.holdPressure))});
 }
 
 void TurnController::holdOthers(double t, ArrayPneumatics& p, std::vector<ControlEvent>& events,
@@ -293,8 +302,8 @@ void TurnController::update(const ControlInputs& in, ArrayPneumatics& p,
         for (int c : m_channels) m_initialMass.push_back(perBag(c));
         // From here the turn commands its own channels; the zone hold starts them again
         // from rest once they are back.
-        for (int c : m_channels)
-            if (isHeld()) m_hold[c].setState(BandController::State::Holding);
+        if (isHeld())
+            for (int c : m_channels) m_hold[c].setState(BandController::State::Holding);
         m_phase = Phase::Turning;
         m_phaseStart = t;
         events.push_back({t, "turn started (target pelvis tilt " +
